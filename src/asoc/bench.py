@@ -1,0 +1,41 @@
+"""``make bench``: time the project's performance targets and print them.
+
+Each subpackage may provide ``bench.py`` with ``BENCHMARKS``: a list of
+``(name, target_seconds, callable)``. The callable runs the timed work once and
+returns the measured seconds (it may time a part of what it does, e.g. excluding
+set-up). The median of ``repeat`` runs is printed next to the target.
+"""
+
+import importlib
+import os
+import platform
+import statistics
+import sys
+
+SUBPACKAGES = ("mjls", "belief", "gp")
+
+
+def main(argv=None) -> int:
+    import numpy as np
+
+    only = (argv or sys.argv[1:]) or SUBPACKAGES
+    print(f"machine: {os.cpu_count()} cores, {platform.processor() or platform.machine()}, "
+          f"Python {platform.python_version()}, NumPy {np.__version__}")
+    failed = 0
+    for sub in only:
+        try:
+            module = importlib.import_module(f"asoc.{sub}.bench")
+        except ModuleNotFoundError:
+            continue
+        for name, target, fn, repeat in module.BENCHMARKS:
+            times = [fn() for _ in range(repeat)]
+            t = statistics.median(times)
+            ok = t <= target
+            failed += not ok
+            print(f"[{sub}] {name:60s} {t:9.4f} s  (target {target:g} s, median of {repeat})"
+                  f"  {'ok' if ok else 'SLOWER THAN TARGET'}", flush=True)
+    return 0 if not failed else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,20 @@
+"""Reproduction harness: record values, save figures and tables, build the ledger.
+
+Typical notebook use::
+
+    from asoc import repro
+    repro.setup("sec3_5", fidelity=fidelity, output_dir=output_dir)
+    repro.record("rho_open_T1", rho)          # a number the thesis prints
+    repro.save_figure(fig, "3.4")             # figures/fig3_4.png and .pdf
+    md = repro.save_table("3.2", header, rows)
+"""
+
+from .figures import STYLE, apply_style, markdown_table, save_figure, save_table
+from .ledger import ledger_markdown, write_ledger
+from .reference import Entry, load_reference, status
+from .stats import bootstrap_ci
+from .values import load_all_values, load_values, record, setup
+
+__all__ = ["STYLE", "apply_style", "markdown_table", "save_figure", "save_table",
+           "ledger_markdown", "write_ledger", "Entry", "load_reference", "status",
+           "bootstrap_ci", "load_all_values", "load_values", "record", "setup"]

@@ -1,0 +1,85 @@
+"""One plotting style for every figure; atomic saving under the thesis's numbering."""
+
+import csv
+import io
+import re
+
+import matplotlib
+import matplotlib.pyplot as plt
+
+from .io import atomic_write_bytes, atomic_write_text
+from . import values
+
+STYLE = {
+    "figure.figsize": (6.4, 4.0),
+    "figure.dpi": 100,
+    "savefig.dpi": 150,
+    "savefig.bbox": "tight",
+    "font.size": 10,
+    "axes.titlesize": 10,
+    "axes.labelsize": 10,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "legend.fontsize": 9,
+    "legend.frameon": False,
+    "lines.linewidth": 1.5,
+    "image.cmap": "viridis",
+    "mathtext.fontset": "cm",
+    "axes.prop_cycle": matplotlib.cycler(color=["#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                                "#E69F00", "#56B4E9", "#F0E442", "#000000"]),
+}
+
+
+def apply_style():
+    """Apply the project's matplotlib style (called by :func:`asoc.repro.setup`)."""
+    matplotlib.rcParams.update(STYLE)
+
+
+def _stem(kind: str, number: str) -> str:
+    if not re.fullmatch(r"\d+\.\d+", str(number)):
+        raise ValueError(f"number must look like '3.4' (thesis numbering), found {number!r}")
+    return f"{kind}{str(number).replace('.', '_')}"
+
+
+def save_figure(fig, number: str, output_dir=None):
+    """Save ``fig`` as ``fig<chapter>_<n>.png`` and ``.pdf`` (atomically); return the PNG path."""
+    out = output_dir or values.current_output_dir()
+    stem = _stem("fig", number)
+    paths = []
+    for ext in ("png", "pdf"):
+        buf = io.BytesIO()
+        fig.savefig(buf, format=ext, metadata={"Creator": None, "Producer": None,
+                                               "CreationDate": None} if ext == "pdf" else None)
+        paths.append(atomic_write_bytes(out / f"{stem}.{ext}", buf.getvalue()))
+    return paths[0]
+
+
+def markdown_table(header, rows) -> str:
+    """A GitHub-flavoured Markdown table from a header and rows of cells."""
+    lines = ["| " + " | ".join(map(str, header)) + " |",
+             "|" + "|".join("---" for _ in header) + "|"]
+    lines += ["| " + " | ".join(map(str, row)) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def save_table(number: str, header, rows, output_dir=None) -> str:
+    """Save a table as ``table<chapter>_<n>.csv`` and ``.md`` (atomically); return the Markdown."""
+    if any(len(row) != len(header) for row in rows):
+        raise ValueError("rows: every row needs as many cells as header")
+    out = output_dir or values.current_output_dir()
+    stem = _stem("table", number)
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    writer.writerows(rows)
+    atomic_write_text(out / f"{stem}.csv", buf.getvalue())
+    md = markdown_table(header, rows)
+    atomic_write_text(out / f"{stem}.md", md)
+    return md
+
+
+def close(fig):
+    """Close ``fig`` after it has been shown and saved."""
+    plt.close(fig)

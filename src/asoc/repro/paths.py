@@ -1,0 +1,9 @@
+"""Where the project's files live (src layout: this file is src/asoc/repro/paths.py)."""
+
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[3]
+BOOK = ROOT / "book"
+FIGURES = ROOT / "figures"
+REFERENCE = ROOT / "tests" / "reference" / "thesis_values.yaml"
+CI_OUTPUT = BOOK / "_build" / "ci"

@@ -1,0 +1,111 @@
+"""The reference file ``tests/reference/thesis_values.yaml`` and the status of each value.
+
+Each entry is keyed ``<notebook>.<key>`` and holds
+
+``where``    where the thesis prints it (section, figure, table, page);
+``kind``     ``deterministic`` (a number to its printed decimals), ``monte_carlo`` (a
+             median whose bootstrap interval is recorded), ``claim`` (a qualitative
+             statement turned into a check with a stated threshold) or ``measured`` (a
+             number the thesis does not print, shown for the reader);
+``thesis``   the printed value (number, list, or the claim's text); null for ``measured``;
+``tol``      absolute tolerance (deterministic; rounding of Monte Carlo values);
+``ci_rtol``  relative tolerance of a ``ci``-fidelity run against our own ``full`` value;
+``expect``   ``reproduced``, ``deviates`` or ``new``: the status the ledger must show, so a
+             change in status is a test failure, not a silent edit;
+``note``     the reason for a deviation, the reading chosen, what was tried.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import yaml
+
+from .paths import REFERENCE
+
+KINDS = ("deterministic", "monte_carlo", "claim", "measured")
+EXPECT = ("reproduced", "deviates", "new")
+
+
+@dataclass(frozen=True)
+class Entry:
+    key: str
+    where: str
+    kind: str
+    thesis: object = None
+    tol: float | None = None
+    ci_rtol: float | None = None
+    expect: str = "reproduced"
+    note: str = ""
+
+    @property
+    def notebook(self) -> str:
+        return self.key.split(".", 1)[0]
+
+    @property
+    def name(self) -> str:
+        return self.key.split(".", 1)[1]
+
+
+def load_reference(path=None) -> dict:
+    """Load and validate the reference file; return ``{key: Entry}``."""
+    with open(path or REFERENCE) as handle:
+        raw = yaml.safe_load(handle) or {}
+    entries = {}
+    for key, spec in raw.items():
+        if "." not in key:
+            raise ValueError(f"reference key {key!r}: expected '<notebook>.<name>'")
+        entry = Entry(key=key, **spec)
+        if entry.kind not in KINDS:
+            raise ValueError(f"reference {key}: kind must be one of {KINDS}, found {entry.kind!r}")
+        if entry.expect not in EXPECT:
+            raise ValueError(f"reference {key}: expect must be one of {EXPECT}, found {entry.expect!r}")
+        if entry.kind == "deterministic" and entry.tol is None:
+            raise ValueError(f"reference {key}: a deterministic value needs tol")
+        entries[key] = entry
+    return entries
+
+
+def _max_abs_diff(a, b) -> float:
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape:
+        return float("inf")
+    return float(np.max(np.abs(a - b))) if a.size else 0.0
+
+
+def status(entry: Entry, ours) -> str:
+    """``reproduced``, ``deviates``, ``new`` or ``missing`` for our value ``ours``."""
+    if ours is None:
+        return "missing"
+    if entry.kind == "measured":
+        return "new"
+    if entry.kind == "claim":
+        return "reproduced" if ours["holds"] else "deviates"
+    if entry.kind == "deterministic":
+        return "reproduced" if _max_abs_diff(ours, entry.thesis) <= entry.tol else "deviates"
+    lo, hi = ours["ci"]
+    slack = entry.tol or 0.0
+    return "reproduced" if lo - slack <= float(entry.thesis) <= hi + slack else "deviates"
+
+
+def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
+    """Whether a ``ci``-fidelity value agrees with our ``full``-fidelity value.
+
+    Deterministic values must agree to ``tol`` at any fidelity; Monte Carlo values to
+    ``ci_rtol`` (relative); claims must give the same verdict unless ``ci_rtol`` is null
+    (claims that only make sense at full fidelity); measured values to ``ci_rtol``.
+    """
+    if entry.kind == "deterministic":
+        diff = _max_abs_diff(ours_ci, ours_full)
+        return diff <= entry.tol, f"|ci - full| = {diff:.3g}, tol {entry.tol}"
+    if entry.kind == "claim":
+        if entry.ci_rtol is None:
+            return True, "claim checked at full fidelity only"
+        return ours_ci["holds"] == ours_full["holds"], f"holds: ci {ours_ci['holds']}, full {ours_full['holds']}"
+    a = ours_ci["value"] if isinstance(ours_ci, dict) else ours_ci
+    b = ours_full["value"] if isinstance(ours_full, dict) else ours_full
+    if entry.ci_rtol is None:
+        return True, "compared at full fidelity only"
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    scale = np.maximum(np.abs(b), 1e-12)
+    rel = float(np.max(np.abs(a - b) / scale)) if a.shape == b.shape else float("inf")
+    return rel <= entry.ci_rtol, f"relative |ci - full| = {rel:.3g}, ci_rtol {entry.ci_rtol}"

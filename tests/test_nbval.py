@@ -1,0 +1,36 @@
+"""nbval (lax mode) on every committed notebook, re-executed at ci fidelity.
+
+The committed notebooks in ``book/`` hold the outputs of the full-fidelity run. Cells
+marked ``# NBVAL_CHECK_OUTPUT`` print numbers that do not depend on the Monte Carlo
+size (spectral radii, gains, errors); nbval re-executes the notebook with papermill's
+ci parameters injected and requires those printed outputs to be identical.
+"""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+from papermill.parameterize import parameterize_notebook
+
+from conftest import NOTEBOOKS
+
+HERE = Path(__file__).parent
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("name", sorted(NOTEBOOKS))
+def test_nbval_checked_cells(name, tmp_path):
+    nb = nbformat.read(NOTEBOOKS[name].path, as_version=4)
+    checked = [c for c in nb.cells if c.cell_type == "code" and "NBVAL_CHECK_OUTPUT" in c.source]
+    assert checked, f"{name}: no cell is marked # NBVAL_CHECK_OUTPUT"
+    assert all(c.get("outputs") for c in checked), f"{name}: a checked cell has no stored output"
+    nb = parameterize_notebook(nb, {"fidelity": "ci", "output_dir": str(tmp_path / "out")})
+    copy = tmp_path / f"{name}.ipynb"
+    nbformat.write(nb, copy)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--nbval-lax",
+         "--nbval-sanitize-with", str(HERE / "nbval_sanitize.cfg"), str(copy)],
+        cwd=NOTEBOOKS[name].path.parent, capture_output=True, text=True, timeout=1200)
+    assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-2000:]
