@@ -1,0 +1,18 @@
+"""Chapter 3: Markov jump linear systems (MJLS) without mode observation.
+
+The model (3.7): x_{k+1} = A_theta x_k + B_theta u_k + H_theta w_k, y_k = C_theta x_k (+ J_theta v_k),
+with a Markov chain theta_k (transition matrix T) that the controller does not observe.
+"""
+
+from .moments import h2_cost, second_moment_step, second_moments, steady_state_second_moment
+from .simulate import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
+                       StaticGain, TimeVariantGain, simulate)
+from .stability import closed_loop, ms_operator, ms_spectral_radius
+from .static import StaticOutputFeedbackResult, gain_from_moments, static_output_feedback
+from .system import MJLS, D, E, stationary_distribution
+
+__all__ = ["MJLS", "D", "E", "stationary_distribution", "ms_operator", "ms_spectral_radius",
+           "closed_loop", "second_moment_step", "second_moments", "steady_state_second_moment",
+           "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
+           "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
+           "TimeVariantGain", "DynamicOutputFeedback"]

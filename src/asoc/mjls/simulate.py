@@ -1,0 +1,191 @@
+"""Monte Carlo simulation of an MJLS (3.7) in closed loop, vectorised over runs.
+
+All runs advance together: at step k the modes theta_k (N,), states x_k (N, nx) and
+controller states are arrays, and the mode-dependent matrices are gathered per run.
+Random draws come from the ``rng`` passed in, in a fixed order (initial mode, initial
+state, then per step: process noise, measurement noise, next mode), so a seed gives
+the same numbers bit for bit.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .system import check_distribution
+
+
+class Controller:
+    """Protocol of a controller in :func:`simulate`.
+
+    ``start(n_runs)`` returns the initial controller state; ``input(k, y, theta, state)``
+    returns ``(u, state)`` for measurements ``y`` (N, ny). ``theta`` (N,) is passed to
+    every controller, but only controllers with ``observes_mode = True`` may use it.
+    """
+
+    observes_mode = False
+
+    def start(self, n_runs):
+        return None
+
+    def input(self, k, y, theta, state):
+        raise NotImplementedError
+
+
+class StaticGain(Controller):
+    """u_k = L y_k, mode-independent (3.8)."""
+
+    def __init__(self, L):
+        self.L = np.atleast_2d(np.asarray(L, dtype=float))
+
+    def input(self, k, y, theta, state):
+        return y @ self.L.T, state
+
+
+class ModeDependentGain(Controller):
+    """u_k = L_{theta_k} y_k (3.24): requires the mode, e.g. the optimal controller of [38]."""
+
+    observes_mode = True
+
+    def __init__(self, L):
+        self.L = np.asarray(L, dtype=float)
+
+    def input(self, k, y, theta, state):
+        return np.einsum("nab,nb->na", self.L[theta], y), state
+
+
+class TimeVariantGain(Controller):
+    """u_k = L_k y_k with a gain sequence L of shape (K, nu, ny) (e.g. [165], [163])."""
+
+    def __init__(self, L):
+        self.L = np.asarray(L, dtype=float)
+
+    def input(self, k, y, theta, state):
+        return y @ self.L[min(k, len(self.L) - 1)].T, state
+
+
+class DynamicOutputFeedback(Controller):
+    """x^_{k+1} = F_k x^_k + K_k y_k, u_k = L_k x^_k (3.37); F, K, L constant or (K, ...).
+
+    ``xhat0`` is the controller's initial state (nc,), default zero.
+    """
+
+    def __init__(self, F, K, L, xhat0=None):
+        self.F, self.K, self.L = (np.asarray(a, dtype=float) for a in (F, K, L))
+        self.time_variant = self.F.ndim == 3
+        self.xhat0 = np.zeros(self.F.shape[-1]) if xhat0 is None else np.asarray(xhat0, float)
+
+    def _at(self, k):
+        if not self.time_variant:
+            return self.F, self.K, self.L
+        k = min(k, len(self.F) - 1)
+        return self.F[k], self.K[k], self.L[k]
+
+    def start(self, n_runs):
+        return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
+
+    def input(self, k, y, theta, xhat):
+        F, K, L = self._at(k)
+        u = xhat @ L.T
+        return u, xhat @ F.T + y @ K.T
+
+
+@dataclass
+class SimulationResult:
+    """Per-run costs of (3.3): cost = sum_{k<K} (x'Q x + u'R u) + x_K' Q x_K, and, on request,
+    trajectories x (N, K+1, nx), u (N, K, nu), theta (N, K+1)."""
+
+    cost: np.ndarray
+    horizon: int
+    x: np.ndarray | None = None
+    u: np.ndarray | None = None
+    theta: np.ndarray | None = None
+
+    @property
+    def average_cost(self):
+        """Per-run cost divided by the horizon K (the finite-K reading of (3.9))."""
+        return self.cost / self.horizon
+
+
+def _initial_states(sys, x0, x0_cov, theta0, n_runs, rng):
+    x0 = np.asarray(x0, dtype=float)
+    if x0.shape == (sys.nx,):
+        mean = np.broadcast_to(x0, (n_runs, sys.nx))
+    elif x0.shape == (sys.M, sys.nx):
+        mean = x0[theta0]
+    else:
+        raise ValueError(f"x0: expected shape ({sys.nx},) or ({sys.M}, {sys.nx}), found {x0.shape}")
+    if x0_cov is None:
+        return mean.copy()
+    cov = np.asarray(x0_cov, dtype=float)
+    if cov.shape == (sys.nx, sys.nx):
+        cov = np.broadcast_to(cov, (sys.M, sys.nx, sys.nx))
+    if cov.shape != (sys.M, sys.nx, sys.nx):
+        raise ValueError(f"x0_cov: expected shape ({sys.nx}, {sys.nx}) or ({sys.M}, {sys.nx}, "
+                         f"{sys.nx}), found {cov.shape}")
+    roots = np.stack([_psd_sqrt(c, i) for i, c in enumerate(cov)])
+    return mean + np.einsum("nab,nb->na", roots[theta0], rng.standard_normal((n_runs, sys.nx)))
+
+
+def _psd_sqrt(c, i):
+    lam, vec = np.linalg.eigh(0.5 * (c + c.T))
+    if lam.min() < -1e-10 * max(1.0, abs(lam).max()):
+        raise ValueError(f"x0_cov: mode {i + 1} covariance is not positive semidefinite")
+    return vec * np.sqrt(np.clip(lam, 0, None))
+
+
+def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0_cov=None,
+             trajectories=False, progress=False):
+    """Simulate ``n_runs`` closed-loop runs of ``horizon`` steps; return per-run costs.
+
+    Parameters
+    ----------
+    sys : MJLS
+    controller : Controller
+    x0 : (nx,) initial state, or (M, nx) per-mode means of a Gaussian mixture (Sec. 3.7).
+    horizon : K >= 1 steps.
+    n_runs : N >= 1 runs.
+    rng : numpy.random.Generator.
+    mode0 : fixed initial mode (0-based), or None to draw theta_0 from ``mu0``.
+    mu0 : initial mode distribution (default: the stationary distribution).
+    x0_cov : optional (nx, nx) or (M, nx, nx) covariance of x_0 given theta_0.
+    trajectories : also return x, u and theta of every run.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError("rng: pass a seeded numpy.random.Generator")
+    if int(horizon) != horizon or horizon < 1:
+        raise ValueError(f"horizon must be an integer >= 1, found {horizon}")
+    if int(n_runs) != n_runs or n_runs < 1:
+        raise ValueError(f"n_runs must be an integer >= 1, found {n_runs}")
+    N, K = int(n_runs), int(horizon)
+    if mode0 is not None:
+        if not 0 <= mode0 < sys.M:
+            raise ValueError(f"mode0 must be in 0..{sys.M - 1}, found {mode0}")
+        theta = np.full(N, int(mode0))
+    else:
+        mu0 = sys.mu_inf if mu0 is None else check_distribution(mu0, sys.M)
+        theta = rng.choice(sys.M, size=N, p=mu0)
+    x = _initial_states(sys, x0, x0_cov, theta, N, rng)
+    cumT = np.cumsum(sys.T, axis=1)
+    cumT[:, -1] = 1.0
+    state = controller.start(N)
+    cost = np.zeros(N)
+    if trajectories:
+        xs, us, ths = np.empty((N, K + 1, sys.nx)), np.empty((N, K, sys.nu)), np.empty((N, K + 1), int)
+    for k in tqdm(range(K), disable=not progress, desc="Monte Carlo", leave=False):
+        y = np.einsum("nab,nb->na", sys.C[theta], x)
+        w = rng.standard_normal((N, sys.nw))
+        if sys.J is not None:
+            y += np.einsum("nab,nb->na", sys.J[theta], rng.standard_normal((N, sys.J.shape[2])))
+        u, state = controller.input(k, y, theta, state)
+        cost += np.einsum("na,nab,nb->n", x, sys.Q[theta], x) + np.einsum("na,nab,nb->n", u, sys.R[theta], u)
+        if trajectories:
+            xs[:, k], us[:, k], ths[:, k] = x, u, theta
+        x = (np.einsum("nab,nb->na", sys.A[theta], x) + np.einsum("nab,nb->na", sys.B[theta], u)
+             + np.einsum("nab,nb->na", sys.H[theta], w))
+        theta = (rng.random(N)[:, None] > cumT[theta]).sum(axis=1)
+    cost += np.einsum("na,nab,nb->n", x, sys.Q[theta], x)
+    if trajectories:
+        xs[:, K], ths[:, K] = x, theta
+        return SimulationResult(cost, K, xs, us, ths)
+    return SimulationResult(cost, K)

@@ -1,0 +1,30 @@
+"""Mean-square stability (Sec. 3.3, Corollary 3.2)."""
+
+import numpy as np
+
+from .system import check_transition_matrix, _stack
+
+
+def ms_operator(A_stack, T):
+    """The matrix M = diag[A_1 (x) A_1, ..., A_M (x) A_M] (T^T (x) I_{n^2}) of Corollary 3.2."""
+    A_stack = _stack(A_stack, "A_stack")
+    T = check_transition_matrix(T)
+    M, n, _ = A_stack.shape
+    if T.shape[0] != M:
+        raise ValueError(f"T: expected shape ({M}, {M}) for {M} modes, found {T.shape}")
+    n2 = n * n
+    blocks = np.zeros((M * n2, M * n2))
+    for i in range(M):
+        blocks[i * n2:(i + 1) * n2, i * n2:(i + 1) * n2] = np.kron(A_stack[i], A_stack[i])
+    return blocks @ np.kron(T.T, np.eye(n2))
+
+
+def ms_spectral_radius(A_stack, T) -> float:
+    """Spectral radius of M (Corollary 3.2); the MJLS is mean-square stable iff it is < 1."""
+    return float(np.max(np.abs(np.linalg.eigvals(ms_operator(A_stack, T)))))
+
+
+def closed_loop(sys, L):
+    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L."""
+    L = np.asarray(L, dtype=float).reshape(sys.nu, sys.ny)
+    return sys.A + sys.B @ L @ sys.C

@@ -1,0 +1,146 @@
+"""Static output feedback u_k = L y_k without mode observation (Sec. 3.5.3, Alg. 3.1)."""
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .moments import h2_cost, second_moment_step, steady_state_second_moment
+from .stability import closed_loop, ms_spectral_radius
+from .system import E
+
+
+@dataclass
+class StaticOutputFeedbackResult:
+    """Result of Algorithm 3.1.
+
+    L : (nu, ny) regulator gain; converged, iterations; rho: mean-square spectral radius
+    of the closed loop (Cor. 3.2); stabilizing: rho < 1; cost: H2 cost (Prop. 3.7) of L,
+    inf when not stabilizing; history: traces of X^i and P^i per iteration, shape
+    (iterations + 1, M) each; X, P: the last iterates; seconds: wall time of the iteration.
+    """
+
+    L: np.ndarray
+    converged: bool
+    iterations: int
+    rho: float
+    stabilizing: bool
+    cost: float
+    X: np.ndarray
+    P: np.ndarray
+    history: dict = field(repr=False)
+    seconds: float = 0.0
+
+
+def gain_from_moments(sys, X, P, method="vec", R=None):
+    """L solving (3.31) for given X^i, P^i: Prop. 3.18 (``"vec"``) or its SDP (``"sdp"``).
+
+    ``R`` overrides sys.R (used by Alg. 3.1's scaled iteration).
+    """
+    EP = E(sys.T, P)
+    S = (sys.R if R is None else R) + np.swapaxes(sys.B, 1, 2) @ EP @ sys.B                     # (M, nu, nu)
+    W = sys.C @ X @ np.swapaxes(sys.C, 1, 2)                                # (M, ny, ny)
+    N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
+    if method == "sdp":
+        return _gain_sdp(S, W, N)
+    if method != "vec":
+        raise ValueError(f"method must be 'vec' or 'sdp', found {method!r}")
+    lhs = np.einsum("iab,icd->acbd", W, S).reshape(W.shape[1] * S.shape[1], -1)  # sum W_i (x) S_i
+    vec_L = -np.linalg.solve(lhs, N.reshape(-1, order="F"))
+    return vec_L.reshape(S.shape[1], W.shape[1], order="F")
+
+
+def _gain_sdp(S, W, N):
+    """The SDP of Prop. 3.18: min lambda s.t. [[lambda I, L], [L^T, I]] >= 0 and (3.31)."""
+    import cvxpy as cp
+
+    nu, ny = S.shape[1], W.shape[1]
+    L = cp.Variable((nu, ny))
+    lam = cp.Variable()
+    eq = sum(S[i] @ L @ W[i] for i in range(S.shape[0])) + N
+    block = cp.bmat([[lam * np.eye(nu), L], [L.T, np.eye(ny)]])
+    prob = cp.Problem(cp.Minimize(lam), [0.5 * (block + block.T) >> 0, eq == 0])
+    prob.solve(solver=cp.CLARABEL)
+    if L.value is None:
+        raise np.linalg.LinAlgError(f"SDP of Prop. 3.18 failed: {prob.status}")
+    return np.asarray(L.value)
+
+
+def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True):
+    """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
+
+    When the gain does not stabilise the MJLS, X^i and P^i grow geometrically while the
+    gain still converges (Sec. 3.5.4, C = [1 0]: "the iterative algorithm converges ...
+    however ... cannot be stabilized"). To follow that limit without overflow, the
+    recursion is carried out exactly in scaled variables X = s_X Xs, P = s_P Ps (the
+    constant terms mu H H^T, Q and C^T L^T R L C are divided by the scales; the gain
+    (3.34) is invariant under that scaling). Step 4's test is applied to the scaled
+    iterates (their directions) and to the gain; ``bounded`` tells whether the moments
+    themselves converged (they do iff the limit gain stabilises the MJLS).
+
+    Parameters
+    ----------
+    sys : MJLS
+    tol : stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol.
+    max_iter : iteration limit; ``converged=False`` and a warning when reached.
+    init : the thesis recommends 1e-4 I as the initial X^i, P^i (Sec. 3.5.3).
+    method : ``"vec"`` solves (3.31) by Prop. 3.18; ``"sdp"`` by its SDP alternative.
+    """
+    if not tol > 0 or max_iter < 1 or not init > 0:
+        raise ValueError(f"tol and init must be > 0 and max_iter >= 1, found tol={tol}, "
+                         f"max_iter={max_iter}, init={init}")
+    start = time.perf_counter()
+    M, n = sys.M, sys.nx
+    Xs = np.broadcast_to(init * np.eye(n), (M, n, n)).copy()
+    Ps = Xs.copy()
+    log_sX = log_sP = 0.0
+    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
+    mu = sys.mu_inf
+    traces_X, traces_P = [np.trace(Xs, axis1=1, axis2=2)], [np.trace(Ps, axis1=1, axis2=2)]
+    converged = False
+    L = np.zeros((sys.nu, sys.ny))
+    it = 0
+    for it in range(1, max_iter + 1):
+        L_new = gain_from_moments(sys, Xs, Ps, method, R=sys.R * np.exp(-log_sP))
+        Acl = closed_loop(sys, L_new)
+        LC = L_new @ sys.C
+        X_new = second_moment_step(Acl, HHt * np.exp(-log_sX), sys.T, Xs, mu)
+        P_new = np.swapaxes(Acl, 1, 2) @ E(sys.T, Ps) @ Acl \
+            + (sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC) * np.exp(-log_sP)
+        if not (np.all(np.isfinite(X_new)) and np.all(np.isfinite(P_new))):
+            break
+        dL = np.linalg.norm(L_new - L) / max(np.linalg.norm(L_new), 1e-300)
+        dX = _relative_change(Xs, X_new)
+        dP = _relative_change(Ps, P_new)
+        cX, cP = np.abs(X_new).max(), np.abs(P_new).max()
+        Xs, Ps, L = X_new / cX, P_new / cP, L_new
+        log_sX, log_sP = log_sX + np.log(cX), log_sP + np.log(cP)
+        traces_X.append(np.exp(log_sX) * np.trace(Xs, axis1=1, axis2=2))
+        traces_P.append(np.exp(log_sP) * np.trace(Ps, axis1=1, axis2=2))
+        if it > 1 and max(dL, dX, dP) < tol:
+            converged = True
+            break
+    seconds = time.perf_counter() - start
+    X, P = np.exp(log_sX) * Xs, np.exp(log_sP) * Ps
+    Acl = closed_loop(sys, L)
+    rho = ms_spectral_radius(Acl, sys.T)
+    stabilizing = bool(rho < 1)
+    cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, mu)) if stabilizing else np.inf
+    if warn and not converged:
+        warnings.warn(f"Algorithm 3.1 did not converge within {it} iterations", RuntimeWarning,
+                      stacklevel=2)
+    elif warn and not stabilizing:
+        warnings.warn(f"Algorithm 3.1 converged, but the gain does not stabilise the MJLS in the "
+                      f"mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning, stacklevel=2)
+    history = {"trace_X": np.array(traces_X), "trace_P": np.array(traces_P)}
+    return StaticOutputFeedbackResult(L=L, converged=converged, iterations=it, rho=rho,
+                                      stabilizing=stabilizing, cost=cost, X=X, P=P,
+                                      history=history, seconds=seconds)
+
+
+def _relative_change(old, new):
+    """max_i ||new^i/||new|| - old^i/||old|| ||_F: change of the scaled iterate's direction."""
+    a = old / np.linalg.norm(old)
+    b = new / np.linalg.norm(new)
+    return float(np.linalg.norm(a - b, axis=(1, 2)).max())
