@@ -1,0 +1,70 @@
+"""Baseline [38]: optimal state feedback with observed mode (coupled algebraic Riccati equations).
+
+O. L. V. Costa, M. D. Fragoso, R. P. Marques, *Discrete-Time Markov Jump Linear Systems*,
+Springer 2005, Ch. 4 (control CARE, eq. (4.12)-(4.14)) and Sec. 4.4 (the H2/LQ problem
+with noise): the mode-dependent gains
+
+    F_i = -(R_i + B_i^T E_i(X) B_i)^{-1} B_i^T E_i(X) A_i,
+    X_i = A_i^T E_i(X) A_i + Q_i - A_i^T E_i(X) B_i (R_i + B_i^T E_i(X) B_i)^{-1} B_i^T E_i(X) A_i,
+
+with E_i(X) = sum_j p_ij X_j. The CARE is solved by the Riccati iteration started at
+X = 0 (the coupled Riccati difference equation run backwards until it is stationary),
+which converges to the mean-square stabilising solution when the MJLS is
+mean-square stabilisable and detectable (Costa et al., Sec. 4.2 and App. A).
+"""
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .stability import ms_spectral_radius
+
+
+@dataclass
+class ObservedModeResult:
+    """Mode-dependent gains L (M, nu, nx), Riccati solution P (M, nx, nx), rho, stabilizing,
+    converged, iterations, seconds."""
+
+    L: np.ndarray
+    P: np.ndarray
+    rho: float
+    stabilizing: bool
+    converged: bool
+    iterations: int
+    seconds: float
+
+
+def riccati_step(sys, P):
+    """One step of the coupled Riccati difference equation; returns (L, P_new)."""
+    EP = sys.E(P)
+    BT = np.swapaxes(sys.B, 1, 2)
+    S = sys.R + BT @ EP @ sys.B
+    L = -np.linalg.solve(S, BT @ EP @ sys.A)
+    Acl = sys.A + sys.B @ L
+    P_new = np.swapaxes(Acl, 1, 2) @ EP @ Acl + sys.Q + np.swapaxes(L, 1, 2) @ sys.R @ L
+    return L, 0.5 * (P_new + np.swapaxes(P_new, 1, 2))
+
+
+def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
+    """[38]: optimal time-invariant state feedback u_k = L_{theta_k} x_k with observed mode."""
+    start = time.perf_counter()
+    P = np.zeros((sys.M, sys.nx, sys.nx))
+    converged = False
+    it = 0
+    for it in range(1, max_iter + 1):
+        L, P_new = riccati_step(sys, P)
+        delta = np.abs(P_new - P).max() / (1 + np.abs(P_new).max())
+        P = P_new
+        if delta < tol:
+            converged = True
+            break
+    L, _ = riccati_step(sys, P)
+    rho = ms_spectral_radius(sys.A + sys.B @ L, sys.T)
+    if warn and not converged:
+        warnings.warn(f"coupled Riccati iteration did not converge in {max_iter} steps", RuntimeWarning,
+                      stacklevel=2)
+    elif warn and rho >= 1:
+        warnings.warn(f"CARE gains do not stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning, stacklevel=2)
+    return ObservedModeResult(L, P, rho, bool(rho < 1), converged, it, time.perf_counter() - start)
