@@ -1,0 +1,230 @@
+"""Unit tests of asoc.belief (Sec. 2.5): Def. 2.2, Lemma 2.1, filters, Alg. 2.2 vs LQG, [159]."""
+
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from asoc.belief import (UKF, AffinePolicy, DiracMixture, GaussianNoise, ParticleFilter, QuadraticCost,
+                         affine_policy_value, algorithm_2_2, belief_ilqg, draw_noise, ekf_step,
+                         landmark_example, lemma_2_1, linear_gaussian_model, reference_trajectory,
+                         sigma_points, statistical_taylor_expansion, statistical_taylor_linearization_error,
+                         theorem_2_5_value)
+from asoc.belief.trajectory import StageProblem, terminal_value
+
+# a linear-Gaussian model (the LQG case of Sec. 2.3)
+A = np.array([[1.0, 0.1], [0.0, 1.0]])
+B = np.array([[0.0], [0.1]])
+H = 0.3 * np.eye(2)
+C = np.array([[1.0, 0.0]])
+J = np.array([[0.5]])
+LIN = linear_gaussian_model(A, B, H, C, J)
+
+
+def lqg_gains(Q, R, QK, K):
+    """Finite-horizon Riccati recursion: u_k = L_k x_k."""
+    P, gains = QK, []
+    for _ in range(K):
+        L = -np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
+        P = Q + A.T @ P @ (A + B @ L)
+        gains.append(L)
+    return gains[::-1]
+
+
+def test_fig2_2_errors():
+    ekf, stat = statistical_taylor_linearization_error()
+    assert abs(ekf - 1.3173) < 6e-5
+    assert abs(stat - 0.6289) < 6e-5
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.lists(st.floats(-3, 3), min_size=3, max_size=3), st.integers(1, 6), st.integers(0, 10_000))
+def test_definition_2_2_exact_for_quadratic(coef, m, seed):
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(2, 2))
+    Vq = M @ M.T + coef[0] * np.eye(2)
+    vq = np.array(coef[1:])
+    g = lambda x: 0.7 + vq @ x + 0.5 * x @ Vq @ x
+    mix = DiracMixture(rng.normal(size=(m, 2)), rng.dirichlet(np.ones(m)))
+    q = statistical_taylor_expansion(g, mix)
+    x = rng.normal(size=(5, 2))
+    assert np.allclose(q(x), [g(xi) for xi in x], atol=1e-6)
+
+
+def test_definition_2_2_one_particle_is_taylor():
+    g = lambda x: np.sin(x[0]) * np.exp(x[1])
+    x0 = np.array([0.3, -0.2])
+    q = statistical_taylor_expansion(g, DiracMixture(x0[None]))
+    d = np.array([0.01, -0.02])
+    grad = np.array([np.cos(x0[0]) * np.exp(x0[1]), np.sin(x0[0]) * np.exp(x0[1])])
+    hess = np.array([[-np.sin(x0[0]), np.cos(x0[0])], [np.cos(x0[0]), np.sin(x0[0])]]) * np.exp(x0[1])
+    assert q(x0 + d) == pytest.approx(g(x0) + grad @ d + 0.5 * d @ hess @ d, abs=1e-8)
+
+
+def test_lemma_2_1_matches_large_sample():
+    ex = landmark_example()
+    rng = np.random.default_rng(0)
+    mean, cov = np.array([-2.0, 1.5]), np.diag([0.3, 0.2])
+    u = np.array([0.4, -0.2])
+    N = 400_000
+    x = ex.model.a(GaussianNoise(mean, cov).sample(rng, N), u, ex.model.w.sample(rng, N))
+    y = ex.model.h(x, ex.model.v.sample(rng, N))
+    Z = np.concatenate([x, y], 1)
+    Cz = np.cov(Z.T)
+    big = Cz[:2, :2] - Cz[:2, 2:] @ np.linalg.solve(Cz[2:, 2:], Cz[2:, :2])
+    vp, gamma = sigma_points(ex.model.v.mean, ex.model.v.cov)   # y is linear in v: exact moments
+    parts = GaussianNoise(mean, cov).sample(rng, 1000)
+    ours = lemma_2_1(DiracMixture(parts), u, ex.model, ex.model.w.sample(rng, 300), vp, gamma=gamma)
+    assert np.allclose(ours, big, atol=0.03)
+
+
+def test_ukf_matches_kalman_filter_on_linear_model():
+    ukf = UKF(LIN)
+    mean, cov = np.array([1.0, -0.5]), np.diag([0.2, 0.1])
+    m_kf, P_kf = mean.copy(), cov.copy()
+    est = (mean, cov)
+    rng = np.random.default_rng(3)
+    for k in range(10):
+        u, y = rng.normal(size=1), rng.normal(size=1)
+        est = ukf.step(est, u, y)
+        m_kf, P_kf = A @ m_kf + B @ u, A @ P_kf @ A.T + H @ H.T
+        S = C @ P_kf @ C.T + J @ J.T
+        K = P_kf @ C.T @ np.linalg.inv(S)
+        m_kf, P_kf = m_kf + K @ (y - C @ m_kf), P_kf - K @ S @ K.T
+    assert np.allclose(est[0], m_kf, atol=1e-10) and np.allclose(est[1], P_kf, atol=1e-10)
+    m_e, P_e = ekf_step(LIN, mean, cov, np.array([0.3]), np.array([0.2]))
+    m_u, P_u = ukf.step((mean, cov), np.array([0.3]), np.array([0.2]))
+    assert np.allclose(m_e, m_u) and np.allclose(P_e, P_u)
+
+
+def test_particle_filter_tracks_kalman_filter():
+    pf = ParticleFilter(LIN, 20_000, np.random.default_rng(5))
+    mean, cov = np.array([1.0, -0.5]), np.diag([0.2, 0.1])
+    est = pf.initial(mean, cov)
+    kf = (mean, cov)
+    for u, y in [(0.2, 0.9), (-0.1, 1.1), (0.0, 1.0)]:
+        est = pf.step(est, np.array([u]), np.array([y]))
+        kf = UKF(LIN).step(kf, np.array([u]), np.array([y]))
+    assert np.allclose(est.mean, kf[0], atol=0.03) and np.allclose(est.cov, kf[1], atol=0.03)
+    assert pf.next_covariance(est, np.array([0.0])).shape == (2, 2)
+
+
+def test_algorithm_2_2_converges_to_lqg():
+    Q, R, K = np.eye(2), np.array([[0.5]]), 8
+    cost = QuadraticCost(Q, R, Q, np.zeros(2), K)
+    res = algorithm_2_2(LIN, cost, np.array([1.0, 0.5]), 0.1 * np.eye(2), rng=np.random.default_rng(0),
+                        n_cost_runs=50, max_iterations=10)
+    assert res.converged
+    for L_ours, L_lqg in zip(res.policy.L, lqg_gains(Q, R, Q, K)):
+        assert np.allclose(L_ours, L_lqg, atol=1e-6)
+    assert np.allclose(res.policy.d, 0.0, atol=1e-6)
+
+
+def test_analytic_and_numdifftools_derivatives_agree():
+    ex = landmark_example(K=3)
+    filt = UKF(ex.model)
+    policy = AffinePolicy(np.zeros((3, 2, 2)), np.tile([1.0, -0.3], (3, 1)))
+    ref = reference_trajectory(ex.model, filt, policy, ex.mean0, ex.cov0)
+    wp, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    value = terminal_value(ex.cost, filt.mixture(ref.estimates[3]))
+    stage = StageProblem(ex.model, ex.cost, filt, ref.estimates[2], value, wp, beta)
+    e1, e2 = stage.expansion(ref.u_bar[2], "analytic"), stage.expansion(ref.u_bar[2], "numdifftools")
+    for name in ("p", "r", "Q", "P", "R"):
+        assert np.allclose(getattr(e1, name), getattr(e2, name), atol=1e-6), name
+
+
+def test_affine_policy_value_equals_theorem_2_5_for_its_policy():
+    ex = landmark_example(K=3)
+    filt = UKF(ex.model)
+    policy = AffinePolicy(np.zeros((3, 2, 2)), np.tile([1.0, -0.3], (3, 1)))
+    ref = reference_trajectory(ex.model, filt, policy, ex.mean0, ex.cov0)
+    wp, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    nxt = theorem_2_5_value(StageProblem(ex.model, ex.cost, filt, ref.estimates[2],
+                                         terminal_value(ex.cost, filt.mixture(ref.estimates[3])), wp, beta)
+                            .expansion(ref.u_bar[2]), 1.0)
+    exp = StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta).expansion(ref.u_bar[1])
+    p_t, r_t, P_t, R_t = exp.tilde
+    eps = 0.5
+    L = -np.linalg.solve(R_t, P_t)
+    d = np.linalg.solve(R_t, p_t - eps * r_t) + ref.u_bar[1]
+    a, b = theorem_2_5_value(exp, eps), affine_policy_value(exp, L, d, ref.u_bar[1])
+    assert a.s == pytest.approx(b.s) and np.allclose(a.v, b.v) and np.allclose(a.V, b.V)
+    assert np.allclose(a.S, b.S)
+
+
+def test_belief_ilqg_feedback_on_mean_is_lqg_for_linear_model():
+    Q, R, K = np.eye(2), np.array([[0.5]]), 6
+    cost = QuadraticCost(Q, R, Q, np.zeros(2), K)
+    res = belief_ilqg(LIN, cost, np.array([1.0, 0.5]), 0.1 * np.eye(2), rtol=1e-10)
+    for L_ours, L_lqg in zip(res.L, lqg_gains(Q, R, Q, K)):
+        assert np.allclose(L_ours[:, :2], L_lqg, atol=1e-5)
+
+
+def test_both_controllers_improve_on_the_example():
+    ex = landmark_example(K=20)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(1),
+                            n_cost_runs=30, max_iterations=3)
+    assert res.costs[-1] < 0.5 * res.costs[0]
+    assert all(np.all(e[e > 0] <= 1.0) for e in res.eps)
+
+
+# --- bad input ---------------------------------------------------------------------
+
+def test_bad_covariance():
+    with pytest.raises(ValueError, match="cov"):
+        GaussianNoise(np.zeros(2), np.array([[1.0, 0.0], [0.0, -1.0]]))
+    with pytest.raises(ValueError, match="symmetric"):
+        GaussianNoise(np.zeros(2), np.array([[1.0, 0.5], [0.0, 1.0]]))
+
+
+def test_bad_horizon():
+    with pytest.raises(ValueError, match="horizon"):
+        QuadraticCost(np.eye(2), np.eye(2), np.eye(2), np.zeros(2), 0)
+
+
+def test_bad_mixture_weights():
+    with pytest.raises(ValueError, match="summing to 1"):
+        DiracMixture(np.zeros((3, 2)), np.array([0.5, 0.5, 0.5]))
+    with pytest.raises(ValueError, match="non-negative"):
+        DiracMixture(np.zeros((2, 2)), np.array([1.5, -0.5]))
+
+
+def test_cost_violating_assumption_2_3():
+    with pytest.raises(ValueError, match="Assumption 2.3"):
+        QuadraticCost(np.eye(2), np.zeros((2, 2)), np.eye(2), np.zeros(2), 5)
+
+
+def test_bad_rng_and_policy_shape():
+    ex = landmark_example(K=3)
+    with pytest.raises(ValueError, match="rng"):
+        algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=1)
+    with pytest.raises(ValueError, match="policy"):
+        algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                      policy=AffinePolicy.zero(4, 2, 2))
+    with pytest.raises(ValueError, match="n_runs"):
+        draw_noise(ex.model, ex.mean0, ex.cov0, 3, 0, np.random.default_rng(0))
+
+
+def test_indefinite_covariance_hessian_warns_not_crashes():
+    ex = landmark_example(K=20)
+    with pytest.warns(RuntimeWarning, match="Assumption 2.3"):
+        res = algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(1),
+                            n_cost_runs=20, max_iterations=2, covariance_hessian="exact")
+    assert res.iterations == 2 and sum(res.rejected) > 0
+
+
+def test_line_search_that_cannot_decrease_stops_with_flag():
+    from asoc.belief.trajectory import line_search
+
+    class Flat:
+        def cost_to_go(self, u):
+            return 0.0 if np.allclose(u, 0.0) else 1.0 + float(np.sum(np.abs(u)))
+
+    class Exp:
+        tilde = (np.zeros(1), np.ones(1), np.zeros((1, 1)), np.eye(1))
+
+    ls = line_search(Flat(), Exp(), np.zeros(1), np.zeros(1))
+    assert not ls.accepted and ls.cost_after == ls.cost_before
