@@ -10,6 +10,7 @@ the same numbers bit for bit.
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 from tqdm.auto import tqdm
 
 from .system import check_distribution
@@ -134,7 +135,62 @@ def _psd_sqrt(c, i):
     return vec * np.sqrt(np.clip(lam, 0, None))
 
 
-def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0_cov=None,
+def _next_mode(theta, r, cumT):
+    """theta_{k+1} = #{j < M-1 : r > cumT[theta_k, j]} for uniform r: inverse-CDF sampling of
+    the row theta_k of T."""
+    nxt = np.zeros_like(theta)
+    for j in range(cumT.shape[1] - 1):
+        nxt += r > cumT[theta, j]
+    return nxt
+
+
+class _ModeStack:
+    """Mode-dependent products for all runs at once: one matrix product per quantity for
+    all modes (BLAS), then each run's row picked by its mode, instead of gathering an
+    (N, n, n) stack of matrices per step."""
+
+    def __init__(self, sys):
+        self.M, self.nx, self.nu = sys.M, sys.nx, sys.nu
+        cat = lambda S: np.concatenate(list(np.swapaxes(S, 1, 2)), axis=1)   # (cols, M*rows)
+        self.ABH = cat(np.concatenate([sys.A, sys.B, sys.H], axis=2))
+        self.C = cat(sys.C)
+        self.J = cat(sys.J) if sys.J is not None else None
+        self.Q, self.R = cat(sys.Q), cat(sys.R)
+
+    def rows(self, theta):
+        return np.arange(theta.size) * self.M + theta
+
+    def _pick(self, flat, rows):
+        return flat.reshape(rows.size * self.M, -1)[rows]
+
+    def output(self, x, rows):
+        return self._pick(x @ self.C, rows)
+
+    def measurement_noise(self, v, rows):
+        return self._pick(v @ self.J, rows)
+
+    def stage_cost(self, x, u, rows):
+        return (np.einsum("na,na->n", self._pick(x @ self.Q, rows), x)
+                + np.einsum("na,na->n", self._pick(u @ self.R, rows), u))
+
+    def terminal_cost(self, x, rows):
+        return np.einsum("na,na->n", self._pick(x @ self.Q, rows), x)
+
+    def transition(self, x, u, w, rows):
+        return self._pick(np.concatenate([x, u, w], axis=1) @ self.ABH, rows)
+
+
+def simulate(sys, controller, *args, **kwargs):
+    """Simulate closed-loop runs; see :func:`_simulate` for the parameters.
+
+    BLAS is limited to one thread here: the products are small (N x 5 by 5 x 4), and
+    threading them costs more than it gains, badly so on a loaded 2-core machine.
+    """
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _simulate(sys, controller, *args, **kwargs)
+
+
+def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0_cov=None,
              trajectories=False, progress=False):
     """Simulate ``n_runs`` closed-loop runs of ``horizon`` steps; return per-run costs.
 
@@ -168,23 +224,24 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     x = _initial_states(sys, x0, x0_cov, theta, N, rng)
     cumT = np.cumsum(sys.T, axis=1)
     cumT[:, -1] = 1.0
+    step = _ModeStack(sys)
     state = controller.start(N)
     cost = np.zeros(N)
     if trajectories:
         xs, us, ths = np.empty((N, K + 1, sys.nx)), np.empty((N, K, sys.nu)), np.empty((N, K + 1), int)
     for k in tqdm(range(K), disable=not progress, desc="Monte Carlo", leave=False):
-        y = np.einsum("nab,nb->na", sys.C[theta], x)
+        rows = step.rows(theta)
+        y = step.output(x, rows)
         w = rng.standard_normal((N, sys.nw))
         if sys.J is not None:
-            y += np.einsum("nab,nb->na", sys.J[theta], rng.standard_normal((N, sys.J.shape[2])))
+            y += step.measurement_noise(rng.standard_normal((N, sys.J.shape[2])), rows)
         u, state = controller.input(k, y, theta, state)
-        cost += np.einsum("na,nab,nb->n", x, sys.Q[theta], x) + np.einsum("na,nab,nb->n", u, sys.R[theta], u)
+        cost += step.stage_cost(x, u, rows)
         if trajectories:
             xs[:, k], us[:, k], ths[:, k] = x, u, theta
-        x = (np.einsum("nab,nb->na", sys.A[theta], x) + np.einsum("nab,nb->na", sys.B[theta], u)
-             + np.einsum("nab,nb->na", sys.H[theta], w))
-        theta = (rng.random(N)[:, None] > cumT[theta]).sum(axis=1)
-    cost += np.einsum("na,nab,nb->n", x, sys.Q[theta], x)
+        x = step.transition(x, u, w, rows)
+        theta = _next_mode(theta, rng.random(N), cumT)
+    cost += step.terminal_cost(x, step.rows(theta))
     if trajectories:
         xs[:, K], ths[:, K] = x, theta
         return SimulationResult(cost, K, xs, us, ths)
