@@ -357,7 +357,7 @@ def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iteratio
     result = Alg22Result(policy, [policy], [J(policy)])
     iterator = range(max_iterations)
     if progress:
-        from tqdm.auto import tqdm
+        from tqdm import tqdm
         iterator = tqdm(iterator, desc="Alg. 2.2")
     ref = None
     for _ in iterator:

@@ -191,7 +191,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     costs, converged, expected, L = [J], False, np.nan, np.zeros((K, model.n_u, b0.size))
     bar = None
     if progress:
-        from tqdm.auto import tqdm
+        from tqdm import tqdm
         bar = tqdm(total=max_iterations, desc="belief iLQG [159]")
     it = 0
     for it in range(1, max_iterations + 1):
