@@ -1,0 +1,46 @@
+"""The numerical examples of Chapter 3, with the thesis's parameters."""
+
+import numpy as np
+
+from .system import MJLS
+
+# Sec. 3.2: two stable modes whose switching makes the MJLS mean-square unstable (Fig. 3.2).
+SEC32_A = np.array([[[0.9, 1.0], [0.0, 0.5]], [[0.9, 0.0], [1.0, 0.5]]])
+SEC32_T = np.array([[0.7, 0.3], [0.4, 0.6]])
+SEC32_X0 = np.array([-4.0, 8.0])
+
+# Sec. 3.4: scalar example of the intractable optimal cost (Fig. 3.3).
+SEC34_A = np.array([1.0, 0.3])
+SEC34_B = np.array([1.0, 0.8])
+SEC34_G = 0.2
+SEC34_T = np.array([[0.7, 0.3], [0.2, 0.8]])
+SEC34_PI = np.array([0.4, 0.6])
+
+# Sec. 3.5.4: the static output-feedback example (Figs. 3.4, 3.5, Table 3.2).
+SEC354_A = np.array([[[1.2, 1.2], [0.0, 1.0]], [[1.0, 0.8], [0.0, 1.0]]])
+SEC354_B = np.array([[[0.0], [1.0]], [[0.0], [0.2]]])
+SEC354_H = np.diag([0.2, 0.1])
+SEC354_T = {1: np.array([[0.7, 0.3], [0.6, 0.4]]), 2: np.array([[0.9, 0.1], [0.1, 0.9]])}
+SEC354_C = {"C=[1 0]": np.array([[1.0, 0.0]]),
+            "C1=[1 2], C2=[2 1]": np.array([[[1.0, 2.0]], [[2.0, 1.0]]]),
+            "state": np.eye(2)}
+SEC354_X0 = {1: np.array([0.0, 0.0]), 2: np.array([3.0, 0.0])}
+
+
+def sec32_system() -> MJLS:
+    """x_{k+1} = A_theta x_k of Sec. 3.2 as an MJLS without input and noise."""
+    return MJLS(A=SEC32_A, B=np.zeros((2, 1)), C=np.eye(2), H=np.zeros((2, 1)),
+                Q=np.eye(2), R=np.eye(1), T=SEC32_T)
+
+
+def sec354_system(T: int = 1, C: str = "C1=[1 2], C2=[2 1]", H=SEC354_H) -> MJLS:
+    """The MJLS of Sec. 3.5.4 with transition matrix T[1] or T[2] and output matrices ``C``.
+
+    Q_i = I and R_i = 1 (the thesis writes R_i = I_{n_x}; with one input, R_i is 1 x 1).
+    """
+    if T not in SEC354_T:
+        raise ValueError(f"T must be 1 or 2, found {T!r}")
+    if C not in SEC354_C:
+        raise ValueError(f"C must be one of {list(SEC354_C)}, found {C!r}")
+    return MJLS(A=SEC354_A, B=SEC354_B, C=SEC354_C[C], H=H, Q=np.eye(2), R=np.eye(1),
+                T=SEC354_T[T])
