@@ -16,3 +16,6 @@ __all__ = ["MJLS", "D", "E", "stationary_distribution", "ms_operator", "ms_spect
            "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
            "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
            "TimeVariantGain", "DynamicOutputFeedback"]
+from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback, steady_state_cost
+from .finite_horizon import FiniteHorizonResult, finite_horizon_cost, finite_horizon_dynamic_output_feedback
+from .optimal_observed import ModeObservedLQG, ModeObservedResult, mode_observed_lqg

@@ -1,0 +1,327 @@
+"""Infinite-horizon dynamic output feedback without mode observation (Sec. 3.6, Alg. 3.2).
+
+The controller (3.37) is x^_{k+1} = F x^_k + K y_k, u_k = L x^_k with constant F, K, L.
+With it the MJLS (3.36) forms the augmented closed loop (3.39)-(3.40) in x~ = [x; x^].
+Alg. 3.2 does not minimise the true cost (3.42) but the bound of Prop. 3.26: the second
+moment of x~ is replaced by the two blocks
+
+    Xbar_i  ~ E{(x - x^)(x - x^)^T 1(theta = i)}   (estimation error, (3.44)),
+    Xunder_i ~ E{x^ x^^T 1(theta = i)}              (controller state),
+
+and the Lagrange multiplier by Pbar_i, Punder_i. The gains solve the linear system (3.49)
+built from (3.50). The module also gives the augmented closed loop and its exact
+second-moment recursion (Prop. 3.23), so the true cost of any controller can be set next
+to the bound (Prop. 3.24).
+"""
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .moments import second_moment_step, steady_state_second_moment
+from .stability import ms_spectral_radius
+from .system import D, E
+
+METHODS = ("lstsq", "sdp")
+DIVERGED = 1e100          # bounds beyond this are treated as diverging (the iteration stops)
+
+
+def _T(X):
+    return np.swapaxes(X, -1, -2)
+
+
+def noise_covariances(sys):
+    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny); J = None means noise-free outputs."""
+    HHt = sys.H @ _T(sys.H)
+    JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
+    return HHt, JJt
+
+
+def check_gains(sys, F, K, L):
+    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays."""
+    F, K, L = (np.atleast_2d(np.asarray(g, dtype=float)) for g in (F, K, L))
+    nc = F.shape[0]
+    for name, g, shape in (("F", F, (nc, nc)), ("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
+        if g.shape != shape:
+            raise ValueError(f"{name}: expected shape {shape}, found {g.shape}")
+        if not np.all(np.isfinite(g)):
+            raise ValueError(f"{name}: found non-finite entries")
+    return F, K, L
+
+
+def augmented_closed_loop(sys, F, K, L):
+    """The augmented closed loop (3.39)-(3.40) and weight of Prop. 3.20 for x~ = [x; x^].
+
+    Returns (A~ (M, n, n), H~H~^T (M, n, n), Q~ (M, n, n)) with n = nx + nc:
+    A~_i = [[A_i, B_i L], [K C_i, F]], H~_i H~_i^T = diag(H_i H_i^T, K J_i J_i^T K^T),
+    Q~_i = diag(Q_i, L^T R_i L).
+    """
+    F, K, L = check_gains(sys, F, K, L)
+    M, nx, nc = sys.M, sys.nx, F.shape[0]
+    HHt, JJt = noise_covariances(sys)
+    At = np.zeros((M, nx + nc, nx + nc))
+    At[:, :nx, :nx] = sys.A
+    At[:, :nx, nx:] = sys.B @ L
+    At[:, nx:, :nx] = K @ sys.C
+    At[:, nx:, nx:] = F
+    HHt_cl = np.zeros_like(At)
+    HHt_cl[:, :nx, :nx] = HHt
+    HHt_cl[:, nx:, nx:] = K @ JJt @ K.T
+    Qt = np.zeros_like(At)
+    Qt[:, :nx, :nx] = sys.Q
+    Qt[:, nx:, nx:] = L.T @ sys.R @ L
+    return At, HHt_cl, Qt
+
+
+def steady_state_cost(sys, F, K, L):
+    """True average cost (3.38) of (3.37): sum_i tr[Q~_i X~_inf^i] by Prop. 3.24.
+
+    X~_inf solves the coupled Lyapunov equations of Prop. 3.23 with mu = mu_inf. Returns
+    (cost, X~_inf, rho); cost is inf when the closed loop is not mean-square stable (Cor. 3.2).
+    """
+    At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
+    rho = ms_spectral_radius(At, sys.T)
+    if not rho < 1:
+        return np.inf, None, rho
+    X = steady_state_second_moment(At, HHt_cl, sys.T, sys.mu_inf)
+    return float(np.einsum("iab,iba->", Qt, X)), X, rho
+
+
+def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
+    """One step of the second-moment bounds, (3.45)-(3.46) / (3.66)-(3.67).
+
+    Returns (Xbar_next, Xunder_next), each (M, nx, nx).
+    """
+    KC = K @ sys.C
+    AKC = sys.A - KC
+    G = AKC - F + sys.B @ L                       # A_i - F + B_i L - K C_i
+    FKC = F + KC
+    KJJK = K @ JJt @ K.T
+    m = mu[:, None, None]
+    Xbar_in = m * (HHt + KJJK) + AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)
+    Xunder_in = m * KJJK + KC @ Xbar @ _T(KC) + FKC @ Xunder @ _T(FKC)
+    Xbar_new, Xunder_new = D(sys.T, Xbar_in), D(sys.T, Xunder_in)
+    return 0.5 * (Xbar_new + _T(Xbar_new)), 0.5 * (Xunder_new + _T(Xunder_new))
+
+
+def bound_costate_step(sys, F, K, L, EPbar, EPunder):
+    """One step of the multiplier bounds, (3.47)-(3.48) / (3.68)-(3.69).
+
+    ``EPbar``, ``EPunder`` are E_i(Pbar), E_i(Punder) of the next step. Returns (Pbar, Punder).
+    """
+    BL = sys.B @ L
+    ABL = sys.A + BL
+    G = ABL - F - K @ sys.C
+    FBL = F - BL
+    LRL = L.T @ sys.R @ L
+    Pbar = sys.Q + LRL + _T(ABL) @ EPbar @ ABL + _T(G) @ EPunder @ G
+    Punder = LRL + _T(BL) @ EPbar @ BL + _T(FBL) @ EPunder @ FBL
+    return 0.5 * (Pbar + _T(Pbar)), 0.5 * (Punder + _T(Punder))
+
+
+def _kron_sum(X, Y):
+    """sum_i X_i (x) Y_i for stacks X (M, a, b), Y (M, c, d)."""
+    M, a, b = X.shape
+    _, c, d = Y.shape
+    return np.einsum("iab,icd->acbd", X, Y).reshape(a * c, b * d)
+
+
+def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
+    """The matrix and vector of (3.49)/(3.70), built from (3.50).
+
+    Unknown z = [vec F; vec K; vec L] (column-stacking vec); the conditions read H z + rho = 0.
+    H is (half) the Hessian of the bounded cost (A.7)/(B.5), hence symmetric PSD.
+    """
+    A, B, C, R = sys.A, sys.B, sys.C, sys.R
+    S = Xbar + Xunder
+    EP = EPbar + EPunder
+    m = mu[:, None, None]
+    EPuB = EPunder @ B
+    XuCt = Xunder @ _T(C)
+    nF, nK = sys.nx * sys.nx, sys.nx * sys.ny
+    blocks = ((slice(0, nF), slice(0, nF), _kron_sum(Xunder, EPunder)),                  # Phi_F
+              (slice(nF, nF + nK), slice(nF, nF + nK), _kron_sum(m * JJt + C @ S @ _T(C), EPunder)),
+              (slice(nF + nK, None), slice(nF + nK, None), _kron_sum(Xunder, R + _T(B) @ EP @ B)),
+              (slice(0, nF), slice(nF, nF + nK), _kron_sum(XuCt, EPunder)),           # Gamma_FK
+              (slice(0, nF), slice(nF + nK, None), -_kron_sum(Xunder, EPuB)),         # Gamma_FL
+              (slice(nF, nF + nK), slice(nF + nK, None), -_kron_sum(_T(XuCt), EPuB)))  # Gamma_KL
+    n_z = nF + nK + sys.nu * sys.nx
+    H = np.empty((n_z, n_z))
+    for rows, cols, block in blocks:
+        H[rows, cols] = block
+        H[cols, rows] = block.T
+    rho = np.concatenate([
+        -(EPunder @ A @ Xunder).sum(axis=0).reshape(-1, order="F"),
+        -(EPunder @ A @ S @ _T(C)).sum(axis=0).reshape(-1, order="F"),
+        (_T(B) @ EP @ A @ Xunder).sum(axis=0).reshape(-1, order="F")])
+    return H, rho
+
+
+def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"):
+    """F, K, L solving (3.51)/(3.71).
+
+    ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
+    (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
+    F and K do not enter the cost); ``"sdp"``: the SDP after Alg. 3.2 (min lambda with
+    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel.
+    """
+    n, ny, nu = sys.nx, sys.ny, sys.nu
+    H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
+    if method == "lstsq":
+        z = np.linalg.lstsq(H, -rho, rcond=None)[0]
+    elif method == "sdp":
+        z = _gains_sdp(H, rho, n, ny, nu)
+    else:
+        raise ValueError(f"method must be one of {METHODS}, found {method!r}")
+    F = z[:n * n].reshape(n, n, order="F")
+    K = z[n * n:n * n + n * ny].reshape(n, ny, order="F")
+    L = z[n * n + n * ny:].reshape(nu, n, order="F")
+    return F, K, L
+
+
+def _gains_sdp(H, rho, n, ny, nu):
+    """The SDP recommended after Alg. 3.2: min lambda s.t. [[lambda I, G], [G^T, I]] >= 0, (3.49)."""
+    import cvxpy as cp
+
+    F, K, L = cp.Variable((n, n)), cp.Variable((n, ny)), cp.Variable((nu, n))
+    lam = cp.Variable()
+    z = cp.hstack([cp.vec(F, order="F"), cp.vec(K, order="F"), cp.vec(L, order="F")])
+    G = cp.hstack([F, K, L.T])
+    block = cp.bmat([[lam * np.eye(n), G], [G.T, np.eye(n + ny + nu)]])
+    scale = max(1.0, float(np.abs(H).max()))
+    prob = cp.Problem(cp.Minimize(lam), [0.5 * (block + block.T) >> 0, (H @ z + rho) / scale == 0])
+    prob.solve(solver=cp.CLARABEL)
+    if F.value is None:
+        raise np.linalg.LinAlgError(f"SDP of Alg. 3.2 failed ((3.49) may be inconsistent when "
+                                    f"singular; use method='lstsq'): {prob.status}")
+    return np.concatenate([F.value.reshape(-1, order="F"), K.value.reshape(-1, order="F"),
+                           L.value.reshape(-1, order="F")])
+
+
+@dataclass
+class DynamicOutputFeedbackResult:
+    """Result of Algorithm 3.2.
+
+    F (nx, nx), K (nx, ny), L (nu, nx): the controller (3.37); converged, iterations;
+    rho: mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2);
+    stabilizing: rho < 1; cost: true average cost (3.38) from Prop. 3.24 (inf if not
+    stabilizing); bound: sum_i tr[Q_i (Xbar_i + Xunder_i) + L^T R_i L Xunder_i], the cost of
+    the bounded second moment of Prop. 3.26 that the algorithm minimises; Xbar, Xunder,
+    Pbar, Punder: the last iterates; history: traces of Xbar_i, Xunder_i, Pbar_i, Punder_i
+    per iteration, each (iterations + 1, M); seconds: wall time.
+    """
+
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    converged: bool
+    iterations: int
+    rho: float
+    stabilizing: bool
+    cost: float
+    bound: float
+    Xbar: np.ndarray
+    Xunder: np.ndarray
+    Pbar: np.ndarray
+    Punder: np.ndarray
+    history: dict = field(repr=False)
+    seconds: float = 0.0
+
+
+def _initial_bounds(sys, init, rng):
+    M, n = sys.M, sys.nx
+    if rng is None:
+        return [np.broadcast_to(init * np.eye(n), (M, n, n)).copy() for _ in range(4)]
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError("rng: pass a seeded numpy.random.Generator (or None for init * I)")
+    out = []
+    for _ in range(4):
+        G = rng.standard_normal((M, n, n))
+        out.append(init * (G @ _T(G) / n + np.eye(n)))
+    return out
+
+
+def _rel_change(old, new):
+    d = (new - old).ravel()
+    n = new.ravel()
+    return float(np.sqrt(d @ d / max(n @ n, 1e-300)))
+
+
+def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
+                            warn=True):
+    """Algorithm 3.2: the time-invariant controller (3.37) for the MJLS (3.36), mode not observed.
+
+    Iterates Step 2 (gains from (3.51)) and Step 4 (bounds (3.52)) with mu = mu_inf.
+
+    Parameters
+    ----------
+    sys : MJLS with measurement noise J (Sec. 3.6; J = None means y = C x).
+    tol : stop when the relative changes of F, K, L and of Xbar, Xunder, Pbar, Punder
+        (Frobenius norms) all fall below ``tol`` (Step 3 asks for unchanged gains; the
+        author's reference code stops on the change of the four bounds, Mxttak/MJLS,
+        MJLS_ClassMeasurementFeedbackConstGains.m).
+    max_iter : iteration limit; ``converged=False`` and a warning when reached or when the
+        bounds diverge (beyond 1e100, e.g. for a system this controller cannot stabilise).
+    init : scale of the initial bounds. With ``rng=None`` all four start at init * I, as in
+        the author's reference code (1e-4 I); with a Generator they are random symmetric
+        positive definite matrices of that scale (Step 1).
+    method : ``"lstsq"`` (minimum-norm solution of (3.51)) or ``"sdp"`` (the SDP after Alg. 3.2).
+    warn : warn when the iteration does not converge or the controller does not stabilise.
+    """
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1 or not init > 0:
+        raise ValueError(f"tol and init must be > 0 and max_iter an integer >= 1, found tol={tol}, "
+                         f"max_iter={max_iter}, init={init}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, found {method!r}")
+    start = time.perf_counter()
+    HHt, JJt = noise_covariances(sys)
+    mu = sys.mu_inf
+    Xbar, Xunder, Pbar, Punder = _initial_bounds(sys, init, rng)
+    traces = {k: [np.trace(v, axis1=1, axis2=2)] for k, v in
+              (("Xbar", Xbar), ("Xunder", Xunder), ("Pbar", Pbar), ("Punder", Punder))}
+    gains = None
+    converged = False
+    it = 0
+    for it in range(1, int(max_iter) + 1):
+        EPbar, EPunder = E(sys.T, Pbar), E(sys.T, Punder)
+        try:
+            F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method)
+        except np.linalg.LinAlgError:
+            break
+        new_X = bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt)
+        new_P = bound_costate_step(sys, F, K, L, EPbar, EPunder)
+        if not all(np.abs(v).max() < DIVERGED for v in (*new_X, *new_P)):
+            break                                   # the bounds diverge: not stabilisable this way
+        changes = [_rel_change(o, n) for o, n in zip((Xbar, Xunder, Pbar, Punder), (*new_X, *new_P))]
+        if gains is not None:
+            changes += [_rel_change(o, n) for o, n in zip(gains, (F, K, L))]
+        gains = (F, K, L)
+        Xbar, Xunder = new_X
+        Pbar, Punder = new_P
+        for name, v in (("Xbar", Xbar), ("Xunder", Xunder), ("Pbar", Pbar), ("Punder", Punder)):
+            traces[name].append(np.trace(v, axis1=1, axis2=2))
+        if it > 1 and max(changes) < tol:
+            converged = True
+            break
+    seconds = time.perf_counter() - start
+    if gains is None:
+        raise FloatingPointError("Algorithm 3.2: the bounds diverged in the first iteration")
+    F, K, L = gains
+    cost, _, rho = steady_state_cost(sys, F, K, L)
+    stabilizing = bool(rho < 1)
+    bound = float(np.einsum("iab,iba->", sys.Q, Xbar + Xunder)
+                  + np.einsum("iab,iba->", L.T @ sys.R @ L, Xunder))
+    if warn and not converged:
+        warnings.warn(f"Algorithm 3.2 did not converge within {it} iterations (rho = {rho:.4f})",
+                      RuntimeWarning, stacklevel=2)
+    elif warn and not stabilizing:
+        warnings.warn(f"Algorithm 3.2 converged, but the controller does not stabilise the MJLS in "
+                      f"the mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning,
+                      stacklevel=2)
+    history = {f"trace_{k}": np.array(v) for k, v in traces.items()}
+    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
+                                       stabilizing=stabilizing, cost=cost, bound=bound, Xbar=Xbar,
+                                       Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history,
+                                       seconds=seconds)

@@ -1,0 +1,328 @@
+"""Finite-horizon dynamic output feedback without mode observation (Sec. 3.7, Alg. 3.3).
+
+The time-variant controller (3.55) x^_{k+1} = F_k x^_k + K_k y_k, u_k = L_k x^_k for the
+MJLS (3.54) over k = 0..K-1 minimises the bound Jbar_0 (3.65) of the cost (3.56). Each
+iteration of Alg. 3.3 runs the bounds Xbar_k, Xunder_k forward ((3.66)-(3.67), Step 2)
+with the current gains and then, backwards from k = K - 1, solves (3.70)/(3.71) for the
+gains at step k and updates Pbar_k, Punder_k, omega_k ((3.68)-(3.69), Step 6).
+
+The initial state is a Gaussian mixture: given theta_0 = i (probability mu0_i), x_0 has
+mean ``mean0[i]`` and covariance ``cov0[i]``. The controller starts at x^_0 = E{x_0} =
+sum_i mu0_i mean0[i], so that Xunder_{i,0} = mu0_i x^_0 x^_0^T and
+Xbar_{i,0} = mu0_i (cov0[i] + (mean0[i] - x^_0)(mean0[i] - x^_0)^T). This is the
+initialisation of Thm. 3.31/Alg. 3.3 Step 2 (Xbar_{i,0} = Xi_0^i, Xunder_{i,0} = xi_0^i
+xi_0^i^T, with mu0_i as the factor of the author's reference code, Mxttak/MJLS,
+MJLS_ClassMeasurementFeedbackVariantGains.m, PredictXuXl) whenever the mode-conditional
+means coincide or mu0 is a unit vector, as in Sec. 3.7.3; otherwise it is the exact
+second moment of (x_0 - x^_0, x^_0) without the cross term, the same bound as later steps.
+"""
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .dynamic import (METHODS, _T, bound_costate_step, bound_moment_step, dynamic_output_feedback,
+                      gains_from_bounds, noise_covariances)
+from .moments import second_moment_step
+from .system import MJLS, E, check_distribution, check_psd
+
+
+@dataclass
+class FiniteHorizonResult:
+    """Result of Algorithm 3.3.
+
+    F (K, nx, nx), K (K, nx, ny), L (K, nu, nx): the gains of (3.55) for k = 0..K-1;
+    xhat0 (nx,): the controller's initial state E{x_0}; cost_bounds: Jbar_0 (3.72) after
+    each iteration (Thm. 3.33: non-increasing); converged, iterations; cost: the true
+    expected cost (3.56) of the final gains from the exact augmented second-moment
+    recursion (3.58); Xbar, Xunder (K+1, M, nx, nx), Pbar, Punder (K+1, M, nx, nx): the
+    bounds of the last iteration; rejected: number of step updates Step 5 rejected in the
+    last iteration; seconds: wall time.
+    """
+
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    xhat0: np.ndarray
+    cost_bounds: np.ndarray
+    converged: bool
+    iterations: int
+    cost: float
+    Xbar: np.ndarray = field(repr=False)
+    Xunder: np.ndarray = field(repr=False)
+    Pbar: np.ndarray = field(repr=False)
+    Punder: np.ndarray = field(repr=False)
+    rejected: int = 0
+    seconds: float = 0.0
+
+    def controller(self):
+        """The controller (3.55) for :func:`asoc.mjls.simulate`."""
+        from .simulate import DynamicOutputFeedback
+
+        return DynamicOutputFeedback(self.F, self.K, self.L, xhat0=self.xhat0)
+
+
+@dataclass(frozen=True)
+class Stages:
+    """The time-variant MJLS (3.54) over a horizon: one MJLS per step k = 0..K-1 and the
+    terminal weight Q_K (M, nx, nx); noise covariances HHt, JJt per step."""
+
+    systems: tuple
+    Q_final: np.ndarray
+    HHt: tuple
+    JJt: tuple
+
+    @property
+    def horizon(self):
+        return len(self.systems)
+
+
+def stages(sys, horizon):
+    """Normalise ``sys`` (an MJLS, or a sequence of ``horizon`` or ``horizon + 1`` MJLS for
+    the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`."""
+    if int(horizon) != horizon or horizon < 1:
+        raise ValueError(f"horizon must be an integer >= 1, found {horizon}")
+    horizon = int(horizon)
+    if isinstance(sys, MJLS):
+        systems = (sys,) * horizon
+        Q_final = sys.Q
+    else:
+        systems = tuple(sys)
+        if len(systems) not in (horizon, horizon + 1) or not all(isinstance(s, MJLS) for s in systems):
+            raise ValueError(f"sys: expected an MJLS or a sequence of {horizon} or {horizon + 1} MJLS, "
+                             f"found {type(sys).__name__} of length {len(systems)}")
+        ref = systems[0]
+        for k, s in enumerate(systems):
+            if (s.M, s.nx, s.nu, s.ny) != (ref.M, ref.nx, ref.nu, ref.ny):
+                raise ValueError(f"sys: step {k} has (M, nx, nu, ny) = {(s.M, s.nx, s.nu, s.ny)}, "
+                                 f"step 0 has {(ref.M, ref.nx, ref.nu, ref.ny)}")
+        Q_final = systems[-1].Q
+        systems = systems[:horizon]
+    cache = {}
+    for s in systems:
+        if id(s) not in cache:
+            cache[id(s)] = noise_covariances(s)
+    HHt = tuple(cache[id(s)][0] for s in systems)
+    JJt = tuple(cache[id(s)][1] for s in systems)
+    return Stages(systems, Q_final, HHt, JJt)
+
+
+def check_initial_state(M, nx, mean0, cov0, mu0):
+    """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays."""
+    mu0 = check_distribution(mu0, M, "mu0")
+    mean0 = np.asarray(mean0, dtype=float)
+    if mean0.shape != (M, nx) or not np.all(np.isfinite(mean0)):
+        raise ValueError(f"mean0: expected finite per-mode means of shape ({M}, {nx}), found "
+                         f"shape {mean0.shape}")
+    cov0 = np.asarray(cov0, dtype=float)
+    if cov0.shape != (M, nx, nx) or not np.all(np.isfinite(cov0)):
+        raise ValueError(f"cov0: expected finite per-mode covariances of shape ({M}, {nx}, {nx}), "
+                         f"found shape {cov0.shape}")
+    check_psd(cov0, "cov0")
+    return mean0, cov0, mu0
+
+
+def initial_bounds(mean0, cov0, mu0):
+    """x^_0 = E{x_0} and the bounds Xbar_{i,0}, Xunder_{i,0} (Thm. 3.31, Alg. 3.3 Step 2)."""
+    xhat0 = mu0 @ mean0
+    dev = mean0 - xhat0
+    m = mu0[:, None, None]
+    Xbar0 = m * (cov0 + np.einsum("ia,ib->iab", dev, dev))
+    Xunder0 = m * np.outer(xhat0, xhat0)
+    return xhat0, Xbar0, Xunder0
+
+
+def mode_distributions(st, mu0):
+    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..K, shape (K+1, M)."""
+    mu = np.empty((st.horizon + 1, len(mu0)))
+    mu[0] = mu0
+    for k, s in enumerate(st.systems):
+        mu[k + 1] = mu[k] @ s.T
+    return mu
+
+
+def augmented_initial_moment(mean0, cov0, mu0, xhat0):
+    """X~_0^i = E{[x_0; x^_0][x_0; x^_0]^T 1(theta_0 = i)} for a constant x^_0 = xhat0."""
+    M, nx = mean0.shape
+    nc = xhat0.size
+    X0 = np.zeros((M, nx + nc, nx + nc))
+    X0[:, :nx, :nx] = cov0 + np.einsum("ia,ib->iab", mean0, mean0)
+    X0[:, :nx, nx:] = np.einsum("ia,b->iab", mean0, xhat0)
+    X0[:, nx:, :nx] = _T(X0[:, :nx, nx:])
+    X0[:, nx:, nx:] = np.outer(xhat0, xhat0)
+    return mu0[:, None, None] * X0
+
+
+def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
+    """Exact expected cost of a time-variant MJLS closed loop over K steps (3.57)-(3.58).
+
+    Acl, HHt_cl, Qcl: sequences of K stacks (M, n, n) (mode-dependent, e.g. the augmented
+    closed loop (3.59)-(3.60)); Q_final (M, n, n); Ts: K transition matrices; X0 (M, n, n):
+    E{x~_0 x~_0^T 1(theta_0 = i)}. Returns sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K} X~_K^i].
+    """
+    X, mu = X0, np.asarray(mu0, dtype=float)
+    cost = 0.0
+    for A, HH, Q, T in zip(Acl, HHt_cl, Qcl, Ts):
+        cost += float(np.einsum("iab,iba->", Q, X))
+        X = second_moment_step(A, HH, T, X, mu)
+        mu = mu @ T
+    return cost + float(np.einsum("iab,iba->", Q_final, X))
+
+
+def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
+    """True expected cost (3.56) of the time-variant controller (3.55) with gains F, K, L of
+    shapes (K, nx, nx), (K, nx, ny), (K, nu, nx), from the augmented recursion (3.58)."""
+    F, K, L = (np.asarray(g, dtype=float) for g in (F, K, L))
+    st = stages(sys, len(F))
+    s0 = st.systems[0]
+    mean0, cov0, mu0 = check_initial_state(s0.M, s0.nx, mean0, cov0, mu0)
+    if xhat0 is None:
+        xhat0 = mu0 @ mean0
+    nx, nc = s0.nx, F.shape[1]
+    Acl, HHcl, Qcl = [], [], []
+    for k, s in enumerate(st.systems):
+        A = np.zeros((s.M, nx + nc, nx + nc))
+        A[:, :nx, :nx], A[:, :nx, nx:] = s.A, s.B @ L[k]
+        A[:, nx:, :nx], A[:, nx:, nx:] = K[k] @ s.C, F[k]
+        HH = np.zeros_like(A)
+        HH[:, :nx, :nx], HH[:, nx:, nx:] = st.HHt[k], K[k] @ st.JJt[k] @ K[k].T
+        Q = np.zeros_like(A)
+        Q[:, :nx, :nx], Q[:, nx:, nx:] = s.Q, L[k].T @ s.R @ L[k]
+        Acl.append(A), HHcl.append(HH), Qcl.append(Q)
+    Q_final = np.zeros_like(Acl[0])
+    Q_final[:, :nx, :nx] = st.Q_final
+    X0 = augmented_initial_moment(mean0, cov0, mu0, np.asarray(xhat0, dtype=float))
+    return augmented_cost(Acl, HHcl, Qcl, Q_final, [s.T for s in st.systems], X0, mu0)
+
+
+def _bound_to_go(s, F, K, L, Xbar, Xunder, EPbar, EPunder, Eomega, mu, HHt, JJt):
+    """Pbar_k, Punder_k (3.68)-(3.69), omega_k and Jbar_k (3.72) for the gains at step k."""
+    Pbar, Punder = bound_costate_step(s, F, K, L, EPbar, EPunder)
+    omega = (np.einsum("iab,iba->i", EPbar + EPunder, HHt)
+             + np.einsum("iab,iba->i", EPunder, K @ JJt @ K.T) + Eomega)
+    J = float(np.einsum("iab,iba->", Pbar, Xbar + Xunder) + np.einsum("iab,iba->", Punder, Xbar)
+              + mu @ omega)
+    return Pbar, Punder, omega, J
+
+
+def _initial_gains(init, st, nx, ny, nu):
+    """Step 1: the initial gain sequence (see :func:`finite_horizon_dynamic_output_feedback`)."""
+    horizon = st.horizon
+    if init is None:
+        init = dynamic_output_feedback(st.systems[0], warn=False)
+    elif isinstance(init, np.random.Generator):
+        return (init.random((horizon, nx, nx)) - 0.5, init.random((horizon, nx, ny)) - 0.5,
+                init.random((horizon, nu, nx)) - 0.5)
+    F, K, L = (np.asarray(g, dtype=float) for g in (init.F, init.K, init.L)) \
+        if hasattr(init, "F") else (np.asarray(g, dtype=float) for g in init)
+    out = []
+    for name, g, shape in (("F", F, (nx, nx)), ("K", K, (nx, ny)), ("L", L, (nu, nx))):
+        if g.shape == shape:
+            g = np.broadcast_to(g, (horizon,) + shape)
+        if g.shape != (horizon,) + shape or not np.all(np.isfinite(g)):
+            raise ValueError(f"init: {name} must be finite of shape {shape} or {(horizon,) + shape}, "
+                             f"found {g.shape}")
+        out.append(g.copy())
+    return tuple(out)
+
+
+def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=None, mu0=None,
+                                           init=None, tol=1e-9, max_iter=500, method="lstsq",
+                                           safeguard=True, warn=True, progress=False):
+    """Algorithm 3.3: the time-variant controller (3.55) for the MJLS (3.54), mode not observed.
+
+    Parameters
+    ----------
+    sys : MJLS, or a sequence of ``horizon`` (or ``horizon + 1``, the last giving Q_K) MJLS
+        for time-variant system matrices (3.54).
+    horizon : K >= 1.
+    mean0, cov0 : (M, nx) and (M, nx, nx): mean and covariance of x_0 given theta_0 = i.
+    mu0 : (M,) distribution of theta_0.
+    init : initial gains (Step 1, "an arbitrary sequence"). None: the time-invariant
+        controller of Alg. 3.2 for the (first-step) system, as the author's simulation of
+        Sec. 3.7.3 passes it to the time-variant design (Mxttak/MJLS,
+        sim_MJLS_ClassMeasurementFeedbackVariantGains.m); a Generator: entries uniform in
+        [-0.5, 0.5) as in the author's MJLS_ClassMeasurementFeedbackVariantGains.m; or a
+        result of :func:`dynamic_output_feedback` / a tuple (F, K, L), constant or per step.
+        All-zero gains are a fixed point of the iteration (Xunder_k = 0 for k >= 1 makes
+        (3.71) leave F_k, L_k at their minimum-norm value 0, and then Punder_k = 0 leaves K_k
+        at 0), so they are a poor start.
+    tol : stop (Step 7) when Jbar_0 changed by less than ``tol * max(1, Jbar_0)``.
+    max_iter : iteration limit; ``converged=False`` and a warning when reached.
+    method : ``"lstsq"`` (minimum-norm solution of (3.71), the QP (3.73)) or ``"sdp"``.
+    safeguard : Step 5: keep the previous gains at step k when the new ones increase the
+        bounded cost-to-go Jbar_k (3.72) (evaluated for both with the same Xbar_k, Xunder_k
+        and P_{k+1}). The author's reference code always accepts (safeguard=False).
+    warn : warn on non-convergence and when Jbar_0 increases (contradicting Thm. 3.33).
+    progress : show a tqdm bar over iterations.
+    """
+    start = time.perf_counter()
+    st = stages(sys, horizon)
+    K_ = st.horizon
+    s0 = st.systems[0]
+    M, nx, nu, ny = s0.M, s0.nx, s0.nu, s0.ny
+    mean0, cov0, mu0 = check_initial_state(M, nx, mean0, cov0, mu0)
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
+        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
+                         f"max_iter={max_iter}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, found {method!r}")
+    F, K, L = _initial_gains(init, st, nx, ny, nu)
+    xhat0, Xbar0, Xunder0 = initial_bounds(mean0, cov0, mu0)
+    mu = mode_distributions(st, mu0)
+    Xbar = np.empty((K_ + 1, M, nx, nx))
+    Xunder = np.empty_like(Xbar)
+    Pbar = np.empty_like(Xbar)
+    Punder = np.empty_like(Xbar)
+    Xbar[0], Xunder[0] = Xbar0, Xunder0
+    bounds = []
+    converged = False
+    rejected = 0
+    it = 0
+    from tqdm.auto import tqdm
+
+    for it in tqdm(range(1, int(max_iter) + 1), disable=not progress, desc="Alg. 3.3", leave=False):
+        for k, s in enumerate(st.systems):                                    # Step 2
+            Xbar[k + 1], Xunder[k + 1] = bound_moment_step(s, F[k], K[k], L[k], Xbar[k], Xunder[k],
+                                                           mu[k], st.HHt[k], st.JJt[k])
+        Pbar[K_], Punder[K_] = st.Q_final, 0.0                               # Step 3
+        omega = np.zeros(M)
+        rejected = 0
+        for k in range(K_ - 1, -1, -1):                                      # Steps 4-6
+            s = st.systems[k]
+            EPbar, EPunder, Eomega = E(s.T, Pbar[k + 1]), E(s.T, Punder[k + 1]), s.T @ omega
+            args = (Xbar[k], Xunder[k], EPbar, EPunder, Eomega, mu[k], st.HHt[k], st.JJt[k])
+            Fn, Kn, Ln = gains_from_bounds(s, Xbar[k], Xunder[k], EPbar, EPunder, mu[k],
+                                           st.JJt[k], method)
+            new = _bound_to_go(s, Fn, Kn, Ln, *args)
+            if safeguard and it > 1:
+                old = _bound_to_go(s, F[k], K[k], L[k], *args)
+                if old[3] < new[3] - 1e-12 * abs(new[3]):
+                    rejected += 1
+                    Pbar[k], Punder[k], omega = old[:3]
+                    continue
+            F[k], K[k], L[k] = Fn, Kn, Ln
+            Pbar[k], Punder[k], omega = new[:3]
+        J0 = float(np.einsum("iab,iba->", Pbar[0], Xbar[0] + Xunder[0])
+                   + np.einsum("iab,iba->", Punder[0], Xbar[0]) + mu0 @ omega)   # Step 7, (3.72)
+        if not np.isfinite(J0):
+            break
+        bounds.append(J0)
+        if len(bounds) > 1 and abs(bounds[-2] - J0) <= tol * max(1.0, abs(J0)):
+            converged = True
+            break
+    bounds = np.array(bounds)
+    seconds = time.perf_counter() - start
+    if warn and not converged:
+        warnings.warn(f"Algorithm 3.3 did not converge within {it} iterations", RuntimeWarning,
+                      stacklevel=2)
+    increases = np.diff(bounds) > 1e-9 * np.maximum(1.0, np.abs(bounds[1:]))
+    if warn and np.any(increases):
+        warnings.warn(f"Algorithm 3.3: Jbar_0 increased in {int(increases.sum())} iterations "
+                      f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
+    cost = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
+    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds, converged=converged,
+                               iterations=it, cost=cost, Xbar=Xbar, Xunder=Xunder, Pbar=Pbar,
+                               Punder=Punder, rejected=rejected, seconds=seconds)

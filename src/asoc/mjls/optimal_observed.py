@@ -1,0 +1,153 @@
+"""Baseline [38] of Table 3.3: finite-horizon output feedback WITH mode observation.
+
+O. L. V. Costa, M. D. Fragoso, R. P. Marques, *Discrete-Time Markov Jump Linear Systems*,
+Springer 2005 ([38] of the thesis). With theta_k observed, the quadratic problem with
+partial state information separates (their Ch. 5, finite-horizon case with the Markov
+jump filter; also Dolgov & Hanebeck, arXiv:1507.00304, Sec. 1: "mode availability
+guarantees that the separation between control and estimation holds"):
+
+* control: the mode-dependent LQ gains of the coupled Riccati difference equations
+  (their Ch. 4, finite horizon),
+
+      X_i(K) = Q_i,   S_i(k) = R_i + B_i^T E_i(X(k+1)) B_i,
+      F_i(k) = -S_i(k)^{-1} B_i^T E_i(X(k+1)) A_i,
+      X_i(k) = Q_i + A_i^T E_i(X(k+1)) (A_i + B_i F_i(k)),
+
+* estimation: the Markov jump filter, the best linear estimator whose gain depends on
+  the current mode and time only (their Ch. 5), in predictor form so that u_k uses
+  y_0..y_{k-1} as the controllers (3.37)/(3.55) do:
+
+      x^_{k+1} = A_i x^_k + B_i u_k + M_i(k) (y_k - C_i x^_k),   i = theta_k,
+      M_i(k) = A_i Y_i(k) C_i^T (C_i Y_i(k) C_i^T + pi_i(k) J_i J_i^T)^+,
+      Y_j(k+1) = sum_i p_ij [A_i Y_i(k) A_i^T - M_i(k) C_i Y_i(k) A_i^T + pi_i(k) H_i H_i^T],
+
+  with Y_i(k) = E{(x_k - x^_k)(x_k - x^_k)^T 1(theta_k = i)} and pi_i(k) = P(theta_k = i).
+  Y_j(k+1) is minimal in the positive semidefinite order because M_i(k) enters only the
+  i-th summand (A_i - M C_i) Y_i (A_i - M C_i)^T + pi_i M J_i J_i^T M^T, which M_i(k)
+  minimises (completion of squares); the estimation error does not depend on u.
+
+u_k = F_{theta_k}(k) x^_k. The filter starts at x^_0 = E{x_0} with
+Y_i(0) = mu0_i (cov0[i] + (mean0[i] - x^_0)(mean0[i] - x^_0)^T).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .finite_horizon import (_T, augmented_cost, augmented_initial_moment, check_initial_state,
+                             mode_distributions, stages)
+from .simulate import Controller
+
+
+@dataclass
+class ModeObservedResult:
+    """F (K, M, nu, nx) LQ gains, Mf (K, M, nx, ny) filter gains, X (K+1, M, nx, nx) control
+    Riccati solutions, Y (K+1, M, nx, nx) filter error moments, xhat0 (nx,), cost: the exact
+    expected cost (3.56) of the closed loop (augmented second-moment recursion)."""
+
+    F: np.ndarray
+    Mf: np.ndarray
+    X: np.ndarray = field(repr=False)
+    Y: np.ndarray = field(repr=False)
+    xhat0: np.ndarray = None
+    cost: float = np.nan
+
+    def controller(self, sys):
+        """The controller for :func:`asoc.mjls.simulate` (it reads theta_k)."""
+        return ModeObservedLQG(sys, self.F, self.Mf, self.xhat0)
+
+
+class ModeObservedLQG(Controller):
+    """u_k = F_{theta_k}(k) x^_k with the Markov jump filter x^ (needs the mode, [38])."""
+
+    observes_mode = True
+
+    def __init__(self, sys, F, Mf, xhat0):
+        self.A, self.B, self.C = sys.A, sys.B, sys.C
+        self.F, self.Mf = np.asarray(F, dtype=float), np.asarray(Mf, dtype=float)
+        self.xhat0 = np.asarray(xhat0, dtype=float)
+
+    def start(self, n_runs):
+        return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
+
+    def input(self, k, y, theta, xhat):
+        k = min(k, len(self.F) - 1)
+        u = np.einsum("nab,nb->na", self.F[k][theta], xhat)
+        innovation = y - np.einsum("nab,nb->na", self.C[theta], xhat)
+        xhat = (np.einsum("nab,nb->na", self.A[theta], xhat) + np.einsum("nab,nb->na", self.B[theta], u)
+                + np.einsum("nab,nb->na", self.Mf[k][theta], innovation))
+        return u, xhat
+
+
+def control_riccati(st):
+    """Coupled Riccati difference equations of the LQ problem with observed mode ([38], Ch. 4)."""
+    K_ = st.horizon
+    s0 = st.systems[0]
+    X = np.empty((K_ + 1, s0.M, s0.nx, s0.nx))
+    F = np.empty((K_, s0.M, s0.nu, s0.nx))
+    X[K_] = st.Q_final
+    for k in range(K_ - 1, -1, -1):
+        s = st.systems[k]
+        EX = s.E(X[k + 1])
+        BtEX = _T(s.B) @ EX
+        F[k] = -np.linalg.solve(s.R + BtEX @ s.B, BtEX @ s.A)
+        Xk = s.Q + _T(s.A) @ EX @ (s.A + s.B @ F[k])
+        X[k] = 0.5 * (Xk + _T(Xk))
+    return F, X
+
+
+def markov_jump_filter(st, Y0, mu):
+    """Gains M_i(k) and error moments Y_i(k) of the Markov jump filter ([38], Ch. 5)."""
+    K_ = st.horizon
+    s0 = st.systems[0]
+    Y = np.empty((K_ + 1, s0.M, s0.nx, s0.nx))
+    Mf = np.empty((K_, s0.M, s0.nx, s0.ny))
+    Y[0] = Y0
+    for k, s in enumerate(st.systems):
+        CY = s.C @ Y[k]
+        Sigma = CY @ _T(s.C) + mu[k][:, None, None] * st.JJt[k]
+        Mf[k] = s.A @ _T(CY) @ np.linalg.pinv(Sigma, hermitian=True)
+        inner = s.A @ Y[k] @ _T(s.A) - Mf[k] @ CY @ _T(s.A) + mu[k][:, None, None] * st.HHt[k]
+        Yn = s.D(inner)
+        Y[k + 1] = 0.5 * (Yn + _T(Yn))
+    return Mf, Y
+
+
+def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
+    """The optimal finite-horizon output-feedback controller with observed mode ([38]).
+
+    Parameters as in :func:`finite_horizon_dynamic_output_feedback`: ``sys`` an MJLS or a
+    sequence of MJLS (3.54); mean0 (M, nx), cov0 (M, nx, nx) the mode-conditional mean
+    and covariance of x_0; mu0 (M,) the distribution of theta_0.
+    """
+    st = stages(sys, horizon)
+    s0 = st.systems[0]
+    mean0, cov0, mu0 = check_initial_state(s0.M, s0.nx, mean0, cov0, mu0)
+    mu = mode_distributions(st, mu0)
+    xhat0 = mu0 @ mean0
+    dev = mean0 - xhat0
+    Y0 = mu0[:, None, None] * (cov0 + np.einsum("ia,ib->iab", dev, dev))
+    F, X = control_riccati(st)
+    Mf, Y = markov_jump_filter(st, Y0, mu)
+    cost = _closed_loop_cost(st, F, Mf, mean0, cov0, mu0, xhat0)
+    return ModeObservedResult(F=F, Mf=Mf, X=X, Y=Y, xhat0=xhat0, cost=cost)
+
+
+def _closed_loop_cost(st, F, Mf, mean0, cov0, mu0, xhat0):
+    """Exact expected cost (3.56) of [x; x^] with x^+ = M C x + (A + B F - M C) x^ + M J v."""
+    nx = st.systems[0].nx
+    Acl, HHcl, Qcl = [], [], []
+    for k, s in enumerate(st.systems):
+        A = np.zeros((s.M, 2 * nx, 2 * nx))
+        BF, MC = s.B @ F[k], Mf[k] @ s.C
+        A[:, :nx, :nx], A[:, :nx, nx:] = s.A, BF
+        A[:, nx:, :nx], A[:, nx:, nx:] = MC, s.A + BF - MC
+        HH = np.zeros_like(A)
+        HH[:, :nx, :nx], HH[:, nx:, nx:] = st.HHt[k], Mf[k] @ st.JJt[k] @ _T(Mf[k])
+        Q = np.zeros_like(A)
+        Q[:, :nx, :nx], Q[:, nx:, nx:] = s.Q, _T(F[k]) @ s.R @ F[k]
+        Acl.append(A), HHcl.append(HH), Qcl.append(Q)
+    Q_final = np.zeros_like(Acl[0])
+    Q_final[:, :nx, :nx] = st.Q_final
+    X0 = augmented_initial_moment(mean0, cov0, mu0, xhat0)
+    return augmented_cost(Acl, HHcl, Qcl, Q_final, [s.T for s in st.systems], X0, mu0)
