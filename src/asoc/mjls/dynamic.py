@@ -244,9 +244,8 @@ def _initial_bounds(sys, init, rng):
 
 
 def _rel_change(old, new):
-    d = (new - old).ravel()
-    n = new.ravel()
-    return float(np.sqrt(d @ d / max(n @ n, 1e-300)))
+    d = new - old
+    return float(np.sqrt(np.vdot(d, d) / max(np.vdot(new, new), 1e-300)))
 
 
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
@@ -279,8 +278,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     HHt, JJt = noise_covariances(sys)
     mu = sys.mu_inf
     Xbar, Xunder, Pbar, Punder = _initial_bounds(sys, init, rng)
-    traces = {k: [np.trace(v, axis1=1, axis2=2)] for k, v in
-              (("Xbar", Xbar), ("Xunder", Xunder), ("Pbar", Pbar), ("Punder", Punder))}
+    iterates = [np.stack([Xbar, Xunder, Pbar, Punder])]
     gains = None
     converged = False
     it = 0
@@ -297,11 +295,10 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
         changes = [_rel_change(o, n) for o, n in zip((Xbar, Xunder, Pbar, Punder), (*new_X, *new_P))]
         if gains is not None:
             changes += [_rel_change(o, n) for o, n in zip(gains, (F, K, L))]
+        iterates.append(np.stack([*new_X, *new_P]))
         gains = (F, K, L)
         Xbar, Xunder = new_X
         Pbar, Punder = new_P
-        for name, v in (("Xbar", Xbar), ("Xunder", Xunder), ("Pbar", Pbar), ("Punder", Punder)):
-            traces[name].append(np.trace(v, axis1=1, axis2=2))
         if it > 1 and max(changes) < tol:
             converged = True
             break
@@ -320,7 +317,8 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
         warnings.warn(f"Algorithm 3.2 converged, but the controller does not stabilise the MJLS in "
                       f"the mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning,
                       stacklevel=2)
-    history = {f"trace_{k}": np.array(v) for k, v in traces.items()}
+    traces = np.trace(np.array(iterates), axis1=-2, axis2=-1)           # (iterations + 1, 4, M)
+    history = {f"trace_{k}": traces[:, j] for j, k in enumerate(("Xbar", "Xunder", "Pbar", "Punder"))}
     return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
                                        stabilizing=stabilizing, cost=cost, bound=bound, Xbar=Xbar,
                                        Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history,

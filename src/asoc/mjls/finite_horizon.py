@@ -318,7 +318,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     if warn and not converged:
         warnings.warn(f"Algorithm 3.3 did not converge within {it} iterations", RuntimeWarning,
                       stacklevel=2)
-    increases = np.diff(bounds) > 1e-9 * np.maximum(1.0, np.abs(bounds[1:]))
+    increases = np.diff(bounds) > 1e-8 * np.maximum(1.0, np.abs(bounds[1:]))   # beyond rounding
     if warn and np.any(increases):
         warnings.warn(f"Algorithm 3.3: Jbar_0 increased in {int(increases.sum())} iterations "
                       f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
