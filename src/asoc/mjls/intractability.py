@@ -56,22 +56,22 @@ def expected_cost_K2(x, u, a, b, g, T, pi, Q=1.0, R=1.0, n_nodes=80):
     return total
 
 
-def convexity_violation(J, xs, us):
-    """Largest violation of midpoint convexity on a grid: max over grid pairs of
-    J((p+q)/2) - (J(p)+J(q))/2 along rows, columns and diagonals (> 0 means not convex)."""
-    worst = -np.inf
-    arg = None
-    for step in range(1, min(J.shape) // 2):
-        for (di, dj) in ((step, 0), (0, step), (step, step), (step, -step)):
-            i0, i1 = max(0, -2 * di), J.shape[0] - max(0, 2 * di)
-            j0, j1 = max(0, -2 * dj), J.shape[1] - max(0, 2 * dj)
-            p = J[i0:i1, j0:j1]
-            mid = J[i0 + di:i1 + di, j0 + dj:j1 + dj]
-            q = J[i0 + 2 * di:i1 + 2 * di, j0 + 2 * dj:j1 + 2 * dj]
-            gap = mid - 0.5 * (p + q)
-            k = np.unravel_index(np.argmax(gap), gap.shape)
-            if gap[k] > worst:
-                worst = float(gap[k])
-                i, j = k[0] + i0, k[1] + j0
-                arg = ((xs[i], us[j]), (xs[i + 2 * di], us[j + 2 * dj]))
-    return worst, arg
+def hessian_min_eigenvalue(J, X, U, h=1e-3):
+    """Smallest eigenvalue of the Hessian of J(x, u) over a grid (central differences).
+
+    Returns (lambda_min, (x, u)) where it is attained.
+    """
+    fxx = (J(X + h, U) - 2 * J(X, U) + J(X - h, U)) / h ** 2
+    fuu = (J(X, U + h) - 2 * J(X, U) + J(X, U - h)) / h ** 2
+    fxu = (J(X + h, U + h) - J(X + h, U - h) - J(X - h, U + h) + J(X - h, U - h)) / (4 * h * h)
+    lam = 0.5 * (fxx + fuu) - np.sqrt(0.25 * (fxx - fuu) ** 2 + fxu ** 2)
+    k = np.unravel_index(np.argmin(lam), lam.shape)
+    return float(lam[k]), (float(X[k]), float(U[k]))
+
+
+def quadratic_fit_residual(X, U, J):
+    """Relative RMS residual of the least-squares fit of J by a full quadratic in (x, u)."""
+    x, u, j = X.ravel(), U.ravel(), J.ravel()
+    basis = np.stack([np.ones_like(x), x, u, x * x, x * u, u * u], axis=1)
+    coef, *_ = np.linalg.lstsq(basis, j, rcond=None)
+    return float(np.sqrt(np.mean((basis @ coef - j) ** 2)) / np.sqrt(np.mean(j ** 2)))

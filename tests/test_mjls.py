@@ -1,0 +1,240 @@
+"""Unit tests of asoc.mjls: model validation, stability, moments, Alg. 3.1, LMIs, baselines,
+Monte Carlo."""
+
+import warnings
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from asoc.mjls import (MJLS, ModeDependentGain, StaticGain, TimeVariantGain, closed_loop, h2_cost,
+                       ms_spectral_radius, second_moments, simulate, static_output_feedback,
+                       steady_state_second_moment)
+from asoc.mjls.baselines import do_val_h2_state_feedback, time_variant_feedback
+from asoc.mjls.examples import sec354_system
+from asoc.mjls.intractability import expected_cost_K2
+from asoc.mjls.lmi import static_output_lmi
+from asoc.mjls.observed import observed_mode_state_feedback
+
+
+def random_mjls(rng, M=3, nx=3, nu=2, ny=2, scale=0.6):
+    A = rng.normal(size=(M, nx, nx))
+    A *= scale / np.max(np.abs(np.linalg.eigvals(A)), axis=1)[:, None, None]
+    T = rng.random((M, M)) + 0.2
+    T /= T.sum(axis=1, keepdims=True)
+    return MJLS(A=A, B=rng.normal(size=(M, nx, nu)), C=rng.normal(size=(M, ny, nx)),
+                H=0.3 * rng.normal(size=(M, nx, nx)), Q=np.eye(nx), R=np.eye(nu), T=T)
+
+
+# --- validation ------------------------------------------------------------------------------
+
+def test_bad_transition_matrix_names_the_row():
+    with pytest.raises(ValueError, match=r"T: row 1"):
+        sec354_system(1).replace(T=[[0.7, 0.3], [0.5, 0.6]])
+
+
+def test_wrong_shape_names_matrix_and_shapes():
+    sys = sec354_system(1)
+    with pytest.raises(ValueError, match=r"B: expected shape .*found \(2, 3, 1\)"):
+        sys.replace(B=np.zeros((2, 3, 1)))
+    with pytest.raises(ValueError, match=r"A: expected 2 modes, found 3"):
+        sys.replace(A=np.zeros((3, 2, 2)))
+
+
+def test_weights_and_finiteness_are_checked():
+    sys = sec354_system(1)
+    with pytest.raises(ValueError, match="Q: mode 1 matrix is not symmetric"):
+        sys.replace(Q=np.array([[1.0, 1.0], [0.0, 1.0]]))
+    with pytest.raises(ValueError, match="Q: .*positive semidefinite"):
+        sys.replace(Q=-np.eye(2))
+    with pytest.raises(ValueError, match="R: .*positive definite"):
+        sys.replace(R=np.zeros((1, 1)))
+    with pytest.raises(ValueError, match="A: found non-finite"):
+        sys.replace(A=np.full((2, 2, 2), np.nan))
+
+
+# --- stability and moments ---------------------------------------------------------------------
+
+def test_spectral_radius_single_mode_is_square_of_eigenvalue_radius():
+    A = np.array([[[0.5, 1.0], [0.0, -0.8]]])
+    assert ms_spectral_radius(A, [[1.0]]) == pytest.approx(0.8 ** 2)
+
+
+def test_second_moments_match_monte_carlo():
+    rng = np.random.default_rng(0)
+    sys = random_mjls(rng)
+    L = 0.1 * rng.normal(size=(sys.nu, sys.ny))
+    Acl = closed_loop(sys, L)
+    x0 = np.array([1.0, -2.0, 0.5])
+    mu0 = np.array([1.0, 0.0, 0.0])
+    K = 8
+    X, mu = second_moments(Acl, sys.H @ np.swapaxes(sys.H, 1, 2), sys.T,
+                           mu0[:, None, None] * np.outer(x0, x0), mu0, K)
+    run = simulate(sys, StaticGain(L), x0, K, 200_000, np.random.default_rng(1), mode0=0, trajectories=True)
+    xK, thK = run.x[:, K], run.theta[:, K]
+    for i in range(sys.M):
+        emp = np.einsum("na,nb->ab", xK * (thK == i)[:, None], xK) / len(xK)
+        assert np.allclose(emp, X[K, i], atol=0.04 * np.abs(X[K]).max())
+
+
+def test_steady_state_moment_is_the_fixed_point_and_h2_is_the_mean_cost():
+    sys = sec354_system(1)
+    L = np.array([[-0.6350]])
+    Acl = closed_loop(sys, L)
+    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
+    X = steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)
+    X_iter, _ = second_moments(Acl, HHt, sys.T, np.zeros_like(X), sys.mu_inf, 3000)
+    assert np.allclose(X, X_iter[-1], rtol=1e-8)
+    run = simulate(sys, StaticGain(L), np.zeros(2), 400, 20_000, np.random.default_rng(2))
+    assert run.average_cost.mean() == pytest.approx(h2_cost(sys, L, X), rel=0.03)
+
+
+# --- Algorithm 3.1 -------------------------------------------------------------------------------
+
+def test_alg31_reduces_to_lqr_for_one_mode_with_state_feedback():
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(3, 3))
+    B = rng.normal(size=(3, 2))
+    sys = MJLS(A=[A], B=[B], C=[np.eye(3)], H=[np.eye(3)], Q=np.eye(3), R=np.eye(2), T=[[1.0]])
+    res = static_output_feedback(sys)
+    P = sla.solve_discrete_are(A, B, np.eye(3), np.eye(2))
+    L_lqr = -np.linalg.solve(np.eye(2) + B.T @ P @ B, B.T @ P @ A)
+    assert res.converged and res.stabilizing
+    assert np.allclose(res.L, L_lqr, atol=1e-7)
+
+
+def test_alg31_gain_is_a_local_minimum_of_the_h2_cost():
+    sys = sec354_system(1)
+    res = static_output_feedback(sys)
+    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
+
+    def cost(L):
+        return h2_cost(sys, L, steady_state_second_moment(closed_loop(sys, L), HHt, sys.T, sys.mu_inf))
+
+    assert res.cost == pytest.approx(cost(res.L))
+    for d in (1e-3, -1e-3):
+        assert cost(res.L + d) > res.cost
+
+
+def test_alg31_sdp_solve_of_331_agrees_with_vec():
+    sys = sec354_system(1, "state")
+    a, b = static_output_feedback(sys), static_output_feedback(sys, method="sdp", max_iter=2000)
+    assert np.allclose(a.L, b.L, atol=1e-5)
+
+
+def test_alg31_reports_non_convergence_and_instability():
+    with pytest.warns(RuntimeWarning, match="did not converge"):
+        res = static_output_feedback(sec354_system(1), max_iter=3)
+    assert not res.converged and res.iterations == 3
+    with pytest.warns(RuntimeWarning, match="does not stabilise"):
+        res = static_output_feedback(sec354_system(1, "C=[1 0]"))
+    assert res.converged and not res.stabilizing and res.cost == np.inf
+    with pytest.raises(ValueError, match="tol"):
+        static_output_feedback(sec354_system(1), tol=-1)
+
+
+# --- LMIs and baselines --------------------------------------------------------------------------
+
+def test_lmi_infeasible_is_a_result_not_an_exception():
+    res = static_output_lmi(sec354_system(1, "C=[1 0]"))
+    assert not res.feasible and res.L is None and res.status == "infeasible"
+
+
+def test_lmi_state_feedback_gain_stabilises_and_bounds_the_h2_cost():
+    sys = sec354_system(1, "state")
+    res = static_output_lmi(sys)
+    assert res.feasible
+    Acl = closed_loop(sys, res.L)
+    assert ms_spectral_radius(Acl, sys.T) < 1
+    X = steady_state_second_moment(Acl, sys.H @ np.swapaxes(sys.H, 1, 2), sys.T, sys.mu_inf)
+    assert h2_cost(sys, res.L, X) <= res.bound + 1e-6
+    observed = static_output_lmi(sys, mode_observed=True)
+    assert observed.feasible and observed.L.shape == (2, 1, 2) and observed.bound <= res.bound + 1e-6
+
+
+def test_do_val_gain_stabilises_and_bounds_its_cost():
+    sys = sec354_system(2, "state")
+    res = do_val_h2_state_feedback(sys)
+    Acl = sys.A + sys.B @ res.L
+    X = steady_state_second_moment(Acl, sys.H @ np.swapaxes(sys.H, 1, 2), sys.T, sys.mu_inf)
+    assert ms_spectral_radius(Acl, sys.T) < 1
+    assert h2_cost(sys, res.L, X) <= res.bound + 1e-6
+
+
+def test_observed_mode_riccati_reduces_to_dare_and_beats_mode_independent_gain():
+    rng = np.random.default_rng(4)
+    A, B = rng.normal(size=(2, 2)), rng.normal(size=(2, 1))
+    one = MJLS(A=[A], B=[B], C=[np.eye(2)], H=[np.eye(2)], Q=np.eye(2), R=np.eye(1), T=[[1.0]])
+    res = observed_mode_state_feedback(one)
+    assert np.allclose(res.P[0], sla.solve_discrete_are(A, B, np.eye(2), np.eye(1)), rtol=1e-8)
+    sys = sec354_system(1, "state")
+    obs = observed_mode_state_feedback(sys)
+    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
+    X = steady_state_second_moment(sys.A + sys.B @ obs.L, HHt, sys.T, sys.mu_inf)
+    cost_obs = float(np.einsum("iab,iba->", sys.Q + np.swapaxes(obs.L, 1, 2) @ sys.R @ obs.L, X))
+    assert cost_obs <= static_output_feedback(sys).cost
+
+
+def test_variational_method_decreases_cost_and_predicts_monte_carlo():
+    sys = sec354_system(1)
+    x0 = np.array([3.0, 0.0])
+    res = time_variant_feedback(sys, 30, x0)
+    assert res.converged and np.all(np.diff(res.costs) <= 1e-9 * res.costs[0])
+    mc = simulate(sys, TimeVariantGain(res.G), x0, 30, 40_000, np.random.default_rng(5)).cost
+    se = mc.std() / np.sqrt(mc.size)
+    assert abs(mc.mean() - res.costs[-1]) < 4 * se
+    # with one mode and state feedback the optimum is the finite-horizon LQR
+    one = MJLS(A=[sys.A[0]], B=[sys.B[0]], C=[np.eye(2)], H=[sys.H[0]], Q=np.eye(2), R=np.eye(1), T=[[1.0]])
+    G = time_variant_feedback(one, 5, x0).G
+    P = np.eye(2)
+    for k in range(4, -1, -1):
+        A_, B_ = one.A[0], one.B[0]
+        Lk = -np.linalg.solve(np.eye(1) + B_.T @ P @ B_, B_.T @ P @ A_)
+        P = np.eye(2) + A_.T @ P @ A_ + A_.T @ P @ B_ @ Lk
+        if k > 0:
+            assert np.allclose(G[k], Lk, atol=1e-8)
+        else:                            # X(0) = x0 x0^T: only G_0 x0 is determined
+            assert np.allclose(G[0] @ x0, Lk @ x0, atol=1e-8)
+
+
+# --- Monte Carlo ------------------------------------------------------------------------------
+
+def test_simulation_is_deterministic_and_validates_input():
+    sys = sec354_system(1)
+    a = simulate(sys, StaticGain([[-0.6]]), np.array([3.0, 0.0]), 20, 500, np.random.default_rng(7))
+    b = simulate(sys, StaticGain([[-0.6]]), np.array([3.0, 0.0]), 20, 500, np.random.default_rng(7))
+    assert np.array_equal(a.cost, b.cost)
+    with pytest.raises(ValueError, match="horizon"):
+        simulate(sys, StaticGain([[0.0]]), np.zeros(2), 0, 10, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="mode0"):
+        simulate(sys, StaticGain([[0.0]]), np.zeros(2), 5, 10, np.random.default_rng(0), mode0=2)
+    with pytest.raises(ValueError, match="rng"):
+        simulate(sys, StaticGain([[0.0]]), np.zeros(2), 5, 10, 0)
+    with pytest.raises(ValueError, match="x0"):
+        simulate(sys, StaticGain([[0.0]]), np.zeros(3), 5, 10, np.random.default_rng(0))
+
+
+def test_mode_chain_has_the_transition_frequencies_of_T():
+    sys = sec354_system(1)
+    run = simulate(sys, ModeDependentGain(np.zeros((2, 1, 2))), np.zeros(2), 50, 4000,
+                   np.random.default_rng(8), trajectories=True)
+    th = run.theta
+    for i in range(2):
+        frm = th[:, :-1] == i
+        freq = (th[:, 1:][frm] == 1).mean()
+        assert freq == pytest.approx(sys.T[i, 1], abs=0.01)
+
+
+# --- Sec. 3.4 --------------------------------------------------------------------------------
+
+def test_expected_cost_K2_matches_monte_carlo():
+    a, b, g = np.array([1.0, 0.3]), np.array([1.0, 0.8]), 0.2
+    T, pi = np.array([[0.7, 0.3], [0.2, 0.8]]), np.array([0.4, 0.6])
+    x, u = 1.5, -0.7
+    J = expected_cost_K2(x, u, a, b, g, T, pi)
+    rng = np.random.default_rng(9)
+    q = rng.choice(2, size=400_000, p=pi)
+    xn = a[q] * x + b[q] * u + g * rng.standard_normal(q.size)
+    from asoc.mjls.intractability import psi
+    samples = x ** 2 + u ** 2 + xn ** 2 * psi(xn, np.full_like(xn, x), np.full_like(xn, u), a, b, g, T, pi)
+    assert J == pytest.approx(samples.mean(), abs=4 * samples.std() / np.sqrt(q.size))
