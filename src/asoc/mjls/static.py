@@ -67,6 +67,40 @@ def _gain_sdp(S, W, N):
     return np.asarray(L.value)
 
 
+class _Recursion:
+    """One step of (3.34)-(3.35) in scaled variables, with the mode stacks precomputed."""
+
+    def __init__(self, sys):
+        swap = lambda S: np.ascontiguousarray(np.swapaxes(S, 1, 2))
+        self.A, self.B, self.C, self.Bt, self.Ct = sys.A, sys.B, sys.C, swap(sys.B), swap(sys.C)
+        self.Q, self.R, self.T, self.Tt = sys.Q, sys.R, sys.T, np.ascontiguousarray(sys.T.T)
+        self.muHHt = sys.mu_inf[:, None, None] * (sys.H @ swap(sys.H))
+        self.nu, self.ny = sys.nu, sys.ny
+
+    def gain(self, Xs, EP, cP):
+        """(3.34) with R scaled by cP = 1 / s_P."""
+        BtEP = self.Bt @ EP
+        S = cP * self.R + BtEP @ self.B
+        XCt = Xs @ self.Ct
+        W = self.C @ XCt
+        N = (BtEP @ self.A @ XCt).sum(axis=0)
+        if self.nu == self.ny == 1:
+            return -N / (W * S).sum()
+        lhs = np.einsum("iab,icd->acbd", W, S).reshape(self.ny * self.nu, -1)
+        return -np.linalg.solve(lhs, N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
+
+    def moments(self, L, Xs, Ps, EP, cX, cP):
+        """(3.35): next X (constant term scaled by cX = 1 / s_X) and P (by cP)."""
+        BL = self.B @ L
+        Acl = self.A + BL @ self.C
+        Aclt = np.swapaxes(Acl, 1, 2)
+        Y = Acl @ Xs @ Aclt + cX * self.muHHt
+        X_new = (self.Tt @ Y.reshape(len(Y), -1)).reshape(Y.shape)
+        LC = L @ self.C
+        P_new = Aclt @ EP @ Acl + cP * (self.Q + np.swapaxes(LC, 1, 2) @ self.R @ LC)
+        return X_new, P_new
+
+
 def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True):
     """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
 
@@ -76,8 +110,10 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     recursion is carried out exactly in scaled variables X = s_X Xs, P = s_P Ps (the
     constant terms mu H H^T, Q and C^T L^T R L C are divided by the scales; the gain
     (3.34) is invariant under that scaling). Step 4's test is applied to the scaled
-    iterates (their directions) and to the gain; ``bounded`` tells whether the moments
-    themselves converged (they do iff the limit gain stabilises the MJLS).
+    iterates (their directions) and to the gain, which is also what the author's
+    reference implementation stops on (sum |L_[eta] - L_[eta-1]| < 1e-8; M. Dolgov,
+    MJLS_StaticOutputComputeRegulatorGain.m, github.com/Mxttak/MJLS). The moments
+    themselves converge iff the limit gain stabilises the MJLS (``stabilizing``).
 
     Parameters
     ----------
@@ -90,57 +126,68 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     if not tol > 0 or max_iter < 1 or not init > 0:
         raise ValueError(f"tol and init must be > 0 and max_iter >= 1, found tol={tol}, "
                          f"max_iter={max_iter}, init={init}")
+    if method not in ("vec", "sdp"):
+        raise ValueError(f"method must be 'vec' or 'sdp', found {method!r}")
     start = time.perf_counter()
     M, n = sys.M, sys.nx
+    rec = _Recursion(sys)
     Xs = np.broadcast_to(init * np.eye(n), (M, n, n)).copy()
     Ps = Xs.copy()
     log_sX = log_sP = 0.0
-    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
-    mu = sys.mu_inf
-    traces_X, traces_P = [np.trace(Xs, axis1=1, axis2=2)], [np.trace(Ps, axis1=1, axis2=2)]
+    diag = np.arange(n)
+    traces_X, traces_P = [Xs[:, diag, diag].sum(1)], [Ps[:, diag, diag].sum(1)]
+    logs = [(0.0, 0.0)]
     converged = False
     L = np.zeros((sys.nu, sys.ny))
     it = 0
     for it in range(1, max_iter + 1):
-        L_new = gain_from_moments(sys, Xs, Ps, method, R=sys.R * np.exp(-log_sP))
-        Acl = closed_loop(sys, L_new)
-        LC = L_new @ sys.C
-        X_new = second_moment_step(Acl, HHt * np.exp(-log_sX), sys.T, Xs, mu)
-        P_new = np.swapaxes(Acl, 1, 2) @ E(sys.T, Ps) @ Acl \
-            + (sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC) * np.exp(-log_sP)
-        if not (np.all(np.isfinite(X_new)) and np.all(np.isfinite(P_new))):
+        cX, cP = np.exp(-log_sX), np.exp(-log_sP)
+        EP = (sys.T @ Ps.reshape(M, -1)).reshape(Ps.shape)
+        if method == "vec":
+            L_new = rec.gain(Xs, EP, cP)
+        else:
+            L_new = gain_from_moments(sys, Xs, Ps, "sdp", R=sys.R * cP)
+        X_new, P_new = rec.moments(L_new, Xs, Ps, EP, cX, cP)
+        sX, sP = abs(X_new).max(), abs(P_new).max()
+        if not (np.isfinite(sX) and np.isfinite(sP)):
             break
-        dL = np.linalg.norm(L_new - L) / max(np.linalg.norm(L_new), 1e-300)
-        dX = _relative_change(Xs, X_new)
-        dP = _relative_change(Ps, P_new)
-        cX, cP = np.abs(X_new).max(), np.abs(P_new).max()
-        Xs, Ps, L = X_new / cX, P_new / cP, L_new
-        log_sX, log_sP = log_sX + np.log(cX), log_sP + np.log(cP)
-        traces_X.append(np.exp(log_sX) * np.trace(Xs, axis1=1, axis2=2))
-        traces_P.append(np.exp(log_sP) * np.trace(Ps, axis1=1, axis2=2))
-        if it > 1 and max(dL, dX, dP) < tol:
+        X_new, P_new = X_new / sX, P_new / sP
+        change = max(_relative_change(L, L_new), _relative_change(Xs, X_new), _relative_change(Ps, P_new))
+        Xs, Ps, L = X_new, P_new, L_new
+        log_sX, log_sP = log_sX + np.log(sX), log_sP + np.log(sP)
+        traces_X.append(Xs[:, diag, diag].sum(1))
+        traces_P.append(Ps[:, diag, diag].sum(1))
+        logs.append((log_sX, log_sP))
+        if it > 1 and change < tol:
             converged = True
             break
     seconds = time.perf_counter() - start
     X, P = np.exp(log_sX) * Xs, np.exp(log_sP) * Ps
+    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
     Acl = closed_loop(sys, L)
     rho = ms_spectral_radius(Acl, sys.T)
     stabilizing = bool(rho < 1)
-    cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, mu)) if stabilizing else np.inf
+    cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf
     if warn and not converged:
         warnings.warn(f"Algorithm 3.1 did not converge within {it} iterations", RuntimeWarning,
                       stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"Algorithm 3.1 converged, but the gain does not stabilise the MJLS in the "
                       f"mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning, stacklevel=2)
-    history = {"trace_X": np.array(traces_X), "trace_P": np.array(traces_P)}
+    logs = np.array(logs)
+    history = {"trace_X": np.exp(logs[:, :1]) * np.array(traces_X),
+               "trace_P": np.exp(logs[:, 1:]) * np.array(traces_P)}
     return StaticOutputFeedbackResult(L=L, converged=converged, iterations=it, rho=rho,
                                       stabilizing=stabilizing, cost=cost, X=X, P=P,
                                       history=history, seconds=seconds)
 
 
 def _relative_change(old, new):
-    """max_i ||new^i/||new|| - old^i/||old|| ||_F: change of the scaled iterate's direction."""
-    a = old / np.linalg.norm(old)
-    b = new / np.linalg.norm(new)
-    return float(np.linalg.norm(a - b, axis=(1, 2)).max())
+    """||new/||new|| - old/||old|| ||_F over all modes: change of the iterate's direction
+    (for the gain L, whose scale matters, ||new - old|| / ||new||)."""
+    a, b = old.ravel(), new.ravel()
+    if old.ndim == 2:
+        nn = np.sqrt(b @ b)
+        return float(np.sqrt((b - a) @ (b - a)) / nn) if nn > 0 else np.inf
+    d = b / np.sqrt(b @ b) - a / np.sqrt(a @ a)
+    return float(np.sqrt(d @ d))
