@@ -1,0 +1,161 @@
+"""Covariance functions of a distance between distributions (Table 2.1) and the mean kernel.
+
+Every function of Table 2.1 takes the distance :math:`\\Delta = D(d_i, d_j)` (any array
+shape) and the length scale :math:`l`, and returns the unit-variance covariance; the GP
+multiplies by :math:`\\alpha^2`. :func:`mean_kernel_dirac` and :func:`mean_kernel_gaussian`
+are the mean covariance function (2.22) of Dallaire et al. [42], the thesis's baseline.
+"""
+
+import numpy as np
+from scipy.special import gamma as gamma_fn
+from scipy.special import kv
+
+from . import _validate as v
+
+
+def _delta(delta):
+    delta = np.asarray(delta, dtype=float)
+    if np.any(delta < 0) or not np.all(np.isfinite(delta)):
+        raise ValueError("delta: expected finite non-negative distances, "
+                         f"found minimum {np.nanmin(delta):.3g}")
+    return delta
+
+
+def squared_exponential(delta, l: float):
+    r"""Squared exponential, Table 2.1: :math:`\exp(-\tfrac12 \Delta^2 / l^2)`."""
+    l = v.positive(l, "l")
+    return np.exp(-0.5 * (_delta(delta) / l) ** 2)
+
+
+def matern(delta, l: float, nu: float = 2.5):
+    r"""Matern, Table 2.1: :math:`\frac{2^{1-\nu}}{\Gamma(\nu)} (\tfrac{\sqrt{2\nu}}{l}\Delta)^\nu
+    K_\nu(\tfrac{\sqrt{2\nu}}{l}\Delta)`, with value 1 at :math:`\Delta = 0`."""
+    l, nu = v.positive(l, "l"), v.positive(nu, "nu")
+    r = np.sqrt(2 * nu) * _delta(delta) / l
+    with np.errstate(invalid="ignore", over="ignore"):
+        out = 2 ** (1 - nu) / gamma_fn(nu) * r**nu * kv(nu, r)
+    return np.where(r == 0, 1.0, np.nan_to_num(out, nan=0.0))
+
+
+def exponential(delta, l: float):
+    r"""Exponential, Table 2.1: :math:`\exp(-\Delta / l)` (Matern with :math:`\nu = 1/2`)."""
+    l = v.positive(l, "l")
+    return np.exp(-_delta(delta) / l)
+
+
+def gamma_exponential(delta, l: float, gamma: float = 1.5):
+    r""":math:`\gamma`-exponential, Table 2.1: :math:`\exp(-(\Delta / l)^\gamma)`,
+    :math:`0 < \gamma \le 2`."""
+    l = v.positive(l, "l")
+    gamma = float(gamma)
+    if not 0 < gamma <= 2:
+        raise ValueError(f"gamma: expected 0 < gamma <= 2, found {gamma!r}")
+    return np.exp(-(_delta(delta) / l) ** gamma)
+
+
+def rational_quadratic(delta, l: float, alpha: float = 1.0):
+    r"""Rational quadratic, Table 2.1: :math:`(1 + \Delta^2 / (2 \alpha l^2))^{-\alpha}`."""
+    l, alpha = v.positive(l, "l"), v.positive(alpha, "alpha")
+    return (1 + _delta(delta) ** 2 / (2 * alpha * l**2)) ** (-alpha)
+
+
+#: Table 2.1: name -> (function, LaTeX expression, extra shape parameter or None).
+TABLE_2_1 = {
+    "squared exponential": (squared_exponential,
+                            r"$\exp\left(-\frac{1}{2}\frac{\Delta^2}{l^2}\right)$", None),
+    "Matérn": (matern, r"$\frac{2^{1-\nu}}{\Gamma(\nu)}\left(\frac{\sqrt{2\nu}}{l}\Delta\right)^\nu"
+                       r" K_\nu\left(\frac{\sqrt{2\nu}}{l}\Delta\right)$", "nu"),
+    "exponential": (exponential, r"$\exp\left(-\frac{\Delta}{l}\right)$", None),
+    "γ-exponential": (gamma_exponential, r"$\exp\left(-\left(\frac{\Delta}{l}\right)^\gamma\right)$",
+                      "gamma"),
+    "rational quadratic": (rational_quadratic,
+                           r"$\left(1+\frac{\Delta^2}{2\alpha l^2}\right)^{-\alpha}$", "alpha"),
+}
+
+#: Short names used by :class:`asoc.gp.DistributionGP`.
+COVARIANCES = {"se": squared_exponential, "matern": matern, "exponential": exponential,
+               "gamma_exponential": gamma_exponential, "rational_quadratic": rational_quadratic}
+
+
+def bilinear_product(K_distance, means_i, means_j, Sigma):
+    r"""Product of a distance covariance with a bilinear kernel of the means (Sec. 2.6.3).
+
+    :math:`k(d_i, d_j) = \hat{\underline x}_i^\top \mathbf\Sigma \hat{\underline x}_j\,
+    k_D(d_i, d_j)`, with ``K_distance`` (N, M) the distance covariance (e.g.
+    :func:`squared_exponential` of a distance matrix), ``means_i`` (N, n), ``means_j`` (M, n)
+    and :math:`\mathbf\Sigma \succeq 0` (n, n).
+    """
+    Sigma = v.covariance(Sigma, "Sigma")
+    mi, mj = np.atleast_2d(np.asarray(means_i, float)), np.atleast_2d(np.asarray(means_j, float))
+    if mi.shape[1] != Sigma.shape[0] or mj.shape[1] != Sigma.shape[0]:
+        raise ValueError(f"means_i, means_j: expected {Sigma.shape[0]} columns, "
+                         f"found {mi.shape[1]} and {mj.shape[1]}")
+    K = np.asarray(K_distance, dtype=float)
+    if K.shape != (len(mi), len(mj)):
+        raise ValueError(f"K_distance: expected shape {(len(mi), len(mj))}, found {K.shape}")
+    return (mi @ Sigma @ mj.T) * K
+
+
+def mean_kernel_dirac(X, Y=None, WX=None, WY=None, *, alpha: float, Lambda, chunk: int = 16):
+    r"""Mean covariance function (2.22) of Dallaire et al. [42] between Dirac mixtures.
+
+    :math:`k(d_i, d_j) = \sum_a \sum_b w_{i,a} w_{j,b}\, \alpha^2
+    \exp(-\tfrac12 (\underline x_{i,a} - \underline x_{j,b})^\top \mathbf\Lambda^{-1}
+    (\underline x_{i,a} - \underline x_{j,b}))`, the SE kernel averaged over both inputs.
+    ``X`` (N, L, d), ``Y`` (M, K, d) (``None``: ``X``), weights (N, L)/(M, K) or ``None``;
+    ``Lambda`` a positive scalar (:math:`l^2`) or (d, d) positive definite matrix; ``chunk``
+    mixtures of ``X`` per vectorised block. Returns (N, M).
+    """
+    X = v.mixture_set(X, "X")
+    WX = v.set_weights(WX, X.shape, "WX")
+    if Y is None:
+        Y, WY = X, WX
+    else:
+        Y = v.mixture_set(Y, "Y")
+        WY = v.set_weights(WY, Y.shape, "WY")
+    v.same_dimension(X, Y, "X, Y")
+    Linv = _lambda_inverse(Lambda, X.shape[2])
+    alpha = v.positive(alpha, "alpha")
+    out = np.empty((len(X), len(Y)))
+    for start in range(0, len(X), chunk):
+        sl = slice(start, start + chunk)
+        diff = X[sl, None, :, None, :] - Y[None, :, None, :, :]
+        quad = np.einsum("...i,ij,...j->...", diff, Linv, diff)
+        out[sl] = np.einsum("na,nmab,mb->nm", WX[sl], np.exp(-0.5 * quad), WY)
+    return alpha**2 * out
+
+
+def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lambda):
+    r"""Mean covariance function (2.22) between Gaussians, closed form ([42], SE kernel).
+
+    :math:`k = \alpha^2 |\mathbf I + \mathbf\Lambda^{-1}(\mathbf C_i + \mathbf C_j)|^{-1/2}
+    \exp(-\tfrac12 \Delta\underline\mu^\top (\mathbf\Lambda + \mathbf C_i + \mathbf C_j)^{-1}
+    \Delta\underline\mu)`. ``means_*`` (N, d), ``covs_*`` (N, d, d). Returns (N, M).
+    """
+    mi, mj = np.atleast_2d(np.asarray(means_i, float)), np.atleast_2d(np.asarray(means_j, float))
+    Ci, Cj = np.asarray(covs_i, float), np.asarray(covs_j, float)
+    d = mi.shape[1]
+    if Ci.shape != (len(mi), d, d) or Cj.shape != (len(mj), d, d) or mj.shape[1] != d:
+        raise ValueError(f"means/covs: expected (N, {d}) and (N, {d}, {d}), found "
+                         f"{mi.shape}, {Ci.shape}, {mj.shape}, {Cj.shape}")
+    for name, C in (("covs_i", Ci), ("covs_j", Cj)):
+        for c in C:
+            v.covariance(c, name)
+    Lam = np.linalg.inv(_lambda_inverse(Lambda, d))
+    alpha = v.positive(alpha, "alpha")
+    S = Lam + Ci[:, None] + Cj[None]                                   # (N, M, d, d)
+    dm = mi[:, None] - mj[None]
+    quad = np.einsum("nmi,nmi->nm", dm, np.linalg.solve(S, dm[..., None])[..., 0])
+    ratio = np.linalg.det(S) / np.linalg.det(Lam)
+    return alpha**2 / np.sqrt(ratio) * np.exp(-0.5 * quad)
+
+
+def _lambda_inverse(Lambda, d):
+    Lam = np.asarray(Lambda, dtype=float)
+    if Lam.ndim == 0:
+        return np.eye(d) / v.positive(Lam, "Lambda")
+    Lam = v.covariance(Lam, "Lambda")
+    if Lam.shape != (d, d) or np.linalg.eigvalsh(Lam).min() <= 0:
+        raise ValueError(f"Lambda: expected a positive definite ({d}, {d}) matrix, found "
+                         f"shape {Lam.shape}")
+    return np.linalg.inv(Lam)
