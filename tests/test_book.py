@@ -8,9 +8,11 @@ from pathlib import Path
 
 import pytest
 
+from asoc.repro.notebooks import notebooks
 from asoc.repro.paths import BOOK
 
-PAGES = ["sec3_5.html", "ledger.html", "intro.html"]
+NOTEBOOK_PAGES = [f"{name}.html" for name in notebooks()]
+PAGES = NOTEBOOK_PAGES + ["intro.html", "ledger.html"]
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +60,7 @@ def test_page_renders_math_and_images(html, browser, page):
     assert path.exists(), f"{page} was not built"
     browser.get(path.as_uri())
     n_math_src = browser.execute_script("return document.querySelectorAll('.math, mjx-container').length")
-    if page != "ledger.html":
+    if page in NOTEBOOK_PAGES:
         assert n_math_src > 0, f"{page}: no math on the page"
         _wait_for_math(browser)
         rendered = browser.execute_script("return document.querySelectorAll('mjx-container').length")
@@ -69,7 +71,9 @@ def test_page_renders_math_and_images(html, browser, page):
     browser.execute_script("window.scrollTo(0, document.body.scrollHeight)")
     images = browser.execute_script(
         "return Array.from(document.images).map(i => [i.src, i.complete, i.naturalWidth])")
-    if page == "sec3_5.html":
-        assert len(images) >= 3, f"{page}: expected the figures on the page, found {len(images)} images"
+    info = notebooks().get(page.removesuffix(".html"))
+    if info is not None:
+        assert len(images) >= len(info.figures), \
+            f"{page}: expected its {len(info.figures)} figures, found {len(images)} images"
     broken = [src for src, complete, width in images if not (complete and width > 0)]
     assert not broken, f"{page}: images that did not load: {broken}"

@@ -8,6 +8,7 @@ committed results alone.
 """
 
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -55,7 +56,9 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
     executed = info.path if (fidelity == "full" and output_dir == FIGURES.resolve()) \
         else output_dir / "notebooks" / info.path.name
     executed.parent.mkdir(parents=True, exist_ok=True)
+    # a relative output_dir keeps machine paths out of the committed notebooks
+    out_param = os.path.relpath(output_dir, info.path.parent)
     papermill.execute_notebook(str(info.path), str(executed), cwd=str(info.path.parent),
-                               parameters={"fidelity": fidelity, "output_dir": str(output_dir)},
+                               parameters={"fidelity": fidelity, "output_dir": out_param},
                                progress_bar=False, log_output=log_output, kernel_name="python3")
     return executed
