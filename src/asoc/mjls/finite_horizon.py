@@ -281,7 +281,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     converged = False
     rejected = 0
     it = 0
-    from tqdm.auto import tqdm
+    from tqdm import tqdm
 
     for it in tqdm(range(1, int(max_iter) + 1), disable=not progress, desc="Alg. 3.3", leave=False):
         for k, s in enumerate(st.systems):                                    # Step 2
