@@ -104,7 +104,7 @@ class _LikelihoodGP:
         sy = float(np.std(self.y)) or 1.0
         l0 = self._length_scale_guess()
         return {"alpha": (1e-3 * sy, 1e3 * sy), "l": (1e-3 * l0, 1e3 * l0),
-                "sigma_n": (1e-6 * sy, 1.0 * sy)}
+                "sigma_n": (1e-4 * sy, 1.0 * sy)}
 
     def neg_log_ml(self, log_theta, grad=True):
         """Negative log marginal likelihood (and gradient) at ``log(alpha, l, sigma_n)``."""
@@ -194,7 +194,8 @@ class DistributionGP(_LikelihoodGP):
         Random restarts of the likelihood maximisation besides the data-based guess.
     bounds : dict, optional
         ``{"alpha": (lo, hi), "l": (lo, hi), "sigma_n": (lo, hi)}``; default: alpha in
-        [1e-3, 1e3] std(y), l in [1e-3, 1e3] median distance, sigma_n in [1e-6, 1] std(y).
+        [1e-3, 1e3] std(y), l in [1e-3, 1e3] median distance, sigma_n in [1e-4, 1] std(y)
+        (the floor keeps :math:`\Sigma_y` well conditioned, cond <~ M 1e8, for noiseless data).
     **shape : ``nu`` (Matern), ``gamma`` (gamma-exponential), ``alpha_rq`` (rational quadratic).
 
     Examples

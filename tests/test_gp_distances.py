@@ -1,0 +1,145 @@
+"""Correctness of the distances of Sec. 2.6.3 (asoc.gp.distances)."""
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra.numpy import arrays
+from scipy.stats import norm
+
+from asoc import gp
+
+small = arrays(float, st.tuples(st.integers(1, 5), st.integers(1, 2)),
+               elements=st.floats(-5, 5, allow_nan=False))
+
+
+@settings(max_examples=30, deadline=None)
+@given(small)
+def test_mcvmd_of_mixture_with_itself_is_zero(x):
+    assert gp.mcvmd(x, None, x, None) == pytest.approx(0.0, abs=1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(small, st.data())
+def test_mcvmd_symmetric_and_order_invariant(x, data):
+    y = data.draw(arrays(float, (data.draw(st.integers(1, 5)), x.shape[1]),
+                         elements=st.floats(-5, 5, allow_nan=False)))
+    perm = data.draw(st.permutations(range(len(x))))
+    d = gp.mcvmd(x, None, y, None)
+    assert d == pytest.approx(gp.mcvmd(y, None, x, None), rel=1e-9, abs=1e-9)
+    assert d == pytest.approx(gp.mcvmd(x[list(perm)], None, y, None), rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize("b_max", [50.0, 200.0])
+def test_mcvmd_closed_form_matches_quadrature_of_definition(b_max):
+    rng = np.random.default_rng(3)
+    x, y = rng.normal(size=3), rng.normal(size=4) + 0.4
+    wx = np.array([0.2, 0.5, 0.3])
+    quad = gp.mcvmd_quadrature(lambda m, b: gp.lcd_dirac(x, wx, m, b),
+                               lambda m, b: gp.lcd_dirac(y, None, m, b),
+                               b_max=b_max, spread=4, points=np.r_[x, y])
+    # the closed form drops O(1 / b_max^2) terms
+    assert gp.mcvmd(x, wx, y, None, b_max=b_max) == pytest.approx(quad, rel=5e-4 * (50 / b_max) ** 2)
+
+
+def test_mcvmd_matrix_matches_pairwise_calls():
+    rng = np.random.default_rng(0)
+    X, Y = rng.normal(size=(4, 3, 2)), rng.normal(size=(5, 3, 2))
+    D = gp.mcvmd_matrix(X, Y)
+    ref = [[gp.mcvmd(a, None, b, None) for b in Y] for a in X]
+    np.testing.assert_allclose(D, ref, rtol=1e-10, atol=1e-12)
+    S = gp.mcvmd_matrix(X)
+    np.testing.assert_allclose(S, S.T)
+    assert np.all(np.diag(S) == 0)
+
+
+def test_lcd_gaussian_matches_quadrature_of_definition():
+    m, b = np.array([[0.3]]), 0.7
+    from scipy.integrate import quad
+    ref = quad(lambda x: norm.pdf(x, 0.5, 1.3) * np.exp(-0.5 * (x - 0.3) ** 2 / b**2), -20, 20)[0]
+    assert gp.lcd_gaussian(0.5, 1.3**2, m, b)[0] == pytest.approx(ref, rel=1e-9)
+
+
+def test_omat_equals_brute_force_over_permutations():
+    rng = np.random.default_rng(1)
+    for q in (1, 2, 3):
+        x, y = rng.normal(size=(5, 2)), rng.normal(size=(5, 2))
+        brute = min(np.mean(np.linalg.norm(x - y[list(p)], axis=1) ** q)
+                    for p in itertools.permutations(range(5))) ** (1 / q)
+        assert gp.omat(x, y, q) == pytest.approx(brute, rel=1e-12)
+
+
+def test_omat_matrix_matches_pairwise_calls():
+    rng = np.random.default_rng(2)
+    X, Y = rng.normal(size=(3, 4, 1)), rng.normal(size=(2, 4, 1))
+    np.testing.assert_allclose(gp.omat_matrix(X, Y), [[gp.omat(a, b) for b in Y] for a in X])
+    S = gp.omat_matrix(X)
+    np.testing.assert_allclose(S, [[gp.omat(a, b) for b in X] for a in X], atol=1e-12)
+
+
+def test_ospa_reduces_to_omat_and_penalises_cardinality():
+    rng = np.random.default_rng(4)
+    x, y = rng.normal(size=(4, 2)), rng.normal(size=(4, 2))
+    assert gp.ospa(x, y, c=1e6) == pytest.approx(gp.omat(x, y))
+    assert gp.ospa(x, x[:2], c=3.0, p=2) == pytest.approx(np.sqrt(2 * 9 / 4))
+
+
+def test_wasserstein_gaussian_agrees_with_omat_of_large_deterministic_samples():
+    m1, v1, m2, v2 = 0.5, 0.8, -1.0, 2.5
+    u = norm.ppf((np.arange(2000) + 0.5) / 2000)       # large equally weighted sample of N(0, 1)
+    u = u / np.sqrt(np.mean(u**2))
+    w_omat = gp.omat(m1 + np.sqrt(v1) * u, m2 + np.sqrt(v2) * u)
+    assert gp.wasserstein_gaussian(m1, v1, m2, v2) == pytest.approx(w_omat, rel=1e-6)
+
+
+def test_wasserstein_gaussian_commuting_case():
+    C1, C2 = np.diag([1.0, 4.0]), np.diag([9.0, 1.0])
+    expected = np.sqrt(1 + (1 - 3) ** 2 + (2 - 1) ** 2)
+    assert gp.wasserstein_gaussian([0, 0], C1, [1, 0], C2) == pytest.approx(expected)
+
+
+def test_density_distances_against_closed_forms():
+    p1, p2 = norm(0, 1).pdf, norm(1, 1.5).pdf
+    assert gp.hellinger(p1, p2) == pytest.approx(gp.hellinger_gaussian(0, 1, 1, 1.5**2), rel=1e-7)
+    assert gp.hellinger(p1, p1) == pytest.approx(0, abs=1e-6)
+    assert 0 < gp.jensen_shannon(p1, p2) < np.log(2)
+    assert gp.jensen_shannon(p1, p1) == pytest.approx(0, abs=1e-10)
+    # L2 distance between two Gaussians: closed form via Gaussian product integrals
+    l2sq = 1 / (2 * np.sqrt(np.pi)) + 1 / (2 * np.sqrt(np.pi) * 1.5) - 2 * norm(0, np.sqrt(1 + 1.5**2)).pdf(1)
+    assert gp.lq_distance(p1, p2, 2) == pytest.approx(np.sqrt(l2sq), rel=1e-7)
+
+
+def test_lcd_dirac_approximation_of_standard_normal():
+    a = gp.lcd_standard_normal(10)
+    assert a.converged
+    np.testing.assert_allclose(a.x, -a.x[::-1], atol=1e-6)           # symmetric
+    # the approximation is better than the midpoint-quantile start
+    start = norm.ppf((2 * np.arange(1, 11) - 1) / 20)
+    assert a.distance < gp.mcvmd_standard_normal_dirac(start)
+    # the semi-analytic distance agrees with quadrature of the LCD definition
+    quad = gp.mcvmd_quadrature(lambda m, b: gp.lcd_gaussian(0, 1, m, b),
+                               lambda m, b: gp.lcd_dirac(a.x, None, m, b),
+                               b_max=10, spread=9, points=a.x)
+    assert gp.mcvmd_standard_normal_dirac(a.x, b_max=10) == pytest.approx(quad, rel=1e-8)
+    X = gp.gaussian_dirac_mixtures([1.0, -2.0], [4.0, 0.25], 10)
+    np.testing.assert_allclose(X[:, :, 0], [1 + 2 * a.x, -2 + 0.5 * a.x])
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: gp.mcvmd([0.0, 1.0], [0.7, -0.7 + 1], [0.0], None), None),
+    (lambda: gp.mcvmd([0.0, 1.0], [-0.5, 1.5], [0.0], None), "wx"),
+    (lambda: gp.mcvmd([0.0, 1.0], [0.5, 0.6], [0.0], None), "wx"),
+    (lambda: gp.mcvmd(np.zeros((2, 2)), None, np.zeros((2, 3)), None), "x, y"),
+    (lambda: gp.mcvmd(np.zeros((0, 1)), None, [0.0], None), "x"),
+    (lambda: gp.omat(np.zeros((2, 1)), np.zeros((3, 1))), "x, y"),
+    (lambda: gp.wasserstein_gaussian(0, [[1.0, 2.0], [2.0, 1.0]], 0, np.eye(2)), "C1"),
+    (lambda: gp.mcvmd([0.0], None, [1.0], None, b_max=-1), "b_max"),
+    (lambda: gp.omat_matrix(np.zeros((2, 3, 1)), np.zeros((2, 3, 2))), "X, Y"),
+])
+def test_bad_input_raises_value_error_naming_the_argument(call, name):
+    if name is None:          # valid weights: no error
+        call()
+        return
+    with pytest.raises(ValueError, match=name):
+        call()
