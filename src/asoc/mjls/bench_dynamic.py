@@ -10,21 +10,15 @@ import numpy as np
 from .dynamic import dynamic_output_feedback
 from .finite_horizon import finite_horizon_dynamic_output_feedback
 from .simulate import DynamicOutputFeedback, simulate
-from .system import MJLS
+from .examples import SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec373_system
 
 
-def example_system(T=((0.7, 0.3), (0.6, 0.4))):
-    """The MJLS of Sec. 3.7.3 with transition matrix T (default T[1])."""
-    A = [[[1.2, 1.2], [0.0, 1.0]], [[1.0, 0.8], [0.0, 1.0]]]
-    B = [[[0.0], [1.0]], [[0.0], [0.2]]]
-    C = [[[1.0, 0.0]], [[0.8, 0.0]]]
-    return MJLS(np.array(A), np.array(B), np.array(C), 0.2 * np.eye(2), np.eye(2), np.eye(1),
-                np.array(T), J=0.1 * np.ones((1, 1)))
+def example_system():
+    """The MJLS of Sec. 3.7.3 with T[1]."""
+    return sec373_system(1)
 
 
-MEAN0 = np.array([[5.0, 0.0], [0.0, 0.0]])
-COV0 = np.stack([0.01 * np.eye(2), np.zeros((2, 2))])
-MU0 = np.array([1.0, 0.0])
+MEAN0, COV0, MU0 = SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0
 
 
 def _timed(fn):

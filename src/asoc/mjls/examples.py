@@ -44,3 +44,20 @@ def sec354_system(T: int = 1, C: str = "C1=[1 2], C2=[2 1]", H=SEC354_H) -> MJLS
         raise ValueError(f"C must be one of {list(SEC354_C)}, found {C!r}")
     return MJLS(A=SEC354_A, B=SEC354_B, C=SEC354_C[C], H=H, Q=np.eye(2), R=np.eye(1),
                 T=SEC354_T[T])
+
+
+# Sec. 3.7.3: the dynamic output-feedback example (Figs. 3.6-3.8, Table 3.3).
+SEC373_C = np.array([[[1.0, 0.0]], [[0.8, 0.0]]])
+SEC373_T = {1: np.array([[0.7, 0.3], [0.6, 0.4]]), 2: np.array([[0.9, 0.1], [0.9, 0.1]])}
+SEC373_MU0 = np.array([1.0, 0.0])
+SEC373_MEAN0 = {1: np.array([[5.0, 0.0], [0.0, 0.0]]), 2: np.zeros((2, 2))}   # xi_0[1], xi_0[2]
+SEC373_COV0 = np.stack([0.1 ** 2 * np.eye(2), np.zeros((2, 2))])              # Xi_0^1, Xi_0^2
+
+
+def sec373_system(T: int = 1) -> MJLS:
+    """The MJLS of Sec. 3.7.3 (A, B as in Sec. 3.5.4, C1 = [1 0], C2 = [0.8 0], H = 0.2 I,
+    J = 0.1, Q = I, R = 1) with transition matrix T[1] or T[2]."""
+    if T not in SEC373_T:
+        raise ValueError(f"T must be 1 or 2, found {T!r}")
+    return MJLS(A=SEC354_A, B=SEC354_B, C=SEC373_C, H=0.2 * np.eye(2), Q=np.eye(2), R=np.eye(1),
+                T=SEC373_T[T], J=0.1 * np.ones((1, 1)))
