@@ -3,6 +3,18 @@
 import numpy as np
 
 
+def _check_samples(samples, level):
+    """The samples as a flat float array; ValueError on empty/non-finite samples or a bad level."""
+    x = np.asarray(samples, dtype=float).ravel()
+    if x.size == 0:
+        raise ValueError("samples: need at least one sample, found none")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("samples: found non-finite entries")
+    if not 0 < level < 1:
+        raise ValueError(f"level must lie in (0, 1), found {level}")
+    return x
+
+
 def bootstrap_ci(samples, rng: np.random.Generator, statistic=np.median, n_boot: int = 1000,
                  level: float = 0.95, chunk: int = 50):
     """Percentile bootstrap interval of ``statistic`` (Efron & Tibshirani, 1993, ch. 13).
@@ -20,13 +32,7 @@ def bootstrap_ci(samples, rng: np.random.Generator, statistic=np.median, n_boot:
     -------
     dict with ``value`` (statistic of the samples), ``ci`` ([low, high]) and ``n``.
     """
-    x = np.asarray(samples, dtype=float).ravel()
-    if x.size == 0:
-        raise ValueError("samples: need at least one sample, found none")
-    if not np.all(np.isfinite(x)):
-        raise ValueError("samples: found non-finite entries")
-    if not 0 < level < 1:
-        raise ValueError(f"level must lie in (0, 1), found {level}")
+    x = _check_samples(samples, level)
     if not isinstance(rng, np.random.Generator):
         raise ValueError("rng: pass a seeded numpy.random.Generator")
     stats = []
@@ -53,13 +59,7 @@ def bootstrap_median_ci(samples, level: float = 0.95):
     """
     from scipy.stats import binom
 
-    x = np.sort(np.asarray(samples, dtype=float).ravel())
-    if x.size == 0:
-        raise ValueError("samples: need at least one sample, found none")
-    if not np.all(np.isfinite(x)):
-        raise ValueError("samples: found non-finite entries")
-    if not 0 < level < 1:
-        raise ValueError(f"level must lie in (0, 1), found {level}")
+    x = np.sort(_check_samples(samples, level))
     n = x.size
     m = (n + 1) // 2
     half = int(12 * np.sqrt(n)) + 2                   # the distribution lives within m +- 6 sd
