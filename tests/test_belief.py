@@ -228,3 +228,54 @@ def test_line_search_that_cannot_decrease_stops_with_flag():
 
     ls = line_search(Flat(), Exp(), np.zeros(1), np.zeros(1))
     assert not ls.accepted and ls.cost_after == ls.cost_before
+
+
+# --- safeguards for the curvature of the covariance term ---------------------------
+
+def _schur_ok(H, nx, mu):
+    Q, P, R = H[:nx, :nx], H[nx:, :nx], H[nx:, nx:] + mu * np.eye(H.shape[0] - nx)
+    return np.linalg.eigvalsh(R).min() > 0 and np.linalg.eigvalsh(Q - P.T @ np.linalg.solve(R, P)).min() >= -1e-7
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10_000))
+def test_levenberg_marquardt_shift_is_the_smallest_that_satisfies_2_9(seed):
+    rng = np.random.default_rng(seed)
+    nx, nu = 2, 2
+    M = rng.normal(size=(nx + nu, nx + nu))
+    H = M @ M.T + 0.1 * np.eye(nx + nu)                 # satisfies (2.9)
+    H[nx:, nx:] -= rng.uniform(0, 5) * np.eye(nu)       # negative curvature in u
+    H = np.stack([H, H])
+    mu = StageProblem._shift(np.array([0.5, 0.5]), H, nx)
+    assert mu >= 0 and _schur_ok(H[0], nx, mu * (1 + 1e-5))
+    if mu > 0:
+        assert not _schur_ok(H[0], nx, mu * (1 - 1e-3))
+
+
+def test_shift_is_zero_when_the_exact_hessian_satisfies_2_9():
+    H = np.stack([np.array([[2.0, 0.5], [0.5, 1.0]])])
+    assert StageProblem._shift(np.ones(1), H, 1) == 0.0
+
+
+def test_covariance_hessian_variants_on_the_example():
+    ex = landmark_example(K=3)
+    filt = UKF(ex.model)
+    policy = AffinePolicy(np.zeros((3, 2, 2)), np.tile([1.0, -0.3], (3, 1)))
+    ref = reference_trajectory(ex.model, filt, policy, ex.mean0, ex.cov0)
+    wp, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    nxt = theorem_2_5_value(StageProblem(ex.model, ex.cost, filt, ref.estimates[2],
+                                         terminal_value(ex.cost, filt.mixture(ref.estimates[3])), wp, beta)
+                            .expansion(ref.u_bar[2]), 1.0)
+    exps = {name: StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta, name).expansion(ref.u_bar[1])
+            for name in ("psd", "exact", "shift")}
+    # the three differ only in R; the gradient (first-order dual effect) is the same
+    for name in ("p", "r", "Q", "P"):
+        assert np.allclose(getattr(exps["psd"], name), getattr(exps["exact"], name))
+        assert np.allclose(getattr(exps["shift"], name), getattr(exps["exact"], name))
+    R = {name: e.tilde[3] for name, e in exps.items()}
+    assert np.linalg.eigvalsh(R["psd"] - R["exact"]).min() >= -1e-9      # projection only adds curvature
+    assert np.linalg.eigvalsh(R["psd"]).min() >= 2 * 0.1 - 1e-9           # >= grad_uu C_k = 2 R
+    d = R["shift"] - R["exact"]
+    assert np.allclose(d, d[0, 0] * np.eye(2)) and d[0, 0] >= 0          # a shift mu I, nothing else
+    with pytest.raises(ValueError, match="covariance_hessian"):
+        StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta, "clip")

@@ -112,6 +112,9 @@ class Expansion:
                 np.einsum("i,iuj->uj", a, self.P), np.einsum("i,iuv->uv", a, self.R))
 
 
+COVARIANCE_HESSIANS = ("psd", "exact", "shift")
+
+
 class StageProblem:
     """phi_k of eq. (2.13) at time step k for the reference estimate p_bar_k.
 
@@ -122,8 +125,8 @@ class StageProblem:
     """
 
     def __init__(self, model, cost, filt, estimate, nxt: Value, w_points, beta, covariance_hessian="psd"):
-        if covariance_hessian not in ("psd", "exact"):
-            raise ValueError(f"covariance_hessian: expected 'psd' or 'exact', found {covariance_hessian!r}")
+        if covariance_hessian not in COVARIANCE_HESSIANS:
+            raise ValueError(f"covariance_hessian: expected one of {COVARIANCE_HESSIANS}, found {covariance_hessian!r}")
         self.covariance_hessian = covariance_hessian
         self.model, self.cost, self.filt, self.est, self.nxt = model, cost, filt, estimate, nxt
         self.w_points, self.beta = w_points, beta
@@ -174,22 +177,59 @@ class StageProblem:
             G[:, nx:] += np.atleast_1d(nd.Gradient(self.covariance_part)(u_bar))
             H[:, nx:, nx:] += self._covariance_hessian(u_bar)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
+        if self.covariance_hessian == "shift":
+            H[:, nx:, nx:] += self._shift(alpha, H, nx) * np.eye(nu)
         phi = self.particle_part(X, u_bar) + self.covariance_part(u_bar)
         return Expansion(phi, G[:, :nx], G[:, nx:], H[:, :nx, :nx], H[:, nx:, :nx], H[:, nx:, nx:], X, alpha)
 
+    @staticmethod
+    def _shift(alpha, H, nx):
+        """Levenberg-Marquardt shift mu >= 0 of R~_k for ``covariance_hessian="shift"``.
+
+        The smallest mu (bisection, relative accuracy 1e-6) for which the weighted Hessian
+        [[Q~, P~^T], [P~, R~ + mu I]] of phi_k satisfies the conditions (2.9) of Assumption
+        2.3: R~_k + mu I > 0 and the Schur complement Q~ - P~^T (R~_k + mu I)^{-1} P~ >= 0.
+        The Schur complement is V_k + S_k - S_k of eq. (2.11), so the value function stays
+        convex in E{x_k}. mu = 0 when the exact Hessian already satisfies (2.9).
+        """
+        Hm = np.einsum("i,ijk->jk", alpha, H)
+        Q, P, R = Hm[:nx, :nx], Hm[nx:, :nx], Hm[nx:, nx:]
+        nu = R.shape[0]
+        scale = max(1.0, np.abs(Hm).max())
+
+        def ok(mu):
+            Rm = R + mu * np.eye(nu)
+            if np.linalg.eigvalsh(Rm).min() <= 1e-9 * scale:
+                return False
+            schur = Q - P.T @ np.linalg.solve(Rm, P)
+            return np.linalg.eigvalsh(0.5 * (schur + schur.T)).min() >= -1e-9 * scale
+
+        if ok(0.0):
+            return 0.0
+        lo, hi = 0.0, max(scale, 1e-9)
+        while not ok(hi):
+            lo, hi = hi, 2 * hi
+        while hi - lo > 1e-6 * hi:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (lo, mid) if ok(mid) else (mid, hi)
+        return hi
+
     def _covariance_hessian(self, u_bar):
-        """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools), projected onto the PSD
-        cone unless ``covariance_hessian="exact"``.
+        """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools); the safeguard against
+        its negative curvature depends on ``covariance_hessian``.
 
         The thesis asserts R~_k > 0 (after Theorem 2.5) from Assumption 2.3, which covers
         C_k but not this term; its curvature can be negative and then R~_k loses
-        definiteness. Setting its negative eigenvalues to zero keeps R~_k >= grad_uu C_k > 0
-        and keeps the gradient (the dual effect) unchanged.
+        definiteness. ``"psd"`` sets the term's negative eigenvalues to zero (R~_k >=
+        grad_uu C_k > 0; the gradient, the first-order dual effect, is unchanged);
+        ``"exact"`` keeps the Hessian (Alg. 2.2 then keeps the old policy where R~_k is
+        indefinite); ``"shift"`` keeps it and shifts R~_k by mu I only as far as needed
+        (:meth:`_shift`), as in Levenberg-Marquardt-regularised DDP.
         """
         import numdifftools as nd
         Hc = np.atleast_2d(nd.Hessian(self.covariance_part)(u_bar))
         Hc = 0.5 * (Hc + Hc.T)
-        if self.covariance_hessian == "exact":
+        if self.covariance_hessian in ("exact", "shift"):
             return Hc
         lam, vec = np.linalg.eigh(Hc)
         return (vec * np.clip(lam, 0.0, None)) @ vec.T
@@ -339,7 +379,7 @@ def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iteratio
     derivatives : "analytic" (model/cost derivatives where available) or "numdifftools".
     reference_mode : "nominal" or "sampled" (Alg. 2.1); "sampled" draws from ``rng``.
     alpha_min : the constant alpha of Alg. 2.3 below which a step is rejected.
-    covariance_hessian : "psd" (default) or "exact", see :meth:`StageProblem._covariance_hessian`.
+    covariance_hessian : "psd" (default), "exact" or "shift", see :meth:`StageProblem._covariance_hessian`.
     """
     K = check_horizon(cost.K)
     rng = check_rng(rng)
