@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..progress import progress_bar
 from ._validate import check_rng
 from .filters import UKF, sigma_points
 from .models import check_horizon
@@ -395,10 +396,7 @@ def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iteratio
         return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, pol), noise).costs.mean())
 
     result = Alg22Result(policy, [policy], [J(policy)])
-    iterator = range(max_iterations)
-    if progress:
-        from tqdm import tqdm
-        iterator = tqdm(iterator, desc="Alg. 2.2")
+    iterator = progress_bar(range(max_iterations), progress, desc="Alg. 2.2")
     ref = None
     for _ in iterator:
         ref = reference_trajectory(model, filt, policy, mean0, cov0, reference_mode, rng)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..progress import progress_bar
 from .filters import ekf_gain, ekf_predict
 from .models import check_horizon
 
@@ -189,14 +190,10 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     b0 = belief_vector(np.asarray(mean0, dtype=float), np.asarray(cov0, dtype=float))
     b_bar, u_bar, J = rollout(dyn, bcost, b0, u_bar)
     costs, converged, expected, L = [J], False, np.nan, np.zeros((K, model.n_u, b0.size))
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=max_iterations, desc="belief iLQG [159]")
+    bar = progress_bar(total=max_iterations, enabled=progress, desc="belief iLQG [159]")
     it = 0
     for it in range(1, max_iterations + 1):
-        if bar is not None:
-            bar.update()
+        bar.update()
         L, l, expected, ok = _backward(dyn, bcost, b_bar, u_bar)
         if not ok:
             warnings.warn("belief iLQG [159]: D_t is not positive definite; stopping", RuntimeWarning, stacklevel=2)
@@ -217,8 +214,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
         if change <= rtol * abs(J):
             converged = True
             break
-    if bar is not None:
-        bar.close()
+    bar.close()
     if not converged:
         warnings.warn(f"belief iLQG [159] did not converge in {max_iterations} iterations", RuntimeWarning,
                       stacklevel=2)

@@ -22,7 +22,7 @@ import numpy as np
 from scipy import integrate
 from scipy.optimize import linear_sum_assignment
 from scipy.special import xlogy
-from tqdm.auto import tqdm
+from ..progress import progress_bar
 
 from . import _validate as v
 
@@ -124,7 +124,7 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     D2 = D1 if symmetric else np.einsum("ma,mab,mb->m", WY, _xlog_sq(Y[:, :, None], Y[:, None]), WY)
     mx, my = np.einsum("na,nad->nd", WX, X), np.einsum("ma,mad->md", WY, Y)
     out = np.empty((len(X), len(Y)))
-    for start in tqdm(range(0, len(X), chunk), disable=not progress, desc="mCvMd", leave=False):
+    for start in progress_bar(range(0, len(X), chunk), progress, desc="mCvMd", leave=False):
         sl = slice(start, start + chunk)
         xl = _xlog_sq(X[sl, None, :, None], Y[None, :, None, :])          # (c, M, L, K)
         D12 = np.einsum("ca,cmab,mb->cm", WX[sl], xl, WY)
@@ -272,7 +272,7 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
         raise ValueError(f"X, Y: OMAT needs the same number of components, found {X.shape[1]} "
                          f"and {Y.shape[1]}")
     out = np.zeros((len(X), len(Y)))
-    for i in tqdm(range(len(X)), disable=not progress, desc="OMAT", leave=False):
+    for i in progress_bar(range(len(X)), progress, desc="OMAT", leave=False):
         j0 = i + 1 if symmetric else 0
         costs = np.sum((X[i][None, :, None, :] - Y[j0:, None, :, :]) ** 2, axis=-1) ** (q / 2)
         for k, cost in enumerate(costs):

@@ -5,7 +5,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from tqdm import tqdm
+from ..progress import progress_bar
 
 from ..repro.stats import bootstrap_median_ci
 from .baselines import do_val_h2_state_feedback, time_variant_feedback
@@ -71,7 +71,7 @@ def median_costs(designs, x0, horizon, n_runs, seed, normalise=True, mode0=None,
     divides each run's cost (3.3) by the horizon (the finite-K reading of (3.9)).
     """
     out = {}
-    for row, d in tqdm(designs.items(), desc="controllers", leave=False, disable=n_runs < 20000):
+    for row, d in progress_bar(designs.items(), n_runs >= 20000, desc="controllers", leave=False):
         res = simulate(d.sys, d.controller, x0, horizon, n_runs, np.random.default_rng(seed),
                        mode0=mode0)
         cost = res.average_cost if normalise else res.cost

@@ -25,6 +25,7 @@ import numpy as np
 
 from .dynamic import (METHODS, _T, bound_costate_step, bound_moment_step, dynamic_output_feedback,
                       gains_from_bounds, noise_covariances)
+from ..progress import progress_bar
 from .moments import second_moment_step
 from .system import MJLS, E, check_distribution, check_psd
 
@@ -281,9 +282,8 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     converged = False
     rejected = 0
     it = 0
-    from tqdm import tqdm
 
-    for it in tqdm(range(1, int(max_iter) + 1), disable=not progress, desc="Alg. 3.3", leave=False):
+    for it in progress_bar(range(1, int(max_iter) + 1), progress, desc="Alg. 3.3", leave=False):
         for k, s in enumerate(st.systems):                                    # Step 2
             Xbar[k + 1], Xunder[k + 1] = bound_moment_step(s, F[k], K[k], L[k], Xbar[k], Xunder[k],
                                                            mu[k], st.HHt[k], st.JJt[k])

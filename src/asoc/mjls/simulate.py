@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from threadpoolctl import threadpool_limits
-from tqdm import tqdm
+from ..progress import progress_bar
 
 from .system import check_distribution
 
@@ -229,7 +229,7 @@ def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x
     cost = np.zeros(N)
     if trajectories:
         xs, us, ths = np.empty((N, K + 1, sys.nx)), np.empty((N, K, sys.nu)), np.empty((N, K + 1), int)
-    for k in tqdm(range(K), disable=not progress, desc="Monte Carlo", leave=False):
+    for k in progress_bar(range(K), progress, desc="Monte Carlo", leave=False):
         rows = step.rows(theta)
         y = step.output(x, rows)
         w = rng.standard_normal((N, sys.nw))

@@ -9,6 +9,7 @@ committed results alone.
 
 import json
 import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,5 +61,6 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
     out_param = os.path.relpath(output_dir, info.path.parent)
     papermill.execute_notebook(str(info.path), str(executed), cwd=str(info.path.parent),
                                parameters={"fidelity": fidelity, "output_dir": out_param},
-                               progress_bar=False, log_output=log_output, kernel_name="python3")
+                               progress_bar=sys.stderr.isatty(), log_output=log_output,
+                               kernel_name="python3")
     return executed

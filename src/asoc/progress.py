@@ -1,0 +1,10 @@
+"""Progress bars for long computations: shown on an interactive terminal, kept out of
+executed notebooks (papermill records stderr into the notebook, and the book would show
+every refresh of the bar)."""
+
+from tqdm import tqdm
+
+
+def progress_bar(iterable=None, enabled=True, **kwargs):
+    """``tqdm(iterable, **kwargs)`` when ``enabled`` and stderr is a terminal, else silent."""
+    return tqdm(iterable, disable=None if enabled else True, **kwargs)
