@@ -134,7 +134,8 @@ def test_analytic_and_numdifftools_derivatives_agree():
         assert np.allclose(getattr(e1, name), getattr(e2, name), atol=1e-6), name
 
 
-def test_affine_policy_value_equals_theorem_2_5_for_its_policy():
+def _step1_setup():
+    """Landmark example, K = 3: the reference under a fixed policy and the value at step 2."""
     ex = landmark_example(K=3)
     filt = UKF(ex.model)
     policy = AffinePolicy(np.zeros((3, 2, 2)), np.tile([1.0, -0.3], (3, 1)))
@@ -143,6 +144,11 @@ def test_affine_policy_value_equals_theorem_2_5_for_its_policy():
     nxt = theorem_2_5_value(StageProblem(ex.model, ex.cost, filt, ref.estimates[2],
                                          terminal_value(ex.cost, filt.mixture(ref.estimates[3])), wp, beta)
                             .expansion(ref.u_bar[2]), 1.0)
+    return ex, filt, policy, ref, wp, beta, nxt
+
+
+def test_affine_policy_value_equals_theorem_2_5_for_its_policy():
+    ex, filt, policy, ref, wp, beta, nxt = _step1_setup()
     exp = StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta).expansion(ref.u_bar[1])
     p_t, r_t, P_t, R_t = exp.tilde
     eps = 0.5
@@ -258,14 +264,7 @@ def test_shift_is_zero_when_the_exact_hessian_satisfies_2_9():
 
 
 def test_covariance_hessian_variants_on_the_example():
-    ex = landmark_example(K=3)
-    filt = UKF(ex.model)
-    policy = AffinePolicy(np.zeros((3, 2, 2)), np.tile([1.0, -0.3], (3, 1)))
-    ref = reference_trajectory(ex.model, filt, policy, ex.mean0, ex.cov0)
-    wp, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
-    nxt = theorem_2_5_value(StageProblem(ex.model, ex.cost, filt, ref.estimates[2],
-                                         terminal_value(ex.cost, filt.mixture(ref.estimates[3])), wp, beta)
-                            .expansion(ref.u_bar[2]), 1.0)
+    ex, filt, policy, ref, wp, beta, nxt = _step1_setup()
     exps = {name: StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta, name).expansion(ref.u_bar[1])
             for name in ("psd", "exact", "shift")}
     # the three differ only in R; the gradient (first-order dual effect) is the same
