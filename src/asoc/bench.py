@@ -12,8 +12,19 @@ import os
 import platform
 import statistics
 import sys
+import time
 
 SUBPACKAGES = ("mjls", "belief", "gp")
+
+
+def median_seconds(fn, repeat: int = 15) -> float:
+    """Median wall time of ``repeat`` calls of ``fn()``."""
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return float(statistics.median(times))
 
 
 def main(argv=None) -> int:

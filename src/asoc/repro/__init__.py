@@ -12,9 +12,9 @@ Typical notebook use::
 from .figures import STYLE, apply_style, markdown_table, save_figure, save_table
 from .ledger import ledger_markdown, write_ledger
 from .reference import Entry, load_reference, status
-from .stats import bootstrap_ci, bootstrap_median_ci
+from .stats import bootstrap_ci, bootstrap_median_ci, settling_iteration
 from .values import load_all_values, load_values, record, setup
 
 __all__ = ["STYLE", "apply_style", "markdown_table", "save_figure", "save_table",
            "ledger_markdown", "write_ledger", "Entry", "load_reference", "status",
-           "bootstrap_ci", "bootstrap_median_ci", "load_all_values", "load_values", "record", "setup"]
+           "bootstrap_ci", "bootstrap_median_ci", "settling_iteration", "load_all_values", "load_values", "record", "setup"]

@@ -69,3 +69,22 @@ def bootstrap_median_ci(samples, level: float = 0.95):
     lo = x[j[min(np.searchsorted(cdf, alpha), j.size - 1)] - 1]
     hi = x[j[min(np.searchsorted(cdf, 1 - alpha), j.size - 1)] - 1]
     return {"value": float(np.median(x)), "ci": [float(lo), float(hi)], "n": int(n)}
+
+
+def settling_iteration(series, band: float = 0.02) -> int:
+    """First index after which every series stays within ``band`` of its total change.
+
+    The classical settling time (e.g. 2% band) applied to iteration histories: for each
+    series s_0..s_N with final value s_N, the band is ``band * max|s_eta - s_N|``. This
+    turns "converges after about N iterations", read off a plot, into a number that does
+    not depend on the series' scale. ``series`` is (N+1,) or (n_series, N+1).
+    """
+    s = np.atleast_2d(np.asarray(series, dtype=float))
+    if s.shape[1] < 1 or not np.all(np.isfinite(s)):
+        raise ValueError("series: need finite values, at least one per series")
+    if not 0 < band < 1:
+        raise ValueError(f"band must lie in (0, 1), found {band}")
+    dev = np.abs(s - s[:, -1:])
+    ok = np.all(dev <= band * dev.max(axis=1, keepdims=True), axis=0)
+    bad = np.flatnonzero(~ok)
+    return int(bad[-1] + 1) if bad.size else 0
