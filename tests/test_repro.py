@@ -95,10 +95,10 @@ def test_cli_lists_notebooks_and_rejects_unknown_figures(capsys):
 
 
 def test_settling_iteration_is_scale_free_and_validates():
-    s = np.array([0.0, 5.0, 9.0, 9.9, 10.1, 10.0])
-    assert repro.settling_iteration(s) == 4
-    assert repro.settling_iteration(1000 * s + 7) == 4
-    assert repro.settling_iteration(np.vstack([s, [1, 1, 1, 1, 1, 1.0]])) == 4
-    assert repro.settling_iteration(s, band=0.2) == 3
+    s = np.array([0.0, 5.0, 9.0, 9.9, 10.3, 10.0])      # deviations 10, 5, 1, 0.1, 0.3, 0
+    assert repro.settling_iteration(s) == 5               # 0.3 > 2% of 10
+    assert repro.settling_iteration(1000 * s + 7) == 5
+    assert repro.settling_iteration(np.vstack([s, [1, 1, 1, 1, 1, 1.0]])) == 5
+    assert repro.settling_iteration(s, band=0.1) == 2
     with pytest.raises(ValueError, match="band"):
         repro.settling_iteration(s, band=0)
