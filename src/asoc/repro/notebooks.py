@@ -13,7 +13,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .paths import BOOK, CI_OUTPUT, FIGURES
+from .paths import BOOK, CI_OUTPUT, FIGURES, ROOT
 from .values import FIDELITIES
 
 
@@ -63,4 +63,17 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
                                parameters={"fidelity": fidelity, "output_dir": out_param},
                                progress_bar=sys.stderr.isatty(), log_output=log_output,
                                kernel_name="python3")
+    _relative_provenance(executed)
     return executed
+
+
+def _relative_provenance(path: Path):
+    """Store papermill's input/output paths relative to the project (no machine paths)."""
+    import nbformat
+
+    nb = nbformat.read(path, as_version=4)
+    meta = nb.metadata.get("papermill", {})
+    for key in ("input_path", "output_path"):
+        if meta.get(key):
+            meta[key] = os.path.relpath(meta[key], ROOT)
+    nbformat.write(nb, path)
