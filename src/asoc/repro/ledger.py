@@ -5,6 +5,7 @@ from .figures import markdown_table
 from .io import atomic_write_text
 from .notebooks import notebooks
 from .paths import BOOK
+from .prose import fill
 from .reference import load_reference, status
 from .values import load_all_values
 
@@ -48,7 +49,7 @@ def ledger_rows(reference=None, values=None):
     for key, entry in reference.items():
         ours = values.get(key)
         st = status(entry, ours)
-        note = " ".join(entry.note.split())
+        note = fill(" ".join(entry.note.split()), values)
         if st != entry.expect and st != "missing":
             note = f"(status changed from expected '{entry.expect}') " + note
         rows.append(dict(key=key, notebook=entry.notebook, where=entry.where, thesis=_fmt(entry.thesis),

@@ -1,0 +1,74 @@
+"""Numbers in prose come from recorded values (DESIGN.md, "Portability").
+
+Text (a ledger note, a notebook paragraph, the findings page) names a recorded value by a
+placeholder ``{{path:spec}}`` and :func:`fill` replaces it by the value formatted with the
+Python format ``spec``:
+
+- ``path`` is ``<notebook>.<key>`` or, inside a notebook, just ``<key>`` (the current
+  notebook's value, see :func:`prose`); it may go on into dicts and lists:
+  ``{{sec2_5.mc_cost_proposed.ci[0]:.1f}}``, ``{{sec3_6.iters.T1}}``;
+- a Monte Carlo record (a dict with ``value`` or ``median`` and ``ci``) prints as ``m [lo, hi]``, a claim
+  record (``holds``, ``value``) prints its value, a bool prints ``yes``/``no``.
+
+An unknown path raises ``KeyError`` naming it: a number is never typed in its place.
+"""
+
+import re
+
+PLACEHOLDER = re.compile(r"\{\{\s*([A-Za-z_][\w.\[\]-]*?)\s*(?::\s*([^{}]*?))?\s*\}\}")
+_STEP = re.compile(r"\.?([A-Za-z0-9_-]+)|\[(-?\d+)\]")
+
+
+def lookup(path: str, values: dict, notebook: str | None = None):
+    """The value at ``path`` in ``values`` (``{"<notebook>.<key>": value}``)."""
+    steps = [name or int(index) for name, index in _STEP.findall(path)]
+    if any(k.startswith(f"{steps[0]}.") for k in values) and len(steps) > 1:
+        key, rest = f"{steps[0]}.{steps[1]}", steps[2:]
+    elif notebook is not None:
+        key, rest = f"{notebook}.{steps[0]}", steps[1:]
+    else:
+        raise KeyError(f"{{{{{path}}}}}: no notebook named {steps[0]!r} has recorded values")
+    if key not in values:
+        raise KeyError(f"{{{{{path}}}}}: {key} is not recorded")
+    value = values[key]
+    for step in rest:
+        try:
+            value = value[step]
+        except (KeyError, IndexError, TypeError):
+            raise KeyError(f"{{{{{path}}}}}: {key} has no part {step!r}") from None
+    return value
+
+
+def format_value(value, spec: str = "") -> str:
+    """``value`` formatted with ``spec`` (Monte Carlo records as ``m [lo, hi]``)."""
+    if isinstance(value, dict):
+        if "ci" in value and ("median" in value or "value" in value):
+            lo, hi = value["ci"]
+            return f"{format_value(value.get('median', value.get('value')), spec)} [{format_value(lo, spec)}, {format_value(hi, spec)}]"
+        if "value" in value:
+            return format_value(value["value"], spec)
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, list):
+        return "[" + ", ".join(format_value(v, spec) for v in value) + "]"
+    return format(value, spec) if spec else str(value)
+
+
+def fill(text: str, values: dict, notebook: str | None = None) -> str:
+    """``text`` with every ``{{path:spec}}`` replaced by the recorded value."""
+    return PLACEHOLDER.sub(lambda m: format_value(lookup(m.group(1), values, notebook), m.group(2) or ""), text)
+
+
+def prose(text: str):
+    """Markdown for a notebook cell: ``text`` filled from this notebook's values and the committed ones."""
+    from IPython.display import Markdown
+
+    from .values import _session, load_all_values
+
+    values = load_all_values()
+    if _session.notebook is not None:
+        values.update({f"{_session.notebook}.{k}": v for k, v in _session.values.items()})
+    return Markdown(fill(text, values, _session.notebook))
+
+
+__all__ = ["fill", "format_value", "lookup", "prose"]

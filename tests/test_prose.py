@@ -1,0 +1,27 @@
+"""Numbers in prose: placeholders filled from recorded values, unknown ones rejected."""
+
+import pytest
+
+from asoc.repro.prose import fill
+
+VALUES = {"sec9_9.cost": {"value": 93.16, "ci": [88.5, 98.1], "n": 1000},
+          "sec9_9.claim": {"holds": False, "value": 0.1905},
+          "sec9_9.iters": [13, 26], "sec9_9.flag": True, "sec9_9.gains": {"T1": -0.63501}}
+
+
+def test_fill_formats_records_and_parts():
+    text = "cost {{sec9_9.cost:.1f}}, lo {{sec9_9.cost.ci[0]:.2f}}, bend {{sec9_9.claim:.3f}}, " \
+           "iters {{sec9_9.iters[1]}}, {{sec9_9.flag}}, L {{sec9_9.gains.T1:.4f}}, $x_{K-1}$"
+    assert fill(text, VALUES) == "cost 93.2 [88.5, 98.1], lo 88.50, bend 0.191, iters 26, yes, " \
+                                 "L -0.6350, $x_{K-1}$"
+
+
+def test_fill_local_keys_inside_a_notebook():
+    assert fill("{{iters:d}} and {{sec9_9.iters[0]}}", VALUES, notebook="sec9_9") == "[13, 26] and 13"
+
+
+@pytest.mark.parametrize("text", ["{{sec9_9.missing}}", "{{sec9_9.iters[5]}}", "{{other.cost}}",
+                                  "{{cost}}"])
+def test_fill_rejects_unknown_paths(text):
+    with pytest.raises(KeyError):
+        fill(text, VALUES)
