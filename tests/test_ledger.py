@@ -21,7 +21,7 @@ def test_full_fidelity_status_is_the_expected_one(key):
 
 def test_every_recorded_value_is_in_the_reference():
     missing = sorted(set(VALUES) - set(REFERENCE))
-    assert not missing, f"recorded but not in tests/reference/thesis_values.yaml: {missing}"
+    assert not missing, f"recorded but not in tests/reference/thesis_values/<notebook>.yaml: {missing}"
 
 
 def test_committed_ledger_is_current():

@@ -5,5 +5,5 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[3]
 BOOK = ROOT / "book"
 FIGURES = ROOT / "figures"
-REFERENCE = ROOT / "tests" / "reference" / "thesis_values.yaml"
+REFERENCE = ROOT / "tests" / "reference" / "thesis_values"   # one <notebook>.yaml each
 CI_OUTPUT = BOOK / "_build" / "ci"

@@ -1,6 +1,6 @@
-"""The reference file ``tests/reference/thesis_values.yaml`` and the status of each value.
+"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and the status of each value.
 
-Each entry is keyed ``<notebook>.<key>`` and holds
+Each notebook has its own file (so work on one section does not touch another's). Each entry is keyed ``<notebook>.<key>`` and holds
 
 ``where``    where the thesis prints it (section, figure, table, page);
 ``kind``     ``deterministic`` (a number to its printed decimals), ``monte_carlo`` (a
@@ -16,6 +16,7 @@ Each entry is keyed ``<notebook>.<key>`` and holds
 """
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import yaml
@@ -47,9 +48,17 @@ class Entry:
 
 
 def load_reference(path=None) -> dict:
-    """Load and validate the reference file; return ``{key: Entry}``."""
-    with open(path or REFERENCE) as handle:
-        raw = yaml.safe_load(handle) or {}
+    """Load and validate the reference files (a folder of YAML files, or one file); return ``{key: Entry}``."""
+    path = Path(path or REFERENCE)
+    raw = {}
+    for file in sorted(path.glob("*.yaml")) if path.is_dir() else [path]:
+        with open(file) as handle:
+            for key, spec in (yaml.safe_load(handle) or {}).items():
+                if key in raw:
+                    raise ValueError(f"reference key {key!r} appears twice (in {file.name})")
+                if path.is_dir() and not key.startswith(file.stem + "."):
+                    raise ValueError(f"reference key {key!r} belongs in {key.split('.')[0]}.yaml, not {file.name}")
+                raw[key] = spec
     entries = {}
     for key, spec in raw.items():
         if "." not in key:
