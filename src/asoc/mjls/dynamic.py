@@ -210,7 +210,9 @@ class DynamicOutputFeedbackResult:
     stabilizing); bound: sum_i tr[Q_i (Xbar_i + Xunder_i) + L^T R_i L Xunder_i], the cost of
     the bounded second moment of Prop. 3.26 that the algorithm minimises; Xbar, Xunder,
     Pbar, Punder: the last iterates; history: traces of Xbar_i, Xunder_i, Pbar_i, Punder_i
-    per iteration, each (iterations + 1, M); seconds: wall time.
+    per iteration, each (iterations + 1, M); seconds: wall time. For
+    :func:`asoc.mjls.exact_dynamic_output_feedback`: bound = nan, the four blocks None, and
+    history["cost"] the exact cost per iteration.
     """
 
     F: np.ndarray

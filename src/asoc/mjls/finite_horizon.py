@@ -40,7 +40,9 @@ class FiniteHorizonResult:
     expected cost (3.56) of the final gains from the exact augmented second-moment
     recursion (3.58); Xbar, Xunder (K+1, M, nx, nx), Pbar, Punder (K+1, M, nx, nx): the
     bounds of the last iteration; rejected: number of step updates Step 5 rejected in the
-    last iteration; seconds: wall time.
+    last iteration; seconds: wall time; costs: the exact J_0 after each iteration of
+    :func:`asoc.mjls.exact_finite_horizon_dynamic_output_feedback` (None for Alg. 3.3, whose
+    bound arrays it leaves None).
     """
 
     F: np.ndarray
@@ -57,6 +59,7 @@ class FiniteHorizonResult:
     Punder: np.ndarray = field(repr=False)
     rejected: int = 0
     seconds: float = 0.0
+    costs: np.ndarray | None = field(default=None, repr=False)
 
     def controller(self):
         """The controller (3.55) for :func:`asoc.mjls.simulate`."""
