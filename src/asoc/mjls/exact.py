@@ -24,6 +24,7 @@ from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic
 from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_initial_moment,
                              check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages)
+from .moments import moment_operator
 from .system import D, E
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
@@ -42,14 +43,6 @@ def _unpack(z, shapes):
         out.append(z[start:start + size].reshape(shape))
         start += size
     return out
-
-
-def _operator(At, T):
-    """I - op with op[j, i] = p_ij (A~_i (x) A~_i): the map X -> D(A~ X A~^T) on row-major vecs."""
-    M, n, _ = At.shape
-    n2 = n * n
-    op = np.einsum("ij,iab,icd->jacibd", T, At, At).reshape(M * n2, M * n2)
-    return np.eye(M * n2) - op
 
 
 def gain_gradient(sys, K, L, At, X, EP, JJt, mu, gamma=1.0):
@@ -97,7 +90,7 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     At = At / gamma
     M, n, _ = At.shape
-    lhs = _operator(At, sys.T)
+    lhs = np.eye(M * n * n) - moment_operator(At, sys.T)
     rho = float(np.max(np.abs(np.linalg.eigvals(np.eye(M * n * n) - lhs))))
     if not rho < 1:
         return np.inf, None, rho
