@@ -75,6 +75,10 @@ def gain_gradient(sys, K, L, At, X, EP, JJt, mu, gamma=1.0):
 def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     """Exact average cost (3.42) (Prop. 3.24) of (3.37) and its gradient over (F, K, L).
 
+    Mean-square stability is tested without eigenvalues: the closed loop is stable iff the
+    solution Y of Y_j = sum_i p_ij A~_i Y_i A~_i^T + I is positive definite (the coupled
+    Lyapunov test, cf. Thm. 3.9); Y comes from the same LU factorisation as X and P.
+
     Parameters
     ----------
     sys : MJLS with measurement noise J (Sec. 3.6).
@@ -84,24 +88,37 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
 
     Returns
     -------
-    (cost, (gF, gK, gL), rho) : cost is inf and the gradient None when rho, the mean-square
-        spectral radius of A~ / gamma (Cor. 3.2), is not below 1.
+    (cost, (gF, gK, gL)) : cost is inf and the gradient None when A~ / gamma is not
+        mean-square stable (Cor. 3.2).
     """
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     At = At / gamma
     M, n, _ = At.shape
-    lhs = np.eye(M * n * n) - moment_operator(At, sys.T)
-    rho = float(np.max(np.abs(np.linalg.eigvals(np.eye(M * n * n) - lhs))))
-    if not rho < 1:
-        return np.inf, None, rho
+    lu = scipy.linalg.lu_factor(np.eye(M * n * n) - moment_operator(At, sys.T), check_finite=False)
+    Y = scipy.linalg.lu_solve(lu, np.broadcast_to(np.eye(n), (M, n, n)).ravel()).reshape(M, n, n)
+    if not (np.all(np.isfinite(Y)) and _positive_definite(0.5 * (Y + np.swapaxes(Y, 1, 2)))):
+        return np.inf, None
     mu = sys.mu_inf
-    lu = scipy.linalg.lu_factor(lhs)
     X = scipy.linalg.lu_solve(lu, D(sys.T, mu[:, None, None] * Wt).ravel()).reshape(M, n, n)
     P = scipy.linalg.lu_solve(lu, Qt.ravel(), trans=1).reshape(M, n, n)
     X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
     cost = float(np.einsum("iab,iba->", Qt, X))
     JJt = np.zeros((M, sys.ny, sys.ny)) if sys.J is None else sys.J @ np.swapaxes(sys.J, 1, 2)
-    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), JJt, mu, gamma), rho
+    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), JJt, mu, gamma)
+
+
+def _positive_definite(Y):
+    try:
+        np.linalg.cholesky(Y)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def closed_loop_radius(sys, F, K, L):
+    """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39)."""
+    At = augmented_closed_loop(sys, F, K, L)[0]
+    return float(np.max(np.abs(np.linalg.eigvals(moment_operator(At, sys.T)))))
 
 
 class _InverseHessian:
@@ -196,14 +213,17 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None):
 
 
 def _start_gains(sys, init, nc):
-    """(F, K, L) from ``init`` (result or tuple), else Alg. 3.2's result padded/cut to nc states."""
+    """(F, K, L) from ``init`` (result or tuple), else Alg. 3.2's result padded/cut to nc states
+    (zeros when Alg. 3.2 diverges at once)."""
     if init is None:
-        r = dynamic_output_feedback(sys, warn=False)
-        F, K, L = r.F, r.K, r.L
         nc = sys.nx if nc is None else nc
-        m = min(nc, sys.nx)
         F0, K0, L0 = np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu, nc))
-        F0[:m, :m], K0[:m], L0[:, :m] = F[:m, :m], K[:m], L[:, :m]
+        try:
+            r = dynamic_output_feedback(sys, warn=False)
+        except FloatingPointError:
+            return F0, K0, L0
+        m = min(nc, sys.nx)
+        F0[:m, :m], K0[:m], L0[:, :m] = r.F[:m, :m], r.K[:m], r.L[:, :m]
         return F0, K0, L0
     gains = (init.F, init.K, init.L) if isinstance(init, DynamicOutputFeedbackResult) else init
     if not (isinstance(gains, (tuple, list)) and len(gains) == 3):
@@ -212,8 +232,35 @@ def _start_gains(sys, init, nc):
     F = np.atleast_2d(np.asarray(gains[0], dtype=float))
     if nc is not None and F.shape[0] != nc:
         raise ValueError(f"nc: expected the controller order of init, {F.shape[0]}, found {nc}")
-    _, _, _ = augmented_closed_loop(sys, *gains)        # validates the shapes
+    augmented_closed_loop(sys, *gains)                  # validates the shapes
     return tuple(np.atleast_2d(np.asarray(g, dtype=float)) for g in gains)
+
+
+def averaged_lqg(sys, nc):
+    """The LQG compensator of the mode-averaged system (sum_i mu_inf,i A_i, ...) in the form (3.37).
+
+    A start for the stabilising phase when Alg. 3.2 gives none (predictor-form Kalman gain
+    and LQ gain from the two discrete algebraic Riccati equations). Returns (F, K, L), or
+    None when nc != nx or a Riccati equation has no stabilising solution.
+    """
+    if nc != sys.nx:
+        return None
+    mu = sys.mu_inf
+    avg = lambda S: np.einsum("i,iab->ab", mu, S)
+    A, B, C, Q, R = (avg(S) for S in (sys.A, sys.B, sys.C, sys.Q, sys.R))
+    W = avg(sys.H @ np.swapaxes(sys.H, 1, 2))
+    V = np.zeros((sys.ny, sys.ny)) if sys.J is None else avg(sys.J @ np.swapaxes(sys.J, 1, 2))
+    V = V + 1e-6 * max(1.0, np.abs(V).max()) * np.eye(sys.ny)       # y = C x: a regular filter DARE
+    Q = Q + 1e-6 * max(1.0, np.abs(Q).max()) * np.eye(sys.nx)
+    W = W + 1e-6 * max(1.0, np.abs(W).max()) * np.eye(sys.nx)
+    try:
+        X = scipy.linalg.solve_discrete_are(A, B, Q, R)
+        S = scipy.linalg.solve_discrete_are(A.T, C.T, W, V)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    L = -np.linalg.solve(R + B.T @ X @ B, B.T @ X @ A)
+    K = A @ S @ C.T @ np.linalg.inv(C @ S @ C.T + V)
+    return A + B @ L - K @ C, K, L
 
 
 def _stabilise(sys, z, shapes, max_rounds=200):
@@ -223,23 +270,42 @@ def _stabilise(sys, z, shapes, max_rounds=200):
     which pushes rho(A~) away from gamma, then sets gamma halfway to the new rho(A~).
     Returns (z, rho).
     """
-    rho = average_cost_and_gradient(sys, *_unpack(z, shapes))[2]
+    rho = closed_loop_radius(sys, *_unpack(z, shapes))
     gamma = 1.05 * rho
     for _ in range(max_rounds):
         if rho < 1:
             break
         fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes), gamma=gamma))
         z = bfgs(fun, z, 1e-6, 100)[0]
-        rho = average_cost_and_gradient(sys, *_unpack(z, shapes))[2]
-        new_gamma = max(0.5 * (rho + gamma), 1.0 + 0.5 * (rho - 1.0))
-        if gamma - new_gamma <= 1e-9 * gamma:
+        rho = closed_loop_radius(sys, *_unpack(z, shapes))
+        new_gamma = 0.5 * (rho + gamma)
+        if gamma - new_gamma <= 1e-6 * gamma:
             break
         gamma = new_gamma
     return z, rho
 
 
+def _stabilising_start(sys, z, shapes):
+    """z if it stabilises, else the first of z and the averaged LQG compensator (in order of
+    rho) that :func:`_stabilise` turns into a stabilising controller. Returns (z, rho)."""
+    candidates = [z]
+    lqg = averaged_lqg(sys, shapes[0][0])
+    if lqg is not None:
+        candidates.append(_pack(*lqg))
+    radii = [closed_loop_radius(sys, *_unpack(c, shapes)) for c in candidates]
+    best = (z, min(radii))
+    for i in np.argsort(radii):
+        if not np.isfinite(radii[i]):
+            continue
+        zi, rho = _stabilise(sys, candidates[i], shapes)
+        if rho < 1:
+            return zi, rho
+        best = min(best, (zi, rho), key=lambda b: b[1])
+    return best
+
+
 def _flat(out):
-    cost, grads = out[0], out[1]
+    cost, grads = out
     return cost, (None if grads is None else _pack(*grads))
 
 
@@ -286,7 +352,7 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     start = time.perf_counter()
     F, K, L = _start_gains(sys, init, nc)
     shapes = (F.shape, K.shape, L.shape)
-    z, rho = _stabilise(sys, _pack(F, K, L), shapes)
+    z, rho = _stabilising_start(sys, _pack(F, K, L), shapes)
     if not rho < 1:
         if warn:
             warnings.warn(f"exact_dynamic_output_feedback: found no mean-square stabilising start "
@@ -301,7 +367,7 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes)))
     z, cost, converged, it, history = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
     F, K, L = _unpack(z, shapes)
-    rho = average_cost_and_gradient(sys, F, K, L)[2]
+    rho = closed_loop_radius(sys, F, K, L)
     if warn and not converged:
         warnings.warn(f"exact_dynamic_output_feedback did not converge within {it} iterations "
                       f"(cost {cost:.6g})", RuntimeWarning, stacklevel=2)
