@@ -31,7 +31,8 @@ def moment_operator(Acl, T):
     Its spectral radius is that of Cor. 3.2; its transpose maps vec P to vec(Acl_i^T E_i(P) Acl_i).
     """
     M, n, _ = Acl.shape
-    return np.einsum("ij,iab,icd->jacibd", T, Acl, Acl).reshape(M * n * n, M * n * n)
+    kron = np.einsum("iab,icd->iacbd", Acl, Acl).reshape(M, n * n, n * n)    # Acl_i (x) Acl_i
+    return np.einsum("ij,ixy->jxiy", T, kron).reshape(M * n * n, M * n * n)
 
 
 def steady_state_second_moment(Acl, HHt, T, mu_inf):
