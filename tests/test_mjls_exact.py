@@ -180,7 +180,8 @@ def test_exact_finite_horizon_equals_lqg_for_one_mode():
     optimiser cannot improve it beyond its stopping tolerance."""
     sys = random_system(4, M=1)
     mean0, cov0, mu0 = initial_state(sys)
-    f = finite_horizon_dynamic_output_feedback(sys, 15, mean0, cov0, mu0)
+    f = finite_horizon_dynamic_output_feedback(sys, 15, mean0, cov0, mu0, warn=False)   # Jbar_0 may rise
+    assert f.converged
     e = exact_finite_horizon_dynamic_output_feedback(sys, 15, mean0, cov0, mu0, init=f)
     assert e.converged
     assert f.cost * (1 - 1e-8) <= e.cost <= f.cost * (1 + 4 * EPS)

@@ -20,7 +20,8 @@ import numpy as np
 import scipy.linalg
 
 from ..progress import progress_bar
-from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback
+from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
+                      noise_covariances)
 from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_initial_moment,
                              check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages)
@@ -103,8 +104,7 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     P = scipy.linalg.lu_solve(lu, Qt.ravel(), trans=1).reshape(M, n, n)
     X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
     cost = float(np.einsum("iab,iba->", Qt, X))
-    JJt = np.zeros((M, sys.ny, sys.ny)) if sys.J is None else sys.J @ np.swapaxes(sys.J, 1, 2)
-    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), JJt, mu, gamma)
+    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), noise_covariances(sys)[1], mu, gamma)
 
 
 def _positive_definite(Y):
