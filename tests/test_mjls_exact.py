@@ -166,7 +166,8 @@ def test_exact_finite_horizon_never_worse_than_alg33(t):
     sys = sec373_system(t)
     horizon = 20
     f = finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
-                                               init=dynamic_output_feedback(sys))
+                                               init=dynamic_output_feedback(sys), warn=False)
+    assert f.converged                                 # (Jbar_0 may rise once at K = 20, T[2])
     e = exact_finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0,
                                                      SEC373_MU0, init=f)
     assert e.converged
