@@ -7,12 +7,15 @@ Modules: ``system`` (the model), ``stability`` (Cor. 3.2), ``moments`` (Prop. 3.
 ``static`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12), ``dynamic`` (Alg. 3.2), ``finite_horizon``
 (Alg. 3.3), ``observed`` and ``optimal_observed`` (the mode-observing optimum [38] for
 state feedback and for output feedback), ``baselines`` ([52], [163], [165]),
-``intractability`` (Sec. 3.4), ``simulate`` (Monte Carlo), ``examples`` (the thesis's
+``intractability`` (Sec. 3.4), ``exact`` (exact-cost optimisation of (3.37) and (3.55),
+not in the thesis), ``simulate`` (Monte Carlo), ``examples`` (the thesis's
 examples), ``comparison`` (Table 3.2).
 """
 
 from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
                       steady_state_cost)
+from .exact import (average_cost_and_gradient, exact_dynamic_output_feedback,
+                    exact_finite_horizon_dynamic_output_feedback)
 from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback)
 from .lmi import LMIResult, static_output_lmi
@@ -33,4 +36,5 @@ __all__ = ["MJLS", "D", "E", "stationary_distribution", "ms_operator", "ms_spect
            "steady_state_cost", "finite_horizon_dynamic_output_feedback", "FiniteHorizonResult",
            "finite_horizon_cost", "mode_observed_lqg", "ModeObservedLQG", "ModeObservedResult",
            "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
-           "TimeVariantGain", "DynamicOutputFeedback"]
+           "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
+           "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient"]

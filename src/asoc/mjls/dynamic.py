@@ -259,6 +259,9 @@ class DynamicOutputFeedbackResult:
         Traces of Xbar_i, Xunder_i, Pbar_i, Punder_i per iteration, each (iterations + 1, M).
     seconds : float
         Wall time.
+
+    For :func:`asoc.mjls.exact_dynamic_output_feedback`: bound = nan, the four blocks None,
+    and history["cost"] the exact cost per iteration.
     """
 
     F: np.ndarray

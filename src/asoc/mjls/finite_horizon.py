@@ -53,6 +53,10 @@ class FiniteHorizonResult:
         Number of step updates Step 5 rejected in the last iteration.
     seconds : float
         Wall time.
+    costs : numpy.ndarray or None
+        The exact J_0 after each iteration of
+        :func:`asoc.mjls.exact_finite_horizon_dynamic_output_feedback` (None for Alg. 3.3;
+        the exact optimiser leaves the bound arrays None).
     """
 
     F: np.ndarray
@@ -69,6 +73,7 @@ class FiniteHorizonResult:
     Punder: np.ndarray = field(repr=False)
     rejected: int = 0
     seconds: float = 0.0
+    costs: np.ndarray | None = field(default=None, repr=False)
 
     def controller(self):
         """The controller (3.55) for :func:`asoc.mjls.simulate`."""

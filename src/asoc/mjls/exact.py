@@ -1,0 +1,386 @@
+"""Controllers (3.37) and (3.55) that minimise the exact cost instead of its bound (not in the thesis).
+
+Algorithms 3.2 and 3.3 minimise the costs of the bounded second moments of Prop. 3.26 and
+Thm. 3.31, which are not upper bounds of the true costs (Secs. 3.6-3.7 page). Here the exact
+average cost (3.42) (Prop. 3.24), resp. the exact expected cost J_0 (3.56) from the augmented
+recursion (3.58), is minimised over the gains by BFGS. The gradient is analytic: with the
+augmented closed loop A~_i, W_i = H~_i H~_i^T and Q~_i of (3.39)-(3.40) and Prop. 3.20,
+
+    X_j = sum_i p_ij [A~_i X_i A~_i^T + mu_i W_i]   (Prop. 3.23),
+    P_i = Q~_i + A~_i^T E_i(P) A~_i                  (its adjoint, the costate),
+
+the cost J = sum_i tr[Q~_i X_i] has dJ/dA~_i = 2 E_i(P) A~_i X_i, dJ/dW_i = mu_i E_i(P) and
+dJ/dQ~_i = X_i; the finite-horizon case uses the same relations step by step.
+"""
+
+import time
+import warnings
+
+import numpy as np
+import scipy.linalg
+
+from ..progress import progress_bar
+from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback
+from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_initial_moment,
+                             check_initial_state, finite_horizon_cost,
+                             finite_horizon_dynamic_output_feedback, mode_distributions, stages)
+from .system import D, E
+
+ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
+MIN_STEP = 2.0 ** -40         # the line search gives up below this step length
+
+
+def _pack(F, K, L):
+    return np.concatenate([np.ravel(F), np.ravel(K), np.ravel(L)])
+
+
+def _unpack(z, shapes):
+    out, start = [], 0
+    for shape in shapes:
+        size = int(np.prod(shape))
+        out.append(z[start:start + size].reshape(shape))
+        start += size
+    return out
+
+
+def _operator(At, T):
+    """I - op with op[j, i] = p_ij (A~_i (x) A~_i): the map X -> D(A~ X A~^T) on row-major vecs."""
+    M, n, _ = At.shape
+    n2 = n * n
+    op = np.einsum("ij,iab,icd->jacibd", T, At, At).reshape(M * n2, M * n2)
+    return np.eye(M * n2) - op
+
+
+def gain_gradient(sys, K, L, At, X, EP, JJt, mu, gamma=1.0):
+    """dJ/dF, dJ/dK, dJ/dL from the moments X and costates E_i(P) (adjoint of Prop. 3.23).
+
+    Parameters
+    ----------
+    sys : MJLS (one step of (3.36)/(3.54)).
+    K, L : the gains of (3.37); F enters only through ``At``.
+    At : (M, n, n) augmented closed loop (3.39) divided by ``gamma``.
+    X : (M, n, n) augmented second moments at this step.
+    EP : (M, n, n) E_i(P) of the costates at the next step.
+    JJt : (M, ny, ny) measurement-noise covariances; mu : (M,) mode distribution.
+    gamma : the closed loop is A~ / gamma (gamma > 1 for the stabilising phase).
+
+    Returns
+    -------
+    (gF, gK, gL) : arrays of the shapes of F, K, L.
+    """
+    nx = sys.nx
+    G = 2.0 * EP @ At @ X / gamma                                     # dJ/dA~_i
+    gF = G[:, nx:, nx:].sum(axis=0)
+    gK = (G[:, nx:, :nx] @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
+    gK += 2.0 * (mu[:, None, None] * EP[:, nx:, nx:] @ K @ JJt).sum(axis=0)
+    gL = (np.swapaxes(sys.B, 1, 2) @ G[:, :nx, nx:]).sum(axis=0)
+    gL += 2.0 * (sys.R @ L @ X[:, nx:, nx:]).sum(axis=0)
+    return gF, gK, gL
+
+
+def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
+    """Exact average cost (3.42) (Prop. 3.24) of (3.37) and its gradient over (F, K, L).
+
+    Parameters
+    ----------
+    sys : MJLS with measurement noise J (Sec. 3.6).
+    F, K, L : gains of (3.37), shapes (nc, nc), (nc, ny), (nu, nc).
+    gamma : evaluate the closed loop A~ / gamma instead of A~ (gamma >= 1; used to find a
+        stabilising start).
+
+    Returns
+    -------
+    (cost, (gF, gK, gL), rho) : cost is inf and the gradient None when rho, the mean-square
+        spectral radius of A~ / gamma (Cor. 3.2), is not below 1.
+    """
+    At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
+    At = At / gamma
+    M, n, _ = At.shape
+    lhs = _operator(At, sys.T)
+    rho = float(np.max(np.abs(np.linalg.eigvals(np.eye(M * n * n) - lhs))))
+    if not rho < 1:
+        return np.inf, None, rho
+    mu = sys.mu_inf
+    lu = scipy.linalg.lu_factor(lhs)
+    X = scipy.linalg.lu_solve(lu, D(sys.T, mu[:, None, None] * Wt).ravel()).reshape(M, n, n)
+    P = scipy.linalg.lu_solve(lu, Qt.ravel(), trans=1).reshape(M, n, n)
+    X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
+    cost = float(np.einsum("iab,iba->", Qt, X))
+    JJt = np.zeros((M, sys.ny, sys.ny)) if sys.J is None else sys.J @ np.swapaxes(sys.J, 1, 2)
+    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), JJt, mu, gamma), rho
+
+
+def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS"):
+    """Minimise ``fun`` (z -> (f, grad); f = inf outside the domain) by BFGS.
+
+    The line search backtracks from the full quasi-Newton step until the Armijo condition
+    holds (up to rounding of f); a step out of the domain (f = inf) is rejected like any
+    other. The iteration stops (converged) when the decrease the quasi-Newton model predicts,
+    g^T H^-1 g / 2, is below ``tol * |f|``.
+
+    Returns
+    -------
+    (z, f, converged, iterations, history) : history holds f after each iteration.
+    """
+    z = np.asarray(z0, dtype=float)
+    f, g = fun(z)
+    if not np.isfinite(f):
+        raise ValueError("z0: the start is outside the domain (cost is inf)")
+    n = z.size
+    Hinv = None
+    history = [f]
+    converged = False
+    it = 0
+    for it in progress_bar(range(1, int(max_iter) + 1), progress, desc=desc, leave=False):
+        fresh = Hinv is None
+        if fresh:
+            Hinv = np.eye(n) / max(1.0, float(np.linalg.norm(g)))
+        d = -Hinv @ g
+        slope = float(g @ d)
+        if -0.5 * slope <= tol * abs(f):
+            converged = True
+            break
+        t = 1.0
+        while t >= MIN_STEP:
+            z_new = z + t * d
+            f_new, g_new = fun(z_new)
+            if f_new <= f + ARMIJO * t * slope + 4 * np.finfo(float).eps * abs(f):
+                break
+            t *= 0.5
+        else:
+            if fresh:                                  # no descent even along -g: stop
+                break
+            Hinv = None                                # restart from a scaled gradient step
+            continue
+        s, y = z_new - z, g_new - g
+        sy = float(s @ y)
+        if sy > 1e-12 * np.linalg.norm(s) * np.linalg.norm(y):
+            if fresh:
+                Hinv = np.eye(n) * (sy / float(y @ y))
+            Hy = Hinv @ y
+            Hinv = (Hinv - (np.outer(s, Hy) + np.outer(Hy, s)) / sy
+                    + (1.0 + float(y @ Hy) / sy) * np.outer(s, s) / sy)
+        z, f, g = z_new, f_new, g_new
+        history.append(f)
+    return z, f, converged, it, np.array(history)
+
+
+def _start_gains(sys, init, nc):
+    """(F, K, L) from ``init`` (result or tuple), else Alg. 3.2's result padded/cut to nc states."""
+    if init is None:
+        r = dynamic_output_feedback(sys, warn=False)
+        F, K, L = r.F, r.K, r.L
+        nc = sys.nx if nc is None else nc
+        m = min(nc, sys.nx)
+        F0, K0, L0 = np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu, nc))
+        F0[:m, :m], K0[:m], L0[:, :m] = F[:m, :m], K[:m], L[:, :m]
+        return F0, K0, L0
+    gains = (init.F, init.K, init.L) if isinstance(init, DynamicOutputFeedbackResult) else init
+    if not (isinstance(gains, (tuple, list)) and len(gains) == 3):
+        raise ValueError(f"init: expected a DynamicOutputFeedbackResult or a tuple (F, K, L), "
+                         f"found {type(init).__name__}")
+    F = np.atleast_2d(np.asarray(gains[0], dtype=float))
+    if nc is not None and F.shape[0] != nc:
+        raise ValueError(f"nc: expected the controller order of init, {F.shape[0]}, found {nc}")
+    _, _, _ = augmented_closed_loop(sys, *gains)        # validates the shapes
+    return tuple(np.atleast_2d(np.asarray(g, dtype=float)) for g in gains)
+
+
+def _stabilise(sys, z, shapes, max_rounds=200):
+    """A stabilising start from z: minimise the cost of A~ / gamma, lowering gamma towards 1.
+
+    Each round minimises the cost of the scaled closed loop (finite for rho(A~) < gamma),
+    which pushes rho(A~) away from gamma, then sets gamma halfway to the new rho(A~).
+    Returns (z, rho).
+    """
+    rho = average_cost_and_gradient(sys, *_unpack(z, shapes))[2]
+    gamma = 1.05 * rho
+    for _ in range(max_rounds):
+        if rho < 1:
+            break
+        fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes), gamma=gamma))
+        z = bfgs(fun, z, 1e-6, 100)[0]
+        rho = average_cost_and_gradient(sys, *_unpack(z, shapes))[2]
+        new_gamma = max(0.5 * (rho + gamma), 1.0 + 0.5 * (rho - 1.0))
+        if gamma - new_gamma <= 1e-9 * gamma:
+            break
+        gamma = new_gamma
+    return z, rho
+
+
+def _flat(out):
+    cost, grads = out[0], out[1]
+    return cost, (None if grads is None else _pack(*grads))
+
+
+def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
+                                  progress=False):
+    """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24); not in the thesis.
+
+    BFGS over (F, K, L) with the analytic gradient (adjoint of the augmented second-moment
+    equations, Prop. 3.23), inside the mean-square stabilising set (steps that leave it,
+    where the cost is inf, are rejected by the line search).
+
+    Parameters
+    ----------
+    sys : MJLS with measurement noise J (Sec. 3.6; J = None means y = C x).
+    init : start: a :class:`DynamicOutputFeedbackResult`, a tuple (F, K, L), or None for
+        Algorithm 3.2's controller. A non-stabilising start is first moved into the
+        stabilising set by minimising the cost of the scaled closed loop A~ / gamma while
+        gamma is lowered to 1 (this lowers the mean-square spectral radius).
+    nc : controller order (default: that of ``init``, else nx; Alg. 3.2's controller is
+        padded with zeros or cut to nc states).
+    tol : stop when the decrease the quasi-Newton model predicts is below tol * cost.
+    max_iter : BFGS iteration limit.
+    warn : warn when no stabilising start is found or the iteration does not converge.
+    progress : show a tqdm bar over iterations.
+
+    Returns
+    -------
+    DynamicOutputFeedbackResult
+        F, K, L; cost (exact, Prop. 3.24), rho, stabilizing, converged, iterations, seconds;
+        bound = nan and Xbar, Xunder, Pbar, Punder = None (no bound is involved);
+        history["cost"]: exact cost after each iteration.
+
+    Raises
+    ------
+    ValueError
+        if tol or max_iter are not positive, nc is not a positive integer, or init has
+        the wrong type or shapes.
+    """
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
+        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
+                         f"max_iter={max_iter}")
+    if nc is not None and (int(nc) != nc or nc < 1):
+        raise ValueError(f"nc must be an integer >= 1, found {nc}")
+    start = time.perf_counter()
+    F, K, L = _start_gains(sys, init, nc)
+    shapes = (F.shape, K.shape, L.shape)
+    z, rho = _stabilise(sys, _pack(F, K, L), shapes)
+    if not rho < 1:
+        if warn:
+            warnings.warn(f"exact_dynamic_output_feedback: found no mean-square stabilising start "
+                          f"(smallest rho reached {rho:.4f}); pass a stabilising init", RuntimeWarning,
+                          stacklevel=2)
+        F, K, L = _unpack(z, shapes)
+        return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=False, iterations=0, rho=rho,
+                                           stabilizing=False, cost=np.inf, bound=np.nan, Xbar=None,
+                                           Xunder=None, Pbar=None, Punder=None,
+                                           history={"cost": np.array([np.inf])},
+                                           seconds=time.perf_counter() - start)
+    fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes)))
+    z, cost, converged, it, history = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
+    F, K, L = _unpack(z, shapes)
+    rho = average_cost_and_gradient(sys, F, K, L)[2]
+    if warn and not converged:
+        warnings.warn(f"exact_dynamic_output_feedback did not converge within {it} iterations "
+                      f"(cost {cost:.6g})", RuntimeWarning, stacklevel=2)
+    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
+                                       stabilizing=bool(rho < 1), cost=cost, bound=np.nan, Xbar=None,
+                                       Xunder=None, Pbar=None, Punder=None, history={"cost": history},
+                                       seconds=time.perf_counter() - start)
+
+
+def _augmented_stage(s, F, K, L, HHt, JJt):
+    """A~, W, Q~ of (3.59)-(3.60) at one step (J = None handled by JJt)."""
+    nx, nc = s.nx, F.shape[0]
+    A = np.zeros((s.M, nx + nc, nx + nc))
+    A[:, :nx, :nx], A[:, :nx, nx:] = s.A, s.B @ L
+    A[:, nx:, :nx], A[:, nx:, nx:] = K @ s.C, F
+    W = np.zeros_like(A)
+    W[:, :nx, :nx], W[:, nx:, nx:] = HHt, K @ JJt @ K.T
+    Q = np.zeros_like(A)
+    Q[:, :nx, :nx], Q[:, nx:, nx:] = s.Q, L.T @ s.R @ L
+    return A, W, Q
+
+
+def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
+    """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.
+
+    Parameters
+    ----------
+    st : :class:`asoc.mjls.finite_horizon.Stages` of the horizon.
+    F, K, L : (K, nc, nc), (K, nc, ny), (K, nu, nc) gains of (3.55).
+    X0 : (M, n, n) E{x~_0 x~_0^T 1(theta_0 = i)}; mu : (K + 1, M) mode distributions.
+
+    Returns
+    -------
+    (cost, (gF, gK, gL)) : gradients of the shapes of F, K, L (backward adjoint recursion).
+    """
+    stage = [_augmented_stage(s, F[k], K[k], L[k], st.HHt[k], st.JJt[k])
+             for k, s in enumerate(st.systems)]
+    X = [X0]
+    cost = 0.0
+    for k, (s, (A, W, Q)) in enumerate(zip(st.systems, stage)):
+        cost += float(np.einsum("iab,iba->", Q, X[k]))
+        X.append(D(s.T, A @ X[k] @ np.swapaxes(A, 1, 2) + mu[k][:, None, None] * W))
+    nx = st.systems[0].nx
+    P = np.zeros_like(X0)
+    P[:, :nx, :nx] = st.Q_final
+    cost += float(np.einsum("iab,iba->", P, X[-1]))
+    gF, gK, gL = np.zeros_like(F), np.zeros_like(K), np.zeros_like(L)
+    for k in range(st.horizon - 1, -1, -1):
+        s, (A, W, Q) = st.systems[k], stage[k]
+        EP = E(s.T, P)
+        gF[k], gK[k], gL[k] = gain_gradient(s, K[k], L[k], A, X[k], EP, st.JJt[k], mu[k])
+        P = Q + np.swapaxes(A, 1, 2) @ EP @ A
+    return cost, (gF, gK, gL)
+
+
+def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None, tol=1e-10,
+                                                 max_iter=5000, warn=True, progress=False):
+    """The time-variant controller (3.55) minimising the exact J_0 (3.56)/(3.58); not in the thesis.
+
+    BFGS over all gains F_k, K_k, L_k (k = 0..K-1) with the analytic gradient (the adjoint
+    of the augmented forward recursion (3.58)); the controller starts at x^_0 = E{x_0} as in
+    :func:`finite_horizon_dynamic_output_feedback`.
+
+    Parameters
+    ----------
+    sys : MJLS, or a sequence of ``horizon`` (or ``horizon + 1``) MJLS (3.54).
+    horizon : K >= 1.
+    mean0, cov0, mu0 : the Gaussian-mixture initial state, as for Alg. 3.3.
+    init : start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a
+        FiniteHorizonResult, a DynamicOutputFeedbackResult or a tuple (F, K, L), constant
+        or per step.
+    tol : stop when the decrease the quasi-Newton model predicts is below tol * J_0.
+    max_iter : BFGS iteration limit.
+    warn : warn when the iteration does not converge.
+    progress : show a tqdm bar over iterations.
+
+    Returns
+    -------
+    FiniteHorizonResult
+        F, K, L (per step), xhat0, cost (exact J_0), converged, iterations, seconds;
+        costs: exact J_0 after each iteration; cost_bounds empty and Xbar, Xunder, Pbar,
+        Punder None (no bound is involved).
+
+    Raises
+    ------
+    ValueError
+        for an invalid horizon, initial state, init, tol or max_iter.
+    """
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
+        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
+                         f"max_iter={max_iter}")
+    start = time.perf_counter()
+    st = stages(sys, horizon)
+    s0 = st.systems[0]
+    mean0, cov0, mu0 = check_initial_state(s0.M, s0.nx, mean0, cov0, mu0)
+    if init is None:
+        init = finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, warn=False)
+    F, K, L = _initial_gains(init, st, s0.nx, s0.ny, s0.nu)
+    xhat0 = mu0 @ mean0
+    X0 = augmented_initial_moment(mean0, cov0, mu0, xhat0)
+    mu = mode_distributions(st, mu0)
+    shapes = (F.shape, K.shape, L.shape)
+    fun = lambda v: _flat(finite_horizon_cost_and_gradient(st, *_unpack(v, shapes), X0, mu))
+    z, cost, converged, it, history = bfgs(fun, _pack(F, K, L), tol, max_iter, progress, "exact (3.56)")
+    F, K, L = _unpack(z, shapes)
+    if warn and not converged:
+        warnings.warn(f"exact_finite_horizon_dynamic_output_feedback did not converge within {it} "
+                      f"iterations (J_0 {cost:.6g})", RuntimeWarning, stacklevel=2)
+    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=np.array([]), converged=converged,
+                               iterations=it, cost=finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0),
+                               Xbar=None, Xunder=None, Pbar=None, Punder=None,
+                               seconds=time.perf_counter() - start, costs=history)
