@@ -241,6 +241,12 @@ def linear_gaussian_model(A, B, H, C, J) -> NonlinearModel:
     -------
     NonlinearModel
         With analytic Jacobians.
+
+    Raises
+    ------
+    ValueError
+        If ``B`` is not 2-D after ``numpy.atleast_2d``; the shapes are otherwise checked when
+        the model is evaluated (by NumPy).
     """
     A, B, H, C, J = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, H, C, J))
     n_x, n_u = B.shape

@@ -113,6 +113,11 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
     -------
     ClosedLoop
         Per-run costs and trajectories.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     N, K = noise.w.shape[:2]
     x = noise.x0

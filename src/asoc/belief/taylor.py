@@ -61,6 +61,11 @@ def statistical_taylor_expansion(g, mixture: DiracMixture, grad=None, hess=None)
     -------
     QuadraticExpansion
         s, v, V of the expansion.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     s, v, V = 0.0, 0.0, 0.0
     for alpha, x in zip(mixture.weights, mixture.points):
@@ -106,6 +111,11 @@ def fig2_2_linearizations(a=_fig22_function, da=_fig22_derivative, mean=4.0, var
     -------
     dict
         ``{name: (slope, intercept)}``.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     pts, w = sigma_points(np.array([mean]), np.array([[var]]))
     x = pts[:, 0]

@@ -115,6 +115,11 @@ def terminal_value(cost, mixture) -> Value:
     Returns
     -------
     Value
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     derivs = cost.terminal_derivatives if hasattr(cost, "terminal_derivatives") else None
     q = statistical_taylor_expansion(cost.terminal, mixture,
@@ -294,6 +299,11 @@ def theorem_2_5_value(exp: Expansion, eps: float) -> Value:
     Returns
     -------
     Value
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     p_t, r_t, P_t, R_t = exp.tilde
     Ri = np.linalg.inv(R_t)
@@ -324,6 +334,11 @@ def affine_policy_value(exp: Expansion, L, d, u_bar) -> Value:
     Returns
     -------
     Value
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     p_t, r_t, P_t, R_t = exp.tilde
     a, X = exp.alpha, exp.points
@@ -368,6 +383,11 @@ def line_search(stage: StageProblem, exp: Expansion, u_bar, mean_bar, alpha_min=
     LineSearch
         The step, whether it was accepted (False: no eps >= ``alpha_min`` decreased the
         costs-to-go, the current policy is locally optimal at this step) and the costs.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     before = stage.cost_to_go(u_bar)
     eps = 1.0

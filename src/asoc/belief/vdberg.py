@@ -62,6 +62,11 @@ def belief_vector(mean, cov):
     Returns
     -------
     numpy.ndarray, (..., n + n (n + 1) / 2)
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     n = np.shape(mean)[-1]
     root = psd_sqrt(np.asarray(cov, dtype=float))

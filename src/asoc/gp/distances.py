@@ -511,6 +511,11 @@ def hellinger(p1, p2, lower=-np.inf, upper=np.inf) -> float:
     Returns
     -------
     float
+
+    Warns
+    -----
+    scipy.integrate.IntegrationWarning
+        When the quadrature does not reach its tolerance (nothing is raised).
     """
     bc = _quad(lambda x: np.sqrt(max(p1(x), 0.0) * max(p2(x), 0.0)), lower, upper)
     return float(np.sqrt(max(1.0 - bc, 0.0)))
@@ -564,6 +569,11 @@ def jensen_shannon(p1, p2, lower=-np.inf, upper=np.inf) -> float:
     Returns
     -------
     float
+
+    Warns
+    -----
+    scipy.integrate.IntegrationWarning
+        When the quadrature does not reach its tolerance (nothing is raised).
     """
     def f(x):
         a, b = max(p1(x), 0.0), max(p2(x), 0.0)

@@ -17,6 +17,11 @@ def v1(mu, var):
     Returns
     -------
     numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     return np.asarray(mu) ** 2 + np.asarray(var)
 
@@ -38,6 +43,11 @@ def v2(mu, var, a=0.1, b=4.0, c=0.1, d=-4.0):
     Returns
     -------
     numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     mu, var = np.asarray(mu), np.asarray(var)
     return a * (mu + b) ** 2 + c * (mu**2 - var + d) ** 2

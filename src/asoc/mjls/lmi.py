@@ -73,6 +73,12 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
     LMIResult
         Infeasibility and solver errors are reported in the result (``feasible=False`` and
         the status), not raised.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        Only if the solver returns a numerically singular M despite the margin M >= eps I
+        (infeasibility and solver errors are reported in the result, not raised).
     """
     M_, nx, nu, ny = sys.M, sys.nx, sys.nu, sys.ny
     mu = sys.mu_inf

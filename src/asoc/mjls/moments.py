@@ -25,6 +25,11 @@ def second_moment_step(Acl, HHt, T, X, mu):
     -------
     numpy.ndarray, shape (M, n, n)
         X_{k+1}.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     inner = Acl @ X @ np.swapaxes(Acl, 1, 2) + mu[:, None, None] * HHt
     return D(T, inner)
@@ -50,6 +55,11 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
     -------
     X : numpy.ndarray, shape (horizon + 1, M, n, n)
     mu : numpy.ndarray, shape (horizon + 1, M)
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     X = np.empty((horizon + 1,) + np.shape(X0))
     mu = np.empty((horizon + 1, len(mu0)))

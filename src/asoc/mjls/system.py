@@ -124,6 +124,11 @@ def E(T, P):
     -------
     numpy.ndarray, shape (M, ...)
         The expected next-mode value E_i(P) for every mode i.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
     """
     return np.einsum("ij,j...->i...", T, P)
 
@@ -142,6 +147,11 @@ def D(T, Y):
     -------
     numpy.ndarray, shape (M, ...)
         D_i(Y), the probability-weighted sum over the predecessor modes j of i.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
     """
     return np.einsum("ji,j...->i...", T, Y)
 
@@ -170,8 +180,6 @@ class MJLS:
     ----------
     M, nx, nu, ny, nw : int
         Number of modes and dimensions.
-    mu_inf : numpy.ndarray, shape (M,)
-        Stationary mode distribution.
 
     Raises
     ------

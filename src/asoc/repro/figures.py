@@ -93,6 +93,11 @@ def markdown_table(header, rows) -> str:
     Returns
     -------
     str
+
+    Raises
+    ------
+    TypeError
+        If ``rows`` is not an iterable of iterables.
     """
     lines = ["| " + " | ".join(map(str, header)) + " |",
              "|" + "|".join("---" for _ in header) + "|"]

@@ -118,6 +118,13 @@ def write_ledger(path=None) -> str:
     Returns
     -------
     str
+
+    Raises
+    ------
+    KeyError
+        If a note names a value that is not recorded (see :func:`fill`).
+    OSError
+        If the file cannot be written (the previous file is kept: atomic write).
     """
     text = ledger_markdown()
     atomic_write_text(path or BOOK / "ledger.md", text)

@@ -110,6 +110,11 @@ def status(entry: Entry, ours) -> str:
     Returns
     -------
     str
+
+    Raises
+    ------
+    KeyError
+        If a Monte Carlo or claim value lacks ``ci`` or ``holds``.
     """
     if ours is None:
         return "missing"

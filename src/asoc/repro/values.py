@@ -124,6 +124,11 @@ def load_values(notebook: str, output_dir=None) -> dict:
     Returns
     -------
     dict
+
+    Raises
+    ------
+    json.JSONDecodeError
+        If the values file is not valid JSON.
     """
     path = values_path(notebook, output_dir)
     if not path.exists():
@@ -142,6 +147,11 @@ def load_all_values(output_dir=None) -> dict:
     Returns
     -------
     dict
+
+    Raises
+    ------
+    json.JSONDecodeError
+        If a values file is not valid JSON.
     """
     folder = Path(output_dir or FIGURES) / "values"
     out = {}
