@@ -1,7 +1,9 @@
 """``make bench``: time the project's performance targets and print them.
 
 Each subpackage may provide ``bench.py`` with ``BENCHMARKS``: a list of
-``(name, target_seconds, callable)``. The callable runs the timed work once and
+``(name, target_seconds, callable, repeat)``, and ``RATIOS``: a list of ``(name,
+target_speedup, callable, repeat)`` whose callable returns (reference seconds, seconds) of
+two computations timed alternately in the same process. The callable runs the timed work once and
 returns the measured seconds (it may time a part of what it does, e.g. excluding
 set-up). The median of ``repeat`` runs is printed next to the target; a missed target is
 reported, not an error (timings depend on the machine's load).
@@ -46,6 +48,12 @@ def main(argv=None) -> int:
             failed += not ok
             print(f"[{sub}] {name:60s} {t:9.4f} s  (target {target:g} s, median of {repeat})"
                   f"  {'ok' if ok else 'SLOWER THAN TARGET'}", flush=True)
+        for name, target, fn, repeat in getattr(module, "RATIOS", []):
+            ref, fast = (statistics.median(ts) for ts in zip(*(fn() for _ in range(repeat))))
+            ok = ref >= target * fast
+            failed += not ok
+            print(f"[{sub}] {name:60s} {ref / fast:9.1f} x  ({ref:.4f} s / {fast:.4f} s, target "
+                  f">= {target:g} x, median of {repeat})  {'ok' if ok else 'BELOW TARGET'}", flush=True)
     print(f"{failed} target(s) missed" if failed else "all targets met")
     return 0
 

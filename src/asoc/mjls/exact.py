@@ -24,10 +24,12 @@ from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic
 from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_initial_moment,
                              check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages)
+from .moments import moment_operator
 from .system import D, E
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
 MIN_STEP = 2.0 ** -40         # the line search gives up below this step length
+LBFGS_MEMORY = 200            # pairs kept by L-BFGS for the K (nc^2 + nc ny + nu nc) time-variant gains
 
 
 def _pack(F, K, L):
@@ -41,14 +43,6 @@ def _unpack(z, shapes):
         out.append(z[start:start + size].reshape(shape))
         start += size
     return out
-
-
-def _operator(At, T):
-    """I - op with op[j, i] = p_ij (A~_i (x) A~_i): the map X -> D(A~ X A~^T) on row-major vecs."""
-    M, n, _ = At.shape
-    n2 = n * n
-    op = np.einsum("ij,iab,icd->jacibd", T, At, At).reshape(M * n2, M * n2)
-    return np.eye(M * n2) - op
 
 
 def gain_gradient(sys, K, L, At, X, EP, JJt, mu, gamma=1.0):
@@ -96,7 +90,7 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     At = At / gamma
     M, n, _ = At.shape
-    lhs = _operator(At, sys.T)
+    lhs = np.eye(M * n * n) - moment_operator(At, sys.T)
     rho = float(np.max(np.abs(np.linalg.eigvals(np.eye(M * n * n) - lhs))))
     if not rho < 1:
         return np.inf, None, rho
@@ -110,13 +104,59 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), JJt, mu, gamma), rho
 
 
-def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS"):
+class _InverseHessian:
+    """The BFGS inverse-Hessian approximation: dense, or limited-memory (the last ``memory``
+    pairs, two-loop recursion) for many variables; empty means a scaled identity."""
+
+    def __init__(self, n, memory):
+        self.n, self.memory = n, memory
+        self.reset()
+
+    def reset(self):
+        self.pairs, self.dense, self.scale = [], None, None
+
+    @property
+    def empty(self):
+        return self.scale is None
+
+    def apply(self, g):
+        if self.empty:
+            return g / max(1.0, float(np.linalg.norm(g)))
+        if self.memory is None:
+            return self.dense @ g
+        q, alphas = g.copy(), []
+        for s, y, r in reversed(self.pairs):
+            alphas.append(r * float(s @ q))
+            q -= alphas[-1] * y
+        q *= self.scale
+        for (s, y, r), a in zip(self.pairs, reversed(alphas)):
+            q += (a - r * float(y @ q)) * s
+        return q
+
+    def update(self, s, y):
+        sy = float(s @ y)
+        if not sy > 1e-12 * np.linalg.norm(s) * np.linalg.norm(y):
+            return                                     # curvature condition fails: skip
+        if self.memory is not None:
+            self.scale = sy / float(y @ y)
+            self.pairs = (self.pairs + [(s, y, 1.0 / sy)])[-self.memory:]
+            return
+        if self.empty:
+            self.scale = sy / float(y @ y)
+            self.dense = self.scale * np.eye(self.n)
+        Hy = self.dense @ y                            # rank-2 update as one product
+        a = (1.0 + float(y @ Hy) / sy) / sy
+        self.dense += np.column_stack([s, Hy]) @ np.column_stack([a * s - Hy / sy, -s / sy]).T
+
+
+def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None):
     """Minimise ``fun`` (z -> (f, grad); f = inf outside the domain) by BFGS.
 
     The line search backtracks from the full quasi-Newton step until the Armijo condition
     holds (up to rounding of f); a step out of the domain (f = inf) is rejected like any
     other. The iteration stops (converged) when the decrease the quasi-Newton model predicts,
-    g^T H^-1 g / 2, is below ``tol * |f|``.
+    g^T H^-1 g / 2, is below ``tol * |f|``. ``memory``: None for dense BFGS, else L-BFGS
+    with that many pairs.
 
     Returns
     -------
@@ -126,16 +166,13 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS"):
     f, g = fun(z)
     if not np.isfinite(f):
         raise ValueError("z0: the start is outside the domain (cost is inf)")
-    n = z.size
-    Hinv = None
+    Hinv = _InverseHessian(z.size, memory)
     history = [f]
     converged = False
     it = 0
     for it in progress_bar(range(1, int(max_iter) + 1), progress, desc=desc, leave=False):
-        fresh = Hinv is None
-        if fresh:
-            Hinv = np.eye(n) / max(1.0, float(np.linalg.norm(g)))
-        d = -Hinv @ g
+        fresh = Hinv.empty
+        d = -Hinv.apply(g)
         slope = float(g @ d)
         if -0.5 * slope <= tol * abs(f):
             converged = True
@@ -150,16 +187,9 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS"):
         else:
             if fresh:                                  # no descent even along -g: stop
                 break
-            Hinv = None                                # restart from a scaled gradient step
+            Hinv.reset()                               # restart from a scaled gradient step
             continue
-        s, y = z_new - z, g_new - g
-        sy = float(s @ y)
-        if sy > 1e-12 * np.linalg.norm(s) * np.linalg.norm(y):
-            if fresh:
-                Hinv = np.eye(n) * (sy / float(y @ y))
-            Hy = Hinv @ y
-            Hinv = (Hinv - (np.outer(s, Hy) + np.outer(Hy, s)) / sy
-                    + (1.0 + float(y @ Hy) / sy) * np.outer(s, s) / sy)
+        Hinv.update(z_new - z, g_new - g)
         z, f, g = z_new, f_new, g_new
         history.append(f)
     return z, f, converged, it, np.array(history)
@@ -281,17 +311,9 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
                                        seconds=time.perf_counter() - start)
 
 
-def _augmented_stage(s, F, K, L, HHt, JJt):
-    """A~, W, Q~ of (3.59)-(3.60) at one step (J = None handled by JJt)."""
-    nx, nc = s.nx, F.shape[0]
-    A = np.zeros((s.M, nx + nc, nx + nc))
-    A[:, :nx, :nx], A[:, :nx, nx:] = s.A, s.B @ L
-    A[:, nx:, :nx], A[:, nx:, nx:] = K @ s.C, F
-    W = np.zeros_like(A)
-    W[:, :nx, :nx], W[:, nx:, nx:] = HHt, K @ JJt @ K.T
-    Q = np.zeros_like(A)
-    Q[:, :nx, :nx], Q[:, nx:, nx:] = s.Q, L.T @ s.R @ L
-    return A, W, Q
+def _stacked(st):
+    """The matrices of all steps stacked over k: A, B, C, Q, R (K, M, ., .), T (K, M, M)."""
+    return {name: np.stack([getattr(s, name) for s in st.systems]) for name in "ABCQRT"}
 
 
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
@@ -307,31 +329,48 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     -------
     (cost, (gF, gK, gL)) : gradients of the shapes of F, K, L (backward adjoint recursion).
     """
-    stage = [_augmented_stage(s, F[k], K[k], L[k], st.HHt[k], st.JJt[k])
-             for k, s in enumerate(st.systems)]
-    X = [X0]
-    cost = 0.0
-    for k, (s, (A, W, Q)) in enumerate(zip(st.systems, stage)):
-        cost += float(np.einsum("iab,iba->", Q, X[k]))
-        X.append(D(s.T, A @ X[k] @ np.swapaxes(A, 1, 2) + mu[k][:, None, None] * W))
-    nx = st.systems[0].nx
-    P = np.zeros_like(X0)
+    m = _stacked(st)
+    HHt, JJt = np.stack(st.HHt), np.stack(st.JJt)
+    nx, nc, M = st.systems[0].nx, F.shape[1], X0.shape[0]
+    n = nx + nc
+    horizon = st.horizon
+    A = np.zeros((horizon, M, n, n))                                  # A~_{i,k} of (3.59)
+    A[:, :, :nx, :nx], A[:, :, :nx, nx:] = m["A"], m["B"] @ L[:, None]
+    A[:, :, nx:, :nx], A[:, :, nx:, nx:] = K[:, None] @ m["C"], F[:, None]
+    W = np.zeros_like(A)                                              # mu_k,i H~ H~^T (3.60)
+    W[:, :, :nx, :nx], W[:, :, nx:, nx:] = HHt, K[:, None] @ JJt @ np.swapaxes(K, 1, 2)[:, None]
+    W *= mu[:-1, :, None, None]
+    LRL = np.swapaxes(L, 1, 2)[:, None] @ m["R"] @ L[:, None]
+    At = np.swapaxes(A, 2, 3)
+    X = np.empty((horizon + 1, M, n, n))
+    X[0] = X0
+    for k in range(horizon):
+        X[k + 1] = D(m["T"][k], A[k] @ X[k] @ At[k] + W[k])
+    P = np.zeros((M, n, n))
     P[:, :nx, :nx] = st.Q_final
-    cost += float(np.einsum("iab,iba->", P, X[-1]))
-    gF, gK, gL = np.zeros_like(F), np.zeros_like(K), np.zeros_like(L)
-    for k in range(st.horizon - 1, -1, -1):
-        s, (A, W, Q) = st.systems[k], stage[k]
-        EP = E(s.T, P)
-        gF[k], gK[k], gL[k] = gain_gradient(s, K[k], L[k], A, X[k], EP, st.JJt[k], mu[k])
-        P = Q + np.swapaxes(A, 1, 2) @ EP @ A
+    cost = float(np.einsum("iab,iba->", P, X[-1]))
+    EP = np.empty_like(A)
+    for k in range(horizon - 1, -1, -1):
+        EP[k] = E(m["T"][k], P)
+        P = At[k] @ EP[k] @ A[k]
+        P[:, :nx, :nx] += m["Q"][k]
+        P[:, nx:, nx:] += LRL[k]
+    cost += float(np.einsum("kiab,kiba->", m["Q"], X[:-1, :, :nx, :nx])
+                  + np.einsum("kiab,kiba->", LRL, X[:-1, :, nx:, nx:]))
+    G = 2.0 * EP @ A @ X[:-1]                                         # dJ/dA~_{i,k}
+    gF = G[:, :, nx:, nx:].sum(axis=1)
+    gK = (G[:, :, nx:, :nx] @ np.swapaxes(m["C"], 2, 3)).sum(axis=1)
+    gK += 2.0 * (mu[:-1, :, None, None] * EP[:, :, nx:, nx:] @ K[:, None] @ JJt).sum(axis=1)
+    gL = (np.swapaxes(m["B"], 2, 3) @ G[:, :, :nx, nx:]).sum(axis=1)
+    gL += 2.0 * (m["R"] @ L[:, None] @ X[:-1, :, nx:, nx:]).sum(axis=1)
     return cost, (gF, gK, gL)
 
 
-def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None, tol=1e-10,
+def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None, tol=1e-12,
                                                  max_iter=5000, warn=True, progress=False):
     """The time-variant controller (3.55) minimising the exact J_0 (3.56)/(3.58); not in the thesis.
 
-    BFGS over all gains F_k, K_k, L_k (k = 0..K-1) with the analytic gradient (the adjoint
+    L-BFGS over all gains F_k, K_k, L_k (k = 0..K-1) with the analytic gradient (the adjoint
     of the augmented forward recursion (3.58)); the controller starts at x^_0 = E{x_0} as in
     :func:`finite_horizon_dynamic_output_feedback`.
 
@@ -343,8 +382,11 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
     init : start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a
         FiniteHorizonResult, a DynamicOutputFeedbackResult or a tuple (F, K, L), constant
         or per step.
-    tol : stop when the decrease the quasi-Newton model predicts is below tol * J_0.
-    max_iter : BFGS iteration limit.
+    tol : stop when the decrease the quasi-Newton model predicts is below tol * J_0. The
+        problem is ill-conditioned (the time-variant state transformations of x^_k leave
+        J_0 unchanged), so the model underestimates the remaining decrease: on Sec. 3.7.3,
+        tol = 1e-12 stops within about 1e-8 (relative) of the limit, tol = 1e-10 within 1e-7.
+    max_iter : L-BFGS iteration limit.
     warn : warn when the iteration does not converge.
     progress : show a tqdm bar over iterations.
 
@@ -375,7 +417,8 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
     mu = mode_distributions(st, mu0)
     shapes = (F.shape, K.shape, L.shape)
     fun = lambda v: _flat(finite_horizon_cost_and_gradient(st, *_unpack(v, shapes), X0, mu))
-    z, cost, converged, it, history = bfgs(fun, _pack(F, K, L), tol, max_iter, progress, "exact (3.56)")
+    z, cost, converged, it, history = bfgs(fun, _pack(F, K, L), tol, max_iter, progress, "exact (3.56)",
+                                           memory=LBFGS_MEMORY)
     F, K, L = _unpack(z, shapes)
     if warn and not converged:
         warnings.warn(f"exact_finite_horizon_dynamic_output_feedback did not converge within {it} "

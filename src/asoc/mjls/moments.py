@@ -70,6 +70,15 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
     return X, mu
 
 
+def moment_operator(Acl, T):
+    """The matrix of X -> D_j(Acl X Acl^T) on row-major vecs (3.29): block (j, i) = p_ij Acl_i (x) Acl_i.
+
+    Its spectral radius is that of Cor. 3.2; its transpose maps vec P to vec(Acl_i^T E_i(P) Acl_i).
+    """
+    M, n, _ = Acl.shape
+    return np.einsum("ij,iab,icd->jacibd", T, Acl, Acl).reshape(M * n * n, M * n * n)
+
+
 def steady_state_second_moment(Acl, HHt, T, mu_inf):
     """X_inf^i solving the coupled Lyapunov equations of Prop. 3.7 / (3.32) directly.
 
@@ -96,13 +105,8 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
         If I - M is singular (rho(M) = 1).
     """
     M, n, _ = Acl.shape
-    n2 = n * n
-    op = np.zeros((M * n2, M * n2))
-    for j in range(M):
-        for i in range(M):
-            op[j * n2:(j + 1) * n2, i * n2:(i + 1) * n2] = T[i, j] * np.kron(Acl[i], Acl[i])
-    rhs = D(T, mu_inf[:, None, None] * HHt).reshape(M * n2)
-    X = np.linalg.solve(np.eye(M * n2) - op, rhs).reshape(M, n, n)
+    rhs = D(T, mu_inf[:, None, None] * HHt).reshape(M * n * n)
+    X = np.linalg.solve(np.eye(M * n * n) - moment_operator(Acl, T), rhs).reshape(M, n, n)
     return 0.5 * (X + np.swapaxes(X, 1, 2))
 
 

@@ -5,10 +5,11 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg
 
-from .moments import h2_cost, second_moment_step, steady_state_second_moment
+from .moments import h2_cost, moment_operator, steady_state_second_moment
 from .stability import closed_loop, ms_spectral_radius
-from .system import E
+from .system import D, E
 
 
 @dataclass
@@ -134,60 +135,28 @@ class _Recursion:
         return X_new, P_new
 
 
-def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True):
-    """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
+MOMENTS = ("step", "exact")
 
-    When the gain does not stabilise the MJLS, X^i and P^i grow geometrically while the
-    gain still converges (Sec. 3.5.4, C = [1 0]: "the iterative algorithm converges ...
-    however ... cannot be stabilized"). To follow that limit without overflow, the
-    recursion is carried out exactly in scaled variables X = s_X Xs, P = s_P Ps (the
-    constant terms mu H H^T, Q and C^T L^T R L C are divided by the scales; the gain
-    (3.34) is invariant under that scaling). Step 4's test is applied to the scaled
-    iterates (their directions) and to the gain, which is also what the author's
-    reference implementation stops on (the sum of the absolute changes of L below 1e-8;
-    M. Dolgov, MJLS_StaticOutputComputeRegulatorGain.m, github.com/Mxttak/MJLS). The
-    moments themselves converge iff the limit gain stabilises the MJLS (``stabilizing``).
 
-    Parameters
-    ----------
-    sys : MJLS
-    tol : float
-        Stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol.
-    max_iter : int
-        Iteration limit; ``converged=False`` and a warning when reached.
-    init : float
-        Scale of the initial X^i, P^i; the thesis recommends 1e-4 I (Sec. 3.5.3).
-    method : {"vec", "sdp"}
-        Solve (3.31) by Prop. 3.18 (vectorised) or by its SDP alternative.
-    warn : bool
-        Warn (RuntimeWarning) when the iteration does not converge, or converges to a gain
-        that does not stabilise.
+def _ms_radius(Acl, T):
+    """Mean-square spectral radius (Cor. 3.2) of the closed loop Acl (M, n, n)."""
+    return float(np.max(np.abs(np.linalg.eigvals(moment_operator(Acl, T)))))
 
-    Returns
-    -------
-    StaticOutputFeedbackResult
-        Gain, convergence, spectral radius, stability, cost and iterate history.
 
-    Raises
-    ------
-    ValueError
-        If ``tol`` or ``init`` is not positive, ``max_iter`` < 1 or ``method`` is unknown.
+def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
+    """The thesis's iteration (3.34)-(3.35) in scaled variables (see static_output_feedback).
+
+    With ``until_stabilizing`` it also stops at the first stabilising gain. Returns a dict
+    with L, the unscaled X, P, converged, iterations, stabilized and the trace histories.
     """
-    if not tol > 0 or max_iter < 1 or not init > 0:
-        raise ValueError(f"tol and init must be > 0 and max_iter >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}, init={init}")
-    if method not in ("vec", "sdp"):
-        raise ValueError(f"method must be 'vec' or 'sdp', found {method!r}")
-    start = time.perf_counter()
     M, n = sys.M, sys.nx
-    rec = _Recursion(sys)
     Xs = np.broadcast_to(init * np.eye(n), (M, n, n)).copy()
     Ps = Xs.copy()
     log_sX = log_sP = 0.0
     diag = np.arange(n)
     traces_X, traces_P = [Xs[:, diag, diag].sum(1)], [Ps[:, diag, diag].sum(1)]
     logs = [(0.0, 0.0)]
-    converged = False
+    converged = stabilized = False
     L = np.zeros((sys.nu, sys.ny))
     it = 0
     for it in range(1, max_iter + 1):
@@ -211,25 +180,140 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
         if it > 1 and change < tol:
             converged = True
             break
+        if until_stabilizing and _ms_radius(closed_loop(sys, L), sys.T) < 1:
+            stabilized = True
+            break
+    logs = np.array(logs)
+    return dict(L=L, X=np.exp(log_sX) * Xs, P=np.exp(log_sP) * Ps, converged=converged, iterations=it,
+                stabilized=stabilized, trace_X=np.exp(logs[:, :1]) * np.array(traces_X),
+                trace_P=np.exp(logs[:, 1:]) * np.array(traces_P))
+
+
+def _exact_iteration(sys, rec, L, tol, max_iter, method):
+    """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
+
+    Each step solves the two coupled linear equations X = D(Acl X Acl^T + mu H H^T) and
+    P = Q + C^T L^T R L C + Acl^T E(P) Acl (one LU factorisation of size M nx^2, used for
+    both). Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when
+    an iterate does not stabilise (the moments have no solution then).
+    """
+    M, n = sys.M, sys.nx
+    rhs_X = D(sys.T, rec.muHHt).ravel()
+    trace_X, trace_P = [], []
+    converged, stabilized = False, True
+    X = P = None
+    it = 0
+    for it in range(1, max_iter + 1):
+        Acl = closed_loop(sys, L)
+        op = moment_operator(Acl, sys.T)
+        if not np.max(np.abs(np.linalg.eigvals(op))) < 1:
+            stabilized = False
+            break
+        lu = scipy.linalg.lu_factor(np.eye(M * n * n) - op)
+        LC = L @ sys.C
+        X = scipy.linalg.lu_solve(lu, rhs_X).reshape(M, n, n)
+        P = scipy.linalg.lu_solve(lu, (sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC).ravel(),
+                                  trans=1).reshape(M, n, n)
+        X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
+        trace_X.append(np.trace(X, axis1=1, axis2=2))
+        trace_P.append(np.trace(P, axis1=1, axis2=2))
+        L_new = rec.gain(X, E(sys.T, P), 1.0) if method == "vec" else gain_from_moments(sys, X, P, "sdp")
+        change = _relative_change(L, L_new)
+        L = L_new
+        if change < tol:
+            converged = True
+            break
+    return dict(L=L, X=X, P=P, converged=converged, iterations=it, stabilized=stabilized,
+                trace_X=np.array(trace_X).reshape(-1, M), trace_P=np.array(trace_P).reshape(-1, M))
+
+
+def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True,
+                           moments="step"):
+    """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
+
+    When the gain does not stabilise the MJLS, X^i and P^i grow geometrically while the
+    gain still converges (Sec. 3.5.4, C = [1 0]: "the iterative algorithm converges ...
+    however ... cannot be stabilized"). To follow that limit without overflow, the
+    recursion is carried out exactly in scaled variables X = s_X Xs, P = s_P Ps (the
+    constant terms mu H H^T, Q and C^T L^T R L C are divided by the scales; the gain
+    (3.34) is invariant under that scaling). Step 4's test is applied to the scaled
+    iterates (their directions) and to the gain, which is also what the author's
+    reference implementation stops on (the sum of the absolute changes of L below 1e-8;
+    M. Dolgov, MJLS_StaticOutputComputeRegulatorGain.m, github.com/Mxttak/MJLS). The
+    moments themselves converge iff the limit gain stabilises the MJLS (``stabilizing``).
+
+    Parameters
+    ----------
+    sys : MJLS
+    tol : float
+        Stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol
+        (``moments="exact"``: the relative change of L).
+    max_iter : int
+        Iteration limit; ``converged=False`` and a warning when reached.
+    init : float
+        Scale of the initial X^i, P^i; the thesis recommends 1e-4 I (Sec. 3.5.3).
+    method : {"vec", "sdp"}
+        Solve (3.31) by Prop. 3.18 (vectorised) or by its SDP alternative.
+    warn : bool
+        Warn (RuntimeWarning) when the iteration does not converge, or converges to a gain
+        that does not stabilise.
+    moments : {"step", "exact"}
+        ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
+        update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
+        thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with
+        the exact solution of the two moment equations (3.32)-(3.33) for the current gain
+        (linear systems of size M nx^2). Same fixed point, far fewer iterations when the
+        recursions contract slowly. Where no iterate stabilises (or an exact iterate does
+        not), the result of the thesis's iteration is returned.
+
+    Returns
+    -------
+    StaticOutputFeedbackResult
+        Gain, convergence, spectral radius, stability, cost and iterate history
+        (for ``moments="exact"``, ``iterations`` and ``history`` cover both phases).
+
+    Raises
+    ------
+    ValueError
+        If ``tol`` or ``init`` is not positive, ``max_iter`` < 1, or ``method`` or
+        ``moments`` is unknown.
+    """
+    if not tol > 0 or max_iter < 1 or not init > 0:
+        raise ValueError(f"tol and init must be > 0 and max_iter >= 1, found tol={tol}, "
+                         f"max_iter={max_iter}, init={init}")
+    if method not in ("vec", "sdp"):
+        raise ValueError(f"method must be 'vec' or 'sdp', found {method!r}")
+    if moments not in MOMENTS:
+        raise ValueError(f"moments must be one of {MOMENTS}, found {moments!r}")
+    start = time.perf_counter()
+    rec = _Recursion(sys)
+    run = _step_iteration(sys, rec, tol, max_iter, init, method, moments == "exact")
+    if run["stabilized"]:
+        exact = _exact_iteration(sys, rec, run["L"], tol, max_iter - run["iterations"], method)
+        if exact["stabilized"]:
+            exact["iterations"] += run["iterations"]
+            for key in ("trace_X", "trace_P"):
+                exact[key] = np.concatenate([run[key], exact[key]])
+            run = exact
+        else:                                           # an exact iterate left the stabilising set
+            run = _step_iteration(sys, rec, tol, max_iter, init, method, False)
     seconds = time.perf_counter() - start
-    X, P = np.exp(log_sX) * Xs, np.exp(log_sP) * Ps
+    L = run["L"]
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
     Acl = closed_loop(sys, L)
     rho = ms_spectral_radius(Acl, sys.T)
     stabilizing = bool(rho < 1)
     cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf
-    if warn and not converged:
-        warnings.warn(f"Algorithm 3.1 did not converge within {it} iterations", RuntimeWarning,
-                      stacklevel=2)
+    if warn and not run["converged"]:
+        warnings.warn(f"Algorithm 3.1 did not converge within {run['iterations']} iterations",
+                      RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"Algorithm 3.1 converged, but the gain does not stabilise the MJLS in the "
                       f"mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning, stacklevel=2)
-    logs = np.array(logs)
-    history = {"trace_X": np.exp(logs[:, :1]) * np.array(traces_X),
-               "trace_P": np.exp(logs[:, 1:]) * np.array(traces_P)}
-    return StaticOutputFeedbackResult(L=L, converged=converged, iterations=it, rho=rho,
-                                      stabilizing=stabilizing, cost=cost, X=X, P=P,
-                                      history=history, seconds=seconds)
+    history = {"trace_X": run["trace_X"], "trace_P": run["trace_P"]}
+    return StaticOutputFeedbackResult(L=L, converged=run["converged"], iterations=run["iterations"],
+                                      rho=rho, stabilizing=stabilizing, cost=cost, X=run["X"],
+                                      P=run["P"], history=history, seconds=seconds)
 
 
 def _relative_change(old, new):
