@@ -165,8 +165,14 @@ class MJLS:
 
     Parameters
     ----------
-    A, B, C, H : list of 2-D array_like, or array_like of shapes (M, nx, nx), (M, nx, nu), (M, ny, nx), (M, nx, nw)
-        Per-mode matrices; a single 2-D array is used for every mode.
+    A : list of 2-D array_like, or array_like (M, nx, nx)
+        Per-mode system matrices; a single 2-D array is used for every mode (also below).
+    B : list of 2-D array_like, or array_like (M, nx, nu)
+        Input matrices.
+    C : list of 2-D array_like, or array_like (M, ny, nx)
+        Output matrices.
+    H : list of 2-D array_like, or array_like (M, nx, nw)
+        Process-noise matrices.
     Q : array_like, (M, nx, nx) or (nx, nx)
         Symmetric positive semidefinite state weights.
     R : array_like, (M, nu, nu) or (nu, nu)
