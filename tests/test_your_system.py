@@ -53,7 +53,7 @@ def test_what_goes_wrong_is_reported(full):
 
 
 @pytest.mark.notebook
-def test_mode_observation_lower_bound_and_monte_carlo(full):
+def test_mode_observing_benchmark_and_monte_carlo(full):
     v, out = full
     assert v["expected_opt38"] < v["expected_exact"] < v["expected_alg32"]
     assert np.isclose(v["cost_ratio_alg32_to_38"], v["expected_alg32"] / v["expected_opt38"], rtol=1e-12)
