@@ -63,7 +63,22 @@ def _root(cov):
 def sigma_points(mean, cov, kappa: float = KAPPA):
     """Sigma points m, m +- sqrt(n + kappa) L_j of N(mean, cov) and their weights [101].
 
-    Returns ``(points, weights)`` with shapes ``(..., 2n+1, n)`` and ``(2n+1,)``.
+    Parameters
+    ----------
+    mean : array_like, (..., n)
+    cov : array_like, (..., n, n)
+    kappa : float
+        Spread parameter, kappa > -n.
+
+    Returns
+    -------
+    points : numpy.ndarray, (..., 2n+1, n)
+    weights : numpy.ndarray, (2n+1,)
+
+    Raises
+    ------
+    ValueError
+        If kappa <= -n.
     """
     mean = np.asarray(mean, dtype=float)
     n = mean.shape[-1]
@@ -107,15 +122,26 @@ def lemma_2_1(mixture: DiracMixture, u, model, w_samples, v_samples, beta=None, 
 
     Parameters
     ----------
-    mixture : DiracMixture, the estimate p_k^x (points x_k^i, weights alpha_k^i).
-    u : array_like, shape (n_u,), the input u_k.
-    model : NonlinearModel with ``a`` and ``h``.
-    w_samples, v_samples : arrays (R, n_w) and (S, n_v) of process and measurement noise
-        samples with weights ``beta`` and ``gamma`` (None: equal weights).
+    mixture : DiracMixture
+        The estimate p_k^x (points x_k^i, weights alpha_k^i).
+    u : array_like, shape (n_u,)
+        The input u_k.
+    model : NonlinearModel
+        With ``a`` and ``h``.
+    w_samples, v_samples : numpy.ndarray, (R, n_w) and (S, n_v)
+        Process and measurement noise samples.
+    beta, gamma : array_like (R,) and (S,), optional
+        Their weights (None: equal weights).
 
     Returns
     -------
-    ndarray (n_x, n_x): C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T over all M R S combinations.
+    numpy.ndarray, (n_x, n_x)
+        C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T over all M R S combinations.
+
+    Raises
+    ------
+    ValueError
+        If ``beta`` or ``gamma`` are not valid weights.
     """
     w_samples, v_samples = np.atleast_2d(w_samples), np.atleast_2d(v_samples)
     R, S = w_samples.shape[0], v_samples.shape[0]
@@ -292,7 +318,30 @@ def ekf_gain(model, mean, cov):
 
 
 def ekf_step(model, mean, cov, u, y):
-    """One EKF step (predict with u, update with y); broadcasts over leading axes."""
+    """One EKF step (predict with u, update with y); broadcasts over leading axes.
+
+    Parameters
+    ----------
+    model : NonlinearModel
+        With ``a``, ``h`` and (optionally) ``jacobians``.
+    mean : array_like, (..., n_x)
+    cov : array_like, (..., n_x, n_x)
+    u : array_like, (..., n_u)
+        Input applied between the estimate and the measurement.
+    y : array_like, (..., n_y)
+        The new measurement.
+
+    Returns
+    -------
+    mean, cov : numpy.ndarray
+        The updated estimate.
+
+    Raises
+    ------
+    ValueError
+        If the model has no Jacobians and a batch of states is passed (numerical Jacobians
+        take one state).
+    """
     mean_p, cov_p = ekf_predict(model, np.asarray(mean, dtype=float), np.asarray(cov, dtype=float), u)
     y_hat, K, _, post = ekf_gain(model, mean_p, cov_p)
     return mean_p + np.einsum("...ij,...j->...i", K, np.asarray(y) - y_hat), post

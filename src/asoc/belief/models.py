@@ -166,6 +166,35 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
     The measurement noise is v_k ~ N(0, 0.1^2 ||x_k - x^||^2); we write it as
     v_k = 0.1 ||x_k - x^|| nu_k with nu_k ~ N(0, 1), so h(x, nu) is non-additive.
     x_0 ~ N([-5, 3], 0.2^2 I), target [0, 3], K = 20, cost (2.19).
+
+    Parameters
+    ----------
+    K : int
+        Horizon, >= 1.
+    landmark : tuple of float
+        Position x^ of the landmark.
+    mean0 : tuple of float
+        Mean of x_0.
+    std0 : float
+        Standard deviation of each component of x_0.
+    x_target : tuple of float
+        Target position of the cost (2.19).
+    noise_gain : float
+        Process-noise gain (0.5 in the thesis).
+    range_noise : float
+        Relative range noise (0.1 in the thesis).
+    input_weight : float
+        Input weight of the cost.
+
+    Returns
+    -------
+    LandmarkExample
+        The model, the cost and the initial estimate.
+
+    Raises
+    ------
+    ValueError
+        If ``K`` is not an integer >= 1, or the cost matrices violate Assumption 2.3.
     """
     lm = np.asarray(landmark, dtype=float)
     n = 2
@@ -201,7 +230,24 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
 
 
 def linear_gaussian_model(A, B, H, C, J) -> NonlinearModel:
-    """x_{k+1} = A x + B u + H w, y = C x + J v with w, v ~ N(0, I) (the LQG case, Sec. 2.3)."""
+    """x_{k+1} = A x + B u + H w, y = C x + J v with w, v ~ N(0, I) (the LQG case, Sec. 2.3).
+
+    Parameters
+    ----------
+    A, B, H, C, J : array_like
+        System, input, process-noise, output and measurement-noise matrices.
+
+    Returns
+    -------
+    NonlinearModel
+        With analytic Jacobians.
+
+    Raises
+    ------
+    ValueError
+        If ``B`` is not 2-D after ``numpy.atleast_2d``; the shapes are otherwise checked when
+        the model is evaluated (by NumPy).
+    """
     A, B, H, C, J = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, H, C, J))
     n_x, n_u = B.shape
 

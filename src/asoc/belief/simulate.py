@@ -24,7 +24,30 @@ class Noise:
 
 
 def draw_noise(model, mean0, cov0, K: int, n_runs: int, rng) -> Noise:
-    """Draw x_0 ~ N(mean0, cov0), w_k ~ p^w, v_{k+1} ~ p^v for ``n_runs`` runs."""
+    """Draw x_0 ~ N(mean0, cov0), w_k ~ p^w, v_{k+1} ~ p^v for ``n_runs`` runs.
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    mean0, cov0 : array_like
+        Gaussian initial state.
+    K : int
+        Horizon.
+    n_runs : int
+        Number of runs, >= 1.
+    rng : numpy.random.Generator
+        The only source of random numbers.
+
+    Returns
+    -------
+    Noise
+        x0 (n_runs, n_x), w (n_runs, K, n_w), v (n_runs, K, n_v).
+
+    Raises
+    ------
+    ValueError
+        If ``n_runs`` < 1 or ``rng`` is not a Generator.
+    """
     rng = check_rng(rng)
     if not isinstance(n_runs, (int, np.integer)) or n_runs < 1:
         raise ValueError(f"n_runs: expected an integer >= 1, found {n_runs!r}")
@@ -73,7 +96,29 @@ class ClosedLoop:
 
 
 def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
-    """Run ``controller`` in closed loop for the draws ``noise``; costs by (2.3)/(2.19)."""
+    """Run ``controller`` in closed loop for the draws ``noise``; costs by (2.3)/(2.19).
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    cost : QuadraticCost
+    mean0, cov0 : array_like
+        Initial estimate given to the controller's filter.
+    controller : object
+        E.g. :class:`BeliefAffineController` or :class:`MeanAffineController`.
+    noise : Noise
+        Draws from :func:`draw_noise` (common random numbers across controllers).
+
+    Returns
+    -------
+    ClosedLoop
+        Per-run costs and trajectories.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    """
     N, K = noise.w.shape[:2]
     x = noise.x0
     mean = np.broadcast_to(np.asarray(mean0, dtype=float), x.shape).copy()

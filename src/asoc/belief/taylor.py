@@ -50,9 +50,22 @@ def statistical_taylor_expansion(g, mixture: DiracMixture, grad=None, hess=None)
 
     Parameters
     ----------
-    g : callable R^n -> R.
-    mixture : DiracMixture, the expansion point.
-    grad, hess : optional analytic derivatives of g; numdifftools otherwise.
+    g : callable
+        R^n -> R.
+    mixture : DiracMixture
+        The expansion point.
+    grad, hess : callable, optional
+        Analytic derivatives of g; numdifftools otherwise.
+
+    Returns
+    -------
+    QuadraticExpansion
+        s, v, V of the expansion.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     s, v, V = 0.0, 0.0, 0.0
     for alpha, x in zip(mixture.weights, mixture.points):
@@ -86,6 +99,23 @@ def fig2_2_linearizations(a=_fig22_function, da=_fig22_derivative, mean=4.0, var
       tangents at the sigma points);
     * ``regression``: statistical linear regression through the sigma points [109];
     * ``mean_gradient_through_mean_value``: the mean derivative through (mean, E{a}).
+
+    Parameters
+    ----------
+    a, da : callable
+        The function and its derivative (default: a(x) = sin(x) + x of Fig. 2.2).
+    mean, var : float
+        The Gaussian N(mean, var).
+
+    Returns
+    -------
+    dict
+        ``{name: (slope, intercept)}``.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     pts, w = sigma_points(np.array([mean]), np.array([[var]]))
     x = pts[:, 0]
@@ -108,11 +138,25 @@ def statistical_taylor_linearization_error(x_true=5.7, mean=4.0, var=1.5, readin
     a(x) = sin(x) + x, the Gaussian N(4, 1.5) (variance 1.5: the toolbox UKF's sigma points
     are then 4 and 4 +- 1.5, the points the thesis prints).
 
+    Parameters
+    ----------
+    x_true : float
+        The input at which the errors are evaluated.
+    mean, var : float
+        The Gaussian N(mean, var).
+    reading : str
+        A key of :func:`fig2_2_linearizations`.
+
     Returns
     -------
-    (ekf_error, statistical_error) : the error of the linearisation at the mean (thesis
-        1.3173) and of the statistical linearisation ``reading`` (thesis 0.6289; see
-        :func:`fig2_2_linearizations` for the readings).
+    ekf_error, statistical_error : float
+        The error of the linearisation at the mean and of the statistical linearisation
+        ``reading`` (the thesis prints both for Fig. 2.2; see the ledger).
+
+    Raises
+    ------
+    ValueError
+        If ``var`` is not positive or ``reading`` is unknown.
     """
     if var <= 0:
         raise ValueError(f"var: expected a positive variance, found {var}")

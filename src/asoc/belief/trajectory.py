@@ -47,6 +47,26 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
 
     ``mode="nominal"`` uses the means E{x_k}, E{w_k}, E{v_k} (the variant the thesis
     mentions after Alg. 2.1); ``mode="sampled"`` draws one sample of each from ``rng``.
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    filt : filter
+    policy : AffinePolicy
+    mean0, cov0 : array_like
+        Initial estimate.
+    mode : {"nominal", "sampled"}
+    rng : numpy.random.Generator, optional
+        Needed for ``mode="sampled"``.
+
+    Returns
+    -------
+    Reference
+
+    Raises
+    ------
+    ValueError
+        If ``mode`` is unknown, or ``rng`` is not a Generator when sampling.
     """
     if mode not in ("nominal", "sampled"):
         raise ValueError(f"mode: expected 'nominal' or 'sampled', found {mode!r}")
@@ -84,7 +104,23 @@ class Value:
 
 
 def terminal_value(cost, mixture) -> Value:
-    """Theorem 2.4: statistical expansion of C_K at p_bar_K, S_K = 0."""
+    """Theorem 2.4: statistical expansion of C_K at p_bar_K, S_K = 0.
+
+    Parameters
+    ----------
+    cost : QuadraticCost
+    mixture : DiracMixture
+        The terminal estimate p_bar_K.
+
+    Returns
+    -------
+    Value
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    """
     derivs = cost.terminal_derivatives if hasattr(cost, "terminal_derivatives") else None
     q = statistical_taylor_expansion(cost.terminal, mixture,
                                      (lambda x: derivs(x)[0]) if derivs else None,
@@ -252,7 +288,23 @@ class StageProblem:
 
 
 def theorem_2_5_value(exp: Expansion, eps: float) -> Value:
-    """s_k, v_k, V_k, S_k of eq. (2.11) for the policy (2.17) with step ``eps``."""
+    """s_k, v_k, V_k, S_k of eq. (2.11) for the policy (2.17) with step ``eps``.
+
+    Parameters
+    ----------
+    exp : Expansion
+    eps : float
+        Line-search step of the policy (2.17).
+
+    Returns
+    -------
+    Value
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    """
     p_t, r_t, P_t, R_t = exp.tilde
     Ri = np.linalg.inv(R_t)
     a, X = exp.alpha, exp.points
@@ -269,6 +321,24 @@ def affine_policy_value(exp: Expansion, L, d, u_bar) -> Value:
 
     For the policy (2.17) it equals :func:`theorem_2_5_value`; Alg. 2.2 uses it for a
     time step whose policy the line search keeps.
+
+    Parameters
+    ----------
+    exp : Expansion
+        The expansion (2.15) at one time step.
+    L, d : numpy.ndarray
+        The policy's gain and offset.
+    u_bar : numpy.ndarray
+        The reference input.
+
+    Returns
+    -------
+    Value
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     p_t, r_t, P_t, R_t = exp.tilde
     a, X = exp.alpha, exp.points
@@ -299,8 +369,25 @@ class LineSearch:
 def line_search(stage: StageProblem, exp: Expansion, u_bar, mean_bar, alpha_min=2.0 ** -10) -> LineSearch:
     """Algorithm 2.3: halve eps_k from 1 until the costs-to-go at p_bar_k do not increase.
 
-    Returns the step, whether it was accepted (False: no eps >= ``alpha_min`` decreased
-    the costs-to-go, the current policy is locally optimal at this step) and the costs.
+    Parameters
+    ----------
+    stage : StageProblem
+    exp : Expansion
+    u_bar, mean_bar : numpy.ndarray
+        Reference input and estimate mean.
+    alpha_min : float
+        Smallest step tried.
+
+    Returns
+    -------
+    LineSearch
+        The step, whether it was accepted (False: no eps >= ``alpha_min`` decreased the
+        costs-to-go, the current policy is locally optimal at this step) and the costs.
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     before = stage.cost_to_go(u_bar)
     eps = 1.0
@@ -337,7 +424,36 @@ class Alg22Result:
 
 def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_points, beta,
                   derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd"):
-    """Steps 3-8 of Algorithm 2.2 along ``ref``; returns (new policy, V_0, eps, rejected)."""
+    """Steps 3-8 of Algorithm 2.2 along ``ref``; returns (new policy, V_0, eps, rejected).
+
+    Parameters
+    ----------
+    model, cost : NonlinearModel and cost
+    filt : filter
+        Its Dirac mixture is the expansion point.
+    ref : Reference
+        The reference trajectory (Alg. 2.1).
+    policy : AffinePolicy
+        The current policy.
+    w_points, beta : numpy.ndarray
+        Process-noise points and weights.
+    derivatives : {"analytic", "numdifftools"}
+    alpha_min : float
+        Line-search threshold of Alg. 2.3.
+    covariance_hessian : {"psd", "exact", "shift"}
+
+    Returns
+    -------
+    policy : AffinePolicy
+    V0 : Value
+    eps : list of float
+    rejected : int
+
+    Raises
+    ------
+    ValueError
+        If ``derivatives`` or ``covariance_hessian`` is unknown.
+    """
     K = ref.u_bar.shape[0]
     value = terminal_value(cost, filt.mixture(ref.estimates[K]))
     L_new, d_new = policy.L.copy(), policy.d.copy()
@@ -374,13 +490,24 @@ def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iteratio
     mean0, cov0 : the initial estimate p_0^x (Gaussian).
     filt : the filter (default :class:`UKF`); its Dirac mixture is the expansion point.
     policy : initial AffinePolicy (default L = 0, d = 0).
-    max_iterations, rtol : stop when |J^[eta+1] - J^[eta]| <= rtol |J^[eta]| (Step 9).
+    max_iterations, rtol : stop when abs(J^[eta+1] - J^[eta]) <= rtol abs(J^[eta]) (Step 9).
     n_cost_runs, rng : J^[eta] is the mean cost of ``n_cost_runs`` closed-loop runs whose
         random draws are the same in every iteration (common random numbers from ``rng``).
     derivatives : "analytic" (model/cost derivatives where available) or "numdifftools".
     reference_mode : "nominal" or "sampled" (Alg. 2.1); "sampled" draws from ``rng``.
     alpha_min : the constant alpha of Alg. 2.3 below which a step is rejected.
     covariance_hessian : "psd" (default), "exact" or "shift", see :meth:`StageProblem._covariance_hessian`.
+
+    Returns
+    -------
+    Alg22Result
+        The policy, the policies and costs per iteration, line-search steps, convergence.
+
+    Raises
+    ------
+    ValueError
+        If the horizon, ``rng``, ``policy``, ``derivatives``, ``reference_mode`` or
+        ``covariance_hessian`` is invalid.
     """
     K = check_horizon(cost.K)
     rng = check_rng(rng)

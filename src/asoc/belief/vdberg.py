@@ -52,7 +52,22 @@ def psd_sqrt(M):
 
 
 def belief_vector(mean, cov):
-    """b = (mean, vech(sqrt(cov))), broadcasting over leading axes."""
+    """b = (mean, vech(sqrt(cov))), broadcasting over leading axes.
+
+    Parameters
+    ----------
+    mean : array_like, (..., n)
+    cov : array_like, (..., n, n)
+
+    Returns
+    -------
+    numpy.ndarray, (..., n + n (n + 1) / 2)
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    """
     n = np.shape(mean)[-1]
     root = psd_sqrt(np.asarray(cov, dtype=float))
     i, j = np.array(_tril_indices(n)).T
@@ -174,12 +189,25 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
 
     Parameters
     ----------
-    model : NonlinearModel (EKF Jacobians: analytic if the model gives them).
-    cost : QuadraticCost, written in the belief by :class:`BeliefCost`.
-    mean0, cov0 : the initial Gaussian belief.
-    u_init : initial nominal inputs (K, n_u); default zeros.
+    model : NonlinearModel
+        EKF Jacobians: analytic if the model gives them.
+    cost : QuadraticCost
+        Written in the belief by :class:`BeliefCost`.
+    mean0, cov0 : array_like
+        The initial Gaussian belief.
+    u_init : array_like (K, n_u), optional
+        Initial nominal inputs; default zeros.
     max_iterations, rtol : stop when the nominal cost changes by less than rtol (relative).
     eps_min : stop (converged) when the line search needs eps below this value.
+
+    Returns
+    -------
+    BeliefILQGResult
+
+    Raises
+    ------
+    ValueError
+        If the horizon is invalid or ``u_init`` has the wrong shape.
     """
     K = check_horizon(cost.K)
     n = model.n_x

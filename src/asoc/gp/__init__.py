@@ -1,11 +1,11 @@
 """Gaussian process regression over probability distributions (thesis Sec. 2.6).
 
-distances   distances between distributions: mCvMd (closed form for Dirac mixtures),
-            OMAT (2.23), OSPA, Wasserstein-2 of Gaussians, Hellinger, Jensen-Shannon, L_q
-kernels     covariance functions of a distance (Table 2.1), bilinear product, mean kernel (2.22)
-sampling    deterministic LCD / mCvMd Dirac approximation of Gaussians [82]
-experiment  Sec. 2.6.4: test functions v1, v2, training and test Gaussians, error metrics
-regression  DistributionGP (Sec. 2.6.3) and the mean-kernel GP of Dallaire et al. [42]
+* distances: distances between distributions: mCvMd (closed form for Dirac mixtures),
+  OMAT (2.23), OSPA, Wasserstein-2 of Gaussians, Hellinger, Jensen-Shannon, L_q;
+* kernels: covariance functions of a distance (Table 2.1), bilinear product, mean kernel (2.22);
+* sampling: deterministic LCD / mCvMd Dirac approximation of Gaussians [82];
+* experiment: Sec. 2.6.4: test functions v1, v2, training and test Gaussians, error metrics;
+* regression: DistributionGP (Sec. 2.6.3) and the mean-kernel GP of Dallaire et al. [42].
 """
 
 from .distances import (c_b, hellinger, hellinger_gaussian, jensen_shannon, lcd_dirac,

@@ -7,7 +7,22 @@ VAR_RANGE = (0.1**2, 2.0**2)     #: range of the variances, Sec. 2.6.4
 
 
 def v1(mu, var):
-    r"""Quadratic function :math:`v_1(\mu, \sigma) = \mu^2 + \sigma^2 = \mathrm E\{x^2\}` (Sec. 2.6.4)."""
+    r"""Quadratic function :math:`v_1(\mu, \sigma) = \mu^2 + \sigma^2 = \mathrm E\{x^2\}` (Sec. 2.6.4).
+
+    Parameters
+    ----------
+    mu, var : array_like
+        Mean and variance of the Gaussian input.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    """
     return np.asarray(mu) ** 2 + np.asarray(var)
 
 
@@ -17,13 +32,45 @@ def v2(mu, var, a=0.1, b=4.0, c=0.1, d=-4.0):
     :math:`v_2(\mu, \sigma) = a(\mu + b)^2 + c(\mu^2 - \sigma^2 + d)^2 = 0.1(\mu + 4)^2 +
     0.1(\mu^2 - \sigma^2 - 4)^2`. The thesis lists :math:`b = 0.4` but its final formula
     uses :math:`\mu + 4`; we follow the final formula (the one that is evaluated).
+
+    Parameters
+    ----------
+    mu, var : array_like
+        Mean and variance of the Gaussian input.
+    a, b, c, d : float
+        Coefficients.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     mu, var = np.asarray(mu), np.asarray(var)
     return a * (mu + b) ** 2 + c * (mu**2 - var + d) ** 2
 
 
 def training_gaussians(n: int, rng: np.random.Generator):
-    """``n`` means uniform in [-5, 5] and variances uniform in [0.1^2, 2^2] (Fig. 2.8)."""
+    """``n`` means uniform in [-5, 5] and variances uniform in [0.1^2, 2^2] (Fig. 2.8).
+
+    Parameters
+    ----------
+    n : int
+        Number of Gaussians, >= 2.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    mu, var : numpy.ndarray, (n,)
+
+    Raises
+    ------
+    ValueError
+        If ``rng`` is not a Generator or ``n`` < 2.
+    """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"rng: expected a seeded numpy.random.Generator, found {type(rng).__name__}")
     if int(n) < 2:
@@ -36,6 +83,20 @@ def test_grid(step: float = 0.1):
 
     Returns ``(mu_axis, var_axis)``: the means from -5 to 5 and the variances from 0.1^2
     upwards while <= 2^2 (with step 0.1: 101 x 40 = 4040 test Gaussians).
+
+    Parameters
+    ----------
+    step : float
+        Increment, > 0.
+
+    Returns
+    -------
+    mu_axis, var_axis : numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If ``step`` is not positive.
     """
     if not step > 0:
         raise ValueError(f"step: expected a positive increment, found {step!r}")
@@ -45,7 +106,23 @@ def test_grid(step: float = 0.1):
 
 
 def error_metrics(prediction, truth) -> dict:
-    """RMSE, maximum quadratic error, RMSE normalised by the range of ``truth``, and R^2."""
+    """RMSE, maximum quadratic error, RMSE normalised by the range of ``truth``, and R^2.
+
+    Parameters
+    ----------
+    prediction, truth : array_like
+        Same shape.
+
+    Returns
+    -------
+    dict
+        ``rmse``, ``max_sq_error``, ``nrmse`` and ``r2``.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ.
+    """
     p, t = np.asarray(prediction, float).ravel(), np.asarray(truth, float).ravel()
     if p.shape != t.shape:
         raise ValueError(f"prediction: expected shape {t.shape}, found {p.shape}")

@@ -22,14 +22,51 @@ def _delta(delta):
 
 
 def squared_exponential(delta, l: float):
-    r"""Squared exponential, Table 2.1: :math:`\exp(-\tfrac12 \Delta^2 / l^2)`."""
+    r"""Squared exponential, Table 2.1: :math:`\exp(-\tfrac12 \Delta^2 / l^2)`.
+
+    Parameters
+    ----------
+    delta : array_like
+        Distances between distributions (finite, non-negative).
+    l : float
+        Length scale, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Covariances, shape of ``delta``.
+
+    Raises
+    ------
+    ValueError
+        If ``delta`` has negative or non-finite entries, or ``l`` is not positive.
+    """
     l = v.positive(l, "l")
     return np.exp(-0.5 * (_delta(delta) / l) ** 2)
 
 
 def matern(delta, l: float, nu: float = 2.5):
     r"""Matern, Table 2.1: :math:`\frac{2^{1-\nu}}{\Gamma(\nu)} (\tfrac{\sqrt{2\nu}}{l}\Delta)^\nu
-    K_\nu(\tfrac{\sqrt{2\nu}}{l}\Delta)`, with value 1 at :math:`\Delta = 0`."""
+    K_\nu(\tfrac{\sqrt{2\nu}}{l}\Delta)`, with value 1 at :math:`\Delta = 0`.
+
+    Parameters
+    ----------
+    delta : array_like
+        Distances (finite, non-negative).
+    l : float
+        Length scale, > 0.
+    nu : float
+        Smoothness, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If ``delta`` is invalid, or ``l`` or ``nu`` is not positive.
+    """
     l, nu = v.positive(l, "l"), v.positive(nu, "nu")
     r = np.sqrt(2 * nu) * _delta(delta) / l
     with np.errstate(invalid="ignore", over="ignore"):
@@ -38,14 +75,50 @@ def matern(delta, l: float, nu: float = 2.5):
 
 
 def exponential(delta, l: float):
-    r"""Exponential, Table 2.1: :math:`\exp(-\Delta / l)` (Matern with :math:`\nu = 1/2`)."""
+    r"""Exponential, Table 2.1: :math:`\exp(-\Delta / l)` (Matern with :math:`\nu = 1/2`).
+
+    Parameters
+    ----------
+    delta : array_like
+        Distances (finite, non-negative).
+    l : float
+        Length scale, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If ``delta`` is invalid or ``l`` is not positive.
+    """
     l = v.positive(l, "l")
     return np.exp(-_delta(delta) / l)
 
 
 def gamma_exponential(delta, l: float, gamma: float = 1.5):
     r""":math:`\gamma`-exponential, Table 2.1: :math:`\exp(-(\Delta / l)^\gamma)`,
-    :math:`0 < \gamma \le 2`."""
+    :math:`0 < \gamma \le 2`.
+
+    Parameters
+    ----------
+    delta : array_like
+        Distances (finite, non-negative).
+    l : float
+        Length scale, > 0.
+    gamma : float
+        Exponent in (0, 2].
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If ``delta`` is invalid, ``l`` is not positive or ``gamma`` is outside (0, 2].
+    """
     l = v.positive(l, "l")
     gamma = float(gamma)
     if not 0 < gamma <= 2:
@@ -54,7 +127,26 @@ def gamma_exponential(delta, l: float, gamma: float = 1.5):
 
 
 def rational_quadratic(delta, l: float, alpha: float = 1.0):
-    r"""Rational quadratic, Table 2.1: :math:`(1 + \Delta^2 / (2 \alpha l^2))^{-\alpha}`."""
+    r"""Rational quadratic, Table 2.1: :math:`(1 + \Delta^2 / (2 \alpha l^2))^{-\alpha}`.
+
+    Parameters
+    ----------
+    delta : array_like
+        Distances (finite, non-negative).
+    l : float
+        Length scale, > 0.
+    alpha : float
+        Scale mixture parameter, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    ValueError
+        If ``delta`` is invalid, or ``l`` or ``alpha`` is not positive.
+    """
     l, alpha = v.positive(l, "l"), v.positive(alpha, "alpha")
     return (1 + _delta(delta) ** 2 / (2 * alpha * l**2)) ** (-alpha)
 
@@ -84,6 +176,24 @@ def bilinear_product(K_distance, means_i, means_j, Sigma):
     k_D(d_i, d_j)`, with ``K_distance`` (N, M) the distance covariance (e.g.
     :func:`squared_exponential` of a distance matrix), ``means_i`` (N, n), ``means_j`` (M, n)
     and :math:`\mathbf\Sigma \succeq 0` (n, n).
+
+    Parameters
+    ----------
+    K_distance : array_like, (N, M)
+        Distance covariance.
+    means_i, means_j : array_like, (N, n) and (M, n)
+        Means of the distributions.
+    Sigma : array_like, (n, n)
+        Symmetric positive semidefinite weight.
+
+    Returns
+    -------
+    numpy.ndarray, (N, M)
+
+    Raises
+    ------
+    ValueError
+        If ``Sigma`` is not symmetric PSD or the shapes do not match.
     """
     Sigma = v.covariance(Sigma, "Sigma")
     mi, mj = np.atleast_2d(np.asarray(means_i, float)), np.atleast_2d(np.asarray(means_j, float))
@@ -105,6 +215,28 @@ def mean_kernel_dirac(X, Y=None, WX=None, WY=None, *, alpha: float, Lambda, chun
     ``X`` (N, L, d), ``Y`` (M, K, d) (``None``: ``X``), weights (N, L)/(M, K) or ``None``;
     ``Lambda`` a positive scalar (:math:`l^2`) or (d, d) positive definite matrix; ``chunk``
     mixtures of ``X`` per vectorised block. Returns (N, M).
+
+    Parameters
+    ----------
+    X, Y : array_like, (N, L, d) and (M, K, d)
+        Dirac mixtures (``Y=None``: ``X``).
+    WX, WY : array_like (N, L) / (M, K) or None
+        Weights (None: equal).
+    alpha : float
+        Signal standard deviation, > 0.
+    Lambda : float or array_like (d, d)
+        Squared length scale or positive definite matrix.
+    chunk : int
+        Mixtures of ``X`` per vectorised block.
+
+    Returns
+    -------
+    numpy.ndarray, (N, M)
+
+    Raises
+    ------
+    ValueError
+        If the mixtures, weights, ``alpha`` or ``Lambda`` are invalid or the dimensions differ.
     """
     X = v.mixture_set(X, "X")
     WX = v.set_weights(WX, X.shape, "WX")
@@ -131,6 +263,25 @@ def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lamb
     :math:`k = \alpha^2 |\mathbf I + \mathbf\Lambda^{-1}(\mathbf C_i + \mathbf C_j)|^{-1/2}
     \exp(-\tfrac12 \Delta\underline\mu^\top (\mathbf\Lambda + \mathbf C_i + \mathbf C_j)^{-1}
     \Delta\underline\mu)`. ``means_*`` (N, d), ``covs_*`` (N, d, d). Returns (N, M).
+
+    Parameters
+    ----------
+    means_i, covs_i : array_like, (N, d) and (N, d, d)
+    means_j, covs_j : array_like, (M, d) and (M, d, d)
+    alpha : float
+        Signal standard deviation, > 0.
+    Lambda : float or array_like (d, d)
+        Squared length scale or positive definite matrix.
+
+    Returns
+    -------
+    numpy.ndarray, (N, M)
+
+    Raises
+    ------
+    ValueError
+        If shapes do not match, a covariance is not symmetric PSD, or ``alpha``/``Lambda``
+        is invalid.
     """
     mi, mj = np.atleast_2d(np.asarray(means_i, float)), np.atleast_2d(np.asarray(means_j, float))
     Ci, Cj = np.asarray(covs_i, float), np.asarray(covs_j, float)

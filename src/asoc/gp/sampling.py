@@ -58,6 +58,26 @@ def mcvmd_standard_normal_dirac(x, wx=None, b_max: float = DEFAULT_B_MAX, nodes=
     :math:`D = \sqrt\pi\, b \sum_{ij} w_i w_j e^{-(x_i - x_j)^2 / (4 b^2)}`; the outer
     integral uses composite Gauss-Legendre quadrature (the growing parts cancel, the
     integrand decays like :math:`\bar x^2 / b`).
+
+    Parameters
+    ----------
+    x : array_like, (L,)
+        Dirac locations.
+    wx : array_like (L,) or None
+        Weights (None: equal).
+    b_max : float
+        Upper limit of the kernel widths.
+    nodes : tuple of arrays, optional
+        Precomputed quadrature nodes and weights over b.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        If the mixture is empty or the weights are invalid.
     """
     x = np.asarray(x, dtype=float).ravel()
     if x.size == 0:
@@ -101,11 +121,28 @@ def _lcd_standard_normal(L: int, b_max: float):
 
 
 def lcd_standard_normal(L: int = 10, b_max: float = DEFAULT_B_MAX) -> DiracApproximation:
-    """L equally weighted Dirac components approximating N(0, 1) by mCvMd minimisation [82].
+    r"""L equally weighted Dirac components approximating N(0, 1) by mCvMd minimisation [82].
 
-    Starts from the midpoint quantiles :math:`\\Phi^{-1}((2i - 1) / (2L))` and minimises
+    Starts from the midpoint quantiles :math:`\Phi^{-1}((2i - 1) / (2L))` and minimises
     :func:`mcvmd_standard_normal_dirac` over the locations with BFGS (analytic gradient). Cached per (L, b_max).
     Warns if the minimisation does not converge.
+
+    Parameters
+    ----------
+    L : int
+        Number of components, >= 1.
+    b_max : float
+        Upper limit of the mCvMd kernel widths.
+
+    Returns
+    -------
+    DiracApproximation
+        Locations, the reached distance, convergence flag and iterations.
+
+    Raises
+    ------
+    ValueError
+        If ``L`` < 1 or ``b_max`` is not positive.
     """
     L = int(L)
     if L < 1:
@@ -123,10 +160,16 @@ def gaussian_dirac_mixtures(means, variances, L: int = 10, b_max: float = DEFAUL
     ----------
     means, variances : array_like, (N,)
     L : number of equally weighted components.
+    b_max : upper limit of the mCvMd kernel widths.
 
     Returns
     -------
     ndarray, (N, L, 1): locations ``mean + sqrt(variance) * x_i`` (:func:`lcd_standard_normal`).
+
+    Raises
+    ------
+    ValueError
+        If ``means`` and ``variances`` differ in shape or a variance is negative.
     """
     mu = np.atleast_1d(np.asarray(means, dtype=float))
     var = np.atleast_1d(np.asarray(variances, dtype=float))

@@ -54,9 +54,23 @@ def check_gains(sys, F, K, L):
 def augmented_closed_loop(sys, F, K, L):
     """The augmented closed loop (3.39)-(3.40) and weight of Prop. 3.20 for x~ = [x; x^].
 
-    Returns (A~ (M, n, n), H~H~^T (M, n, n), Q~ (M, n, n)) with n = nx + nc:
     A~_i = [[A_i, B_i L], [K C_i, F]], H~_i H~_i^T = diag(H_i H_i^T, K J_i J_i^T K^T),
     Q~_i = diag(Q_i, L^T R_i L).
+
+    Parameters
+    ----------
+    sys : MJLS
+    F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
+        Gains of the controller (3.37).
+
+    Returns
+    -------
+    At, HHt_cl, Qt : numpy.ndarray, each (M, nx + nc, nx + nc)
+
+    Raises
+    ------
+    ValueError
+        If a gain has the wrong shape or non-finite entries.
     """
     F, K, L = check_gains(sys, F, K, L)
     M, nx, nc = sys.M, sys.nx, F.shape[0]
@@ -78,8 +92,27 @@ def augmented_closed_loop(sys, F, K, L):
 def steady_state_cost(sys, F, K, L):
     """True average cost (3.38) of (3.37): sum_i tr[Q~_i X~_inf^i] by Prop. 3.24.
 
-    X~_inf solves the coupled Lyapunov equations of Prop. 3.23 with mu = mu_inf. Returns
-    (cost, X~_inf, rho); cost is inf when the closed loop is not mean-square stable (Cor. 3.2).
+    X~_inf solves the coupled Lyapunov equations of Prop. 3.23 with mu = mu_inf.
+
+    Parameters
+    ----------
+    sys : MJLS
+    F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
+        Gains of the controller (3.37).
+
+    Returns
+    -------
+    cost : float
+        inf when the closed loop is not mean-square stable (Cor. 3.2).
+    X : numpy.ndarray, shape (M, nx + nc, nx + nc), or None
+        X~_inf (None when not stable).
+    rho : float
+        Mean-square spectral radius of the augmented closed loop.
+
+    Raises
+    ------
+    ValueError
+        If a gain has the wrong shape or non-finite entries.
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
     rho = ms_spectral_radius(At, sys.T)
@@ -202,17 +235,33 @@ def _gains_sdp(H, rho, n, ny, nu):
 
 @dataclass
 class DynamicOutputFeedbackResult:
-    """Result of Algorithm 3.2.
+    """Result of Algorithm 3.2 (:func:`dynamic_output_feedback`).
 
-    F (nx, nx), K (nx, ny), L (nu, nx): the controller (3.37); converged, iterations;
-    rho: mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2);
-    stabilizing: rho < 1; cost: true average cost (3.38) from Prop. 3.24 (inf if not
-    stabilizing); bound: sum_i tr[Q_i (Xbar_i + Xunder_i) + L^T R_i L Xunder_i], the cost of
-    the bounded second moment of Prop. 3.26 that the algorithm minimises; Xbar, Xunder,
-    Pbar, Punder: the last iterates; history: traces of Xbar_i, Xunder_i, Pbar_i, Punder_i
-    per iteration, each (iterations + 1, M); seconds: wall time. For
-    :func:`asoc.mjls.exact_dynamic_output_feedback`: bound = nan, the four blocks None, and
-    history["cost"] the exact cost per iteration.
+    Attributes
+    ----------
+    F, K, L : numpy.ndarray, shapes (nx, nx), (nx, ny), (nu, nx)
+        The controller (3.37).
+    converged : bool
+    iterations : int
+    rho : float
+        Mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2).
+    stabilizing : bool
+        rho < 1.
+    cost : float
+        True average cost (3.38) from Prop. 3.24 (inf if not stabilizing).
+    bound : float
+        sum_i tr[Q_i (Xbar_i + Xunder_i) + L^T R_i L Xunder_i], the cost of the bounded
+        second moment of Prop. 3.26 that the algorithm minimises (not always an upper
+        bound of ``cost``).
+    Xbar, Xunder, Pbar, Punder : numpy.ndarray, shape (M, nx, nx)
+        The last iterates.
+    history : dict
+        Traces of Xbar_i, Xunder_i, Pbar_i, Punder_i per iteration, each (iterations + 1, M).
+    seconds : float
+        Wall time.
+
+    For :func:`asoc.mjls.exact_dynamic_output_feedback`: bound = nan, the four blocks None,
+    and history["cost"] the exact cost per iteration.
     """
 
     F: np.ndarray
@@ -258,18 +307,40 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
 
     Parameters
     ----------
-    sys : MJLS with measurement noise J (Sec. 3.6; J = None means y = C x).
-    tol : stop when the relative changes of F, K, L and of Xbar, Xunder, Pbar, Punder
+    sys : MJLS
+        With measurement noise J (Sec. 3.6; J = None means y = C x).
+    tol : float
+        Stop when the relative changes of F, K, L and of Xbar, Xunder, Pbar, Punder
         (Frobenius norms) all fall below ``tol`` (Step 3 asks for unchanged gains; the
         author's reference code stops on the change of the four bounds, Mxttak/MJLS,
         MJLS_ClassMeasurementFeedbackConstGains.m).
-    max_iter : iteration limit; ``converged=False`` and a warning when reached or when the
+    max_iter : int
+        Iteration limit; ``converged=False`` and a warning when reached or when the
         bounds diverge (beyond 1e100, e.g. for a system this controller cannot stabilise).
-    init : scale of the initial bounds. With ``rng=None`` all four start at init * I, as in
+    init : float
+        Scale of the initial bounds. With ``rng=None`` all four start at init * I, as in
         the author's reference code (1e-4 I); with a Generator they are random symmetric
         positive definite matrices of that scale (Step 1).
-    method : ``"lstsq"`` (minimum-norm solution of (3.51)) or ``"sdp"`` (the SDP after Alg. 3.2).
-    warn : warn when the iteration does not converge or the controller does not stabilise.
+    rng : numpy.random.Generator, optional
+        Source of random initial bounds.
+    method : {"lstsq", "sdp"}
+        Minimum-norm solution of (3.51), or the SDP after Alg. 3.2.
+    warn : bool
+        Warn (RuntimeWarning) when the iteration does not converge or the controller does
+        not stabilise.
+
+    Returns
+    -------
+    DynamicOutputFeedbackResult
+        Gains, convergence, rho, the true cost (Prop. 3.24) and the bound (Prop. 3.26).
+
+    Raises
+    ------
+    ValueError
+        If ``tol`` or ``init`` is not positive, ``max_iter`` is not an integer >= 1,
+        ``method`` is unknown or ``rng`` is not a Generator.
+    FloatingPointError
+        If the bounds diverge already in the first iteration.
     """
     if not tol > 0 or int(max_iter) != max_iter or max_iter < 1 or not init > 0:
         raise ValueError(f"tol and init must be > 0 and max_iter an integer >= 1, found tol={tol}, "

@@ -32,17 +32,31 @@ from .system import MJLS, E, check_distribution, check_psd
 
 @dataclass
 class FiniteHorizonResult:
-    """Result of Algorithm 3.3.
+    """Result of Algorithm 3.3 (:func:`finite_horizon_dynamic_output_feedback`).
 
-    F (K, nx, nx), K (K, nx, ny), L (K, nu, nx): the gains of (3.55) for k = 0..K-1;
-    xhat0 (nx,): the controller's initial state E{x_0}; cost_bounds: Jbar_0 (3.72) after
-    each iteration (Thm. 3.33: non-increasing); converged, iterations; cost: the true
-    expected cost (3.56) of the final gains from the exact augmented second-moment
-    recursion (3.58); Xbar, Xunder (K+1, M, nx, nx), Pbar, Punder (K+1, M, nx, nx): the
-    bounds of the last iteration; rejected: number of step updates Step 5 rejected in the
-    last iteration; seconds: wall time; costs: the exact J_0 after each iteration of
-    :func:`asoc.mjls.exact_finite_horizon_dynamic_output_feedback` (None for Alg. 3.3, whose
-    bound arrays it leaves None).
+    Attributes
+    ----------
+    F, K, L : numpy.ndarray, shapes (K, nx, nx), (K, nx, ny), (K, nu, nx)
+        The gains of (3.55) for k = 0..K-1.
+    xhat0 : numpy.ndarray, shape (nx,)
+        The controller's initial state E{x_0}.
+    cost_bounds : numpy.ndarray
+        Jbar_0 (3.72) after each iteration (Thm. 3.33: non-increasing).
+    converged : bool
+    iterations : int
+    cost : float
+        The true expected cost (3.56) of the final gains, from the exact augmented
+        second-moment recursion (3.58).
+    Xbar, Xunder, Pbar, Punder : numpy.ndarray, shape (K + 1, M, nx, nx)
+        The bounds of the last iteration.
+    rejected : int
+        Number of step updates Step 5 rejected in the last iteration.
+    seconds : float
+        Wall time.
+    costs : numpy.ndarray or None
+        The exact J_0 after each iteration of
+        :func:`asoc.mjls.exact_finite_horizon_dynamic_output_feedback` (None for Alg. 3.3;
+        the exact optimiser leaves the bound arrays None).
     """
 
     F: np.ndarray
@@ -176,8 +190,31 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
 
 
 def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
-    """True expected cost (3.56) of the time-variant controller (3.55) with gains F, K, L of
-    shapes (K, nx, nx), (K, nx, ny), (K, nu, nx), from the augmented recursion (3.58)."""
+    """True expected cost (3.56) of the time-variant controller (3.55), from the augmented recursion (3.58).
+
+    Parameters
+    ----------
+    sys : MJLS or sequence of MJLS
+        As in :func:`finite_horizon_dynamic_output_feedback`.
+    F, K, L : array_like, shapes (K, nc, nc), (K, nc, ny), (K, nu, nc)
+        Gains per step; the horizon K is their length.
+    mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
+        Mean and covariance of x_0 given theta_0 = i.
+    mu0 : array_like, shape (M,)
+        Distribution of theta_0.
+    xhat0 : array_like, shape (nc,), optional
+        Controller initial state; default E{x_0}.
+
+    Returns
+    -------
+    float
+        E{sum_{k<K} (x_k^T Q x_k + u_k^T R u_k) + x_K^T Q_K x_K}.
+
+    Raises
+    ------
+    ValueError
+        If the initial state or ``sys`` is invalid (see :func:`finite_horizon_dynamic_output_feedback`).
+    """
     F, K, L = (np.asarray(g, dtype=float) for g in (F, K, L))
     st = stages(sys, len(F))
     s0 = st.systems[0]
@@ -239,12 +276,17 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
 
     Parameters
     ----------
-    sys : MJLS, or a sequence of ``horizon`` (or ``horizon + 1``, the last giving Q_K) MJLS
-        for time-variant system matrices (3.54).
-    horizon : K >= 1.
-    mean0, cov0 : (M, nx) and (M, nx, nx): mean and covariance of x_0 given theta_0 = i.
-    mu0 : (M,) distribution of theta_0.
-    init : initial gains (Step 1, "an arbitrary sequence"). None: the time-invariant
+    sys : MJLS or sequence of MJLS
+        One MJLS, or ``horizon`` (or ``horizon + 1``, the last giving Q_K) MJLS for
+        time-variant system matrices (3.54).
+    horizon : int
+        K >= 1.
+    mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
+        Mean and covariance of x_0 given theta_0 = i.
+    mu0 : array_like, shape (M,)
+        Distribution of theta_0.
+    init : None, numpy.random.Generator, DynamicOutputFeedbackResult or tuple (F, K, L)
+        Initial gains (Step 1, "an arbitrary sequence"). None: the time-invariant
         controller of Alg. 3.2 for the (first-step) system, as the author's simulation of
         Sec. 3.7.3 passes it to the time-variant design (Mxttak/MJLS,
         sim_MJLS_ClassMeasurementFeedbackVariantGains.m); a Generator: entries uniform in
@@ -253,14 +295,32 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         All-zero gains are a fixed point of the iteration (Xunder_k = 0 for k >= 1 makes
         (3.71) leave F_k, L_k at their minimum-norm value 0, and then Punder_k = 0 leaves K_k
         at 0), so they are a poor start.
-    tol : stop (Step 7) when Jbar_0 changed by less than ``tol * max(1, Jbar_0)``.
-    max_iter : iteration limit; ``converged=False`` and a warning when reached.
-    method : ``"lstsq"`` (minimum-norm solution of (3.71), the QP (3.73)) or ``"sdp"``.
-    safeguard : Step 5: keep the previous gains at step k when the new ones increase the
+    tol : float
+        Stop (Step 7) when Jbar_0 changed by less than ``tol * max(1, Jbar_0)``.
+    max_iter : int
+        Iteration limit; ``converged=False`` and a warning when reached.
+    method : {"lstsq", "sdp"}
+        Minimum-norm solution of (3.71) (the QP (3.73)) or the SDP.
+    safeguard : bool
+        Step 5: keep the previous gains at step k when the new ones increase the
         bounded cost-to-go Jbar_k (3.72) (evaluated for both with the same Xbar_k, Xunder_k
         and P_{k+1}). The author's reference code always accepts (safeguard=False).
-    warn : warn on non-convergence and when Jbar_0 increases (contradicting Thm. 3.33).
-    progress : show a tqdm bar over iterations.
+    warn : bool
+        Warn (RuntimeWarning) on non-convergence and when Jbar_0 increases (contradicting
+        Thm. 3.33).
+    progress : bool
+        Show a tqdm bar over iterations.
+
+    Returns
+    -------
+    FiniteHorizonResult
+
+    Raises
+    ------
+    ValueError
+        If ``horizon``, ``tol``, ``max_iter``, ``method``, the initial state (``mean0``,
+        ``cov0``, ``mu0``) or the shapes of ``init`` are invalid, or ``sys`` is not an MJLS
+        (sequence) of consistent dimensions.
     """
     start = time.perf_counter()
     st = stages(sys, horizon)

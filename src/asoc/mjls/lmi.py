@@ -17,10 +17,16 @@ EPS = 1e-6
 class LMIResult:
     """Result of :func:`static_output_lmi`.
 
-    feasible : whether the solver found a solution of the LMIs (status optimal).
-    L : the gain F M^{-1} (nu, ny), or the mode-dependent gains (M, nu, ny); None if infeasible.
-    bound : sum_i tr W_i, an upper bound of the H2 cost (3.23); inf if infeasible.
-    status : the solver's status string.
+    Attributes
+    ----------
+    feasible : bool
+        Whether the solver found a solution of the LMIs (status optimal).
+    L : numpy.ndarray or None
+        The gain F M^{-1} (nu, ny), or the mode-dependent gains (M, nu, ny); None if infeasible.
+    bound : float
+        sum_i tr W_i, an upper bound of the H2 cost (3.23); inf if infeasible.
+    status : str
+        The solver's status string.
     """
 
     feasible: bool
@@ -50,6 +56,29 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
 
     Minimises sum_i tr W_i subject to the LMIs of the theorem and M C_i = C_i G (Crusius and
     Trofino's constraint); feasibility implies a mean-square stabilising gain L = F M^{-1}.
+    Strict inequalities are imposed with the margin ``eps``.
+
+    Parameters
+    ----------
+    sys : MJLS
+    mode_observed : bool
+        False: Theorem 3.9 (one gain); True: Theorem 3.12 (one gain per mode).
+    eps : float
+        Margin of the strict inequalities (>= eps I).
+    solver : str
+        cvxpy solver name.
+
+    Returns
+    -------
+    LMIResult
+        Infeasibility and solver errors are reported in the result (``feasible=False`` and
+        the status), not raised.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        Only if the solver returns a numerically singular M despite the margin M >= eps I
+        (infeasibility and solver errors are reported in the result, not raised).
     """
     M_, nx, nu, ny = sys.M, sys.nx, sys.nu, sys.ny
     mu = sys.mu_inf

@@ -24,8 +24,20 @@ from .stability import ms_spectral_radius
 
 @dataclass
 class ObservedModeResult:
-    """Mode-dependent gains L (M, nu, nx), Riccati solution P (M, nx, nx), rho, stabilizing,
-    converged, iterations, seconds."""
+    """Result of :func:`observed_mode_state_feedback`.
+
+    Attributes
+    ----------
+    L : numpy.ndarray, shape (M, nu, nx)
+        Mode-dependent state-feedback gains.
+    P : numpy.ndarray, shape (M, nx, nx)
+        Solution of the coupled algebraic Riccati equations.
+    rho : float
+        Mean-square spectral radius of the closed loop (Cor. 3.2).
+    stabilizing, converged : bool
+    iterations : int
+    seconds : float
+    """
 
     L: np.ndarray
     P: np.ndarray
@@ -48,7 +60,32 @@ def riccati_step(sys, P):
 
 
 def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
-    """[38]: optimal time-invariant state feedback u_k = L_{theta_k} x_k with observed mode."""
+    """[38]: optimal time-invariant state feedback u_k = L_{theta_k} x_k with observed mode.
+
+    Solves the coupled algebraic Riccati equations (Costa, Fragoso, Marques 2005, Ch. 4) by
+    the Riccati iteration from P = 0. Its cost is a lower bound for every controller that
+    sees less (the output only, or not the mode).
+
+    Parameters
+    ----------
+    sys : MJLS
+    tol : float
+        Stop when the largest change of P, relative to 1 + max abs(P), is below tol.
+    max_iter : int
+        Iteration limit.
+    warn : bool
+        Warn (RuntimeWarning) on non-convergence or a non-stabilising result.
+
+    Returns
+    -------
+    ObservedModeResult
+
+    Raises
+    ------
+    ValueError
+        When the Riccati iteration overflows (the MJLS is not mean-square stabilisable even
+        with observed mode), from the stability check of the non-finite gains.
+    """
     start = time.perf_counter()
     P = np.zeros((sys.M, sys.nx, sys.nx))
     converged = False

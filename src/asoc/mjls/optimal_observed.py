@@ -41,9 +41,22 @@ from .simulate import Controller
 
 @dataclass
 class ModeObservedResult:
-    """F (K, M, nu, nx) LQ gains, Mf (K, M, nx, ny) filter gains, X (K+1, M, nx, nx) control
-    Riccati solutions, Y (K+1, M, nx, nx) filter error moments, xhat0 (nx,), cost: the exact
-    expected cost (3.56) of the closed loop (augmented second-moment recursion)."""
+    """Result of :func:`mode_observed_lqg`.
+
+    Attributes
+    ----------
+    F : numpy.ndarray, shape (K, M, nu, nx)
+        LQ gains.
+    Mf : numpy.ndarray, shape (K, M, nx, ny)
+        Markov jump filter gains.
+    X : numpy.ndarray, shape (K + 1, M, nx, nx)
+        Control Riccati solutions.
+    Y : numpy.ndarray, shape (K + 1, M, nx, nx)
+        Filter error moments.
+    xhat0 : numpy.ndarray, shape (nx,)
+    cost : float
+        The exact expected cost (3.56) of the closed loop (augmented second-moment recursion).
+    """
 
     F: np.ndarray
     Mf: np.ndarray
@@ -58,7 +71,16 @@ class ModeObservedResult:
 
 
 class ModeObservedLQG(Controller):
-    """u_k = F_{theta_k}(k) x^_k with the Markov jump filter x^ (needs the mode, [38])."""
+    """u_k = F_{theta_k}(k) x^_k with the Markov jump filter x^ (needs the mode, [38]).
+
+    Parameters
+    ----------
+    sys : MJLS
+    F, Mf : array_like
+        Gains of :class:`ModeObservedResult`.
+    xhat0 : array_like, shape (nx,)
+        Filter initial state.
+    """
 
     observes_mode = True
 
@@ -116,9 +138,30 @@ def markov_jump_filter(st, Y0, mu):
 def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
     """The optimal finite-horizon output-feedback controller with observed mode ([38]).
 
-    Parameters as in :func:`finite_horizon_dynamic_output_feedback`: ``sys`` an MJLS or a
-    sequence of MJLS (3.54); mean0 (M, nx), cov0 (M, nx, nx) the mode-conditional mean
-    and covariance of x_0; mu0 (M,) the distribution of theta_0.
+    Mode-dependent LQ gains from the coupled Riccati difference equations and the Markov
+    jump filter (Costa, Fragoso, Marques 2005, Chs. 4-5). Its expected cost is a lower bound
+    for every controller that does not observe the mode (Table 3.3).
+
+    Parameters
+    ----------
+    sys : MJLS or sequence of MJLS
+        As in :func:`finite_horizon_dynamic_output_feedback` (3.54).
+    horizon : int
+        K >= 1.
+    mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
+        Mode-conditional mean and covariance of x_0.
+    mu0 : array_like, shape (M,)
+        Distribution of theta_0.
+
+    Returns
+    -------
+    ModeObservedResult
+        Gains, filter, and the exact expected cost; ``.controller(sys)`` simulates it.
+
+    Raises
+    ------
+    ValueError
+        If ``horizon``, ``sys`` or the initial state is invalid.
     """
     st = stages(sys, horizon)
     s0 = st.systems[0]

@@ -181,10 +181,48 @@ class _ModeStack:
 
 
 def simulate(sys, controller, *args, **kwargs):
-    """Simulate closed-loop runs; see :func:`_simulate` for the parameters.
+    """Monte Carlo of ``n_runs`` closed-loop runs of ``horizon`` steps, vectorised over runs.
 
-    BLAS is limited to one thread here: the products are small (N x 5 by 5 x 4), and
-    threading them costs more than it gains, badly so on a loaded 2-core machine.
+    Called as ``simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None,
+    x0_cov=None, trajectories=False, progress=False)``. BLAS is limited to one thread here:
+    the products are small (N x 5 by 5 x 4), and threading them costs more than it gains.
+
+    Parameters
+    ----------
+    sys : MJLS
+    controller : Controller
+        E.g. :class:`StaticGain`, :class:`DynamicOutputFeedback`, :class:`ModeDependentGain`.
+    x0 : array_like, (nx,) or (M, nx)
+        Initial state, or per-mode means of a Gaussian mixture (Sec. 3.7).
+    horizon : int
+        K >= 1 steps.
+    n_runs : int
+        N >= 1 runs.
+    rng : numpy.random.Generator
+        The only source of random numbers (initial mode, initial state, then per step:
+        process noise, measurement noise, next mode).
+    mode0 : int, optional
+        Fixed initial mode (0-based), or None to draw theta_0 from ``mu0``.
+    mu0 : array_like, shape (M,), optional
+        Initial mode distribution (default: the stationary distribution).
+    x0_cov : array_like, (nx, nx) or (M, nx, nx), optional
+        Covariance of x_0 given theta_0.
+    trajectories : bool
+        Also return x, u and theta of every run.
+    progress : bool
+        Show a progress bar over the steps.
+
+    Returns
+    -------
+    SimulationResult
+        Per-run costs of (3.3) (``average_cost`` divides by K) and, on request, trajectories.
+
+    Raises
+    ------
+    ValueError
+        If ``rng`` is not a Generator, ``horizon`` or ``n_runs`` is not an integer >= 1,
+        ``mode0`` is out of range, or ``mu0``, ``x0``, ``x0_cov`` have the wrong shape or
+        are invalid.
     """
     with threadpool_limits(limits=1, user_api="blas"):
         return _simulate(sys, controller, *args, **kwargs)

@@ -6,7 +6,26 @@ from .system import check_transition_matrix, _stack
 
 
 def ms_operator(A_stack, T):
-    """The matrix M = diag[A_1 (x) A_1, ..., A_M (x) A_M] (T^T (x) I_{n^2}) of Corollary 3.2."""
+    """The matrix M = diag[A_1 (x) A_1, ..., A_M (x) A_M] (T^T (x) I_{n^2}) of Corollary 3.2.
+
+    Parameters
+    ----------
+    A_stack : array_like, shape (M, n, n)
+        Per-mode (closed-loop) system matrices.
+    T : array_like, shape (M, M)
+        Row-stochastic transition matrix.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M n^2, M n^2)
+        The mean-square operator whose spectral radius decides stability.
+
+    Raises
+    ------
+    ValueError
+        If ``A_stack`` is not an (M, n, n) stack of finite matrices, ``T`` is not
+        row-stochastic, or their numbers of modes differ.
+    """
     A_stack = _stack(A_stack, "A_stack")
     T = check_transition_matrix(T)
     M, n, _ = A_stack.shape
@@ -20,11 +39,45 @@ def ms_operator(A_stack, T):
 
 
 def ms_spectral_radius(A_stack, T) -> float:
-    """Spectral radius of M (Corollary 3.2); the MJLS is mean-square stable iff it is < 1."""
+    """Spectral radius of M (Corollary 3.2); the MJLS is mean-square stable iff it is < 1.
+
+    Parameters
+    ----------
+    A_stack : array_like, shape (M, n, n)
+        Per-mode (closed-loop) system matrices, e.g. from :func:`closed_loop`.
+    T : array_like, shape (M, M)
+        Row-stochastic transition matrix.
+
+    Returns
+    -------
+    float
+        rho(M) of :func:`ms_operator`.
+
+    Raises
+    ------
+    ValueError
+        As :func:`ms_operator`, e.g. for non-finite matrices.
+    """
     return float(np.max(np.abs(np.linalg.eigvals(ms_operator(A_stack, T)))))
 
 
 def closed_loop(sys, L):
-    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L."""
+    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L.
+
+    Parameters
+    ----------
+    sys : MJLS
+    L : array_like, shape (nu, ny)
+        Static output-feedback gain u = L y (3.8).
+
+    Returns
+    -------
+    numpy.ndarray, shape (M, nx, nx)
+
+    Raises
+    ------
+    ValueError
+        If ``L`` does not have nu * ny entries.
+    """
     L = np.asarray(L, dtype=float).reshape(sys.nu, sys.ny)
     return sys.A + sys.B @ L @ sys.C

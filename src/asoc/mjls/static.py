@@ -14,12 +14,26 @@ from .system import D, E
 
 @dataclass
 class StaticOutputFeedbackResult:
-    """Result of Algorithm 3.1.
+    """Result of Algorithm 3.1 (:func:`static_output_feedback`).
 
-    L : (nu, ny) regulator gain; converged, iterations; rho: mean-square spectral radius
-    of the closed loop (Cor. 3.2); stabilizing: rho < 1; cost: H2 cost (Prop. 3.7) of L,
-    inf when not stabilizing; history: traces of X^i and P^i per iteration, shape
-    (iterations + 1, M) each; X, P: the last iterates; seconds: wall time of the iteration.
+    Attributes
+    ----------
+    L : numpy.ndarray, shape (nu, ny)
+        Regulator gain.
+    converged : bool
+    iterations : int
+    rho : float
+        Mean-square spectral radius of the closed loop (Cor. 3.2).
+    stabilizing : bool
+        rho < 1.
+    cost : float
+        H2 cost (Prop. 3.7) of L; inf when not stabilizing.
+    X, P : numpy.ndarray, shape (M, nx, nx)
+        The last iterates.
+    history : dict
+        ``trace_X`` and ``trace_P``: traces of X^i and P^i per iteration, (iterations + 1, M).
+    seconds : float
+        Wall time of the iteration.
     """
 
     L: np.ndarray
@@ -37,7 +51,26 @@ class StaticOutputFeedbackResult:
 def gain_from_moments(sys, X, P, method="vec", R=None):
     """L solving (3.31) for given X^i, P^i: Prop. 3.18 (``"vec"``) or its SDP (``"sdp"``).
 
-    ``R`` overrides sys.R (used by Alg. 3.1's scaled iteration).
+    Parameters
+    ----------
+    sys : MJLS
+    X, P : numpy.ndarray, shape (M, nx, nx)
+        Second moments and multipliers.
+    method : {"vec", "sdp"}
+        Solve the vectorised linear equation (3.34) or the SDP of Prop. 3.18.
+    R : numpy.ndarray, shape (M, nu, nu), optional
+        Overrides sys.R (used by Alg. 3.1's scaled iteration).
+
+    Returns
+    -------
+    numpy.ndarray, shape (nu, ny)
+
+    Raises
+    ------
+    ValueError
+        If ``method`` is not "vec" or "sdp".
+    numpy.linalg.LinAlgError
+        If the linear system is singular or the SDP fails.
     """
     EP = E(sys.T, P)
     S = (sys.R if R is None else R) + np.swapaxes(sys.B, 1, 2) @ EP @ sys.B                     # (M, nu, nu)
@@ -205,21 +238,28 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     constant terms mu H H^T, Q and C^T L^T R L C are divided by the scales; the gain
     (3.34) is invariant under that scaling). Step 4's test is applied to the scaled
     iterates (their directions) and to the gain, which is also what the author's
-    reference implementation stops on (sum |L_[eta] - L_[eta-1]| < 1e-8; M. Dolgov,
-    MJLS_StaticOutputComputeRegulatorGain.m, github.com/Mxttak/MJLS). The moments
-    themselves converge iff the limit gain stabilises the MJLS (``stabilizing``).
+    reference implementation stops on (the sum of the absolute changes of L below 1e-8;
+    M. Dolgov, MJLS_StaticOutputComputeRegulatorGain.m, github.com/Mxttak/MJLS). The
+    moments themselves converge iff the limit gain stabilises the MJLS (``stabilizing``).
 
     Parameters
     ----------
     sys : MJLS
-    tol : stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol
+    tol : float
+        Stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol
         (``moments="exact"``: the relative change of L).
-    max_iter : iteration limit; ``converged=False`` and a warning when reached.
-    init : the thesis recommends 1e-4 I as the initial X^i, P^i (Sec. 3.5.3).
-    method : ``"vec"`` solves (3.31) by Prop. 3.18; ``"sdp"`` by its SDP alternative.
-    warn : warn when the iteration does not converge or the gain does not stabilise.
-    moments : ``"step"``, the thesis's iteration (one step of each recursion (3.35) per gain
-        update; Fig. 3.4 shows its iterates), or ``"exact"`` (not in the thesis): run the
+    max_iter : int
+        Iteration limit; ``converged=False`` and a warning when reached.
+    init : float
+        Scale of the initial X^i, P^i; the thesis recommends 1e-4 I (Sec. 3.5.3).
+    method : {"vec", "sdp"}
+        Solve (3.31) by Prop. 3.18 (vectorised) or by its SDP alternative.
+    warn : bool
+        Warn (RuntimeWarning) when the iteration does not converge, or converges to a gain
+        that does not stabilise.
+    moments : {"step", "exact"}
+        ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
+        update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
         thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with
         the exact solution of the two moment equations (3.32)-(3.33) for the current gain
         (linear systems of size M nx^2). Same fixed point, far fewer iterations when the
@@ -229,13 +269,14 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     Returns
     -------
     StaticOutputFeedbackResult
-        iterations counts both phases for ``moments="exact"``; history holds the traces of
-        both phases.
+        Gain, convergence, spectral radius, stability, cost and iterate history
+        (for ``moments="exact"``, ``iterations`` and ``history`` cover both phases).
 
     Raises
     ------
     ValueError
-        for tol, init <= 0, max_iter < 1, or an unknown method or moments.
+        If ``tol`` or ``init`` is not positive, ``max_iter`` < 1, or ``method`` or
+        ``moments`` is unknown.
     """
     if not tol > 0 or max_iter < 1 or not init > 0:
         raise ValueError(f"tol and init must be > 0 and max_iter >= 1, found tol={tol}, "

@@ -84,7 +84,24 @@ def check_psd(S, name, definite=False, tol=1e-10):
 
 
 def stationary_distribution(T):
-    """Limit distribution mu_inf with mu_inf^T T = mu_inf^T (footnote 5, Sec. 3.5.2)."""
+    """Limit distribution mu_inf with mu_inf^T T = mu_inf^T (footnote 5, Sec. 3.5.2).
+
+    Parameters
+    ----------
+    T : array_like, shape (M, M)
+        Row-stochastic transition matrix, p_ij = P(theta_{k+1} = j | theta_k = i).
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        The stationary distribution (least-squares solution of mu^T (T - I) = 0,
+        sum mu = 1, clipped to be non-negative and renormalised).
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not square, not finite, or a row is negative or does not sum to 1.
+    """
     T = check_transition_matrix(T)
     M = T.shape[0]
     lhs = np.vstack([T.T - np.eye(M), np.ones((1, M))])
@@ -94,12 +111,48 @@ def stationary_distribution(T):
 
 
 def E(T, P):
-    """E_i(P) = sum_j p_ij P_j (Prop. 3.16), for a stack P of shape (M, ...)."""
+    """E_i(P) = sum_j p_ij P_j (Prop. 3.16), for a stack P of shape (M, ...).
+
+    Parameters
+    ----------
+    T : numpy.ndarray, shape (M, M)
+        Transition matrix (not validated here: this helper runs inside the iterations).
+    P : numpy.ndarray, shape (M, ...)
+        One array per mode, e.g. the multipliers P^j of Prop. 3.16.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M, ...)
+        The expected next-mode value E_i(P) for every mode i.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
+    """
     return np.einsum("ij,j...->i...", T, P)
 
 
 def D(T, Y):
-    """D_i(Y) = sum_j p_ji Y_j (Lemma 3.8), for a stack Y of shape (M, ...)."""
+    """D_i(Y) = sum_j p_ji Y_j (Lemma 3.8), for a stack Y of shape (M, ...).
+
+    Parameters
+    ----------
+    T : numpy.ndarray, shape (M, M)
+        Transition matrix (not validated here).
+    Y : numpy.ndarray, shape (M, ...)
+        One array per mode, e.g. the second moments X^j of (3.29).
+
+    Returns
+    -------
+    numpy.ndarray, shape (M, ...)
+        D_i(Y), the probability-weighted sum over the predecessor modes j of i.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
+    """
     return np.einsum("ji,j...->i...", T, Y)
 
 
@@ -107,13 +160,39 @@ def D(T, Y):
 class MJLS:
     """Markov jump linear system (3.7) with cost matrices Q_i, R_i (cost (3.9)).
 
+    x_{k+1} = A_i x_k + B_i u_k + H_i w_k, y_k = C_i x_k + J_i v_k with i = theta_k, w_k and
+    v_k standard normal, theta_k a Markov chain with transition matrix T.
+
     Parameters
     ----------
-    A, B, C, H : lists of 2-D arrays or stacked arrays of shapes (M, nx, nx), (M, nx, nu),
-        (M, ny, nx), (M, nx, nw). A single 2-D array is used for every mode.
-    Q, R : state and input weights, (M, nx, nx) symmetric PSD and (M, nu, nu) symmetric PD.
-    T : (M, M) row-stochastic transition matrix.
-    J : optional measurement-noise matrices (M, ny, nv) of y = C x + J v (Sec. 3.6).
+    A : list of 2-D array_like, or array_like (M, nx, nx)
+        Per-mode system matrices; a single 2-D array is used for every mode (also below).
+    B : list of 2-D array_like, or array_like (M, nx, nu)
+        Input matrices.
+    C : list of 2-D array_like, or array_like (M, ny, nx)
+        Output matrices.
+    H : list of 2-D array_like, or array_like (M, nx, nw)
+        Process-noise matrices.
+    Q : array_like, (M, nx, nx) or (nx, nx)
+        Symmetric positive semidefinite state weights.
+    R : array_like, (M, nu, nu) or (nu, nu)
+        Symmetric positive definite input weights.
+    T : array_like, shape (M, M)
+        Row-stochastic transition matrix, p_ij = P(theta_{k+1} = j | theta_k = i).
+    J : array_like, (M, ny, nv), optional
+        Measurement-noise matrices of y = C x + J v (Sec. 3.6); None means y = C x.
+
+    Attributes
+    ----------
+    M, nx, nu, ny, nw : int
+        Number of modes and dimensions.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, when a shape does not fit, an entry is not finite, ``T`` is not
+        row-stochastic, ``Q`` is not symmetric positive semidefinite or ``R`` not positive
+        definite.
     """
 
     A: np.ndarray

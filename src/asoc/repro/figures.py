@@ -33,7 +33,12 @@ STYLE = {
 
 
 def apply_style():
-    """Apply the project's matplotlib style (called by :func:`asoc.repro.setup`)."""
+    """Apply the project's matplotlib style (called by :func:`asoc.repro.setup`).
+
+    Returns
+    -------
+    None
+    """
     matplotlib.rcParams.update(STYLE)
 
 
@@ -44,7 +49,26 @@ def _stem(kind: str, number: str) -> str:
 
 
 def save_figure(fig, number: str, output_dir=None):
-    """Save ``fig`` as ``fig<chapter>_<n>.png`` and ``.pdf`` (atomically); return the PNG path."""
+    """Save ``fig`` as ``fig<chapter>_<n>.png`` and ``.pdf`` (atomically); return the PNG path.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    number : str
+        Thesis-style number such as "3.4".
+    output_dir : path, optional
+        Default: the current notebook's output folder (:func:`setup`).
+
+    Returns
+    -------
+    pathlib.Path
+        The PNG file.
+
+    Raises
+    ------
+    ValueError
+        If ``number`` does not look like "3.4".
+    """
     out = output_dir or values.current_output_dir()
     stem = _stem("fig", number)
     paths = []
@@ -57,7 +81,24 @@ def save_figure(fig, number: str, output_dir=None):
 
 
 def markdown_table(header, rows) -> str:
-    """A GitHub-flavoured Markdown table from a header and rows of cells."""
+    """A GitHub-flavoured Markdown table from a header and rows of cells.
+
+    Parameters
+    ----------
+    header : sequence
+        Column titles.
+    rows : sequence of sequences
+        Cells, converted with ``str``.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    TypeError
+        If ``rows`` is not an iterable of iterables.
+    """
     lines = ["| " + " | ".join(map(str, header)) + " |",
              "|" + "|".join("---" for _ in header) + "|"]
     lines += ["| " + " | ".join(map(str, row)) + " |" for row in rows]
@@ -65,7 +106,30 @@ def markdown_table(header, rows) -> str:
 
 
 def save_table(number: str, header, rows, output_dir=None) -> str:
-    """Save a table as ``table<chapter>_<n>.csv`` and ``.md`` (atomically); return the Markdown."""
+    """Save a table as ``table<chapter>_<n>.csv`` and ``.md`` (atomically); return the Markdown.
+
+    Parameters
+    ----------
+    number : str
+        Thesis-style number such as "3.2".
+    header : sequence
+        Column titles.
+    rows : sequence of sequences
+        One list of cells per row.
+    output_dir : path, optional
+        Default: the current notebook's output folder.
+
+    Returns
+    -------
+    str
+        The Markdown table.
+
+    Raises
+    ------
+    ValueError
+        If ``number`` does not look like "3.2", or a row has a different number of cells than
+        ``header``.
+    """
     if any(len(row) != len(header) for row in rows):
         raise ValueError("rows: every row needs as many cells as header")
     out = output_dir or values.current_output_dir()

@@ -58,7 +58,24 @@ def ledger_rows(reference=None, values=None):
 
 
 def ledger_markdown(reference=None, values=None) -> str:
-    """The ledger page (MyST Markdown): a summary, then per notebook a table and the notes."""
+    """The ledger page (MyST Markdown): a summary, then per notebook a table and the notes.
+
+    Parameters
+    ----------
+    reference : dict, optional
+        ``{key: Entry}``; default: :func:`load_reference`.
+    values : dict, optional
+        ``{"<notebook>.<key>": value}``; default: the committed values.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        If a note names a value that is not recorded (see :func:`fill`).
+    """
     rows = ledger_rows(reference, values)
     counts = {}
     for row in rows:
@@ -91,7 +108,24 @@ def ledger_markdown(reference=None, values=None) -> str:
             for r in mine if r["note"]))
     return "".join(parts)
 def write_ledger(path=None) -> str:
-    """Write ``book/ledger.md`` and return its text."""
+    """Write ``book/ledger.md`` and return its text.
+
+    Parameters
+    ----------
+    path : path, optional
+        Default ``book/ledger.md``.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        If a note names a value that is not recorded (see :func:`fill`).
+    OSError
+        If the file cannot be written (the previous file is kept: atomic write).
+    """
     text = ledger_markdown()
     atomic_write_text(path or BOOK / "ledger.md", text)
     return text

@@ -27,10 +27,12 @@ class NotebookInfo:
 
 
 def notebooks(book=BOOK) -> dict:
-    """``{name: NotebookInfo}`` for every numerical-section notebook, in thesis order."""
+    """``{name: NotebookInfo}`` for every notebook whose metadata has an ``asoc`` entry, by name."""
     found = {}
-    for path in sorted(Path(book).glob("sec*.ipynb")):
-        meta = json.loads(path.read_text())["metadata"].get("asoc", {})
+    for path in sorted(Path(book).glob("*.ipynb")):
+        meta = json.loads(path.read_text())["metadata"].get("asoc")
+        if meta is None:
+            continue
         found[path.stem] = NotebookInfo(path.stem, path, meta.get("title", path.stem),
                                         tuple(meta.get("figures", ())), tuple(meta.get("tables", ())))
     return found

@@ -55,12 +55,47 @@ def format_value(value, spec: str = "") -> str:
 
 
 def fill(text: str, values: dict, notebook: str | None = None) -> str:
-    """``text`` with every ``{{path:spec}}`` replaced by the recorded value."""
+    """``text`` with every ``{{path:spec}}`` replaced by the recorded value.
+
+    Parameters
+    ----------
+    text : str
+        Text with placeholders ``{{path:spec}}``.
+    values : dict
+        ``{"<notebook>.<key>": value}``, e.g. :func:`load_all_values`.
+    notebook : str, optional
+        Resolves unqualified paths ``{{key}}``.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        If a placeholder names a value that is not recorded.
+    """
     return PLACEHOLDER.sub(lambda m: format_value(lookup(m.group(1), values, notebook), m.group(2) or ""), text)
 
 
 def prose(text: str):
-    """Markdown for a notebook cell: ``text`` filled from this notebook's values and the committed ones."""
+    """Markdown for a notebook cell: ``text`` filled from this notebook's values and the committed ones.
+
+    Parameters
+    ----------
+    text : str
+        Markdown with placeholders ``{{key:spec}}`` (this notebook) or
+        ``{{notebook.key:spec}}``.
+
+    Returns
+    -------
+    IPython.display.Markdown
+
+    Raises
+    ------
+    KeyError
+        If a placeholder names a value that is not recorded.
+    """
     from IPython.display import Markdown
 
     from .values import _session, load_all_values

@@ -48,7 +48,24 @@ class Entry:
 
 
 def load_reference(path=None) -> dict:
-    """Load and validate the reference files (a folder of YAML files, or one file); return ``{key: Entry}``."""
+    """Load and validate the reference files (a folder of YAML files, or one file); return ``{key: Entry}``.
+
+    Parameters
+    ----------
+    path : path, optional
+        Default ``tests/reference/thesis_values/``.
+
+    Returns
+    -------
+    dict
+        ``{key: Entry}``.
+
+    Raises
+    ------
+    ValueError
+        If a key appears twice, sits in the wrong file, is not ``<notebook>.<name>``, or an
+        entry has an unknown kind or expect, or a deterministic entry has no ``tol``.
+    """
     path = Path(path or REFERENCE)
     raw = {}
     for file in sorted(path.glob("*.yaml")) if path.is_dir() else [path]:
@@ -82,7 +99,23 @@ def _max_abs_diff(a, b) -> float:
 
 
 def status(entry: Entry, ours) -> str:
-    """``reproduced``, ``deviates``, ``new`` or ``missing`` for our value ``ours``."""
+    """``reproduced``, ``deviates``, ``new`` or ``missing`` for our value ``ours``.
+
+    Parameters
+    ----------
+    entry : Entry
+    ours : object
+        Our recorded value (None if missing).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        If a Monte Carlo or claim value lacks ``ci`` or ``holds``.
+    """
     if ours is None:
         return "missing"
     if entry.kind == "measured":

@@ -30,7 +30,14 @@ def bootstrap_ci(samples, rng: np.random.Generator, statistic=np.median, n_boot:
 
     Returns
     -------
-    dict with ``value`` (statistic of the samples), ``ci`` ([low, high]) and ``n``.
+    dict
+        ``value`` (statistic of the samples), ``ci`` ([low, high]) and ``n``.
+
+    Raises
+    ------
+    ValueError
+        If the samples are empty or non-finite, ``level`` is outside (0, 1) or ``rng`` is not
+        a Generator.
     """
     x = _check_samples(samples, level)
     if not isinstance(rng, np.random.Generator):
@@ -55,7 +62,21 @@ def bootstrap_median_ci(samples, level: float = 0.95):
     10.7; Maritz & Jarrett, JASA 1978). The interval is read off this distribution exactly,
     so it needs no random numbers and is what infinitely many resamples would give.
 
-    Returns a dict with ``value`` (the sample median), ``ci`` ([low, high]) and ``n``.
+    Parameters
+    ----------
+    samples : array_like, (N,)
+    level : float
+        Confidence level in (0, 1).
+
+    Returns
+    -------
+    dict
+        ``value`` (the sample median), ``ci`` ([low, high]) and ``n``.
+
+    Raises
+    ------
+    ValueError
+        If the samples are empty or non-finite, or ``level`` is outside (0, 1).
     """
     from scipy.stats import binom
 
@@ -77,7 +98,22 @@ def settling_iteration(series, band: float = 0.02) -> int:
     The classical settling time (e.g. 2% band) applied to iteration histories: for each
     series s_0..s_N with final value s_N, the band is ``band * max|s_eta - s_N|``. This
     turns "converges after about N iterations", read off a plot, into a number that does
-    not depend on the series' scale. ``series`` is (N+1,) or (n_series, N+1).
+    not depend on the series' scale. 
+
+    Parameters
+    ----------
+    series : array_like, (N+1,) or (n_series, N+1)
+    band : float
+        Relative band in (0, 1).
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ValueError
+        If ``series`` is empty or non-finite, or ``band`` is outside (0, 1).
     """
     s = np.atleast_2d(np.asarray(series, dtype=float))
     if s.shape[1] < 1 or not np.all(np.isfinite(s)):

@@ -29,7 +29,25 @@ _session = _Session()
 def setup(notebook: str, fidelity: str = "full", output_dir=None) -> Path:
     """Start recording for ``notebook`` at ``fidelity`` into ``output_dir`` (default figures/).
 
-    Also applies the project's plotting style. Returns the output folder.
+    Also applies the project's plotting style.
+
+    Parameters
+    ----------
+    notebook : str
+        Plain name such as "sec3_5".
+    fidelity : {"full", "ci"}
+    output_dir : path, optional
+        Default ``figures/``.
+
+    Returns
+    -------
+    pathlib.Path
+        The output folder.
+
+    Raises
+    ------
+    ValueError
+        If ``fidelity`` is unknown or ``notebook`` is not a plain name.
     """
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, found {fidelity!r}")
@@ -55,6 +73,24 @@ def record(key: str, value):
 
     ``value`` may be a number, bool, string, list/array, or a dict of those (e.g. a Monte
     Carlo median with its bootstrap interval: ``{"median": m, "ci": [lo, hi], "n": N}``).
+
+    Parameters
+    ----------
+    key : str
+        Non-empty, without spaces.
+    value : object
+
+    Returns
+    -------
+    object
+        ``value``.
+
+    Raises
+    ------
+    RuntimeError
+        If :func:`setup` has not been called.
+    ValueError
+        If ``key`` is empty or contains spaces.
     """
     if _session.notebook is None:
         raise RuntimeError("call asoc.repro.setup(notebook, fidelity, output_dir) before record()")
@@ -77,7 +113,23 @@ def values_path(notebook: str, output_dir=None) -> Path:
 
 
 def load_values(notebook: str, output_dir=None) -> dict:
-    """The recorded values of ``notebook`` (``{}`` if it has not been run)."""
+    """The recorded values of ``notebook`` (``{}`` if it has not been run).
+
+    Parameters
+    ----------
+    notebook : str
+    output_dir : path, optional
+        Default ``figures/``.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    json.JSONDecodeError
+        If the values file is not valid JSON.
+    """
     path = values_path(notebook, output_dir)
     if not path.exists():
         return {}
@@ -85,7 +137,22 @@ def load_values(notebook: str, output_dir=None) -> dict:
 
 
 def load_all_values(output_dir=None) -> dict:
-    """All recorded values as ``{"<notebook>.<key>": value}``."""
+    """All recorded values as ``{"<notebook>.<key>": value}``.
+
+    Parameters
+    ----------
+    output_dir : path, optional
+        Default ``figures/``.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    json.JSONDecodeError
+        If a values file is not valid JSON.
+    """
     folder = Path(output_dir or FIGURES) / "values"
     out = {}
     for path in sorted(folder.glob("*.json")):
