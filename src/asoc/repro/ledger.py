@@ -242,7 +242,8 @@ def _notebook_section(notebook, info, mine) -> str:
             notes.append(lead + f"{_row_details(members, same)} {head}\n\n"
                          + "".join(f"- {_key_list(rs)}: {_row_details(rs, differ)} {own}\n" for own, rs in parts)
                          + (f"\n{tail}\n" if tail else ""))
-    table = [[f"[`{r['name']}`]({links[r['name']]})" if r["name"] in links else f"`{r['name']}`",
+    # raw links: Sphinx does not resolve Markdown links to another page's heading ids
+    table = [[f'<a href="{links[r["name"]]}"><code>{r["name"]}</code></a>' if r["name"] in links else f"`{r['name']}`",
               badge(r["status"]), r["thesis"], r["ours"], r["tolerance"], ref.get(r["key"], "")] for r in mine]
     title = info.title if info else notebook
     where = f"[`{info.path.name}`]({info.path.stem}): " if info else ""
