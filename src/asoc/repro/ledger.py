@@ -158,7 +158,7 @@ def _row_details(members, fields=FIELDS) -> str:
     parts = []
     for field, label in fields:
         texts = [r[field] for r in members if r[field]]
-        quote = (lambda t: f"“{t}”") if field == "claim" else (lambda t: t)
+        quote = (lambda t: f"“{t.rstrip('.')}”") if field == "claim" else (lambda t: t.rstrip("."))
         if len(set(texts)) == 1:
             parts.append(f"*{label}:* {quote(texts[0])}.")
         elif texts:
@@ -244,9 +244,8 @@ def _notebook_section(notebook, info, mine) -> str:
             notes.append(lead + f"{_row_details(members)} {head}\n")
         else:
             same, differ = _common_fields(members)
-            notes.append(lead + f"{_row_details(members, same)} {head}\n\n"
-                         + "".join(f"- {_key_list(rs)}: {_row_details(rs, differ)} {own}\n" for own, rs in parts)
-                         + (f"\n{tail}\n" if tail else ""))
+            notes.append(lead + " ".join(t for t in (_row_details(members, same), head, tail) if t) + "\n\n"
+                         + "".join(f"- {_key_list(rs)}: {_row_details(rs, differ)} {own}\n" for own, rs in parts))
     # raw links: Sphinx does not resolve Markdown links to another page's heading ids
     table = [[f'<a href="{links[r["name"]]}"><code>{_breakable(r["name"])}</code></a>' if r["name"] in links
               else f"`{r['name']}`",
