@@ -75,11 +75,12 @@ def figure_caption(number: str):
     return Markdown(caption_markdown(str(number), values=values))
 
 
-def _caption_cell(number, output):
+def _caption_cell(number, output, count):
     import nbformat
 
     cell = nbformat.v4.new_code_cell(f'repro.figure_caption("{number}")', metadata={"tags": ["remove-input"]})
     if output is not None:
+        cell.execution_count = count          # nbval rejects stored outputs of a cell never run
         cell.outputs = [nbformat.v4.new_output("display_data", data={
             "text/markdown": output, "text/plain": "<IPython.core.display.Markdown object>"})]
     return cell
@@ -112,7 +113,9 @@ def insert_caption_cells(path, with_output=False) -> list:
         at = saves[0] + 1
         if at < len(nb.cells) and nb.cells[at].cell_type == "markdown" and nb.cells[at].source.startswith("**Figure"):
             at += 1
-        nb.cells.insert(at, _caption_cell(number, caption_markdown(number, values=values) if with_output else None))
+        count = max((c.get("execution_count") or 0 for c in nb.cells[:at] if c.cell_type == "code"), default=0)
+        nb.cells.insert(at, _caption_cell(number, caption_markdown(number, values=values) if with_output else None,
+                                          count))
         added.append(number)
     if added:
         nbformat.write(nb, path)
