@@ -1,10 +1,15 @@
 """Build the HTML book from the committed notebooks and open pages in headless Chromium:
-math must be typeset by MathJax and every image must load (natural width > 0)."""
+math must be typeset by MathJax, every image must load (natural width > 0), no table is wider
+than its container in a 1280-px window, every internal link of the intro, findings and ledger
+pages resolves to an existing anchor, and the intro reaches every finding in one click."""
 
+import json
+import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
+from urllib.parse import unquote, urlparse
 
 import pytest
 
@@ -39,7 +44,9 @@ def browser():
                  "--disable-background-networking", "--disable-component-update",
                  "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
         opts.add_argument(flag)
+    opts.add_argument("--window-size=1280,900")
     driver = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
+    driver.set_window_size(1280, 900)
     yield driver
     driver.quit()
 
@@ -77,3 +84,67 @@ def test_page_renders_math_and_images(html, browser, page):
             f"{page}: expected its {len(info.figures)} figures, found {len(images)} images"
     broken = [src for src, complete, width in images if not (complete and width > 0)]
     assert not broken, f"{page}: images that did not load: {broken}"
+
+
+@pytest.mark.book
+@pytest.mark.parametrize("page", PAGES)
+def test_no_table_wider_than_its_container_at_1280px(html, browser, page):
+    browser.get((html / page).as_uri())
+    assert browser.execute_script("return window.innerWidth") <= 1280
+    wide = browser.execute_script("""
+        return Array.from(document.querySelectorAll('article table')).map(t => {
+            const box = t.closest('.pst-scrollable-table-container') || t.parentElement;
+            return [t.id || t.className, t.scrollWidth, box.clientWidth, box.scrollWidth];
+        }).filter(([_, tw, cw, sw]) => tw > cw || sw > cw);""")
+    assert not wide, f"{page}: tables wider than their container [table, scrollWidth, clientWidth, box scrollWidth]: {wide}"
+
+
+def _ids(path: Path) -> set:
+    return set(re.findall(r'\sid="([^"]+)"', path.read_text()))
+
+
+@pytest.mark.book
+@pytest.mark.parametrize("page", ["intro.html", "findings.html", "ledger.html"])
+def test_internal_links_resolve(html, browser, page):
+    browser.get((html / page).as_uri())
+    hrefs = browser.execute_script(
+        "return Array.from(document.querySelectorAll('article a[href]')).map(a => a.href)")
+    broken, checked = [], 0
+    for href in hrefs:
+        url = urlparse(href)
+        if url.scheme != "file" or not unquote(url.path).startswith(str(html)):
+            continue
+        target = Path(unquote(url.path))
+        checked += 1
+        if not target.exists():
+            broken.append(href)
+        elif url.fragment and url.fragment not in _ids(target):
+            broken.append(href)
+    assert checked > 10, f"{page}: only {checked} internal links found"
+    assert not broken, f"{page}: links to missing pages or anchors: {broken}"
+
+
+@pytest.mark.book
+def test_intro_summarises_and_reaches_every_finding(html, browser):
+    browser.get((html / "intro.html").as_uri())
+    n_badges = browser.execute_script("return document.querySelectorAll('article .sd-badge').length")
+    assert n_badges >= 3 * len([n for n in notebooks() if n.startswith("sec")]), "status badges missing"
+    links = set(browser.execute_script(
+        "return Array.from(document.querySelectorAll(`article a[href*='findings.html#']`))"
+        ".map(a => a.href.split('#')[1])"))
+    anchors = _ids(html / "findings.html")
+    labels = re.findall(r"\((finding-[\w-]+)\)=", (BOOK / "findings.ipynb").read_text())
+    assert len(labels) >= 11 and set(labels) <= anchors, "findings sections lack their anchors"
+    assert links == set(labels), f"intro does not link every finding: missing {set(labels) - links}"
+
+
+@pytest.mark.book
+@pytest.mark.parametrize("name", [n for n, i in notebooks().items() if i.figures])
+def test_every_rendered_figure_caption_states_the_claim(html, browser, name):
+    cells = json.loads(notebooks()[name].path.read_text())["cells"]
+    rendered = sum(1 for c in cells if "figure_caption(" in "".join(c["source"]) and c.get("outputs"))
+    browser.get((html / f"{name}.html").as_uri())
+    captions = browser.execute_script(
+        "return Array.from(document.querySelectorAll('.asoc-caption')).map(e => e.textContent)")
+    assert len(captions) == rendered, f"{name}: {len(captions)} captions shown, {rendered} caption cells executed"
+    assert all("the thesis" in c and "Ours:" in c for c in captions)

@@ -37,3 +37,80 @@ def test_notebooks_have_figures_in_figures_folder():
             assert (FIGURES / f"fig{number.replace('.', '_')}.png").exists(), number
         for number in info.tables:
             assert (FIGURES / f"table{number.replace('.', '_')}.md").exists(), number
+
+
+# --- the page layout (issue 9): intro summary, shared notes, precision, links, captions ---------
+
+import json
+import re
+
+from asoc.repro.captions import caption_markdown, load_claims
+from asoc.repro.ledger import (decimals, heading_anchor, intro_markdown, ledger_rows, note_groups,
+                               section_links)
+from asoc.repro.notebooks import notebooks
+from asoc.repro.reference import Entry
+
+
+def test_committed_intro_summary_is_current():
+    text = (BOOK / "intro.md").read_text()
+    assert intro_markdown(text) == text, "book/intro.md summary is stale: run `python -m asoc ledger`"
+
+
+@pytest.mark.parametrize("tol, thesis, expected", [(6e-5, 1.297, 4), (5e-7, 0.001343, 6), (5e-8, 0.0019924, 7),
+                                                   (None, 0.025, 3), (None, [0.5, 0.9], 1), (None, "text", None)])
+def test_decimals_from_tolerance_or_printed_number(tol, thesis, expected):
+    assert decimals(Entry(key="x.y", where="", kind="measured", thesis=thesis, tol=tol)) == expected
+
+
+def test_ours_is_rounded_to_the_thesis_decimals_plus_two():
+    rows = {r["key"]: r for r in ledger_rows(REFERENCE, VALUES)}
+    for key, entry in REFERENCE.items():
+        if entry.kind == "deterministic" and isinstance(VALUES.get(key), float):
+            assert rows[key]["ours"] == f"{VALUES[key]:.{decimals(entry) + 2}f}", key
+
+
+def test_a_note_shared_by_rows_is_printed_once():
+    rows = [dict(key=f"n.k{i}", name=f"k{i}", note=f"Row {i} is own. " + "A long shared explanation. " * 12,
+                 claim="", ours_long="", where="w") for i in range(5)]
+    groups = note_groups(rows)
+    assert len(groups) == 1
+    head, tail, parts = groups[0]
+    assert head == "" and tail.count("A long shared explanation.") == 12
+    assert [own for own, _ in parts] == [f"Row {i} is own." for i in range(5)]
+    page = ledger_markdown(REFERENCE, VALUES)
+    shared = "none gives the printed values."             # in every Table 3.2 note of sec3_5
+    assert sum(1 for r in REFERENCE.values() if shared in r.note) > 1 and page.count(shared) == 1
+
+
+def test_every_row_links_to_the_heading_of_the_cell_that_computes_it():
+    for name, info in notebooks().items():
+        keys = [e.name for e in REFERENCE.values() if e.notebook == name]
+        headings = {heading_anchor(line) for cell in json.loads(info.path.read_text())["cells"]
+                    if cell["cell_type"] == "markdown" for line in "".join(cell["source"]).splitlines()
+                    if re.match(r"#{2,6}\s", line)}
+        for key, link in section_links(info.path, keys).items():
+            page, _, anchor = link.partition("#")
+            assert page == f"{name}.html" and anchor in headings, f"{name}.{key}: {link}"
+
+
+def test_every_figure_has_a_claim_and_a_caption_cell():
+    claims = load_claims()
+    for info in notebooks().values():
+        sources = [c["source"] if isinstance(c["source"], str) else "".join(c["source"])
+                   for c in json.loads(info.path.read_text())["cells"]]
+        for number in info.figures:
+            assert number in claims, f"Fig. {number} has no entry in tests/reference/figure_claims.yaml"
+            assert all(k in REFERENCE for k in claims[number]["keys"]), number
+            assert sum(f'figure_caption("{number}")' in s for s in sources) == 1, f"{info.name}: Fig. {number}"
+
+
+def test_caption_follows_the_ledger_status():
+    reference = {"s.a": Entry(key="s.a", where="", kind="deterministic", thesis=1.0, tol=0.01),
+                 "s.b": Entry(key="s.b", where="", kind="claim", thesis="c")}
+    claims = {"9.9": {"where": "Sec. 9", "claim": "it converges", "keys": ["s.a", "s.b"]}}
+    ok = caption_markdown("9.9", claims, reference, {"s.a": 1.001, "s.b": {"holds": True, "value": 1}})
+    part = caption_markdown("9.9", claims, reference, {"s.a": 1.5, "s.b": {"holds": True, "value": 1}})
+    assert "“it converges”" in ok and "{bdg-success}`shows it`" in ok and "2 of 2" in ok
+    assert "{bdg-warning}`shows it in part`" in part and "1 of 2" in part
+    with pytest.raises(ValueError, match="number"):
+        caption_markdown("1.1", claims, reference, {})

@@ -25,3 +25,15 @@ def test_fill_local_keys_inside_a_notebook():
 def test_fill_rejects_unknown_paths(text):
     with pytest.raises(KeyError):
         fill(text, VALUES)
+
+
+def test_thesis_values_are_available_to_prose():
+    from asoc.repro.prose import thesis_values
+    from asoc.repro.reference import Entry
+
+    ref = {"sec9_9.rho": Entry(key="sec9_9.rho", where="", kind="deterministic", thesis=1.297, tol=6e-5),
+           "sec9_9.new": Entry(key="sec9_9.new", where="", kind="measured")}
+    values = {**thesis_values(ref), **VALUES}
+    assert fill("{{thesis_sec9_9.rho:.4f}} vs {{sec9_9.iters[0]}}", values) == "1.2970 vs 13"
+    with pytest.raises(KeyError):
+        fill("{{thesis_sec9_9.new}}", values)

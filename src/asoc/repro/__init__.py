@@ -9,6 +9,7 @@ Typical notebook use::
     md = repro.save_table("3.2", header, rows)
 """
 
+from .captions import figure_caption
 from .figures import STYLE, apply_style, markdown_table, save_figure, save_table
 from .ledger import ledger_markdown, write_ledger
 from .prose import fill, prose
@@ -16,6 +17,6 @@ from .reference import Entry, load_reference, status
 from .stats import bootstrap_ci, bootstrap_median_ci, settling_iteration
 from .values import load_all_values, load_values, record, setup
 
-__all__ = ["STYLE", "apply_style", "markdown_table", "save_figure", "save_table",
+__all__ = ["figure_caption", "STYLE", "apply_style", "markdown_table", "save_figure", "save_table",
            "ledger_markdown", "write_ledger", "fill", "prose", "Entry", "load_reference", "status",
            "bootstrap_ci", "bootstrap_median_ci", "settling_iteration", "load_all_values", "load_values", "record", "setup"]

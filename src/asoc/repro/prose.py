@@ -7,6 +7,9 @@ Python format ``spec``:
 - ``path`` is ``<notebook>.<key>`` or, inside a notebook, just ``<key>`` (the current
   notebook's value, see :func:`prose`); it may go on into dicts and lists:
   ``{{sec2_5.mc_cost_proposed.ci[0]:.1f}}``, ``{{sec3_6.iters.T1}}``;
+- inside a notebook, ``thesis_<notebook>.<key>`` is the value the thesis prints for a
+  reference entry (``tests/reference/thesis_values``), so quotes of printed numbers are not
+  typed either: ``{{thesis_sec3_5.rho_open_T1:.4f}}``;
 - a Monte Carlo record (a dict with ``value`` or ``median`` and ``ci``) prints as ``m [lo, hi]``, a claim
   record (``holds``, ``value``) prints its value, a bool prints ``yes``/``no``.
 
@@ -78,8 +81,17 @@ def fill(text: str, values: dict, notebook: str | None = None) -> str:
     return PLACEHOLDER.sub(lambda m: format_value(lookup(m.group(1), values, notebook), m.group(2) or ""), text)
 
 
+def thesis_values(reference=None) -> dict:
+    """The printed values of the reference entries, keyed ``thesis_<notebook>.<key>``."""
+    from .reference import load_reference
+
+    reference = reference if reference is not None else load_reference()
+    return {f"thesis_{e.notebook}.{e.name}": e.thesis for e in reference.values() if e.thesis is not None}
+
+
 def prose(text: str):
-    """Markdown for a notebook cell: ``text`` filled from this notebook's values and the committed ones.
+    """Markdown for a notebook cell: ``text`` filled from this notebook's values, the committed ones
+    and the thesis's printed values (``{{thesis_<notebook>.<key>}}``).
 
     Parameters
     ----------
@@ -100,10 +112,10 @@ def prose(text: str):
 
     from .values import _session, load_all_values
 
-    values = load_all_values()
+    values = {**thesis_values(), **load_all_values()}
     if _session.notebook is not None:
         values.update({f"{_session.notebook}.{k}": v for k, v in _session.values.items()})
     return Markdown(fill(text, values, _session.notebook))
 
 
-__all__ = ["fill", "format_value", "lookup", "prose"]
+__all__ = ["fill", "format_value", "lookup", "prose", "thesis_values"]

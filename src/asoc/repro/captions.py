@@ -1,0 +1,125 @@
+"""Figure captions that say what the thesis claims about a figure and whether ours shows it.
+
+The registry ``tests/reference/figure_claims.yaml`` holds, per figure number, the thesis's
+statement (``claim``, quoted, with ``where``) and the reference keys that check it; the
+caption's verdict is the ledger status of those keys, so it can never disagree with the
+ledger. In a notebook, a code cell ``repro.figure_caption("3.4")`` right after the figure
+renders the caption.
+"""
+
+import yaml
+
+from .ledger import badge, ledger_label
+from .paths import REFERENCE
+from .reference import load_reference, status
+
+CLAIMS = REFERENCE.parent / "figure_claims.yaml"
+
+
+def load_claims(path=None) -> dict:
+    """``{figure number: {"where", "claim", "keys"}}`` from the registry, validated."""
+    with open(path or CLAIMS) as handle:
+        raw = yaml.safe_load(handle) or {}
+    for number, spec in raw.items():
+        missing = {"where", "claim", "keys"} - set(spec)
+        if missing:
+            raise ValueError(f"figure_claims: figure {number} lacks {sorted(missing)}")
+    return {str(number): spec for number, spec in raw.items()}
+
+
+def verdict(keys, reference, values) -> str:
+    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is absent."""
+    statuses = [status(reference[k], values.get(k)) for k in keys]
+    for st in ("missing", "deviates"):
+        if st in statuses:
+            return st
+    return "reproduced"
+
+
+def caption_markdown(number: str, claims=None, reference=None, values=None) -> str:
+    """The caption of figure ``number``: the thesis's claim and, in one line, whether ours shows it."""
+    claims = claims if claims is not None else load_claims()
+    reference = reference if reference is not None else load_reference()
+    if number not in claims:
+        raise ValueError(f"number: figure {number!r} has no entry in {CLAIMS.name}; known: {', '.join(claims)}")
+    spec = claims[number]
+    unknown = [k for k in spec["keys"] if k not in reference]
+    if unknown:
+        raise ValueError(f"figure_claims: figure {number} names unknown reference keys {unknown}")
+    head = f"**Fig. {number}, the thesis** ({spec['where']}): “{spec['claim']}”"
+    if not spec["keys"]:
+        line = f"**Ours:** {badge('new', 'nothing to check')} the thesis makes no checkable claim about this figure."
+    else:
+        st = verdict(spec["keys"], reference, values or {})
+        n_ok = sum(status(reference[k], (values or {}).get(k)) == "reproduced" for k in spec["keys"])
+        notebooks = dict.fromkeys(k.split(".", 1)[0] for k in spec["keys"])
+        where = ", ".join(f"{{ref}}`ledger <{ledger_label(n)}>`" for n in notebooks)
+        words = "shows it" if st == "reproduced" else "shows it in part" if st == "deviates" and n_ok else STATUS_WORDS[st]
+        line = (f"**Ours:** {badge(st, words)} checks reproduced: {n_ok} of {len(spec['keys'])} "
+                f"({', '.join('`' + k.split('.', 1)[1] + '`' for k in spec['keys'])}; {where}).")
+    return f":::{{container}} asoc-caption\n{head}\n\n{line}\n:::\n"
+
+
+STATUS_WORDS = {"deviates": "does not show it", "missing": "not computed"}
+
+
+def figure_caption(number: str):
+    """Markdown for a notebook cell: the caption of figure ``number`` from the current values."""
+    from IPython.display import Markdown
+
+    from .values import _session, load_all_values
+
+    values = load_all_values()
+    if _session.notebook is not None:
+        values.update({f"{_session.notebook}.{k}": v for k, v in _session.values.items()})
+    return Markdown(caption_markdown(str(number), values=values))
+
+
+def _caption_cell(number, output, count):
+    import nbformat
+
+    cell = nbformat.v4.new_code_cell(f'repro.figure_caption("{number}")', metadata={"tags": ["remove-input"]})
+    if output is not None:
+        cell.execution_count = count          # nbval rejects stored outputs of a cell never run
+        cell.outputs = [nbformat.v4.new_output("display_data", data={
+            "text/markdown": output, "text/plain": "<IPython.core.display.Markdown object>"})]
+    return cell
+
+
+def insert_caption_cells(path, with_output=False) -> list:
+    """Add a ``repro.figure_caption`` cell after each figure of the notebook at ``path`` that lacks one.
+
+    The cell goes right after the cell that saves the figure (after its Markdown caption, if
+    one follows). Other cells are left untouched; ``with_output`` stores the caption rendered
+    from the committed values (what executing the new cell gives). Returns the numbers added.
+    """
+    import re
+
+    import nbformat
+
+    from .values import load_all_values
+
+    nb = nbformat.read(path, as_version=4)
+    values = load_all_values() if with_output else None
+    added = []
+    for number in nb.metadata.get("asoc", {}).get("figures", []):
+        call = f'figure_caption("{number}")'
+        if any(call in c.source for c in nb.cells):
+            continue
+        saves = [i for i, c in enumerate(nb.cells) if c.cell_type == "code"
+                 and re.search(rf',\s*"{re.escape(number)}"\)', c.source)]      # save_figure(fig, "N"), f(..., "N")
+        if not saves:
+            raise ValueError(f"path: {path} saves no figure {number}")
+        at = saves[0] + 1
+        if at < len(nb.cells) and nb.cells[at].cell_type == "markdown" and nb.cells[at].source.startswith("**Figure"):
+            at += 1
+        count = max((c.get("execution_count") or 0 for c in nb.cells[:at] if c.cell_type == "code"), default=0)
+        nb.cells.insert(at, _caption_cell(number, caption_markdown(number, values=values) if with_output else None,
+                                          count))
+        added.append(number)
+    if added:
+        nbformat.write(nb, path)
+    return added
+
+
+__all__ = ["load_claims", "verdict", "caption_markdown", "figure_caption", "insert_caption_cells"]
