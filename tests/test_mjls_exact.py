@@ -145,6 +145,17 @@ def test_unstabilisable_system_is_reported():
     assert not e.stabilizing and not e.converged and np.isinf(e.cost) and e.rho >= 1
 
 
+def test_failed_stabilising_search_reports_its_smallest_radius():
+    """The reported rho is the smallest reached, never above the start's (a round may raise it)."""
+    base = sec373_system(1)
+    sys = base.replace(A=1.2 * base.A)
+    start = dynamic_output_feedback(sec373_system(1))
+    rho_start = closed_loop_radius(sys, start.F, start.K, start.L)
+    with pytest.warns(RuntimeWarning, match="no mean-square stabilising start"):
+        e = exact_dynamic_output_feedback(sys, init=start)
+    assert e.rho <= rho_start and e.rho == pytest.approx(closed_loop_radius(sys, e.F, e.K, e.L))
+
+
 def test_controller_order(sys373, alg32_373):
     e = exact_dynamic_output_feedback(sys373, nc=3)
     assert e.F.shape == (3, 3) and e.K.shape == (3, 1) and e.L.shape == (1, 3)

@@ -268,32 +268,34 @@ def _stabilise(sys, z, shapes, max_rounds=200):
 
     Each round minimises the cost of the scaled closed loop (finite for rho(A~) < gamma),
     which pushes rho(A~) away from gamma, then sets gamma halfway to the new rho(A~).
-    Returns (z, rho).
+    Returns (z, rho) of the round with the smallest rho (a round may raise it).
     """
     rho = closed_loop_radius(sys, *_unpack(z, shapes))
-    gamma = 1.05 * rho
+    best, gamma = (z, rho), 1.05 * rho
     for _ in range(max_rounds):
         if rho < 1:
             break
         fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes), gamma=gamma))
         z = bfgs(fun, z, 1e-6, 100)[0]
         rho = closed_loop_radius(sys, *_unpack(z, shapes))
+        best = min(best, (z, rho), key=lambda b: b[1])
         new_gamma = 0.5 * (rho + gamma)
         if gamma - new_gamma <= 1e-6 * gamma:
             break
         gamma = new_gamma
-    return z, rho
+    return best
 
 
 def _stabilising_start(sys, z, shapes):
     """z if it stabilises, else the first of z and the averaged LQG compensator (in order of
-    rho) that :func:`_stabilise` turns into a stabilising controller. Returns (z, rho)."""
+    rho) that :func:`_stabilise` turns into a stabilising controller. Returns (z, rho), the
+    candidate with the smallest rho reached when none stabilises."""
     candidates = [z]
     lqg = averaged_lqg(sys, shapes[0][0])
     if lqg is not None:
         candidates.append(_pack(*lqg))
     radii = [closed_loop_radius(sys, *_unpack(c, shapes)) for c in candidates]
-    best = (z, min(radii))
+    best = (candidates[int(np.argmin(radii))], min(radii))
     for i in np.argsort(radii):
         if not np.isfinite(radii[i]):
             continue
