@@ -112,7 +112,9 @@ def main(argv=None) -> int:
         for info in nbs.notebooks().values():
             figs = ", ".join(f"Fig. {f}" for f in info.figures)
             tabs = ", ".join(f"Table {t}" for t in info.tables)
-            print(f"{info.name:10s} {info.title}\n{'':10s} {'; '.join(x for x in (figs, tabs) if x)}")
+            params = ", ".join(n for n in nbs.default_parameters(info) if n not in nbs.HARNESS_PARAMETERS)
+            print(f"{info.name:10s} {info.title}\n{'':10s} {'; '.join(x for x in (figs, tabs) if x)}\n"
+                  f"{'':10s} parameters (-p): {params}")
         return 0
     if args.command in ("figure", "table"):
         try:
