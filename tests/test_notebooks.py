@@ -26,7 +26,9 @@ def test_notebook_at_ci_fidelity(name, ci_run):
     ours_ci = load_values(name, out)
     ours_full = load_values(name)
     entries = _entries(name)
-    assert entries, f"no reference entries for {name}"
+    info = NOTEBOOKS[name]
+    # a numerical section records what the thesis prints; a page such as the findings may only quote
+    assert entries or not (info.figures or info.tables), f"no reference entries for {name}"
     problems = []
     for entry in entries:
         if entry.name not in ours_ci:
