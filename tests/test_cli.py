@@ -149,14 +149,16 @@ def test_notebooks_are_discovered_by_their_asoc_metadata(tmp_path):
 
 @pytest.mark.notebook
 def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
-    info = _notebook(tmp_path, "secX_2", source="print(seed * 2)")
+    source = "import time, warnings\nprint(seed * 2, flush=True)\ntime.sleep(0.3)\nprint('x')\nwarnings.warn('w')"
+    info = _notebook(tmp_path, "secX_2", source=source)
     first = nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5})
     data = first.read_bytes()
     nb = nbformat.read(first, as_version=4)
     assert "start_time" not in nb.metadata.papermill and "duration" not in nb.metadata.papermill
     assert all("execution" not in c.metadata and "duration" not in c.metadata.get("papermill", {})
                for c in nb.cells)
-    assert nb.cells[-1].outputs[0]["text"] == "10\n"
+    stdout, stderr = nb.cells[-1].outputs          # one chunk per stream, whatever the timing
+    assert stdout["text"] == "10\nx\n" and stderr["text"].startswith("<cell>:5: UserWarning: w")
     assert nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5}).read_bytes() == data
     with pytest.raises(ValueError, match="valid names: seed"):
         nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"n": 5})

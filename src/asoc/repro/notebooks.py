@@ -16,6 +16,7 @@ unchanged computation gives a byte-identical file.
 import hashlib
 import json
 import os
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -158,6 +159,7 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
 
 
 PAPERMILL_TIMES = ("start_time", "end_time", "duration")
+KERNEL_CELL_FILE = re.compile(r"\S*ipykernel_\d+[/\\]\d+\.py")   # a warning's source: a new name per kernel
 
 
 def normalise(path: Path):
@@ -165,8 +167,10 @@ def normalise(path: Path):
 
     Stores papermill's input/output paths relative to the project (no machine paths) and
     drops what changes on every run: papermill's start/end times and durations (notebook
-    and cells), the kernel's per-cell execution timestamps, and the random id papermill
-    gives its injected-parameters cell.
+    and cells), the kernel's per-cell execution timestamps, the random id papermill
+    gives its injected-parameters cell, the timing-dependent split of printed text into
+    stream chunks (adjacent chunks of one stream are merged) and the per-kernel file name
+    of a cell in warnings (``<cell>``). Paths inside the project are printed relative to it.
     """
     import nbformat
 
@@ -183,4 +187,19 @@ def normalise(path: Path):
         cell.metadata.pop("execution", None)
         for key in PAPERMILL_TIMES:
             cell.metadata.get("papermill", {}).pop(key, None)
+        if cell.cell_type == "code":
+            cell.outputs = _merged_streams(cell.outputs)
     nbformat.write(nb, path)
+
+
+def _merged_streams(outputs) -> list:
+    """Adjacent stream outputs of one name merged into one; project paths made relative."""
+    merged = []
+    for out in outputs:
+        if out.output_type == "stream":
+            out.text = KERNEL_CELL_FILE.sub("<cell>", out.text.replace(f"{ROOT}{os.sep}", ""))
+            if merged and merged[-1].output_type == "stream" and merged[-1].name == out.name:
+                merged[-1].text += out.text
+                continue
+        merged.append(out)
+    return merged
