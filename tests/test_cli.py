@@ -142,9 +142,10 @@ def test_dependencies_run_first_and_enter_the_hash(tmp_path):
 
 def test_notebooks_are_discovered_by_their_asoc_metadata(tmp_path):
     _notebook(tmp_path, "findings")
+    _notebook(tmp_path, "sec9_9")
     plain = nbformat.v4.new_notebook()
     nbformat.write(plain, tmp_path / "scratch.ipynb")
-    assert list(nbs.notebooks(tmp_path)) == ["findings"]
+    assert list(nbs.notebooks(tmp_path)) == ["sec9_9", "findings"]     # sections first
 
 
 @pytest.mark.notebook

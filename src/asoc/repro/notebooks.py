@@ -39,7 +39,7 @@ class NotebookInfo:
 
 
 def notebooks(book=BOOK) -> dict:
-    """``{name: NotebookInfo}`` for every notebook whose metadata has an ``asoc`` entry, by name."""
+    """``{name: NotebookInfo}`` for every notebook with ``asoc`` metadata, in thesis order (sections, then others)."""
     found = {}
     for path in sorted(Path(book).glob("*.ipynb")):
         meta = json.loads(path.read_text())["metadata"].get("asoc")
@@ -47,7 +47,7 @@ def notebooks(book=BOOK) -> dict:
             continue
         found[path.stem] = NotebookInfo(path.stem, path, meta.get("title", path.stem),
                                         tuple(meta.get("figures", ())), tuple(meta.get("tables", ())))
-    return found
+    return dict(sorted(found.items(), key=lambda item: (not item[0].startswith("sec"), item[0])))
 
 
 def find(kind: str, number: str, book=BOOK) -> NotebookInfo:
