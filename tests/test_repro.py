@@ -102,3 +102,16 @@ def test_settling_iteration_is_scale_free_and_validates():
     assert repro.settling_iteration(s, band=0.1) == 2
     with pytest.raises(ValueError, match="band"):
         repro.settling_iteration(s, band=0)
+
+
+def test_saved_figures_carry_no_dates_and_are_byte_identical(tmp_path):
+    repro.setup("secX_1", output_dir=tmp_path)
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [0, 1])
+    repro.save_figure(fig, "3.4")
+    first = {ext: (tmp_path / f"fig3_4.{ext}").read_bytes() for ext in ("png", "pdf")}
+    repro.save_figure(fig, "3.4")
+    assert all((tmp_path / f"fig3_4.{ext}").read_bytes() == data for ext, data in first.items())
+    assert b"CreationDate" not in first["pdf"] and b"ModDate" not in first["pdf"]
+    assert b"Software" not in first["png"]
+    plt.close(fig)

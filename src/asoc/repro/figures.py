@@ -32,6 +32,11 @@ STYLE = {
 }
 
 
+# No dates or producer strings in saved files: an unchanged figure gives identical bytes.
+SAVE_METADATA = {"pdf": {"Creator": None, "Producer": None, "CreationDate": None, "ModDate": None},
+                 "png": {"Software": None}}
+
+
 def apply_style():
     """Apply the project's matplotlib style (called by :func:`asoc.repro.setup`).
 
@@ -74,8 +79,7 @@ def save_figure(fig, number: str, output_dir=None):
     paths = []
     for ext in ("png", "pdf"):
         buf = io.BytesIO()
-        fig.savefig(buf, format=ext, metadata={"Creator": None, "Producer": None,
-                                               "CreationDate": None} if ext == "pdf" else None)
+        fig.savefig(buf, format=ext, metadata=SAVE_METADATA[ext])
         paths.append(atomic_write_bytes(out / f"{stem}.{ext}", buf.getvalue()))
     return paths[0]
 

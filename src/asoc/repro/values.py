@@ -137,7 +137,7 @@ def load_values(notebook: str, output_dir=None) -> dict:
 
 
 def load_all_values(output_dir=None) -> dict:
-    """All recorded values as ``{"<notebook>.<key>": value}``.
+    """All recorded values as ``{"<notebook>.<key>": value}`` (the build manifest is skipped).
 
     Parameters
     ----------
@@ -156,6 +156,8 @@ def load_all_values(output_dir=None) -> dict:
     folder = Path(output_dir or FIGURES) / "values"
     out = {}
     for path in sorted(folder.glob("*.json")):
+        if path.name == "manifest.json":
+            continue
         data = json.loads(path.read_text())
         for key, value in data["values"].items():
             out[f"{data['notebook']}.{key}"] = value

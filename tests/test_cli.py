@@ -1,0 +1,165 @@
+"""The command line and the notebook runner: parameter overrides (-p), the build manifest,
+incremental reproduce, dependency order, reproducible executed notebooks."""
+
+import json
+import shutil
+import subprocess
+
+import nbformat
+import pytest
+
+from asoc import __main__ as cli
+from asoc.repro import manifest
+from asoc.repro import notebooks as nbs
+from asoc.repro.io import atomic_write_json
+from asoc.repro.paths import ROOT
+
+
+def _notebook(folder, name, source="x = 1", depends=None, params='fidelity = "full"\noutput_dir = "."\nseed = 3'):
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [], **({"depends": depends} if depends else {})}
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    cell = nbformat.v4.new_code_cell(params)
+    cell.metadata["tags"] = ["parameters"]
+    nb.cells = [cell, nbformat.v4.new_code_cell(source)]
+    path = folder / f"{name}.ipynb"
+    nbformat.write(nb, path)
+    return nbs.notebooks(folder)[name]
+
+
+def test_values_are_typed_like_papermill():
+    assert [nbs.parse_value(v) for v in ("7", "0.5", "1e3", "True", "False", "None", "ci")] == \
+        [7, 0.5, 1000.0, True, False, None, "ci"]
+    assert isinstance(nbs.parse_value("7"), int)
+
+
+def test_unknown_parameter_fails_with_the_valid_names(capsys):
+    assert cli.main(["figure", "3.2", "-p", "sed", "7", "--fidelity", "ci"]) == 2
+    err = capsys.readouterr().err
+    assert "'sed' is not a parameter of sec3_2.ipynb" in err and "valid names: seed, steps" in err
+    assert cli.main(["figure", "3.2", "-p", "fidelity", "ci"]) == 2
+    assert "--fidelity" in capsys.readouterr().err
+    assert cli.main(["figure", "3.2", "-p", "output_dir", "/tmp"]) == 2
+
+
+@pytest.mark.notebook
+def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capsys):
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.fail("this test needs the project's git checkout (git status of tracked files)")
+    status = ["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"]
+    before = subprocess.run(status, capture_output=True, text=True, check=True).stdout
+    info = nbs.find("figure", "3.2")
+    out = nbs.run_folder(info, "ci", {"seed": 7})
+    shutil.rmtree(out, ignore_errors=True)
+    assert cli.main(["figure", "3.2", "-p", "seed", "7", "--fidelity", "ci"]) == 0
+    printed = capsys.readouterr().out
+    after = subprocess.run(status, capture_output=True, text=True, check=True).stdout
+    assert after == before, f"tracked files changed:\n{after}"
+    assert out.parent == ROOT / "book" / "_build" / "runs" and out.name.startswith("sec3_2-")
+    assert f"{out.relative_to(ROOT)}/" in printed
+    assert (out / "fig3_2.png").exists() and (out / "notebooks" / "sec3_2.ipynb").exists()
+    values = json.loads((out / "values" / "sec3_2.json").read_text())["values"]
+    assert "key" in printed and "committed" in printed and "this run" in printed
+    assert all(key in printed for key in values)
+    executed = nbformat.read(out / "notebooks" / "sec3_2.ipynb", as_version=4)
+    assert executed.metadata.papermill["parameters"]["seed"] == 7
+    assert nbs.run_folder(info, "ci", {"seed": 8}) != out != nbs.run_folder(info, "full", {"seed": 7})
+
+
+def test_source_hash_ignores_outputs_and_injected_parameters(tmp_path):
+    info = _notebook(tmp_path, "secX_1")
+    h = manifest.source_hash(info.path)
+    nb = nbformat.read(info.path, as_version=4)
+    nb.cells[1].outputs = [nbformat.v4.new_output("stream", text="1\n")]
+    injected = nbformat.v4.new_code_cell('fidelity = "ci"')
+    injected.metadata["tags"] = ["injected-parameters"]
+    nb.cells.insert(1, injected)
+    nbformat.write(nb, info.path)
+    assert manifest.source_hash(info.path) == h
+    nb.cells[2].source = "x = 2"
+    nbformat.write(nb, info.path)
+    assert manifest.source_hash(info.path) != h
+
+
+def test_tree_hash_follows_contents_not_caches(tmp_path):
+    (tmp_path / "a.py").write_text("x = 1\n")
+    h = manifest.tree_hash(tmp_path)
+    (tmp_path / "__pycache__").mkdir()
+    (tmp_path / "__pycache__" / "a.cpython-311.pyc").write_bytes(b"\0")
+    assert manifest.tree_hash(tmp_path) == h
+    (tmp_path / "a.py").write_text("x = 2\n")
+    assert manifest.tree_hash(tmp_path) != h
+
+
+def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
+    book, out = tmp_path / "book", tmp_path / "out"
+    book.mkdir()
+    info = _notebook(book, "secX_1")
+    ran = []
+
+    def fake_run(info, fidelity, output_dir=None, **kwargs):
+        ran.append(info.name)
+        atomic_write_json(out / "values" / f"{info.name}.json", {"notebook": info.name, "values": {"a": 1}})
+        return info.path
+
+    monkeypatch.setattr(nbs, "notebooks", lambda book=None: {"secX_1": info})
+    monkeypatch.setattr(nbs, "default_output_dir", lambda fidelity: out)
+    monkeypatch.setattr(nbs, "run", fake_run)
+    monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
+    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert ran == ["secX_1"] and "never run" in capsys.readouterr().out
+    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert ran == ["secX_1"] and "secX_1.ipynb: up to date, skipped" in capsys.readouterr().out
+    nb = nbformat.read(info.path, as_version=4)
+    nb.cells[1].source = "x = 2"
+    nbformat.write(nb, info.path)
+    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert ran == ["secX_1"] * 2 and "changed: source" in capsys.readouterr().out
+    assert cli.main(["reproduce", "--fidelity", "ci", "--force"]) == 0
+    assert ran == ["secX_1"] * 3
+    entry = manifest.load_manifest(out)["secX_1"]
+    assert set(entry) == {"source", "parameters", "src", "environment", "depends"}
+
+
+def test_dependencies_run_first_and_enter_the_hash(tmp_path):
+    a = _notebook(tmp_path, "a_findings", depends=["b_sec"])
+    b = _notebook(tmp_path, "b_sec")
+    assert [i.name for i in nbs.build_order([a, b])] == ["b_sec", "a_findings"]
+    params = {"fidelity": "ci"}
+    h = manifest.entry(a, params, tmp_path)
+    atomic_write_json(tmp_path / "values" / "b_sec.json", {"notebook": "b_sec", "values": {"x": 1}})
+    assert manifest.entry(a, params, tmp_path)["depends"] != h["depends"]
+    _notebook(tmp_path, "b_sec", depends=["a_findings"])
+    with pytest.raises(ValueError, match="circular"):
+        nbs.build_order(nbs.notebooks(tmp_path).values())
+    _notebook(tmp_path, "b_sec", depends=["nope"])
+    with pytest.raises(ValueError, match="'nope', which is not a notebook"):
+        nbs.build_order(nbs.notebooks(tmp_path).values())
+    _notebook(tmp_path, "b_sec", depends="a_findings")
+    with pytest.raises(ValueError, match="list of notebook names"):
+        manifest.dependencies(tmp_path / "b_sec.ipynb")
+
+
+def test_notebooks_are_discovered_by_their_asoc_metadata(tmp_path):
+    _notebook(tmp_path, "findings")
+    _notebook(tmp_path, "sec9_9")
+    plain = nbformat.v4.new_notebook()
+    nbformat.write(plain, tmp_path / "scratch.ipynb")
+    assert list(nbs.notebooks(tmp_path)) == ["sec9_9", "findings"]     # sections first
+
+
+@pytest.mark.notebook
+def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
+    source = "import time, warnings\nprint(seed * 2, flush=True)\ntime.sleep(0.3)\nprint('x')\nwarnings.warn('w')"
+    info = _notebook(tmp_path, "secX_2", source=source)
+    first = nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5})
+    data = first.read_bytes()
+    nb = nbformat.read(first, as_version=4)
+    assert "start_time" not in nb.metadata.papermill and "duration" not in nb.metadata.papermill
+    assert all("execution" not in c.metadata and "duration" not in c.metadata.get("papermill", {})
+               for c in nb.cells)
+    stdout, stderr = nb.cells[-1].outputs          # one chunk per stream, whatever the timing
+    assert stdout["text"] == "10\nx\n" and stderr["text"].startswith("<cell>:5: UserWarning: w")
+    assert nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5}).read_bytes() == data
+    with pytest.raises(ValueError, match="valid names: seed"):
+        nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"n": 5})
