@@ -38,11 +38,12 @@ class Sweep:
 
 
 def distribution(samples) -> dict:
-    """Median, range [min, max] and count n of ``samples`` (the record of a sweep)."""
+    """Median (also as ``value``, the number the ledger shows), range [min, max] and count n."""
     x = np.asarray(samples, dtype=float).ravel()
     if x.size == 0:
         raise ValueError("samples: need at least one sample, found none")
-    return {"median": float(np.median(x)), "range": [float(x.min()), float(x.max())], "n": int(x.size)}
+    median = float(np.median(x))
+    return {"value": median, "median": median, "range": [float(x.min()), float(x.max())], "n": int(x.size)}
 
 
 def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False,
