@@ -47,3 +47,14 @@ def test_the_readings_of_fig_3_3():
     Xb, Ub = np.meshgrid(big, big, indexing="ij")
     radius, _ = nonconvex_radius(J, Xb, Ub)
     assert 5 < radius < 10
+
+
+def test_cost_is_point_symmetric_and_the_representative_is_unique():
+    from asoc.mjls.intractability import symmetric_representative
+    x, u = np.meshgrid(np.linspace(-4, 4, 9), np.linspace(-3, 3, 7), indexing="ij")
+    for terms in ("full", "last"):
+        assert np.allclose(J(x, u, terms), J(-x, -u, terms), rtol=1e-12, atol=1e-12)
+    for p in [(1.4, -4.9), (-1.4, 4.9), (2.0, 0.0), (-2.0, 0.0), (0.0, 0.0)]:
+        r = symmetric_representative(p)
+        assert r in (p, (-p[0], -p[1])) and r == symmetric_representative((-p[0], -p[1]))
+        assert r[1] > 0 or (r[1] == 0 and r[0] >= 0)

@@ -111,6 +111,17 @@ def nonconvex_radius(J, X, U, h=1e-3):
     return _argmin(radius, X, U)
 
 
+def symmetric_representative(point):
+    """(x, u) or (-x, -u), whichever has u > 0 (or u = 0, x >= 0).
+
+    J_{K-2}(x, u) = J_{K-2}(-x, -u) exactly (the dynamics (3.2) are linear and w is
+    symmetric), so a grid minimum is attained at a symmetric pair and rounding decides
+    which of the two an argmin returns; this picks one independent of rounding.
+    """
+    x, u = point
+    return (x, u) if u > 0 or (u == 0 and x >= 0) else (-x + 0.0, -u + 0.0)
+
+
 def quadratic_fit_residual(X, U, J):
     """Relative RMS residual of the least-squares fit of J by a full quadratic in (x, u)."""
     x, u, j = X.ravel(), U.ravel(), J.ravel()
