@@ -278,3 +278,62 @@ def test_covariance_hessian_variants_on_the_example():
     assert np.allclose(d, d[0, 0] * np.eye(2)) and d[0, 0] >= 0          # a shift mu I, nothing else
     with pytest.raises(ValueError, match="covariance_hessian"):
         StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta, "clip")
+
+
+# --- the control run without the covariance term (audit of Sec. 2.5.3) --------------
+
+def test_without_covariance_term_the_expansion_is_the_particle_part_only():
+    ex, filt, policy, ref, wp, beta, nxt = _step1_setup()
+    assert np.any(nxt.S), "the setup must have a covariance term to remove"
+    stage = StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta, covariance_term=False)
+    assert stage.covariance_part(ref.u_bar[1] + 0.3) == 0.0
+    # the same as a value function whose S_{k+1} is zero
+    no_S = type(nxt)(nxt.s, nxt.v, nxt.V, np.zeros_like(nxt.S))
+    exp = stage.expansion(ref.u_bar[1])
+    ref_exp = StageProblem(ex.model, ex.cost, filt, ref.estimates[1], no_S, wp, beta).expansion(ref.u_bar[1])
+    for name in ("phi", "p", "r", "Q", "P", "R"):
+        assert np.allclose(getattr(exp, name), getattr(ref_exp, name), rtol=1e-12, atol=1e-12), name
+    with_term = StageProblem(ex.model, ex.cost, filt, ref.estimates[1], nxt, wp, beta).expansion(ref.u_bar[1])
+    assert not np.allclose(with_term.phi, exp.phi)
+
+
+# --- distributions over perturbed runs of Alg. 2.2 ----------------------------------
+
+def test_distribution_record():
+    from asoc.belief.sweep import distribution
+    d = distribution([3.0, 1.0, 2.0, 10.0])
+    assert d == {"value": 2.5, "median": 2.5, "range": [1.0, 10.0], "n": 4}
+    with pytest.raises(ValueError, match="samples"):
+        distribution([])
+
+
+def test_perturbation_sweep_members_differ_and_psd_is_not_chaotic():
+    from asoc.belief.sweep import perturbation_sweep
+    ex = landmark_example(K=4)
+    noise = draw_noise(ex.model, ex.mean0, ex.cov0, 4, 50, np.random.default_rng(3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        s = perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 3, np.random.default_rng(4),
+                               n_cost_runs=20, max_iterations=6)
+    assert s.iterations.shape == s.costs.shape == s.converged.shape == (3,)
+    assert np.all((s.iterations >= 1) & (s.iterations <= 6)) and np.all(np.isfinite(s.costs))
+    # the zero policy on the same draws is the baseline; the converged policies are far cheaper
+    from asoc.belief import MeanAffineController, simulate
+    zero = simulate(ex.model, ex.cost, ex.mean0, ex.cov0,
+                    MeanAffineController(ex.model, AffinePolicy.zero(4, 2, 2)), noise).costs.mean()
+    assert s.baseline == pytest.approx(zero, rel=1e-12) and not s.diverged.any()
+    # the default is not chaotic: members differ only in where the stopping rule (|dJ| <= 1e-4 J on
+    # the J draws) stops, so their costs on other draws differ by the same order (factor 10 slack)
+    assert np.ptp(s.costs) <= 10 * 1e-4 * np.mean(s.costs), s.costs
+
+
+def test_perturbation_sweep_rejects_bad_arguments():
+    from asoc.belief.sweep import perturbation_sweep
+    ex = landmark_example(K=3)
+    noise = draw_noise(ex.model, ex.mean0, ex.cov0, 3, 5, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="n_members"):
+        perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 0, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="scale"):
+        perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(0), scale=0.0)
+    with pytest.raises(ValueError, match="rng"):
+        perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, 1)

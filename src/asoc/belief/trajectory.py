@@ -158,13 +158,15 @@ class StageProblem:
     phi_k(x, u) = sum_m beta_m [C_k(x, u) + s_{k+1} + v_{k+1}^T a(x, u, w_m)
                   + 1/2 a^T V_{k+1} a] + 1/2 tr[S_{k+1} C_{k+1}(u)],
     where C_{k+1}(u) is the covariance of the next estimate from Lemma 2.1 (the filter's
-    ``next_covariance``), which is what makes the controller dual.
+    ``next_covariance``), which is what makes the controller dual. ``covariance_term=False``
+    drops that term (the certainty-equivalent control run of the notebook).
     """
 
-    def __init__(self, model, cost, filt, estimate, nxt: Value, w_points, beta, covariance_hessian="psd"):
+    def __init__(self, model, cost, filt, estimate, nxt: Value, w_points, beta, covariance_hessian="psd",
+                 covariance_term=True):
         if covariance_hessian not in COVARIANCE_HESSIANS:
             raise ValueError(f"covariance_hessian: expected one of {COVARIANCE_HESSIANS}, found {covariance_hessian!r}")
-        self.covariance_hessian = covariance_hessian
+        self.covariance_hessian, self.covariance_term = covariance_hessian, bool(covariance_term)
         self.model, self.cost, self.filt, self.est, self.nxt = model, cost, filt, estimate, nxt
         self.w_points, self.beta = w_points, beta
         self.mixture = filt.mixture(estimate)
@@ -178,8 +180,8 @@ class StageProblem:
         return self.cost.stage(x, u) + nxt.s + inner @ self.beta
 
     def covariance_part(self, u):
-        """1/2 tr[S_{k+1} C_{k+1}(u)]."""
-        if not np.any(self.nxt.S):
+        """1/2 tr[S_{k+1} C_{k+1}(u)] (0 without the covariance term)."""
+        if not self.covariance_term or not np.any(self.nxt.S):
             return 0.0
         return 0.5 * float(np.trace(self.nxt.S @ self.filt.next_covariance(self.est, np.asarray(u, dtype=float))))
 
@@ -210,7 +212,7 @@ class StageProblem:
                 f = lambda z: self.particle_part(z[:nx], z[nx:])
                 z = np.concatenate([x, u_bar])
                 G[i], H[i] = nd.Gradient(f)(z), nd.Hessian(f)(z)
-        if np.any(self.nxt.S):
+        if self.covariance_term and np.any(self.nxt.S):
             G[:, nx:] += np.atleast_1d(nd.Gradient(self.covariance_part)(u_bar))
             H[:, nx:, nx:] += self._covariance_hessian(u_bar)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
@@ -423,7 +425,7 @@ class Alg22Result:
 
 
 def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_points, beta,
-                  derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd"):
+                  derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True):
     """Steps 3-8 of Algorithm 2.2 along ``ref``; returns (new policy, V_0, eps, rejected).
 
     Parameters
@@ -441,6 +443,8 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     alpha_min : float
         Line-search threshold of Alg. 2.3.
     covariance_hessian : {"psd", "exact", "shift"}
+    covariance_term : bool
+        False drops 1/2 tr[S_{k+1} C_{k+1}(u)] from phi_k (2.13): no dual effect.
 
     Returns
     -------
@@ -459,7 +463,8 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     L_new, d_new = policy.L.copy(), policy.d.copy()
     eps_k, rejected = np.zeros(K), 0
     for k in range(K - 1, -1, -1):
-        stage = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta, covariance_hessian)
+        stage = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta, covariance_hessian,
+                             covariance_term)
         exp = stage.expansion(ref.u_bar[k], derivatives)
         R_t = exp.tilde[3]
         if np.linalg.eigvalsh(R_t).min() <= 0:
@@ -481,7 +486,8 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
 
 def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iterations=50, rtol=1e-4,
                   n_cost_runs=200, rng=None, derivatives="analytic", reference_mode="nominal",
-                  alpha_min=2.0 ** -10, covariance_hessian="psd", progress=False) -> Alg22Result:
+                  alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True,
+                  progress=False) -> Alg22Result:
     """Algorithm 2.2: iterate reference trajectory (Alg. 2.1) and backward pass (Thms. 2.4-2.5).
 
     Parameters
@@ -497,6 +503,7 @@ def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iteratio
     reference_mode : "nominal" or "sampled" (Alg. 2.1); "sampled" draws from ``rng``.
     alpha_min : the constant alpha of Alg. 2.3 below which a step is rejected.
     covariance_hessian : "psd" (default), "exact" or "shift", see :meth:`StageProblem._covariance_hessian`.
+    covariance_term : False drops 1/2 tr[S_{k+1} C_{k+1}(u)] from phi_k (2.13): no dual effect.
 
     Returns
     -------
@@ -528,7 +535,8 @@ def algorithm_2_2(model, cost, mean0, cov0, filt=None, policy=None, max_iteratio
     for _ in iterator:
         ref = reference_trajectory(model, filt, policy, mean0, cov0, reference_mode, rng)
         policy, value, eps, rejected = backward_pass(model, cost, filt, ref, policy, w_points, beta,
-                                                     derivatives, alpha_min, covariance_hessian)
+                                                     derivatives, alpha_min, covariance_hessian,
+                                                     covariance_term)
         result.policies.append(policy)
         result.costs.append(J(policy))
         result.predicted.append(value.at(np.asarray(mean0, float), np.asarray(cov0, float)))
