@@ -43,7 +43,7 @@ def test_nbval_checked_cells(name, tmp_path):
 
 
 def _ends_in_displayed_expression(source: str) -> bool:
-    """Whether a cell's last statement is an expression other than print(...).
+    """Whether a cell's last statement is an expression other than print, display or show (None).
 
     A trailing ';' does not help: IPython decides on it from the input history, which
     nbval's execution does not record, so nbval sees the full repr anyway.
@@ -51,8 +51,10 @@ def _ends_in_displayed_expression(source: str) -> bool:
     code = "\n".join(line for line in source.splitlines() if not line.lstrip().startswith(("%", "!")))
     body = ast.parse(code).body
     last = body[-1] if body else None
-    return isinstance(last, ast.Expr) and not (isinstance(last.value, ast.Call)
-                                               and getattr(last.value.func, "id", None) == "print")
+    if not isinstance(last, ast.Expr):
+        return False
+    func = last.value.func if isinstance(last.value, ast.Call) else None
+    return getattr(func, "id", getattr(func, "attr", None)) not in ("print", "display", "show")
 
 
 @pytest.mark.parametrize("name", sorted(NOTEBOOKS))
