@@ -1,9 +1,15 @@
-"""Shared fixtures: the notebooks are run once per session at ci fidelity."""
+"""Shared fixtures: the notebooks are run once per session at ci fidelity; the book is built
+once and opened in headless Chromium."""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
 from asoc.repro import notebooks as nbs
-from asoc.repro.paths import CI_OUTPUT
+from asoc.repro.paths import BOOK, CI_OUTPUT
 
 NOTEBOOKS = nbs.notebooks()
 
@@ -21,3 +27,36 @@ def ci_run():
         return done[name]
 
     return run
+
+
+@pytest.fixture(scope="session")
+def html(tmp_path_factory):
+    """The book built once per session from the committed notebooks; its HTML folder."""
+    out = tmp_path_factory.mktemp("book")
+    subprocess.run([sys.executable, "-m", "asoc.repro.book"], check=True)
+    jb = Path(sys.executable).parent / "jupyter-book"
+    proc = subprocess.run([str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
+    return out / "_build" / "html"
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Chromium in a 1280 x 900 window."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    if not shutil.which("chromium") or not shutil.which("chromedriver"):
+        pytest.fail("chromium and chromedriver are required (make test installs them)")
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = shutil.which("chromium")
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--disable-background-networking", "--disable-component-update",
+                 "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
+        opts.add_argument(flag)
+    opts.add_argument("--window-size=1280,900")
+    driver = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
+    driver.set_window_size(1280, 900)
+    yield driver
+    driver.quit()

@@ -2,10 +2,6 @@
 in headless Chromium it lists the public controller designs with their full signatures."""
 
 import inspect
-import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
@@ -13,41 +9,16 @@ import asoc.belief
 import asoc.gp
 import asoc.mjls
 import asoc.repro
-from asoc.repro.paths import BOOK
 
 PACKAGES = (asoc.mjls, asoc.belief, asoc.gp, asoc.repro)
 REQUIRED = ("static_output_feedback", "exact_dynamic_output_feedback")
 
 
 @pytest.fixture(scope="module")
-def api_html(tmp_path_factory):
-    out = tmp_path_factory.mktemp("book")
-    subprocess.run([sys.executable, "-m", "asoc.repro.book"], check=True)
-    jb = Path(sys.executable).parent / "jupyter-book"
-    proc = subprocess.run([str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
-                          capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
-    page = out / "_build" / "html" / "api.html"
+def api_html(html):
+    page = html / "api.html"
     assert page.exists(), "api.html was not built"
     return page
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    if not shutil.which("chromium") or not shutil.which("chromedriver"):
-        pytest.fail("chromium and chromedriver are required (make test installs them)")
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = shutil.which("chromium")
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
-        opts.add_argument(flag)
-    driver = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
-    yield driver
-    driver.quit()
 
 
 def _signature_text(browser, obj_id):

@@ -5,9 +5,6 @@ pages resolves to an existing anchor, and the intro reaches every finding in one
 
 import json
 import re
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
@@ -18,37 +15,6 @@ from asoc.repro.paths import BOOK
 
 NOTEBOOK_PAGES = [f"{name}.html" for name in notebooks()]
 PAGES = NOTEBOOK_PAGES + ["intro.html", "ledger.html"]
-
-
-@pytest.fixture(scope="module")
-def html(tmp_path_factory):
-    out = tmp_path_factory.mktemp("book")
-    subprocess.run([sys.executable, "-m", "asoc.repro.book"], check=True)
-    jb = Path(sys.executable).parent / "jupyter-book"
-    proc = subprocess.run([str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
-                          capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
-    return out / "_build" / "html"
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    if not shutil.which("chromium") or not shutil.which("chromedriver"):
-        pytest.fail("chromium and chromedriver are required (make test installs them)")
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = shutil.which("chromium")
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
-        opts.add_argument(flag)
-    opts.add_argument("--window-size=1280,900")
-    driver = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
-    driver.set_window_size(1280, 900)
-    yield driver
-    driver.quit()
 
 
 def _wait_for_math(driver, timeout=30):
