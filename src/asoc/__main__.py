@@ -15,7 +15,7 @@ import time
 from .repro import manifest
 from .repro import notebooks as nbs
 from .repro.io import atomic_write_text
-from .repro.ledger import ledger_markdown
+from .repro.ledger import intro_markdown, ledger_markdown, ledger_rows
 from .repro.paths import BOOK, CI_OUTPUT, ROOT
 from .repro.values import load_all_values, load_values
 
@@ -77,12 +77,19 @@ def compare_with_committed(name, output_dir) -> str:
 def _ledger(fidelity):
     path, values = (BOOK / "ledger.md", load_all_values()) if fidelity == "full" \
         else (CI_OUTPUT / "ledger.md", load_all_values(CI_OUTPUT))
-    text = ledger_markdown(values=values)
+    _write_if_changed(path, ledger_markdown(values=values),
+                      "" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)")
+    if fidelity == "full":
+        intro = BOOK / "intro.md"
+        _write_if_changed(intro, intro_markdown(intro.read_text(), ledger_rows(values=values)), " (summary)")
+
+
+def _write_if_changed(path, text, remark=""):
     if path.exists() and path.read_text() == text:
         print(f"{_rel(path)}: up to date")
         return
     atomic_write_text(path, text)
-    print(f"wrote {_rel(path)}" + ("" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)"))
+    print(f"wrote {_rel(path)}{remark}")
 
 
 def _overrides(pairs, info) -> dict:
