@@ -7,7 +7,8 @@ import pytest
 
 from asoc.mjls import (MJLS, dynamic_output_feedback, exact_dynamic_output_feedback,
                        exact_finite_horizon_dynamic_output_feedback, finite_horizon_cost,
-                       finite_horizon_dynamic_output_feedback, static_output_feedback)
+                       finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
+                       radius_and_gradient, static_output_feedback)
 from asoc.mjls.dynamic import augmented_closed_loop, steady_state_cost
 from asoc.mjls.examples import (SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system,
                                 sec373_system)
@@ -61,6 +62,38 @@ def test_average_cost_gradient_matches_finite_differences(system):
     err, allowed = fd_check(lambda v: average_cost_and_gradient(sys, *_unpack(v, shapes))[0], z, g, cost)
     assert err <= allowed < 1e-4 * np.abs(g).max()
     assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
+
+
+@pytest.mark.parametrize("system, scale", [("sec373", 1.0), ("sec373", 1.2), ("random", 1.0)])
+def test_radius_gradient_matches_finite_differences(system, scale):
+    """At a stabilising and at a non-stabilising controller (A scaled by 1.2)."""
+    base = sec373_system(1) if system == "sec373" else random_system(0)
+    sys = base.replace(A=scale * base.A)
+    r = dynamic_output_feedback(base)
+    shapes = (r.F.shape, r.K.shape, r.L.shape)
+    rho, grads = radius_and_gradient(sys, r.F, r.K, r.L)
+    assert rho == pytest.approx(closed_loop_radius(sys, r.F, r.K, r.L), rel=1e-12)
+    g = _pack(*grads)
+    err, allowed = fd_check(lambda v: radius_and_gradient(sys, *_unpack(v, shapes))[0], _pack(r.F, r.K, r.L),
+                            g, rho)
+    assert err <= allowed < 1e-4 * np.abs(g).max()
+    assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
+
+
+def test_min_radius_lowers_rho_and_ends_stationary(alg32_373, sys373):
+    m = min_radius_dynamic_output_feedback(sys373, init=alg32_373)
+    assert m.converged and m.rho < alg32_373.rho - 1e-3 and m.stabilizing
+    assert m.rho == pytest.approx(closed_loop_radius(sys373, m.F, m.K, m.L), rel=1e-12)
+    assert np.all(np.diff(m.history["rho"]) <= 0) and m.history["rho"][-1] == m.rho
+    assert m.cost == pytest.approx(steady_state_cost(sys373, m.F, m.K, m.L)[0], rel=COST_RTOL)
+    assert np.abs(_pack(*radius_and_gradient(sys373, m.F, m.K, m.L)[1])).max() < 1e-4
+
+
+@pytest.mark.parametrize("kwargs, match", [(dict(max_iter=0), "max_iter"), (dict(nc=0), "nc"),
+                                           (dict(init="Alg. 3.2"), "init")])
+def test_min_radius_bad_input(sys373, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        min_radius_dynamic_output_feedback(sys373, **kwargs)
 
 
 def test_average_cost_and_stability_test_agree_with_prop_324_and_cor_32(alg32_373, sys373):

@@ -15,7 +15,8 @@ examples), ``comparison`` (Table 3.2).
 from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
                       steady_state_cost)
 from .exact import (average_cost_and_gradient, exact_dynamic_output_feedback,
-                    exact_finite_horizon_dynamic_output_feedback)
+                    exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
+                    radius_and_gradient)
 from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback)
 from .lmi import LMIResult, static_output_lmi
@@ -37,4 +38,5 @@ __all__ = ["MJLS", "D", "E", "stationary_distribution", "ms_operator", "ms_spect
            "finite_horizon_cost", "mode_observed_lqg", "ModeObservedLQG", "ModeObservedResult",
            "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
-           "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient"]
+           "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
+           "min_radius_dynamic_output_feedback", "radius_and_gradient"]

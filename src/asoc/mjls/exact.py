@@ -30,6 +30,8 @@ from .system import D, E
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
 MIN_STEP = 2.0 ** -40         # the line search gives up below this step length
+RHO_START = 0.999             # the stabilising search stops once rho is below this
+RADIUS_MAX_ITER = 1000        # BFGS iterations of a search that minimises rho
 LBFGS_MEMORY = 200            # pairs kept by L-BFGS for the K (nc^2 + nc ny + nu nc) time-variant gains
 
 
@@ -46,34 +48,39 @@ def _unpack(z, shapes):
     return out
 
 
-def gain_gradient(sys, K, L, At, X, EP, JJt, mu, gamma=1.0):
+def _closed_loop_gradient(sys, G):
+    """The gradient over (F, K, L) of a function of A~ (3.39) alone, from G_i = d/dA~_i."""
+    nx = sys.nx
+    gF = G[:, nx:, nx:].sum(axis=0)
+    gK = (G[:, nx:, :nx] @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
+    gL = (np.swapaxes(sys.B, 1, 2) @ G[:, :nx, nx:]).sum(axis=0)
+    return gF, gK, gL
+
+
+def gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     """dJ/dF, dJ/dK, dJ/dL from the moments X and costates E_i(P) (adjoint of Prop. 3.23).
 
     Parameters
     ----------
     sys : MJLS (one step of (3.36)/(3.54)).
     K, L : the gains of (3.37); F enters only through ``At``.
-    At : (M, n, n) augmented closed loop (3.39) divided by ``gamma``.
+    At : (M, n, n) augmented closed loop (3.39).
     X : (M, n, n) augmented second moments at this step.
     EP : (M, n, n) E_i(P) of the costates at the next step.
     JJt : (M, ny, ny) measurement-noise covariances; mu : (M,) mode distribution.
-    gamma : the closed loop is A~ / gamma (gamma > 1 for the stabilising phase).
 
     Returns
     -------
     (gF, gK, gL) : arrays of the shapes of F, K, L.
     """
     nx = sys.nx
-    G = 2.0 * EP @ At @ X / gamma                                     # dJ/dA~_i
-    gF = G[:, nx:, nx:].sum(axis=0)
-    gK = (G[:, nx:, :nx] @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
+    gF, gK, gL = _closed_loop_gradient(sys, 2.0 * EP @ At @ X)        # dJ/dA~_i
     gK += 2.0 * (mu[:, None, None] * EP[:, nx:, nx:] @ K @ JJt).sum(axis=0)
-    gL = (np.swapaxes(sys.B, 1, 2) @ G[:, :nx, nx:]).sum(axis=0)
     gL += 2.0 * (sys.R @ L @ X[:, nx:, nx:]).sum(axis=0)
     return gF, gK, gL
 
 
-def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
+def average_cost_and_gradient(sys, F, K, L):
     """Exact average cost (3.42) (Prop. 3.24) of (3.37) and its gradient over (F, K, L).
 
     Mean-square stability is tested without eigenvalues: the closed loop is stable iff the
@@ -84,16 +91,13 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     ----------
     sys : MJLS with measurement noise J (Sec. 3.6).
     F, K, L : gains of (3.37), shapes (nc, nc), (nc, ny), (nu, nc).
-    gamma : evaluate the closed loop A~ / gamma instead of A~ (gamma >= 1; used to find a
-        stabilising start).
 
     Returns
     -------
-    (cost, (gF, gK, gL)) : cost is inf and the gradient None when A~ / gamma is not
-        mean-square stable (Cor. 3.2).
+    (cost, (gF, gK, gL)) : cost is inf and the gradient None when A~ is not mean-square
+        stable (Cor. 3.2).
     """
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
-    At = At / gamma
     M, n, _ = At.shape
     lu = scipy.linalg.lu_factor(np.eye(M * n * n) - moment_operator(At, sys.T), check_finite=False)
     Y = scipy.linalg.lu_solve(lu, np.broadcast_to(np.eye(n), (M, n, n)).ravel()).reshape(M, n, n)
@@ -104,7 +108,7 @@ def average_cost_and_gradient(sys, F, K, L, gamma=1.0):
     P = scipy.linalg.lu_solve(lu, Qt.ravel(), trans=1).reshape(M, n, n)
     X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
     cost = float(np.einsum("iab,iba->", Qt, X))
-    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), noise_covariances(sys)[1], mu, gamma)
+    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), noise_covariances(sys)[1], mu)
 
 
 def _positive_definite(Y):
@@ -119,6 +123,44 @@ def closed_loop_radius(sys, F, K, L):
     """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39)."""
     At = augmented_closed_loop(sys, F, K, L)[0]
     return float(np.max(np.abs(np.linalg.eigvals(moment_operator(At, sys.T)))))
+
+
+def radius_and_gradient(sys, F, K, L):
+    """Mean-square spectral radius rho (Cor. 3.2) of (3.37) and its gradient over (F, K, L).
+
+    rho is an eigenvalue of the positive operator X -> D_j(A~ X A~^T) (Prop. 3.23 without
+    noise), with positive semidefinite right and left eigenvectors X and V (Krein-Rutman;
+    Costa, Fragoso and Marques 2005, Ch. 3). Where it is simple, first-order eigenvalue
+    perturbation gives d rho = <V, D(dA~ X A~^T + A~ X dA~^T)> / <V, X>, i.e.
+    d rho / dA~_i = 2 E_i(V) A~_i X_i / <V, X>. rho is only piecewise smooth (eigenvalues may
+    coalesce); BFGS is used on it regardless (Lewis and Overton, Math. Program. 141, 2013).
+
+    Parameters
+    ----------
+    sys : MJLS; F, K, L : gains of (3.37).
+
+    Returns
+    -------
+    (rho, (gF, gK, gL)) : the gradient is zero where <V, X> vanishes (rho not differentiable).
+    """
+    At = augmented_closed_loop(sys, F, K, L)[0]
+    M, n, _ = At.shape
+    lam, left, right = scipy.linalg.eig(moment_operator(At, sys.T), left=True, right=True)
+    rho = float(np.max(np.abs(lam)))
+    top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-9))
+    k = top[np.argmax(lam[top].real)]                                 # the real Perron eigenvalue
+    X, V = (_real_symmetric(v[:, k].reshape(M, n, n)) for v in (right, left))
+    inner = float(np.einsum("iab,iab->", V, X))
+    if not abs(inner) > 1e-12 * np.linalg.norm(V) * np.linalg.norm(X):
+        return rho, _closed_loop_gradient(sys, np.zeros_like(At))
+    return rho, _closed_loop_gradient(sys, 2.0 * E(sys.T, V) @ At @ X / inner)
+
+
+def _real_symmetric(Z):
+    """The real symmetric part of a complex eigenvector Z after removing its phase."""
+    z = Z.ravel()
+    Z = (Z * np.conj(z[np.argmax(np.abs(z))])).real
+    return 0.5 * (Z + np.swapaxes(Z, 1, 2))
 
 
 class _InverseHessian:
@@ -166,14 +208,14 @@ class _InverseHessian:
         self.dense += np.column_stack([s, Hy]) @ np.column_stack([a * s - Hy / sy, -s / sy]).T
 
 
-def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None):
+def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None, target=-np.inf):
     """Minimise ``fun`` (z -> (f, grad); f = inf outside the domain) by BFGS.
 
     The line search backtracks from the full quasi-Newton step until the Armijo condition
     holds (up to rounding of f); a step out of the domain (f = inf) is rejected like any
     other. The iteration stops (converged) when the decrease the quasi-Newton model predicts,
-    g^T H^-1 g / 2, is below ``tol * |f|``. ``memory``: None for dense BFGS, else L-BFGS
-    with that many pairs.
+    g^T H^-1 g / 2, is below ``tol * |f|``, or once f <= ``target``. ``memory``: None for
+    dense BFGS, else L-BFGS with that many pairs.
 
     Returns
     -------
@@ -191,7 +233,7 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None):
         fresh = Hinv.empty
         d = -Hinv.apply(g)
         slope = float(g @ d)
-        if -0.5 * slope <= tol * abs(f):
+        if -0.5 * slope <= tol * abs(f) or f <= target:
             converged = True
             break
         t = 1.0
@@ -263,43 +305,31 @@ def averaged_lqg(sys, nc):
     return A + B @ L - K @ C, K, L
 
 
-def _stabilise(sys, z, shapes, max_rounds=200):
-    """A stabilising start from z: minimise the cost of A~ / gamma, lowering gamma towards 1.
+def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False):
+    """BFGS on rho (Cor. 3.2) over (F, K, L) from z, stopping early once rho <= target.
 
-    Each round minimises the cost of the scaled closed loop (finite for rho(A~) < gamma),
-    which pushes rho(A~) away from gamma, then sets gamma halfway to the new rho(A~).
-    Returns (z, rho) of the round with the smallest rho (a round may raise it).
-    """
-    rho = closed_loop_radius(sys, *_unpack(z, shapes))
-    best, gamma = (z, rho), 1.05 * rho
-    for _ in range(max_rounds):
-        if rho < 1:
-            break
-        fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes), gamma=gamma))
-        z = bfgs(fun, z, 1e-6, 100)[0]
-        rho = closed_loop_radius(sys, *_unpack(z, shapes))
-        best = min(best, (z, rho), key=lambda b: b[1])
-        new_gamma = 0.5 * (rho + gamma)
-        if gamma - new_gamma <= 1e-6 * gamma:
-            break
-        gamma = new_gamma
-    return best
+    Returns (z, rho, converged, iterations, history of rho)."""
+    fun = lambda v: _flat(radius_and_gradient(sys, *_unpack(v, shapes)))
+    return bfgs(fun, z, 1e-12, max_iter, progress, "min rho", target=target)
 
 
 def _stabilising_start(sys, z, shapes):
     """z if it stabilises, else the first of z and the averaged LQG compensator (in order of
-    rho) that :func:`_stabilise` turns into a stabilising controller. Returns (z, rho), the
-    candidate with the smallest rho reached when none stabilises."""
+    rho) from which minimising rho reaches RHO_START. Returns (z, rho), the smallest rho
+    reached when none stabilises."""
+    rho = closed_loop_radius(sys, *_unpack(z, shapes))
+    if rho < 1:
+        return z, rho
     candidates = [z]
     lqg = averaged_lqg(sys, shapes[0][0])
     if lqg is not None:
         candidates.append(_pack(*lqg))
-    radii = [closed_loop_radius(sys, *_unpack(c, shapes)) for c in candidates]
+    radii = [rho] + [closed_loop_radius(sys, *_unpack(c, shapes)) for c in candidates[1:]]
     best = (candidates[int(np.argmin(radii))], min(radii))
     for i in np.argsort(radii):
         if not np.isfinite(radii[i]):
             continue
-        zi, rho = _stabilise(sys, candidates[i], shapes)
+        zi, rho = _min_radius(sys, candidates[i], shapes, RADIUS_MAX_ITER, target=RHO_START)[:2]
         if rho < 1:
             return zi, rho
         best = min(best, (zi, rho), key=lambda b: b[1])
@@ -309,6 +339,54 @@ def _stabilising_start(sys, z, shapes):
 def _flat(out):
     cost, grads = out
     return cost, (None if grads is None else _pack(*grads))
+
+
+def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=RADIUS_MAX_ITER, progress=False):
+    """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the thesis.
+
+    BFGS on rho over (F, K, L) with the gradient of :func:`radius_and_gradient`. A rho that
+    stays >= 1 from several starts is evidence, not proof, that no controller (3.37) of
+    this order stabilises the system without observing the mode.
+
+    Parameters
+    ----------
+    sys : MJLS (Sec. 3.6).
+    init : start: a :class:`DynamicOutputFeedbackResult`, a tuple (F, K, L), or None for
+        Algorithm 3.2's controller (as in :func:`exact_dynamic_output_feedback`).
+    nc : controller order (default: that of ``init``, else nx).
+    max_iter : BFGS iteration limit.
+    progress : show a tqdm bar over iterations.
+
+    Returns
+    -------
+    DynamicOutputFeedbackResult
+        F, K, L; rho, stabilizing; cost: exact average cost (3.42) if stabilising, else inf;
+        converged (BFGS stopped at a stationary point), iterations, seconds;
+        history["rho"]: rho after each iteration.
+
+    Raises
+    ------
+    ValueError
+        if max_iter is not a positive integer, or nc or init are invalid.
+    """
+    if int(max_iter) != max_iter or max_iter < 1:
+        raise ValueError(f"max_iter: expected an integer >= 1, found {max_iter}")
+    start = time.perf_counter()
+    F, K, L = _start_gains(sys, init, _checked_order(nc))
+    shapes = (F.shape, K.shape, L.shape)
+    z, rho, converged, it, history = _min_radius(sys, _pack(F, K, L), shapes, max_iter, progress=progress)
+    F, K, L = _unpack(z, shapes)
+    cost = average_cost_and_gradient(sys, F, K, L)[0]
+    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
+                                       stabilizing=bool(rho < 1), cost=cost, bound=np.nan, Xbar=None,
+                                       Xunder=None, Pbar=None, Punder=None, history={"rho": history},
+                                       seconds=time.perf_counter() - start)
+
+
+def _checked_order(nc):
+    if nc is not None and (int(nc) != nc or nc < 1):
+        raise ValueError(f"nc must be an integer >= 1, found {nc}")
+    return nc
 
 
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
@@ -323,9 +401,9 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     ----------
     sys : MJLS with measurement noise J (Sec. 3.6; J = None means y = C x).
     init : start: a :class:`DynamicOutputFeedbackResult`, a tuple (F, K, L), or None for
-        Algorithm 3.2's controller. A non-stabilising start is first moved into the
-        stabilising set by minimising the cost of the scaled closed loop A~ / gamma while
-        gamma is lowered to 1 (this lowers the mean-square spectral radius).
+        Algorithm 3.2's controller. A non-stabilising start (and, failing it, the LQG
+        compensator of the mode-averaged system) is first moved into the stabilising set by
+        minimising the mean-square spectral radius (:func:`min_radius_dynamic_output_feedback`).
     nc : controller order (default: that of ``init``, else nx; Alg. 3.2's controller is
         padded with zeros or cut to nc states).
     tol : stop when the decrease the quasi-Newton model predicts is below tol * cost.
@@ -349,10 +427,8 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
         raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
                          f"max_iter={max_iter}")
-    if nc is not None and (int(nc) != nc or nc < 1):
-        raise ValueError(f"nc must be an integer >= 1, found {nc}")
     start = time.perf_counter()
-    F, K, L = _start_gains(sys, init, nc)
+    F, K, L = _start_gains(sys, init, _checked_order(nc))
     shapes = (F.shape, K.shape, L.shape)
     z, rho = _stabilising_start(sys, _pack(F, K, L), shapes)
     if not rho < 1:
