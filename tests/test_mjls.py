@@ -175,6 +175,19 @@ def test_observed_mode_riccati_reduces_to_dare_and_beats_mode_independent_gain()
     assert cost_obs <= static_output_feedback(sys).cost
 
 
+def test_observed_mode_riccati_reports_an_unstabilisable_system():
+    """Mode 2 has no input and stays with probability 0.9: rho >= 0.9 * 1.5^2 > 1 for every gain."""
+    A, B = np.diag([1.5, 0.5]), np.array([[1.0], [0.0]])
+    sys = MJLS(A=[A, A], B=[B, 0 * B], C=[np.eye(2)] * 2, H=[np.eye(2)] * 2, Q=np.eye(2), R=np.eye(1),
+               T=[[0.5, 0.5], [0.1, 0.9]])
+    with pytest.warns(RuntimeWarning, match="not mean-square stabilisable even with observed mode"):
+        res = observed_mode_state_feedback(sys)
+    assert not res.converged and not res.stabilizing and res.rho >= 0.9 * 1.5**2
+    assert np.all(np.isfinite(res.P)) and np.all(np.isfinite(res.L))
+    with pytest.raises(ValueError, match="max_iter"):
+        observed_mode_state_feedback(sys, max_iter=0)
+
+
 def test_variational_method_decreases_cost_and_predicts_monte_carlo():
     sys = sec354_system(1)
     x0 = np.array([3.0, 0.0])

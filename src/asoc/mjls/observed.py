@@ -21,6 +21,8 @@ import numpy as np
 
 from .stability import ms_spectral_radius
 
+DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as Alg. 3.2's bounds)
+
 
 @dataclass
 class ObservedModeResult:
@@ -79,19 +81,26 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
     Returns
     -------
     ObservedModeResult
+        When the iteration diverges (max |P| > 1e100: the MJLS is not mean-square
+        stabilisable even with observed mode), converged is False and L, P, rho are those
+        of the last iterate; it warns.
 
     Raises
     ------
     ValueError
-        When the Riccati iteration overflows (the MJLS is not mean-square stabilisable even
-        with observed mode), from the stability check of the non-finite gains.
+        if tol is not positive or max_iter is not a positive integer.
     """
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
+        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, max_iter={max_iter}")
     start = time.perf_counter()
     P = np.zeros((sys.M, sys.nx, sys.nx))
-    converged = False
+    converged = diverged = False
     it = 0
     for it in range(1, max_iter + 1):
         L, P_new = riccati_step(sys, P)
+        if not np.abs(P_new).max() <= DIVERGED:
+            diverged = True
+            break
         delta = np.abs(P_new - P).max() / (1 + np.abs(P_new).max())
         P = P_new
         if delta < tol:
@@ -99,7 +108,10 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
             break
     L, _ = riccati_step(sys, P)
     rho = ms_spectral_radius(sys.A + sys.B @ L, sys.T)
-    if warn and not converged:
+    if warn and diverged:
+        warnings.warn(f"coupled Riccati iteration diverges (max |P| > {DIVERGED:.0e} after {it} steps): the "
+                      f"MJLS is not mean-square stabilisable even with observed mode", RuntimeWarning, stacklevel=2)
+    elif warn and not converged:
         warnings.warn(f"coupled Riccati iteration did not converge in {max_iter} steps", RuntimeWarning,
                       stacklevel=2)
     elif warn and rho >= 1:

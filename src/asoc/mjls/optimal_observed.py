@@ -139,8 +139,9 @@ def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
     """The optimal finite-horizon output-feedback controller with observed mode ([38]).
 
     Mode-dependent LQ gains from the coupled Riccati difference equations and the Markov
-    jump filter (Costa, Fragoso, Marques 2005, Chs. 4-5). Its expected cost is a lower bound
-    for every controller that does not observe the mode (Table 3.3).
+    jump filter (Costa, Fragoso, Marques 2005, Chs. 4-5): the benchmark of Table 3.3. Its
+    cost is not a proven lower bound for controllers that do not observe the mode, since the
+    filter gain depends on the current mode only, not on the whole mode history.
 
     Parameters
     ----------
