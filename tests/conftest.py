@@ -38,6 +38,7 @@ def html(tmp_path_factory):
     proc = subprocess.run([str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
+    (out / "build.log").write_text(proc.stdout + proc.stderr)
     return out / "_build" / "html"
 
 

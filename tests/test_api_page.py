@@ -48,3 +48,10 @@ def test_api_page_covers_every_public_function(api_html, browser):
     missing = [f"{pkg.__name__}.{name}" for pkg in PACKAGES for name in pkg.__all__
                if inspect.isfunction(getattr(pkg, name)) and f"{pkg.__name__}.{name}" not in ids]
     assert not missing, f"not on the API page: {missing}"
+
+
+def test_docstrings_render_without_sphinx_errors(html):
+    """A docstring that Sphinx misreads (e.g. |P| taken for a substitution) is reported in the build log."""
+    log = (html.parent.parent / "build.log").read_text()
+    problems = [line for line in log.splitlines() if "docstring of" in line]
+    assert not problems, "\n".join(problems)

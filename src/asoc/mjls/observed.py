@@ -81,7 +81,7 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
     Returns
     -------
     ObservedModeResult
-        When the iteration diverges (max |P| > 1e100: the MJLS is not mean-square
+        When the iteration diverges (max abs(P) > 1e100: the MJLS is not mean-square
         stabilisable even with observed mode), converged is False and L, P, rho are those
         of the last iterate; it warns.
 
