@@ -7,11 +7,17 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from asoc.repro import notebooks as nbs
 from asoc.repro.paths import BOOK, CI_OUTPUT
 
 NOTEBOOKS = nbs.notebooks()
+
+# Property tests draw the same examples on every run and machine (no example database), so
+# a test run is reproducible like everything else (DESIGN.md, "Determinism").
+settings.register_profile("deterministic", derandomize=True, database=None)
+settings.load_profile("deterministic")
 
 
 @pytest.fixture(scope="session")
