@@ -27,13 +27,13 @@ $(STAMP): environment.txt pyproject.toml
 	touch $(STAMP)
 
 figures: venv
-	$(PY) -m asoc reproduce --fidelity full $(if $(ALWAYS),--force)
+	$(PY) -m asoc_companion reproduce --fidelity full $(if $(ALWAYS),--force)
 
 ledger: venv
-	$(PY) -m asoc ledger
+	$(PY) -m asoc_companion ledger
 
 html: venv
-	$(PY) -m asoc.repro.book
+	$(PY) -m asoc_companion.book
 	$(VENV)/bin/jupyter-book build book --quiet $(if $(ALWAYS),--all)
 
 book: figures html
@@ -53,7 +53,7 @@ test-portable: venv
 	OPENBLAS_CORETYPE=$(PORTABLE_CORETYPE) $(PY) -m pytest -q -m notebook tests/test_notebooks.py tests/test_nbval.py
 
 bench: venv
-	$(PY) -m asoc.bench
+	$(PY) -m asoc_companion.bench
 
 clean:
 	rm -rf book/_build book/_static/mathjax

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
-from asoc.repro import notebooks as nbs
-from asoc.repro.paths import BOOK, CI_OUTPUT
+from asoc_companion import notebooks as nbs
+from asoc_companion.paths import BOOK, CI_OUTPUT
 
 NOTEBOOKS = nbs.notebooks()
 
@@ -39,7 +39,7 @@ def ci_run():
 def html(tmp_path_factory):
     """The book built once per session from the committed notebooks; its HTML folder."""
     out = tmp_path_factory.mktemp("book")
-    subprocess.run([sys.executable, "-m", "asoc.repro.book"], check=True)
+    subprocess.run([sys.executable, "-m", "asoc_companion.book"], check=True)
     jb = Path(sys.executable).parent / "jupyter-book"
     proc = subprocess.run([str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
                           capture_output=True, text=True, timeout=900)

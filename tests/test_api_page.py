@@ -8,9 +8,9 @@ import pytest
 import asoc.belief
 import asoc.gp
 import asoc.mjls
-import asoc.repro
+import asoc_companion
 
-PACKAGES = (asoc.mjls, asoc.belief, asoc.gp, asoc.repro)
+PACKAGES = (asoc.mjls, asoc.belief, asoc.gp, asoc_companion)
 REQUIRED = ("static_output_feedback", "exact_dynamic_output_feedback")
 
 

@@ -10,8 +10,8 @@ from urllib.parse import unquote, urlparse
 
 import pytest
 
-from asoc.repro.notebooks import notebooks
-from asoc.repro.paths import BOOK
+from asoc_companion.notebooks import notebooks
+from asoc_companion.paths import BOOK
 
 NOTEBOOK_PAGES = [f"{name}.html" for name in notebooks()]
 PAGES = NOTEBOOK_PAGES + ["intro.html", "ledger.html"]

@@ -8,11 +8,11 @@ import subprocess
 import nbformat
 import pytest
 
-from asoc import __main__ as cli
-from asoc.repro import manifest
-from asoc.repro import notebooks as nbs
-from asoc.repro.io import atomic_write_json
-from asoc.repro.paths import ROOT
+from asoc_companion import __main__ as cli
+from asoc_companion import manifest
+from asoc_companion import notebooks as nbs
+from asoc_companion.io import atomic_write_json
+from asoc_companion.paths import ROOT
 
 
 def _notebook(folder, name, source="x = 1", depends=None, params='fidelity = "full"\noutput_dir = "."\nseed = 3'):

@@ -3,9 +3,9 @@ the committed ledger page is the one the generator writes from them."""
 
 import pytest
 
-from asoc.repro import load_all_values, load_reference, status
-from asoc.repro.ledger import ledger_markdown
-from asoc.repro.paths import BOOK
+from asoc_companion import load_all_values, load_reference, status
+from asoc_companion.ledger import ledger_markdown
+from asoc_companion.paths import BOOK
 
 REFERENCE = load_reference()
 VALUES = load_all_values()
@@ -26,12 +26,12 @@ def test_every_recorded_value_is_in_the_reference():
 
 def test_committed_ledger_is_current():
     assert (BOOK / "ledger.md").read_text() == ledger_markdown(REFERENCE, VALUES), \
-        "book/ledger.md is stale: run `python -m asoc ledger`"
+        "book/ledger.md is stale: run `python -m asoc_companion ledger`"
 
 
 def test_notebooks_have_figures_in_figures_folder():
-    from asoc.repro.paths import FIGURES
-    from asoc.repro.notebooks import notebooks
+    from asoc_companion.paths import FIGURES
+    from asoc_companion.notebooks import notebooks
     for info in notebooks().values():
         for number in info.figures:
             assert (FIGURES / f"fig{number.replace('.', '_')}.png").exists(), number
@@ -44,16 +44,16 @@ def test_notebooks_have_figures_in_figures_folder():
 import json
 import re
 
-from asoc.repro.captions import caption_markdown, load_claims
-from asoc.repro.ledger import (decimals, heading_anchor, intro_markdown, ledger_rows, note_groups,
+from asoc_companion.captions import caption_markdown, load_claims
+from asoc_companion.ledger import (decimals, heading_anchor, intro_markdown, ledger_rows, note_groups,
                                section_links)
-from asoc.repro.notebooks import notebooks
-from asoc.repro.reference import Entry
+from asoc_companion.notebooks import notebooks
+from asoc_companion.reference import Entry
 
 
 def test_committed_intro_summary_is_current():
     text = (BOOK / "intro.md").read_text()
-    assert intro_markdown(text) == text, "book/intro.md summary is stale: run `python -m asoc ledger`"
+    assert intro_markdown(text) == text, "book/intro.md summary is stale: run `python -m asoc_companion ledger`"
 
 
 @pytest.mark.parametrize("tol, thesis, expected", [(6e-5, 1.297, 4), (5e-7, 0.001343, 6), (5e-8, 0.0019924, 7),

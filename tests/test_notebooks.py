@@ -7,8 +7,8 @@ tolerances are derived from the quantity's accuracy (src/asoc/repro/reference.py
 
 import pytest
 
-from asoc.repro import load_reference, load_values, status
-from asoc.repro.reference import agrees_with_full, monte_carlo_rtol
+from asoc_companion import load_reference, load_values, status
+from asoc_companion.reference import agrees_with_full, monte_carlo_rtol
 
 from conftest import NOTEBOOKS
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from asoc.repro.prose import fill
+from asoc_companion.prose import fill
 
 VALUES = {"sec9_9.cost": {"value": 93.16, "ci": [88.5, 98.1], "n": 1000},
           "sec9_9.claim": {"holds": False, "value": 0.1905},
@@ -28,8 +28,8 @@ def test_fill_rejects_unknown_paths(text):
 
 
 def test_thesis_values_are_available_to_prose():
-    from asoc.repro.prose import thesis_values
-    from asoc.repro.reference import Entry
+    from asoc_companion.prose import thesis_values
+    from asoc_companion.reference import Entry
 
     ref = {"sec9_9.rho": Entry(key="sec9_9.rho", where="", kind="deterministic", thesis=1.297, tol=6e-5),
            "sec9_9.new": Entry(key="sec9_9.new", where="", kind="measured")}

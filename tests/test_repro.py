@@ -9,10 +9,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from asoc import repro  # noqa: E402
-from asoc.__main__ import main  # noqa: E402
-from asoc.repro.io import atomic_write_text  # noqa: E402
-from asoc.repro.reference import Entry, agrees_with_full, status  # noqa: E402
+import asoc_companion as repro  # noqa: E402
+from asoc_companion.__main__ import main  # noqa: E402
+from asoc_companion.io import atomic_write_text  # noqa: E402
+from asoc_companion.reference import Entry, agrees_with_full, status  # noqa: E402
 
 
 def test_record_writes_json_immediately_and_converts_numpy(tmp_path):

@@ -6,9 +6,9 @@ differences a run can show; on one machine the run is bit-identical)."""
 import numpy as np
 import pytest
 
-from asoc.repro import load_reference, load_values
-from asoc.repro import notebooks as nbs
-from asoc.repro.reference import agrees_with_full
+from asoc_companion import load_reference, load_values
+from asoc_companion import notebooks as nbs
+from asoc_companion.reference import agrees_with_full
 
 NAME = "your_system"
 

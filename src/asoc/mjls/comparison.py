@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from ..progress import progress_bar
 
-from ..repro.stats import bootstrap_median_ci
+from ..stats import bootstrap_median_ci
 from .baselines import do_val_h2_state_feedback, time_variant_feedback
 from .examples import sec354_system
 from .observed import observed_mode_state_feedback

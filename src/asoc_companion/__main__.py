@@ -1,4 +1,4 @@
-"""Command line: ``python -m asoc list | figure N | table N | reproduce | ledger``.
+"""Command line: ``python -m asoc_companion list | figure N | table N | reproduce | ledger``.
 
 Each command takes ``--fidelity full|ci``. ``full`` runs the thesis's settings and
 updates ``figures/`` and the executed notebooks in ``book/``; ``ci`` runs small
@@ -12,12 +12,12 @@ import argparse
 import sys
 import time
 
-from .repro import manifest
-from .repro import notebooks as nbs
-from .repro.io import atomic_write_text
-from .repro.ledger import intro_markdown, ledger_markdown, ledger_rows
-from .repro.paths import BOOK, CI_OUTPUT, ROOT
-from .repro.values import load_all_values, load_values
+from . import manifest
+from . import notebooks as nbs
+from .io import atomic_write_text
+from .ledger import intro_markdown, ledger_markdown, ledger_rows
+from .paths import BOOK, CI_OUTPUT, ROOT
+from .values import load_all_values, load_values
 
 
 def _run(info, fidelity, output_dir=None, overrides=None):
@@ -97,7 +97,7 @@ def _overrides(pairs, info) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m asoc", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m asoc_companion", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     for name, help_ in [("list", "list notebooks, figures and tables"),
                         ("reproduce", "run every notebook whose inputs changed, then write the ledger"),

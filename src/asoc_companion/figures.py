@@ -38,7 +38,7 @@ SAVE_METADATA = {"pdf": {"Creator": None, "Producer": None, "CreationDate": None
 
 
 def apply_style():
-    """Apply the project's matplotlib style (called by :func:`asoc.repro.setup`).
+    """Apply the project's matplotlib style (called by :func:`asoc_companion.setup`).
 
     Returns
     -------

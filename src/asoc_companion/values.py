@@ -93,7 +93,7 @@ def record(key: str, value):
         If ``key`` is empty or contains spaces.
     """
     if _session.notebook is None:
-        raise RuntimeError("call asoc.repro.setup(notebook, fidelity, output_dir) before record()")
+        raise RuntimeError("call asoc_companion.setup(notebook, fidelity, output_dir) before record()")
     if not isinstance(key, str) or not key or " " in key:
         raise ValueError(f"key must be a non-empty string without spaces, found {key!r}")
     _session.values[key] = to_jsonable(value)

@@ -12,7 +12,7 @@ full-fidelity run) holds, per notebook, content hashes of everything its results
                  (``metadata.asoc.depends``, e.g. a findings page that quotes other pages).
 
 A notebook is up to date when its entry equals the hashes computed now and its values file
-exists; ``python -m asoc reproduce`` skips it then (``--force`` re-executes everything).
+exists; ``python -m asoc_companion reproduce`` skips it then (``--force`` re-executes everything).
 """
 
 import hashlib

@@ -1,0 +1,172 @@
+"""Argument checks shared by ``asoc.mjls``, ``asoc.belief`` and ``asoc.gp``.
+
+Every check takes the value and the argument's name *as the caller wrote it* and raises a
+``TypeError`` (wrong kind of object) or ``ValueError`` (right kind, wrong value) whose
+message reads ``"<name>: expected <what>, found <what>"``. Each returns the value converted
+(a float array, an ``int``), so a caller writes ``x0 = real_array(x0, "x0", shape=(n,))``.
+"""
+
+import numbers
+
+import numpy as np
+
+SYMMETRY_RTOL = 1e-9
+WEIGHT_ATOL = 1e-8
+
+
+def _describe(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else f"{type(value).__name__} {text[:57]}..."
+
+
+def integer(value, name: str, minimum: int | None = None, maximum: int | None = None) -> int:
+    """An integer count: ``int`` or a NumPy integer; bool, float, NaN and strings are rejected.
+
+    Examples
+    --------
+    >>> integer(5, "horizon", minimum=1)
+    5
+    >>> integer(2.5, "horizon")
+    Traceback (most recent call last):
+    ...
+    TypeError: horizon: expected an integer, found 2.5
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name}: expected an integer, found {_describe(value)}")
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name}: expected an integer >= {minimum}, found {value}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name}: expected an integer <= {maximum}, found {value}")
+    return value
+
+
+def real_scalar(value, name: str, *, low=None, high=None, low_open=False, high_open=False) -> float:
+    """A finite real number, optionally in ``[low, high]`` (``low_open``/``high_open`` exclude the end).
+
+    Examples
+    --------
+    >>> real_scalar(0.5, "eps", low=0, low_open=True)
+    0.5
+    >>> real_scalar(-1, "eps", low=0, low_open=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: eps: expected a finite real number > 0, found -1
+    """
+    if isinstance(value, (bool, np.bool_, str, bytes)) or not isinstance(value, (numbers.Real, np.ndarray)):
+        raise TypeError(f"{name}: expected a real number, found {_describe(value)}")
+    if isinstance(value, np.ndarray):
+        if value.shape != () or not np.issubdtype(value.dtype, np.number) or np.iscomplexobj(value):
+            raise TypeError(f"{name}: expected a real number, found an array of shape {value.shape}")
+        value = value.item()
+    bounds = []
+    if low is not None:
+        bounds.append(f"{'>' if low_open else '>='} {low:g}")
+    if high is not None:
+        bounds.append(f"{'<' if high_open else '<='} {high:g}")
+    want = "a finite real number" + (" " + " and ".join(bounds) if bounds else "")
+    ok = np.isfinite(value)
+    ok = ok and (low is None or (value > low if low_open else value >= low))
+    ok = ok and (high is None or (value < high if high_open else value <= high))
+    if not ok:
+        raise ValueError(f"{name}: expected {want}, found {value!r}")
+    return float(value)
+
+
+def real_array(value, name: str, *, shape=None, ndim=None, finite=True) -> np.ndarray:
+    """A real float array; ``shape`` may hold ``None`` for a free axis.
+
+    Complex input is rejected (not truncated), as are strings and objects.
+
+    Examples
+    --------
+    >>> real_array([[1, 2]], "C", shape=(1, None)).shape
+    (1, 2)
+    >>> real_array([1j], "A")
+    Traceback (most recent call last):
+    ...
+    TypeError: A: expected a real array, found complex dtype complex128
+    """
+    try:
+        array = np.asarray(value)
+    except (ValueError, TypeError) as err:
+        raise TypeError(f"{name}: expected a real array, found {_describe(value)}") from err
+    if np.iscomplexobj(array):
+        raise TypeError(f"{name}: expected a real array, found complex dtype {array.dtype}")
+    if array.dtype == bool or not (np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)):
+        raise TypeError(f"{name}: expected a real array, found dtype {array.dtype}")
+    array = array.astype(float)
+    if ndim is not None and array.ndim != ndim:
+        raise ValueError(f"{name}: expected a {ndim}-dimensional array, found shape {array.shape}")
+    if shape is not None:
+        want = tuple(shape)
+        if array.ndim != len(want) or any(w is not None and w != s for w, s in zip(want, array.shape)):
+            text = "(" + ", ".join("any" if w is None else str(w) for w in want) + ("," if len(want) == 1 else "") + ")"
+            raise ValueError(f"{name}: expected shape {text}, found shape {array.shape}")
+    if finite and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name}: expected finite entries, found {int(np.size(array) - np.isfinite(array).sum())} "
+                         f"non-finite")
+    return array
+
+
+def symmetric(array, name: str) -> np.ndarray:
+    """A stack of symmetric matrices (last two axes), within a relative rounding tolerance."""
+    asym = np.abs(array - np.swapaxes(array, -1, -2)).max(initial=0.0)
+    if asym > SYMMETRY_RTOL * max(1.0, np.abs(array).max(initial=0.0)):
+        raise ValueError(f"{name}: expected a symmetric matrix, found asymmetry {asym:.3g}")
+    return 0.5 * (array + np.swapaxes(array, -1, -2))
+
+
+def semidefinite(array, name: str, *, definite=False) -> np.ndarray:
+    """A (stack of) symmetric positive semi-definite (``definite=True``: definite) matrices.
+
+    Examples
+    --------
+    >>> semidefinite(np.eye(2), "Q")
+    array([[1., 0.],
+           [0., 1.]])
+    >>> semidefinite(-np.eye(2), "Q")
+    Traceback (most recent call last):
+    ...
+    ValueError: Q: expected a positive semi-definite matrix, found smallest eigenvalue -1
+    """
+    array = symmetric(array, name)
+    if array.size == 0:
+        return array
+    lam = np.linalg.eigvalsh(array).min()
+    scale = max(1.0, np.abs(array).max())
+    if definite and lam <= 0:
+        raise ValueError(f"{name}: expected a positive definite matrix, found smallest eigenvalue {lam:.3g}")
+    if lam < -SYMMETRY_RTOL * scale:
+        raise ValueError(f"{name}: expected a positive semi-definite matrix, found smallest eigenvalue {lam:.3g}")
+    return array
+
+
+def probability_vector(value, name: str, size: int | None = None) -> np.ndarray:
+    """Probability weights: finite, non-negative, summing to one.
+
+    Examples
+    --------
+    >>> probability_vector([0.25, 0.75], "mu")
+    array([0.25, 0.75])
+    >>> probability_vector([0.5, float("nan")], "mu")
+    Traceback (most recent call last):
+    ...
+    ValueError: mu: expected finite entries, found 1 non-finite
+    """
+    p = real_array(value, name, shape=(size,))
+    if p.size == 0:
+        raise ValueError(f"{name}: expected at least one probability, found none")
+    if np.any(p < 0):
+        raise ValueError(f"{name}: expected non-negative probabilities, found minimum {p.min():.3g}")
+    if abs(p.sum() - 1.0) > WEIGHT_ATOL:
+        raise ValueError(f"{name}: expected probabilities summing to 1, found sum {p.sum():.10g}")
+    return p
+
+
+def generator(rng, name: str = "rng") -> np.random.Generator:
+    """A seeded ``numpy.random.Generator`` (every random draw in asoc comes from one)."""
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"{name}: expected a numpy.random.Generator (np.random.default_rng(seed)), "
+                        f"found {type(rng).__name__}")
+    return rng
