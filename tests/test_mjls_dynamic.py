@@ -12,7 +12,7 @@ from asoc.mjls.dynamic import (augmented_closed_loop, dynamic_output_feedback, g
 from asoc.mjls.finite_horizon import (finite_horizon_cost, finite_horizon_dynamic_output_feedback,
                                       initial_bounds)
 from asoc.mjls.optimal_observed import mode_observed_lqg
-from asoc.mjls.system import E
+from asoc.mjls.system import successor_average
 
 
 def random_system(seed, M=3, nx=3, nu=2, ny=2, radius=0.95, iid=False):
@@ -63,7 +63,7 @@ def test_gains_satisfy_the_optimality_conditions(sys3, alg32):
     """At the fixed point, (F, K, L) solve (3.49) for the final bounds (Thm. 3.27)."""
     r = alg32
     _, JJt = noise_covariances(sys3)
-    F, K, L = gains_from_bounds(sys3, r.Xbar, r.Xunder, E(sys3.T, r.Pbar), E(sys3.T, r.Punder),
+    F, K, L = gains_from_bounds(sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar), successor_average(sys3.T, r.Punder),
                                 sys3.mu_inf, JJt)
     for a, b in ((F, r.F), (K, r.K), (L, r.L)):
         np.testing.assert_allclose(a, b, atol=1e-7 * max(1, np.abs(b).max()))
@@ -72,7 +72,7 @@ def test_gains_satisfy_the_optimality_conditions(sys3, alg32):
 def test_sdp_solve_agrees_with_least_squares(sys3, alg32):
     r = alg32
     _, JJt = noise_covariances(sys3)
-    args = (sys3, r.Xbar, r.Xunder, E(sys3.T, r.Pbar), E(sys3.T, r.Punder), sys3.mu_inf, JJt)
+    args = (sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar), successor_average(sys3.T, r.Punder), sys3.mu_inf, JJt)
     for a, b in zip(gains_from_bounds(*args, method="sdp"), gains_from_bounds(*args)):
         np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-4)
 

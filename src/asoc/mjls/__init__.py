@@ -27,9 +27,9 @@ from .simulate import (Controller, DynamicOutputFeedback, ModeDependentGain, Sim
                        StaticGain, TimeVariantGain, simulate)
 from .stability import closed_loop, ms_operator, ms_spectral_radius
 from .static import StaticOutputFeedbackResult, gain_from_moments, static_output_feedback
-from .system import MJLS, D, E, stationary_distribution
+from .system import MJLS, predecessor_sum, successor_average, stationary_distribution
 
-__all__ = ["MJLS", "D", "E", "stationary_distribution", "ms_operator", "ms_spectral_radius",
+__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator", "ms_spectral_radius",
            "closed_loop", "second_moment_step", "second_moments", "steady_state_second_moment",
            "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
            "static_output_lmi", "LMIResult", "observed_mode_state_feedback", "ObservedModeResult",

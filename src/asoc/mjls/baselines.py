@@ -89,7 +89,7 @@ def _forward_moments(sys, G, X0, mu0):
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
     for k in range(K):
         Acl = sys.A + sys.B @ G[k] @ sys.C
-        X[k + 1] = sys.D(Acl @ X[k] @ np.swapaxes(Acl, 1, 2) + pi[k][:, None, None] * HHt)
+        X[k + 1] = sys.predecessor_sum(Acl @ X[k] @ np.swapaxes(Acl, 1, 2) + pi[k][:, None, None] * HHt)
         pi[k + 1] = pi[k] @ sys.T
     return X, pi
 
@@ -117,7 +117,7 @@ def _backward_sweep(sys, G, X, pi):
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
     noise = 0.0
     for k in range(K - 1, -1, -1):
-        EL = sys.E(L)
+        EL = sys.successor_average(L)
         G[k] = _gain(sys, X[k], EL)
         Acl = sys.A + sys.B @ G[k] @ sys.C
         GC = G[k] @ sys.C

@@ -17,7 +17,7 @@ from .examples import SEC354_X0, sec354_system
 from .simulate import StaticGain, simulate
 from .stability import closed_loop
 from .static import gain_from_moments, static_output_feedback
-from .system import D, E
+from .system import predecessor_sum, successor_average
 
 
 def _timed(fn):
@@ -42,8 +42,8 @@ def thesis_iteration(sys, tol=1e-10, max_iter=20000, init=1e-4):
         L_new = gain_from_moments(sys, X, P)
         Acl = closed_loop(sys, L_new)
         LC = L_new @ sys.C
-        X, P = (D(sys.T, Acl @ X @ np.swapaxes(Acl, 1, 2) + muHHt),
-                sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC + np.swapaxes(Acl, 1, 2) @ E(sys.T, P) @ Acl)
+        X, P = (predecessor_sum(sys.T, Acl @ X @ np.swapaxes(Acl, 1, 2) + muHHt),
+                sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC + np.swapaxes(Acl, 1, 2) @ successor_average(sys.T, P) @ Acl)
         done = np.linalg.norm(L_new - L) <= tol * np.linalg.norm(L_new)
         L = L_new
         if done:

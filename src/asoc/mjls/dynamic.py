@@ -22,7 +22,7 @@ import numpy as np
 
 from .moments import second_moment_step, steady_state_second_moment
 from .stability import ms_spectral_radius
-from .system import D, E
+from .system import predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
 DIVERGED = 1e100          # bounds beyond this are treated as diverging (the iteration stops)
@@ -135,7 +135,7 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     m = mu[:, None, None]
     Xbar_in = m * (HHt + KJJK) + AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)
     Xunder_in = m * KJJK + KC @ Xbar @ _T(KC) + FKC @ Xunder @ _T(FKC)
-    Xbar_new, Xunder_new = D(sys.T, Xbar_in), D(sys.T, Xunder_in)
+    Xbar_new, Xunder_new = predecessor_sum(sys.T, Xbar_in), predecessor_sum(sys.T, Xunder_in)
     return 0.5 * (Xbar_new + _T(Xbar_new)), 0.5 * (Xunder_new + _T(Xunder_new))
 
 
@@ -356,7 +356,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     converged = False
     it = 0
     for it in range(1, int(max_iter) + 1):
-        EPbar, EPunder = E(sys.T, Pbar), E(sys.T, Punder)
+        EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
         try:
             F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method)
         except np.linalg.LinAlgError:

@@ -26,7 +26,7 @@ from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_init
                              check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages)
 from .moments import moment_operator
-from .system import D, E
+from .system import predecessor_sum, successor_average
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
 MIN_STEP = 2.0 ** -40         # the line search gives up below this step length
@@ -104,11 +104,11 @@ def average_cost_and_gradient(sys, F, K, L):
     if not (np.all(np.isfinite(Y)) and _positive_definite(0.5 * (Y + np.swapaxes(Y, 1, 2)))):
         return np.inf, None
     mu = sys.mu_inf
-    X = scipy.linalg.lu_solve(lu, D(sys.T, mu[:, None, None] * Wt).ravel()).reshape(M, n, n)
+    X = scipy.linalg.lu_solve(lu, predecessor_sum(sys.T, mu[:, None, None] * Wt).ravel()).reshape(M, n, n)
     P = scipy.linalg.lu_solve(lu, Qt.ravel(), trans=1).reshape(M, n, n)
     X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
     cost = float(np.einsum("iab,iba->", Qt, X))
-    return cost, gain_gradient(sys, K, L, At, X, E(sys.T, P), noise_covariances(sys)[1], mu)
+    return cost, gain_gradient(sys, K, L, At, X, successor_average(sys.T, P), noise_covariances(sys)[1], mu)
 
 
 def _positive_definite(Y):
@@ -131,7 +131,7 @@ def radius_and_gradient(sys, F, K, L):
     rho is an eigenvalue of the positive operator X -> D_j(A~ X A~^T) (Prop. 3.23 without
     noise), with positive semidefinite right and left eigenvectors X and V (Krein-Rutman;
     Costa, Fragoso and Marques 2005, Ch. 3). Where it is simple, first-order eigenvalue
-    perturbation gives d rho = <V, D(dA~ X A~^T + A~ X dA~^T)> / <V, X>, i.e.
+    perturbation gives d rho = <V, predecessor_sum(dA~ X A~^T + A~ X dA~^T)> / <V, X>, i.e.
     d rho / dA~_i = 2 E_i(V) A~_i X_i / <V, X>. rho is only piecewise smooth (eigenvalues may
     coalesce); BFGS is used on it regardless (Lewis and Overton, Math. Program. 141, 2013).
 
@@ -153,7 +153,7 @@ def radius_and_gradient(sys, F, K, L):
     inner = float(np.einsum("iab,iab->", V, X))
     if not abs(inner) > 1e-12 * np.linalg.norm(V) * np.linalg.norm(X):
         return rho, _closed_loop_gradient(sys, np.zeros_like(At))
-    return rho, _closed_loop_gradient(sys, 2.0 * E(sys.T, V) @ At @ X / inner)
+    return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V) @ At @ X / inner)
 
 
 def _real_symmetric(Z):
@@ -489,13 +489,13 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     X = np.empty((horizon + 1, M, n, n))
     X[0] = X0
     for k in range(horizon):
-        X[k + 1] = D(m["T"][k], A[k] @ X[k] @ At[k] + W[k])
+        X[k + 1] = predecessor_sum(m["T"][k], A[k] @ X[k] @ At[k] + W[k])
     P = np.zeros((M, n, n))
     P[:, :nx, :nx] = st.Q_final
     cost = float(np.einsum("iab,iba->", P, X[-1]))
     EP = np.empty_like(A)
     for k in range(horizon - 1, -1, -1):
-        EP[k] = E(m["T"][k], P)
+        EP[k] = successor_average(m["T"][k], P)
         P = At[k] @ EP[k] @ A[k]
         P[:, :nx, :nx] += m["Q"][k]
         P[:, nx:, nx:] += LRL[k]

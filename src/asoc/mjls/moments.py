@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from .system import D
+from .system import predecessor_sum
 
 
 def second_moment_step(Acl, HHt, T, X, mu):
@@ -32,7 +32,7 @@ def second_moment_step(Acl, HHt, T, X, mu):
         If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
     """
     inner = Acl @ X @ np.swapaxes(Acl, 1, 2) + mu[:, None, None] * HHt
-    return D(T, inner)
+    return predecessor_sum(T, inner)
 
 
 def second_moments(Acl, HHt, T, X0, mu0, horizon):
@@ -106,7 +106,7 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
         If I - M is singular (rho(M) = 1).
     """
     M, n, _ = Acl.shape
-    rhs = D(T, mu_inf[:, None, None] * HHt).reshape(M * n * n)
+    rhs = predecessor_sum(T, mu_inf[:, None, None] * HHt).reshape(M * n * n)
     X = np.linalg.solve(np.eye(M * n * n) - moment_operator(Acl, T), rhs).reshape(M, n, n)
     return 0.5 * (X + np.swapaxes(X, 1, 2))
 

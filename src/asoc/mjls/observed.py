@@ -52,7 +52,7 @@ class ObservedModeResult:
 
 def riccati_step(sys, P):
     """One step of the coupled Riccati difference equation; returns (L, P_new)."""
-    EP = sys.E(P)
+    EP = sys.successor_average(P)
     BT = np.swapaxes(sys.B, 1, 2)
     S = sys.R + BT @ EP @ sys.B
     L = -np.linalg.solve(S, BT @ EP @ sys.A)

@@ -110,7 +110,7 @@ def control_riccati(st):
     X[K_] = st.Q_final
     for k in range(K_ - 1, -1, -1):
         s = st.systems[k]
-        EX = s.E(X[k + 1])
+        EX = s.successor_average(X[k + 1])
         BtEX = _T(s.B) @ EX
         F[k] = -np.linalg.solve(s.R + BtEX @ s.B, BtEX @ s.A)
         Xk = s.Q + _T(s.A) @ EX @ (s.A + s.B @ F[k])
@@ -130,7 +130,7 @@ def markov_jump_filter(st, Y0, mu):
         Sigma = CY @ _T(s.C) + mu[k][:, None, None] * st.JJt[k]
         Mf[k] = s.A @ _T(CY) @ np.linalg.pinv(Sigma, hermitian=True)
         inner = s.A @ Y[k] @ _T(s.A) - Mf[k] @ CY @ _T(s.A) + mu[k][:, None, None] * st.HHt[k]
-        Yn = s.D(inner)
+        Yn = s.predecessor_sum(inner)
         Y[k + 1] = 0.5 * (Yn + _T(Yn))
     return Mf, Y
 

@@ -9,7 +9,7 @@ import scipy.linalg
 
 from .moments import h2_cost, moment_operator, steady_state_second_moment
 from .stability import closed_loop, ms_spectral_radius
-from .system import D, E
+from .system import predecessor_sum, successor_average
 
 
 @dataclass
@@ -72,7 +72,7 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
     numpy.linalg.LinAlgError
         If the linear system is singular or the SDP fails.
     """
-    EP = E(sys.T, P)
+    EP = successor_average(sys.T, P)
     S = (sys.R if R is None else R) + np.swapaxes(sys.B, 1, 2) @ EP @ sys.B                     # (M, nu, nu)
     W = sys.C @ X @ np.swapaxes(sys.C, 1, 2)                                # (M, ny, ny)
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
@@ -192,13 +192,13 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
 def _exact_iteration(sys, rec, L, tol, max_iter, method):
     """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
 
-    Each step solves the two coupled linear equations X = D(Acl X Acl^T + mu H H^T) and
-    P = Q + C^T L^T R L C + Acl^T E(P) Acl (one LU factorisation of size M nx^2, used for
+    Each step solves the two coupled linear equations X = predecessor_sum(Acl X Acl^T + mu H H^T) and
+    P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (one LU factorisation of size M nx^2, used for
     both). Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when
     an iterate does not stabilise (the moments have no solution then).
     """
     M, n = sys.M, sys.nx
-    rhs_X = D(sys.T, rec.muHHt).ravel()
+    rhs_X = predecessor_sum(sys.T, rec.muHHt).ravel()
     trace_X, trace_P = [], []
     converged, stabilized = False, True
     X = P = None
@@ -217,7 +217,7 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
         X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
-        L_new = rec.gain(X, E(sys.T, P), 1.0) if method == "vec" else gain_from_moments(sys, X, P, "sdp")
+        L_new = rec.gain(X, successor_average(sys.T, P), 1.0) if method == "vec" else gain_from_moments(sys, X, P, "sdp")
         change = _relative_change(L, L_new)
         L = L_new
         if change < tol:

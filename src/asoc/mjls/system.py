@@ -110,7 +110,7 @@ def stationary_distribution(T):
     return np.clip(mu, 0.0, None) / np.clip(mu, 0.0, None).sum()
 
 
-def E(T, P):
+def successor_average(T, P):
     """E_i(P) = sum_j p_ij P_j (Prop. 3.16), for a stack P of shape (M, ...).
 
     Parameters
@@ -133,7 +133,7 @@ def E(T, P):
     return np.einsum("ij,j...->i...", T, P)
 
 
-def D(T, Y):
+def predecessor_sum(T, Y):
     """D_i(Y) = sum_j p_ji Y_j (Lemma 3.8), for a stack Y of shape (M, ...).
 
     Parameters
@@ -247,13 +247,13 @@ class MJLS:
         """Stationary mode distribution lim P(theta_k = i)."""
         return stationary_distribution(self.T)
 
-    def E(self, P):
+    def successor_average(self, P):
         """E_i(P) = sum_j p_ij P_j."""
-        return E(self.T, P)
+        return successor_average(self.T, P)
 
-    def D(self, Y):
+    def predecessor_sum(self, Y):
         """D_i(Y) = sum_j p_ji Y_j."""
-        return D(self.T, Y)
+        return predecessor_sum(self.T, Y)
 
     def replace(self, **changes) -> "MJLS":
         """A copy with some matrices replaced, e.g. ``sys.replace(T=T2, C=C2)``."""
