@@ -271,7 +271,7 @@ class UKF:
 
     def mixture(self, estimate) -> DiracMixture:
         """The sigma points of the estimate as a :class:`DiracMixture`."""
-        points, weights = _sigma_points(*estimate, self.kappa)
+        points, weights = _sigma_points(*self._checked(*_pair(estimate)), self.kappa)
         return DiracMixture(points, weights)
 
     @staticmethod
@@ -381,7 +381,7 @@ class ParticleFilter:
     def __init__(self, model, n_particles: int, rng, resample_threshold: float = 0.5):
         self.model = check.instance(model, NonlinearModel, "model")
         if model.likelihood is None:
-            raise ValueError("model: the particle filter needs model.likelihood(y, x), found None")
+            raise ValueError("model: expected a model with a likelihood(y, x) for the particle filter, found likelihood None")
         self.M = check.integer(n_particles, "n_particles", minimum=1)
         self.rng = check.generator(rng)
         self.threshold = check.real_scalar(resample_threshold, "resample_threshold", low=0, high=1)
@@ -422,7 +422,7 @@ class ParticleFilter:
         x = m.a(estimate.points, u, m.w.sample(rng, estimate.points.shape[0]))
         w = estimate.weights * m.likelihood(y, x)
         if not np.isfinite(w.sum()) or w.sum() <= 0:
-            raise ValueError("y: the measurement has zero likelihood under every particle")
+            raise ValueError("y: expected a measurement with positive likelihood under some particle, found zero under all")
         w = w / w.sum()
         if 1.0 / np.sum(w ** 2) < self.threshold * w.size:
             idx = np.searchsorted(np.cumsum(w), (rng.random() + np.arange(w.size)) / w.size)
@@ -455,7 +455,7 @@ def jacobians(model, x, u, w, v):
     if model.jacobians is not None:
         return model.jacobians(x, u, w, v)
     if np.asarray(x).ndim > 1:
-        raise ValueError("x: numerical Jacobians take one state, found a batch; give model.jacobians")
+        raise ValueError("mean: expected one state (numerical Jacobians), found a batch; give model.jacobians")
     return _numeric_jacobians(model, x, u, w, v)
 
 

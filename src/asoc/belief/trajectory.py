@@ -79,10 +79,25 @@ def filter_for(filt, model, name="filt"):
 
 @dataclass(frozen=True)
 class Reference:
-    """Reference trajectory {p_bar_{0:K}, u_bar_{0:K-1}} of Algorithm 2.1."""
+    """Reference trajectory {p_bar_{0:K}, u_bar_{0:K-1}} of Algorithm 2.1.
+
+    Examples
+    --------
+    >>> ref = Reference([(np.zeros(1), np.eye(1))] * 2, np.zeros((1, 1)))
+    >>> len(ref.estimates), ref.u_bar.shape
+    (2, (1, 1))
+    """
 
     estimates: list
     u_bar: np.ndarray
+
+    def __post_init__(self):
+        u_bar = check.real_array(self.u_bar, "u_bar", ndim=2)
+        check.instance(self.estimates, (list, tuple), "estimates", "a list of estimates")
+        if len(self.estimates) != u_bar.shape[0] + 1:
+            raise ValueError(f"estimates: expected {u_bar.shape[0] + 1} estimates (one more than inputs), "
+                             f"found {len(self.estimates)}")
+        object.__setattr__(self, "u_bar", u_bar)
 
 
 def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="nominal", rng=None) -> Reference:
@@ -165,6 +180,13 @@ class Value:
     V: np.ndarray
     S: np.ndarray
 
+    def __post_init__(self):
+        object.__setattr__(self, "s", check.real_scalar(self.s, "s"))
+        v = check.vector(self.v, "v")
+        object.__setattr__(self, "v", v)
+        object.__setattr__(self, "V", check.real_array(self.V, "V", shape=(v.size, v.size)))
+        object.__setattr__(self, "S", check.real_array(self.S, "S", shape=(v.size, v.size)))
+
     def at(self, mean, cov) -> float:
         """The approximation for an estimate with the given mean and covariance."""
         q = QuadraticExpansion(self.s, self.v, self.V)
@@ -211,7 +233,21 @@ def _terminal_value(cost, mixture):
 
 @dataclass(frozen=True)
 class Expansion:
-    """Derivatives of phi_k at the particles (eq. 2.12) and their weighted sums."""
+    """Derivatives of phi_k at the particles (eq. 2.12) and their weighted sums.
+
+    Raises
+    ------
+    ValueError, TypeError
+        If the arrays are not finite, real and of consistent shapes, or ``alpha`` is not
+        probability weights.
+
+    Examples
+    --------
+    >>> exp = Expansion(phi=np.zeros(1), p=np.zeros((1, 1)), r=np.ones((1, 1)), Q=np.eye(1)[None],
+    ...                 P=np.zeros((1, 1, 1)), R=2 * np.eye(1)[None], points=np.zeros((1, 1)), alpha=np.ones(1))
+    >>> [t.tolist() for t in exp.tilde]
+    [[0.0], [1.0], [[0.0]], [[2.0]]]
+    """
 
     phi: np.ndarray      # phi_k(x_i, u_bar), (M,)
     p: np.ndarray        # (M, n_x)
@@ -221,6 +257,19 @@ class Expansion:
     R: np.ndarray        # (M, n_u, n_u)
     points: np.ndarray
     alpha: np.ndarray
+
+    def __post_init__(self):
+        points = check.real_array(self.points, "points", ndim=2)
+        r = check.real_array(self.r, "r", shape=(points.shape[0], None))
+        M, n_x, n_u = points.shape[0], points.shape[1], r.shape[1]
+        if 0 in (M, n_x, n_u):
+            raise ValueError(f"points, r: expected non-empty (M, n_x) and (M, n_u), found {points.shape} and {r.shape}")
+        shapes = {"phi": (M,), "p": (M, n_x), "Q": (M, n_x, n_x), "P": (M, n_u, n_x), "R": (M, n_u, n_u)}
+        for name, shape in shapes.items():
+            object.__setattr__(self, name, check.real_array(getattr(self, name), name, shape=shape))
+        object.__setattr__(self, "points", points)
+        object.__setattr__(self, "r", r)
+        object.__setattr__(self, "alpha", check.probability_vector(self.alpha, "alpha", M))
 
     @property
     def tilde(self):
@@ -241,16 +290,54 @@ class StageProblem:
     where C_{k+1}(u) is the covariance of the next estimate from Lemma 2.1 (the filter's
     ``next_covariance``), which is what makes the controller dual. ``covariance_term=False``
     drops that term (the certainty-equivalent control run of the notebook).
+
+    Parameters
+    ----------
+    model, cost : NonlinearModel and QuadraticCost
+    filt : filter
+    estimate : the filter's estimate p_bar_k (for the UKF a tuple (mean, cov))
+    nxt : Value
+        V_{k+1} of eq. (2.10).
+    w_points, beta : array_like, (R, n_w) and (R,)
+        Process-noise points and weights.
+    covariance_hessian : {"psd", "exact", "shift"}
+    covariance_term : bool
+
+    Raises
+    ------
+    ValueError, TypeError
+        If an argument has the wrong type, shape or value.
+
+    Examples
+    --------
+    >>> from asoc.belief import landmark_example, sigma_points
+    >>> ex = landmark_example(K=1)
+    >>> filt = UKF(ex.model)
+    >>> w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    >>> nxt = Value(0.0, np.zeros(2), np.zeros((2, 2)), np.zeros((2, 2)))
+    >>> stage = StageProblem(ex.model, ex.cost, filt, filt.initial(ex.mean0, ex.cov0), nxt, w, beta)
+    >>> round(stage.cost_to_go(np.zeros(2)), 2)     # E{(x - x_T)^T (x - x_T)} = 25 + tr C_0
+    25.08
     """
 
     def __init__(self, model, cost, filt, estimate, nxt: Value, w_points, beta, covariance_hessian="psd",
                  covariance_term=True):
-        if covariance_hessian not in COVARIANCE_HESSIANS:
-            raise ValueError(f"covariance_hessian: expected one of {COVARIANCE_HESSIANS}, found {covariance_hessian!r}")
-        self.covariance_hessian, self.covariance_term = covariance_hessian, bool(covariance_term)
-        self.model, self.cost, self.filt, self.est, self.nxt = model, cost, filt, estimate, nxt
-        self.w_points, self.beta = w_points, beta
-        self.mixture = filt.mixture(estimate)
+        self.model = check.instance(model, NonlinearModel, "model")
+        self.cost, self.filt = cost_for(cost, model), filter_for(filt, model)
+        self.covariance_hessian = check.choice(covariance_hessian, COVARIANCE_HESSIANS, "covariance_hessian")
+        self.covariance_term = check.boolean(covariance_term, "covariance_term")
+        self.nxt = check.instance(nxt, Value, "nxt")
+        if nxt.v.shape != (model.n_x,):
+            raise ValueError(f"nxt: expected a value of state dimension {model.n_x}, found v of shape {nxt.v.shape}")
+        self.w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
+        self.beta = check.probability_vector(beta, "beta", self.w_points.shape[0])
+        self.est = estimate
+        try:
+            self.mixture = filt.mixture(estimate)
+        except (TypeError, ValueError, IndexError, AttributeError) as err:
+            raise TypeError(f"estimate: expected an estimate of the filter {type(filt).__name__}, found "
+                            f"{type(estimate).__name__} ({err})") from None
+        check.real_array(self.mixture.points, "estimate", shape=(None, model.n_x))
 
     def particle_part(self, x, u):
         """All of phi_k except the covariance term, for x (..., n_x) and u (..., n_u)."""
@@ -278,12 +365,11 @@ class StageProblem:
         differentiated by numdifftools [46]. ``"numdifftools"`` differentiates all of phi.
         """
         import numdifftools as nd
+        derivatives = check.choice(derivatives, ("analytic", "numdifftools"), "derivatives")
+        u_bar = check.real_array(u_bar, "u_bar", shape=(self.model.n_u,))
         X, alpha = self.mixture.points, self.mixture.weights
         nx, nu = X.shape[1], np.size(u_bar)
-        analytic = (derivatives == "analytic" and self.model.jacobians is not None and self.model.affine
-                    and hasattr(self.cost, "stage_derivatives"))
-        if derivatives not in ("analytic", "numdifftools"):
-            raise ValueError(f"derivatives: expected 'analytic' or 'numdifftools', found {derivatives!r}")
+        analytic = derivatives == "analytic" and self.model.jacobians is not None and self.model.affine
         G = np.zeros((X.shape[0], nx + nu))
         H = np.zeros((X.shape[0], nx + nu, nx + nu))
         for i, x in enumerate(X):
@@ -768,13 +854,16 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
         return float(_simulate(model, cost, mean0, cov0, MeanAffineController(model, pol), noise).costs.mean())
 
     policies, costs, predicted, eps_all, rejected_all = [policy], [J(policy)], [], [], []
-    status, ref = "max_iterations", None
+    status, ref, error = "max_iterations", None, None
     for _ in progress_bar(range(max_iterations), progress, desc="Alg. 2.2"):
         try:
             ref = _reference_trajectory(model, filt, policy, mean0, cov0, reference_mode, rng)
             policy, value, eps, rejected = _backward_pass(model, cost, filt, ref, policy, w_points, beta, *options)
         except np.linalg.LinAlgError as err:
             status, error = "linalg_error", err
+            break
+        except ValueError as err:       # the inputs are checked: a non-finite intermediate (value, policy)
+            status, error = "diverged", err
             break
         policies.append(policy), costs.append(J(policy)), eps_all.append(eps), rejected_all.append(rejected)
         predicted.append(value.at(mean0, cov0))
@@ -790,7 +879,8 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
                              f"after {iterations} iterations",
         "max_iterations": lambda: f"stopped after max_iterations = {max_iterations} with relative change of J "
                                   f"{_change(costs):.3g} > rtol = {rtol:g}",
-        "diverged": lambda: f"J became non-finite ({costs[-1]}) at iteration {iterations}",
+        "diverged": lambda: (f"J became non-finite ({costs[-1]}) at iteration {iterations}" if error is None
+                             else f"an iterate became non-finite at iteration {iterations + 1}: {error}"),
         "linalg_error": lambda: f"a linear-algebra step failed at iteration {iterations + 1}: {error}",
     }
     result = TrajectoryOptimizationResult(

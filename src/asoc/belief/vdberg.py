@@ -83,7 +83,10 @@ def _belief_vector(mean, cov):
     n = np.shape(mean)[-1]
     root = psd_sqrt(np.asarray(cov, dtype=float))
     i, j = np.array(_tril_indices(n)).T
-    return np.concatenate([np.asarray(mean, dtype=float), root[..., i, j]], axis=-1)
+    mean, tril = np.asarray(mean, dtype=float), root[..., i, j]
+    batch = np.broadcast_shapes(mean.shape[:-1], tril.shape[:-1])
+    return np.concatenate([np.broadcast_to(mean, batch + mean.shape[-1:]),
+                           np.broadcast_to(tril, batch + tril.shape[-1:])], axis=-1)
 
 
 def unpack(b, n):

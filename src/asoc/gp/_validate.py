@@ -55,9 +55,9 @@ def positive(value, name: str) -> float:
     return check.real_scalar(value, name, low=0, low_open=True)
 
 
-def at_least_one(value, name: str) -> float:
-    """A finite number >= 1."""
-    return check.real_scalar(value, name, low=1)
+def order(value, name: str) -> float:
+    """The order of a distance: a number in [1, 100] (higher powers of distances overflow)."""
+    return check.real_scalar(value, name, low=1, high=100)
 
 
 def distances(delta, name: str = "delta") -> np.ndarray:

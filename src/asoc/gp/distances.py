@@ -403,7 +403,7 @@ def omat(x, y, q: float = 2) -> float:
     x, y : array_like, (m, d) or (m,)
         Locations of the two mixtures (same number of components).
     q : float
-        Order, q >= 1.
+        Order, 1 <= q <= 100.
 
     Returns
     -------
@@ -412,7 +412,7 @@ def omat(x, y, q: float = 2) -> float:
     Raises
     ------
     ValueError, TypeError
-        If the mixtures are invalid, of different dimensions or sizes, or ``q`` < 1.
+        If the mixtures are invalid, of different dimensions or sizes, or ``q`` outside [1, 100].
 
     Examples
     --------
@@ -421,9 +421,9 @@ def omat(x, y, q: float = 2) -> float:
     """
     x, y = v.locations(x, "x"), v.locations(y, "y")
     v.same_dimension(x, y, "x, y")
-    q = v.at_least_one(q, "q")
+    q = v.order(q, "q")
     if len(x) != len(y):
-        raise ValueError(f"x, y: OMAT needs the same number of components, found {len(x)} and "
+        raise ValueError(f"x, y: expected the same number of components (OMAT), found {len(x)} and "
                          f"{len(y)} (use ospa)")
     cost = _omat_cost(x, y, q)
     rows, cols = linear_sum_assignment(cost)
@@ -442,7 +442,7 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
     Y : array_like, (M, m, d) or (M, m), optional
         None: ``X`` with itself.
     q : float
-        Order, q >= 1.
+        Order, 1 <= q <= 100.
     progress : bool
         Show a tqdm progress bar.
 
@@ -453,7 +453,7 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
     Raises
     ------
     ValueError, TypeError
-        If the sets are invalid, of different dimensions or numbers of components, or ``q`` < 1.
+        If the sets are invalid, of different dimensions or numbers of components, or ``q`` outside [1, 100].
 
     Examples
     --------
@@ -464,10 +464,10 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
     symmetric = Y is None
     Y = X if symmetric else v.mixture_set(Y, "Y")
     v.same_dimension(X, Y, "X, Y")
-    q = v.at_least_one(q, "q")
+    q = v.order(q, "q")
     progress = check.boolean(progress, "progress")
     if X.shape[1] != Y.shape[1]:
-        raise ValueError(f"X, Y: OMAT needs the same number of components, found {X.shape[1]} "
+        raise ValueError(f"X, Y: expected the same number of components (OMAT), found {X.shape[1]} "
                          f"and {Y.shape[1]}")
     out = np.zeros((len(X), len(Y)))
     for i in progress_bar(range(len(X)), progress, desc="OMAT", leave=False):
@@ -495,7 +495,7 @@ def ospa(x, y, c: float, p: float = 2) -> float:
     c : float
         Cut-off distance, > 0.
     p : float
-        Order, p >= 1.
+        Order, 1 <= p <= 100.
 
     Returns
     -------
@@ -504,7 +504,7 @@ def ospa(x, y, c: float, p: float = 2) -> float:
     Raises
     ------
     ValueError, TypeError
-        If the mixtures are invalid or of different dimensions, ``c`` <= 0 or ``p`` < 1.
+        If the mixtures are invalid or of different dimensions, ``c`` <= 0 or ``p`` outside [1, 100].
 
     Examples
     --------
@@ -513,7 +513,7 @@ def ospa(x, y, c: float, p: float = 2) -> float:
     """
     x, y = v.locations(x, "x"), v.locations(y, "y")
     v.same_dimension(x, y, "x, y")
-    c, p = v.positive(c, "c"), v.at_least_one(p, "p")
+    c, p = v.positive(c, "c"), v.order(p, "p")
     if len(x) > len(y):
         x, y = y, x
     m, n = len(x), len(y)
@@ -542,7 +542,7 @@ def lq_distance(p1, p2, q: float = 2, lower=-np.inf, upper=np.inf) -> float:
     p1, p2 : callable
         Densities, functions of a float.
     q : float
-        Order, q >= 1.
+        Order, 1 <= q <= 100.
     lower, upper : float
         Integration limits.
 
@@ -553,7 +553,7 @@ def lq_distance(p1, p2, q: float = 2, lower=-np.inf, upper=np.inf) -> float:
     Raises
     ------
     ValueError, TypeError
-        If ``q`` < 1.
+        If ``q`` outside [1, 100].
 
     Examples
     --------
@@ -562,7 +562,7 @@ def lq_distance(p1, p2, q: float = 2, lower=-np.inf, upper=np.inf) -> float:
     0.7658
     """
     check.function(p1, "p1"), check.function(p2, "p2")
-    q = v.at_least_one(q, "q")
+    q = v.order(q, "q")
     lower, upper = v.limits(lower, upper)
     return float(_quad(lambda x: abs(p1(x) - p2(x)) ** q, lower, upper) ** (1 / q))
 

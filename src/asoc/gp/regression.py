@@ -248,8 +248,9 @@ class DistributionGP(_LikelihoodGP):
         allowed = {"matern": {"nu"}, "gamma_exponential": {"gamma"},
                    "rational_quadratic": {"alpha_rq"}}.get(covariance, set())
         if set(shape) - allowed:
-            raise ValueError(f"shape: {covariance!r} accepts {sorted(allowed) or 'no'} shape "
-                             f"parameters, found {sorted(shape)}")
+            extra = ", ".join(sorted(set(shape) - allowed))
+            raise TypeError(f"{extra}: expected the shape parameters of {covariance!r}, {sorted(allowed) or 'none'}, "
+                            f"found {sorted(shape)}")
         super().__init__(n_restarts, bounds)
         self.covariance = covariance
         fn = COVARIANCES[covariance]
@@ -287,7 +288,8 @@ class DistributionGP(_LikelihoodGP):
         if D.ndim != 2 or D.shape[0] != D.shape[1]:
             raise ValueError(f"D: expected a square distance matrix, found shape {D.shape}")
         if not np.allclose(D, D.T) or np.any(np.diag(D) != 0):
-            raise ValueError("D: expected a symmetric non-negative matrix with zero diagonal")
+            raise ValueError(f"D: expected a symmetric distance matrix with zero diagonal, found asymmetry "
+                             f"{np.abs(D - D.T).max():.3g} and largest diagonal entry {np.abs(np.diag(D)).max():.3g}")
         y = self._set_outputs(y)
         if len(y) != len(D):
             raise ValueError(f"y: expected {len(D)} outputs (one per training input), found {len(y)}")
