@@ -340,3 +340,69 @@ def test_perturbation_sweep_rejects_bad_arguments():
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(0), scale=0.0)
     with pytest.raises(TypeError, match="rng"):
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, 1)
+
+
+# --- issue 15: bad input named, results say why they stopped --------------------------
+
+@pytest.mark.parametrize("bad, error", [(0, ValueError), (-1, ValueError), (2.5, TypeError), (float("nan"), TypeError),
+                                        (float("inf"), TypeError), ("3", TypeError), (True, TypeError)])
+def test_integer_arguments_reject_non_integers(bad, error):
+    ex = landmark_example(K=2)
+    with pytest.raises(error, match="max_iterations: expected an integer"):
+        optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                                   max_iterations=bad)
+    with pytest.raises(error, match="max_iterations: expected an integer"):
+        belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0, max_iterations=bad)
+    with pytest.raises(error, match="n_runs: expected an integer"):
+        draw_noise(ex.model, ex.mean0, ex.cov0, 2, bad, np.random.default_rng(0))
+
+
+def test_belief_ilqg_rejects_negative_definite_covariance():
+    ex = landmark_example(K=2)
+    with pytest.raises(ValueError, match="cov0: expected a positive semi-definite matrix, found smallest eigenvalue -1"):
+        belief_ilqg(ex.model, ex.cost, ex.mean0, -np.eye(2))
+    with pytest.raises(ValueError, match="cov0"):
+        optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, -np.eye(2), rng=np.random.default_rng(0))
+
+
+def test_sigma_points_reject_degenerate_arguments():
+    with pytest.raises(ValueError, match="mean: expected shape"):
+        sigma_points(1.0, 1.0)                            # a scalar is not a (..., n) mean
+    with pytest.raises(ValueError, match="cov: expected shape"):
+        sigma_points([0.0, 0.0], [[1.0]])
+    with pytest.raises(ValueError, match="kappa: expected a finite real number > -2"):
+        sigma_points([0.0, 0.0], np.eye(2), kappa=-2)
+    with pytest.raises(TypeError, match="cov: expected a real array, found complex"):
+        sigma_points([0.0], [[1j]])
+    points, _ = sigma_points([0.0, 0.0], np.eye(2), kappa=1)      # spread sqrt(n + kappa) = sqrt(3)
+    assert np.allclose(np.abs(points).max(), np.sqrt(3))
+
+
+def test_results_say_why_they_stopped():
+    ex = landmark_example(K=3)
+    with pytest.warns(RuntimeWarning, match="did not converge"):
+        res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                                         n_cost_runs=10, max_iterations=1)
+    assert (res.converged, res.status, res.iterations) == (False, "max_iterations", 1)
+    assert "max_iterations = 1" in res.message
+    res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                                     n_cost_runs=10)
+    assert res.converged and res.status == "converged" and "rtol" in res.message
+    ilqg = belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0)
+    assert ilqg.converged and ilqg.status == "converged"
+    with pytest.warns(RuntimeWarning, match="did not converge"):
+        short = belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0, max_iterations=1, rtol=1e-12)
+    assert short.status in ("max_iterations", "no_progress") and not short.converged
+
+
+def test_simulate_checks_the_controller_against_the_draws():
+    from asoc.belief import MeanAffineController, simulate
+    ex = landmark_example(K=3)
+    noise = draw_noise(ex.model, ex.mean0, ex.cov0, 3, 2, np.random.default_rng(0))
+    short = MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2))
+    with pytest.raises(ValueError, match="controller: expected a horizon >= 3"):
+        simulate(ex.model, ex.cost, ex.mean0, ex.cov0, short, noise)
+    with pytest.raises(ValueError, match="policy: expected gains of shape"):
+        MeanAffineController(ex.model, AffinePolicy.zero(3, 1, 2))
+    with pytest.raises(TypeError, match="model: expected a NonlinearModel"):
+        simulate("model", ex.cost, ex.mean0, ex.cov0, short, noise)

@@ -156,3 +156,23 @@ def test_bad_input_raises_value_error_naming_the_argument(call, name):
         return
     with pytest.raises(ValueError, match=name):
         call()
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: gp.mcvmd([0.0, 1.0], [0.5, float("nan")], [0.0], None), "wx"),
+    (lambda: gp.mcvmd_matrix(np.zeros((2, 2, 1)), WX=[[0.5, 0.5], [float("nan"), 1.0]]), "WX"),
+    (lambda: gp.lcd_dirac([0.0], [float("nan")], [[0.0]], 1.0), "wx"),
+    (lambda: gp.lcd_dirac([0.0], None, [[0.0]], 0.0), "b"),
+    (lambda: gp.mean_kernel_dirac(np.zeros((2, 2, 1)), WX=[[1.0, 0.0], [0.5, float("nan")]], alpha=1.0, Lambda=1.0), "WX"),
+    (lambda: gp.mcvmd([complex(0, 1)], None, [0.0], None), "x"),
+    (lambda: gp.standard_normal_dirac_approximation(float("nan")), "L"),
+    (lambda: gp.standard_normal_dirac_approximation(2.5), "L"),
+    (lambda: gp.standard_normal_dirac_approximation("10"), "L"),
+    (lambda: gp.DistributionGP(n_restarts=float("inf")), "n_restarts"),
+    (lambda: gp.DistributionGP(n_restarts=True), "n_restarts"),
+    (lambda: gp.training_gaussians(2.5, np.random.default_rng(0)), "n"),
+    (lambda: gp.error_metrics([1.0, 2.0], [1.0, 1.0]), "truth"),
+])
+def test_nan_weights_and_bad_counts_are_named(call, name):
+    with pytest.raises((ValueError, TypeError), match=f"^{name}: expected"):
+        call()
