@@ -160,7 +160,7 @@ def _solve(S, B):
         return np.linalg.pinv(S, hermitian=True) @ B
 
 
-def conditional_covariance(ex, ey, weights):
+def _conditional_covariance(ex, ey, weights):
     """C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T and the gain from centred samples (Lemma 2.1)."""
     Cxx = np.einsum("i,...ij,...ik->...jk", weights, ex, ex)
     Cxy = np.einsum("i,...ij,...ik->...jk", weights, ex, ey)
@@ -230,7 +230,7 @@ def _next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta, gam
     ys = y_imn.reshape(-1, y_imn.shape[-1])
     _, ex = _moments(xs, weights)
     _, ey = _moments(ys, weights)
-    return conditional_covariance(ex, ey, weights)[0]
+    return _conditional_covariance(ex, ey, weights)[0]
 
 
 class UKF:
@@ -314,7 +314,7 @@ class UKF:
         y = m.h(pts[..., :n], pts[..., n:])
         _, ex = _moments(pts[..., :n], wts)
         y_hat, ey = _moments(y, wts)
-        post, gain = conditional_covariance(ex, ey, wts)
+        post, gain = _conditional_covariance(ex, ey, wts)
         return y_hat, gain, post
 
     def update(self, mean, cov, y):
@@ -450,7 +450,7 @@ def _numeric_jacobians(model, x, u, w, v):
     return tuple(np.atleast_2d(J) for J in (a_x, a_u, a_w, h_x, h_v))
 
 
-def jacobians(model, x, u, w, v):
+def _jacobians(model, x, u, w, v):
     """(a_x, a_u, a_w, h_x, h_v): the model's analytic Jacobians, else numdifftools [46]."""
     if model.jacobians is not None:
         return model.jacobians(x, u, w, v)
@@ -460,20 +460,42 @@ def jacobians(model, x, u, w, v):
 
 
 def ekf_predict(model, mean, cov, u):
-    """EKF time update [10]: linearisation of a at (mean, u, E{w})."""
+    """EKF time update [10]: linearisation of a at (mean, u, E{w}); (predicted mean, Gamma).
+
+    Broadcasts over leading axes; the arguments are not checked (see :func:`ekf_step`).
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> model = linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]])
+    >>> mean, Gamma = ekf_predict(model, np.array([1.0]), np.array([[1.0]]), np.array([0.5]))
+    >>> mean.tolist(), Gamma.tolist()
+    ([1.5], [[2.0]])
+    """
     w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
     v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
-    a_x, _, a_w, _, _ = jacobians(model, mean, u, w0, v0)
+    a_x, _, a_w, _, _ = _jacobians(model, mean, u, w0, v0)
     Gamma = a_x @ cov @ np.swapaxes(a_x, -1, -2) + a_w @ model.w.cov @ np.swapaxes(a_w, -1, -2)
     return model.a(mean, u, w0), Gamma
 
 
 def ekf_gain(model, mean, cov):
-    """EKF measurement linearisation at (mean, E{v}): (y_hat, gain K, innovation covariance, posterior)."""
+    """EKF measurement linearisation at (mean, E{v}): (y_hat, gain K, innovation covariance, posterior).
+
+    Broadcasts over leading axes; the arguments are not checked (see :func:`ekf_step`).
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> model = linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]])
+    >>> y_hat, K, S, post = ekf_gain(model, np.array([1.0]), np.array([[1.0]]))
+    >>> y_hat.tolist(), K.tolist(), S.tolist(), post.tolist()
+    ([1.0], [[0.5]], [[2.0]], [[0.5]])
+    """
     w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
     v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
     u0 = np.zeros(mean.shape[:-1] + (model.n_u,))
-    _, _, _, h_x, h_v = jacobians(model, mean, u0, w0, v0)
+    _, _, _, h_x, h_v = _jacobians(model, mean, u0, w0, v0)
     S = h_x @ cov @ np.swapaxes(h_x, -1, -2) + h_v @ model.v.cov @ np.swapaxes(h_v, -1, -2)
     K = np.swapaxes(_solve(S, h_x @ cov), -1, -2)
     post = cov - K @ h_x @ cov

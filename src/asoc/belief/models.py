@@ -124,11 +124,6 @@ class NonlinearModel:
         return np.asarray(self.h(np.zeros(self.n_x), self.v.mean)).shape[-1]
 
 
-def model(value, name: str = "model") -> NonlinearModel:
-    """Raise TypeError unless ``value`` is a :class:`NonlinearModel`."""
-    return check.instance(value, NonlinearModel, name)
-
-
 @dataclass(frozen=True)
 class QuadraticCost:
     """Cost (2.3) with C_k(x, u) = (x - x_T)^T Q (x - x_T) + u^T R u, C_K(x) = (x - x_T)^T Q_K (x - x_T).
@@ -204,7 +199,7 @@ class QuadraticCost:
         return np.einsum("...i,ij,...j->...", e, self.Q_K, e) + np.einsum("ij,...ji->...", self.Q_K, cov)
 
 
-def cost_for(cost, model_, name: str = "cost") -> QuadraticCost:
+def _cost_for(cost, model_, name: str = "cost") -> QuadraticCost:
     """Raise unless ``cost`` is a :class:`QuadraticCost` matching the model's dimensions."""
     check.instance(cost, QuadraticCost, name)
     if cost.Q.shape[0] != model_.n_x or cost.R.shape[0] != model_.n_u:

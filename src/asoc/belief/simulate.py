@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import validation as check
 from .filters import UKF, KAPPA, ekf_step
-from .models import GaussianNoise, NonlinearModel, cost_for
+from .models import GaussianNoise, NonlinearModel, _cost_for
 
 
 @dataclass(frozen=True)
@@ -221,7 +221,7 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
     106.3
     """
     model = check.instance(model, NonlinearModel, "model")
-    cost = cost_for(cost, model)
+    cost = _cost_for(cost, model)
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
     check.instance(noise, Noise, "noise")

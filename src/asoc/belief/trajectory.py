@@ -14,7 +14,7 @@ from .. import validation as check
 from ..progress import progress_bar
 from ..result import IterativeResult
 from .filters import UKF, DiracMixture, _sigma_points, KAPPA
-from .models import NonlinearModel, QuadraticCost, cost_for
+from .models import NonlinearModel, QuadraticCost, _cost_for
 from .simulate import MeanAffineController, _draw_noise, _simulate
 from .taylor import QuadraticExpansion, statistical_taylor_expansion
 
@@ -57,7 +57,7 @@ class AffinePolicy:
         return self.L[k] @ mean + self.d[k]
 
 
-def policy_for(policy, K, model, name="policy") -> AffinePolicy:
+def _policy_for(policy, K, model, name="policy") -> AffinePolicy:
     """Raise unless ``policy`` is an AffinePolicy of horizon ``K`` for ``model``."""
     check.instance(policy, AffinePolicy, name)
     if policy.L.shape != (K, model.n_u, model.n_x):
@@ -66,7 +66,7 @@ def policy_for(policy, K, model, name="policy") -> AffinePolicy:
     return policy
 
 
-def filter_for(filt, model, name="filt"):
+def _filter_for(filt, model, name="filt"):
     """The filter (default: a :class:`UKF` of ``model``); raise unless it has the filter methods."""
     if filt is None:
         return UKF(model)
@@ -137,8 +137,8 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
     (4, (3, 2))
     """
     model = check.instance(model, NonlinearModel, "model")
-    filt = filter_for(filt, model)
-    policy = policy_for(policy, check.instance(policy, AffinePolicy, "policy").L.shape[0], model)
+    filt = _filter_for(filt, model)
+    policy = _policy_for(policy, check.instance(policy, AffinePolicy, "policy").L.shape[0], model)
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
     mode = check.choice(mode, ("nominal", "sampled"), "mode")
@@ -323,7 +323,7 @@ class StageProblem:
     def __init__(self, model, cost, filt, estimate, nxt: Value, w_points, beta, covariance_hessian="psd",
                  covariance_term=True):
         self.model = check.instance(model, NonlinearModel, "model")
-        self.cost, self.filt = cost_for(cost, model), filter_for(filt, model)
+        self.cost, self.filt = _cost_for(cost, model), _filter_for(filt, model)
         self.covariance_hessian = check.choice(covariance_hessian, COVARIANCE_HESSIANS, "covariance_hessian")
         self.covariance_term = check.boolean(covariance_term, "covariance_term")
         self.nxt = check.instance(nxt, Value, "nxt")
@@ -561,7 +561,7 @@ def _affine_policy_value(exp, L, d, u_bar):
     return Value(float(s), v, 0.5 * (V + V.T), -0.5 * (M + M.T))
 
 
-def policy_step(exp: Expansion, u_bar, eps):
+def _policy_step(exp: Expansion, u_bar, eps):
     """L_k = -R~^{-1} P~, d_k = R~^{-1} p~ - eps R~^{-1} r~ + u_bar_k (Alg. 2.2, Step 6)."""
     p_t, r_t, P_t, R_t = exp.tilde
     return -np.linalg.solve(R_t, P_t), np.linalg.solve(R_t, p_t - eps * r_t) + u_bar
@@ -642,7 +642,7 @@ def _line_search(stage, exp, u_bar, mean_bar, alpha_min):
     before = stage.cost_to_go(u_bar)
     eps = 1.0
     while eps >= alpha_min:
-        L, d = policy_step(exp, u_bar, eps)
+        L, d = _policy_step(exp, u_bar, eps)
         after = stage.cost_to_go(L @ mean_bar + d)
         if after <= before:
             return LineSearch(eps=eps, cost_before=before, cost_after=after, converged=True, status="converged",
@@ -731,14 +731,14 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     ([1.0, 1.0], 0, [[0.0, 2.73], [0.0, 2.73]])
     """
     model = check.instance(model, NonlinearModel, "model")
-    cost = cost_for(cost, model)
-    filt = filter_for(filt, model)
+    cost = _cost_for(cost, model)
+    filt = _filter_for(filt, model)
     check.instance(ref, Reference, "ref")
     K = ref.u_bar.shape[0]
     if K != cost.K or len(ref.estimates) != K + 1:
         raise ValueError(f"ref: expected a reference of horizon cost.K = {cost.K}, found {K} inputs and "
                          f"{len(ref.estimates)} estimates")
-    policy = policy_for(policy, K, model)
+    policy = _policy_for(policy, K, model)
     w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
     beta = check.probability_vector(beta, "beta", w_points.shape[0])
     return _backward_pass(model, cost, filt, ref, policy, w_points, beta, *_options(
@@ -771,7 +771,7 @@ def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, 
             ls = _line_search(stage, exp, ref.u_bar[k], filt.mean(ref.estimates[k]), alpha_min)
             accepted, eps = ls.accepted, ls.eps
         if accepted:
-            L_new[k], d_new[k] = policy_step(exp, ref.u_bar[k], eps)
+            L_new[k], d_new[k] = _policy_step(exp, ref.u_bar[k], eps)
             value = _improved_policy_value(exp, eps)
         else:
             rejected += 1
@@ -834,12 +834,12 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     (True, 2, (3, 2, 2))
     """
     model = check.instance(model, NonlinearModel, "model")
-    cost = cost_for(cost, model)
+    cost = _cost_for(cost, model)
     K = cost.K
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
-    filt = filter_for(filt, model)
-    policy = AffinePolicy.zero(K, model.n_u, model.n_x) if policy is None else policy_for(policy, K, model)
+    filt = _filter_for(filt, model)
+    policy = AffinePolicy.zero(K, model.n_u, model.n_x) if policy is None else _policy_for(policy, K, model)
     max_iterations = check.integer(max_iterations, "max_iterations", minimum=1)
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     n_cost_runs = check.integer(n_cost_runs, "n_cost_runs", minimum=1)

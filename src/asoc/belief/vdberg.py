@@ -30,7 +30,7 @@ from .. import validation as check
 from ..progress import progress_bar
 from ..result import IterativeResult
 from .filters import _estimate, ekf_gain, ekf_predict
-from .models import NonlinearModel, cost_for
+from .models import NonlinearModel, _cost_for
 
 
 def _tril_indices(n):
@@ -38,7 +38,7 @@ def _tril_indices(n):
     return [(i, j) for j in range(n) for i in range(j, n)]
 
 
-def duplication(n):
+def _duplication(n):
     """D with vec(A) = D vech(A) for symmetric A (our vech order: columns of the lower triangle)."""
     idx = _tril_indices(n)
     D = np.zeros((n * n, len(idx)))
@@ -47,7 +47,7 @@ def duplication(n):
     return D
 
 
-def psd_sqrt(M):
+def _psd_sqrt(M):
     """Principal square root of a batch of symmetric PSD matrices."""
     lam, vec = np.linalg.eigh(0.5 * (M + np.swapaxes(M, -1, -2)))
     return (vec * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]) @ np.swapaxes(vec, -1, -2)
@@ -81,7 +81,7 @@ def belief_vector(mean, cov):
 
 def _belief_vector(mean, cov):
     n = np.shape(mean)[-1]
-    root = psd_sqrt(np.asarray(cov, dtype=float))
+    root = _psd_sqrt(np.asarray(cov, dtype=float))
     i, j = np.array(_tril_indices(n)).T
     mean, tril = np.asarray(mean, dtype=float), root[..., i, j]
     batch = np.broadcast_shapes(mean.shape[:-1], tril.shape[:-1])
@@ -89,8 +89,15 @@ def _belief_vector(mean, cov):
                            np.broadcast_to(tril, batch + tril.shape[-1:])], axis=-1)
 
 
-def unpack(b, n):
-    """(mean, sqrt(cov)) from a belief vector."""
+def belief_mean_and_root(b, n):
+    """(mean, sqrt(cov)) from a belief vector b = (mean, vech(sqrt(cov))) of [159] (inverse of :func:`belief_vector`).
+
+    Examples
+    --------
+    >>> mean, root = belief_mean_and_root(belief_vector([1.0, 2.0], [[4.0, 0.0], [0.0, 9.0]]), 2)
+    >>> mean.tolist(), root.tolist()
+    ([1.0, 2.0], [[2.0, 0.0], [0.0, 3.0]])
+    """
     b = np.asarray(b, dtype=float)
     root = np.zeros(b.shape[:-1] + (n, n))
     i, j = np.array(_tril_indices(n)).T
@@ -132,11 +139,11 @@ class BeliefDynamics:
         return self._dynamics(b, u)
 
     def _dynamics(self, b, u):
-        mean, root = unpack(b, self.n)
+        mean, root = belief_mean_and_root(b, self.n)
         mean_p, Gamma = ekf_predict(self.model, mean, root @ root, np.asarray(u, dtype=float))
         _, K, S, post = ekf_gain(self.model, mean_p, Gamma)
         # principal root of K H Gamma = (K S^1/2)(K S^1/2)^T from the thin SVD of K S^1/2
-        U, sv, _ = np.linalg.svd(K @ psd_sqrt(S), full_matrices=False)
+        U, sv, _ = np.linalg.svd(K @ _psd_sqrt(S), full_matrices=False)
         W_mean = (U * sv) @ U.T
         W = np.zeros((b.shape[-1], self.n))
         W[: self.n] = W_mean
@@ -170,21 +177,21 @@ class BeliefILQGResult(IterativeResult):
     iterations: int
 
 
-class BeliefCost:
+class _BeliefCost:
     """The cost (2.20) in the belief, with its analytic gradient and Hessian in (b, u)."""
 
     def __init__(self, cost, n):
         self.cost, self.n = cost, n
-        D = duplication(n)
+        D = _duplication(n)
         self._H_sqrt = 2 * D.T @ np.kron(np.eye(n), cost.Q) @ D
         self._H_sqrt_K = 2 * D.T @ np.kron(np.eye(n), cost.Q_K) @ D
 
     def stage(self, b, u):
-        mean, root = unpack(b, self.n)
+        mean, root = belief_mean_and_root(b, self.n)
         return self.cost.gaussian_stage(mean, root @ root, u)
 
     def terminal(self, b):
-        mean, root = unpack(b, self.n)
+        mean, root = belief_mean_and_root(b, self.n)
         return self.cost.gaussian_terminal(mean, root @ root)
 
     def _quad(self, b, Qm, Hs):
@@ -222,7 +229,7 @@ def _linearize(dyn, b, u):
     return g, A, B, FG[:, :, :lb], FG[:, :, lb:], W.T
 
 
-def rollout(dyn, bcost, b0, u_bar, b_bar=None, L=None, l=None, eps=1.0):
+def _rollout(dyn, bcost, b0, u_bar, b_bar=None, L=None, l=None, eps=1.0):
     """Forward pass with w = 0: u_t = u_bar_t + L_t (b_t - b_bar_t) + eps l_t. Returns (b, u, cost)."""
     K = u_bar.shape[0]
     b, bs, us, total = b0, [b0], [], 0.0
@@ -244,7 +251,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     model : NonlinearModel
         EKF Jacobians: analytic if the model gives them.
     cost : QuadraticCost
-        Written in the belief by :class:`BeliefCost`; its ``K`` is the horizon.
+        Written in the belief by :class:`_BeliefCost`; its ``K`` is the horizon.
     mean0, cov0 : array_like
         The initial Gaussian belief, (n_x,) and (n_x, n_x) PSD.
     u_init : array_like (K, n_u), optional
@@ -283,7 +290,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     (True, True)
     """
     model = check.instance(model, NonlinearModel, "model")
-    cost = cost_for(cost, model)
+    cost = _cost_for(cost, model)
     K, n = cost.K, model.n_x
     mean0 = check.vector(mean0, "mean0", n)
     cov0 = check.covariance(cov0, "cov0", n)
@@ -292,9 +299,9 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     eps_min = check.real_scalar(eps_min, "eps_min", low=0, high=1, low_open=True)
     progress = check.boolean(progress, "progress")
-    dyn, bcost = BeliefDynamics(model), BeliefCost(cost, n)
+    dyn, bcost = BeliefDynamics(model), _BeliefCost(cost, n)
     b0 = _belief_vector(mean0, cov0)
-    b_bar, u_bar, J = rollout(dyn, bcost, b0, u_bar)
+    b_bar, u_bar, J = _rollout(dyn, bcost, b0, u_bar)
     costs, status, it = [J], "max_iterations", 0
     bar = progress_bar(total=max_iterations, enabled=progress, desc="belief iLQG [159]")
     for it in range(1, max_iterations + 1):
@@ -305,7 +312,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
             break
         eps, accepted = 1.0, False
         while eps >= eps_min:
-            b_new, u_new, J_new = rollout(dyn, bcost, b0, u_bar, b_bar, L, l, eps)
+            b_new, u_new, J_new = _rollout(dyn, bcost, b0, u_bar, b_bar, L, l, eps)
             if J_new < J:
                 accepted = True
                 break
