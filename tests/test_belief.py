@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from asoc.belief import (UKF, AffinePolicy, DiracMixture, GaussianNoise, ParticleFilter, QuadraticCost,
-                         affine_policy_value, algorithm_2_2, belief_ilqg, draw_noise, ekf_step,
-                         landmark_example, lemma_2_1, linear_gaussian_model, reference_trajectory,
+                         affine_policy_value, optimize_belief_trajectory, belief_ilqg, draw_noise, ekf_step,
+                         landmark_example, next_estimate_covariance, linear_gaussian_model, reference_trajectory,
                          sigma_points, statistical_taylor_expansion, statistical_taylor_linearization_error,
-                         theorem_2_5_value)
+                         improved_policy_value)
 from asoc.belief.trajectory import StageProblem, terminal_value
 
 # a linear-Gaussian model (the LQG case of Sec. 2.3)
@@ -75,7 +75,7 @@ def test_lemma_2_1_matches_large_sample():
     big = Cz[:2, :2] - Cz[:2, 2:] @ np.linalg.solve(Cz[2:, 2:], Cz[2:, :2])
     vp, gamma = sigma_points(ex.model.v.mean, ex.model.v.cov)   # y is linear in v: exact moments
     parts = GaussianNoise(mean, cov).sample(rng, 1000)
-    ours = lemma_2_1(DiracMixture(parts), u, ex.model, ex.model.w.sample(rng, 300), vp, gamma=gamma)
+    ours = next_estimate_covariance(DiracMixture(parts), u, ex.model, ex.model.w.sample(rng, 300), vp, gamma=gamma)
     assert np.allclose(ours, big, atol=0.03)
 
 
@@ -113,7 +113,7 @@ def test_particle_filter_tracks_kalman_filter():
 def test_algorithm_2_2_converges_to_lqg():
     Q, R, K = np.eye(2), np.array([[0.5]]), 8
     cost = QuadraticCost(Q, R, Q, np.zeros(2), K)
-    res = algorithm_2_2(LIN, cost, np.array([1.0, 0.5]), 0.1 * np.eye(2), rng=np.random.default_rng(0),
+    res = optimize_belief_trajectory(LIN, cost, np.array([1.0, 0.5]), 0.1 * np.eye(2), rng=np.random.default_rng(0),
                         n_cost_runs=50, max_iterations=10)
     assert res.converged
     for L_ours, L_lqg in zip(res.policy.L, lqg_gains(Q, R, Q, K)):
@@ -141,7 +141,7 @@ def _step1_setup():
     policy = AffinePolicy(np.zeros((3, 2, 2)), np.tile([1.0, -0.3], (3, 1)))
     ref = reference_trajectory(ex.model, filt, policy, ex.mean0, ex.cov0)
     wp, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
-    nxt = theorem_2_5_value(StageProblem(ex.model, ex.cost, filt, ref.estimates[2],
+    nxt = improved_policy_value(StageProblem(ex.model, ex.cost, filt, ref.estimates[2],
                                          terminal_value(ex.cost, filt.mixture(ref.estimates[3])), wp, beta)
                             .expansion(ref.u_bar[2]), 1.0)
     return ex, filt, policy, ref, wp, beta, nxt
@@ -154,7 +154,7 @@ def test_affine_policy_value_equals_theorem_2_5_for_its_policy():
     eps = 0.5
     L = -np.linalg.solve(R_t, P_t)
     d = np.linalg.solve(R_t, p_t - eps * r_t) + ref.u_bar[1]
-    a, b = theorem_2_5_value(exp, eps), affine_policy_value(exp, L, d, ref.u_bar[1])
+    a, b = improved_policy_value(exp, eps), affine_policy_value(exp, L, d, ref.u_bar[1])
     assert a.s == pytest.approx(b.s) and np.allclose(a.v, b.v) and np.allclose(a.V, b.V)
     assert np.allclose(a.S, b.S)
 
@@ -171,7 +171,7 @@ def test_both_controllers_improve_on_the_example():
     ex = landmark_example(K=20)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(1),
+        res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(1),
                             n_cost_runs=30, max_iterations=3)
     assert res.costs[-1] < 0.5 * res.costs[0]
     assert all(np.all(e[e > 0] <= 1.0) for e in res.eps)
@@ -205,10 +205,10 @@ def test_cost_violating_assumption_2_3():
 
 def test_bad_rng_and_policy_shape():
     ex = landmark_example(K=3)
-    with pytest.raises(ValueError, match="rng"):
-        algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=1)
+    with pytest.raises(TypeError, match="rng"):
+        optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=1)
     with pytest.raises(ValueError, match="policy"):
-        algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+        optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
                       policy=AffinePolicy.zero(4, 2, 2))
     with pytest.raises(ValueError, match="n_runs"):
         draw_noise(ex.model, ex.mean0, ex.cov0, 3, 0, np.random.default_rng(0))
@@ -217,23 +217,26 @@ def test_bad_rng_and_policy_shape():
 def test_indefinite_covariance_hessian_warns_not_crashes():
     ex = landmark_example(K=20)
     with pytest.warns(RuntimeWarning, match="Assumption 2.3"):
-        res = algorithm_2_2(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(1),
+        res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(1),
                             n_cost_runs=20, max_iterations=2, covariance_hessian="exact")
     assert res.iterations == 2 and sum(res.rejected) > 0
 
 
 def test_line_search_that_cannot_decrease_stops_with_flag():
-    from asoc.belief.trajectory import line_search
+    from asoc.belief.trajectory import Expansion, line_search
 
-    class Flat:
+    class Flat(StageProblem):
+        def __init__(self):
+            pass
+
         def cost_to_go(self, u):
             return 0.0 if np.allclose(u, 0.0) else 1.0 + float(np.sum(np.abs(u)))
 
-    class Exp:
-        tilde = (np.zeros(1), np.ones(1), np.zeros((1, 1)), np.eye(1))
-
-    ls = line_search(Flat(), Exp(), np.zeros(1), np.zeros(1))
+    exp = Expansion(phi=np.zeros(1), p=np.zeros((1, 1)), r=np.ones((1, 1)), Q=np.zeros((1, 1, 1)),
+                    P=np.zeros((1, 1, 1)), R=np.eye(1)[None], points=np.zeros((1, 1)), alpha=np.ones(1))
+    ls = line_search(Flat(), exp, np.zeros(1), np.zeros(1))
     assert not ls.accepted and ls.cost_after == ls.cost_before
+    assert ls.status == "no_progress" and "alpha_min" in ls.message
 
 
 # --- safeguards for the curvature of the covariance term ---------------------------
@@ -335,5 +338,71 @@ def test_perturbation_sweep_rejects_bad_arguments():
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 0, np.random.default_rng(0))
     with pytest.raises(ValueError, match="scale"):
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(0), scale=0.0)
-    with pytest.raises(ValueError, match="rng"):
+    with pytest.raises(TypeError, match="rng"):
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, 1)
+
+
+# --- issue 15: bad input named, results say why they stopped --------------------------
+
+@pytest.mark.parametrize("bad, error", [(0, ValueError), (-1, ValueError), (2.5, TypeError), (float("nan"), TypeError),
+                                        (float("inf"), TypeError), ("3", TypeError), (True, TypeError)])
+def test_integer_arguments_reject_non_integers(bad, error):
+    ex = landmark_example(K=2)
+    with pytest.raises(error, match="max_iterations: expected an integer"):
+        optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                                   max_iterations=bad)
+    with pytest.raises(error, match="max_iterations: expected an integer"):
+        belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0, max_iterations=bad)
+    with pytest.raises(error, match="n_runs: expected an integer"):
+        draw_noise(ex.model, ex.mean0, ex.cov0, 2, bad, np.random.default_rng(0))
+
+
+def test_belief_ilqg_rejects_negative_definite_covariance():
+    ex = landmark_example(K=2)
+    with pytest.raises(ValueError, match="cov0: expected a positive semi-definite matrix, found smallest eigenvalue -1"):
+        belief_ilqg(ex.model, ex.cost, ex.mean0, -np.eye(2))
+    with pytest.raises(ValueError, match="cov0"):
+        optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, -np.eye(2), rng=np.random.default_rng(0))
+
+
+def test_sigma_points_reject_degenerate_arguments():
+    with pytest.raises(ValueError, match="mean: expected shape"):
+        sigma_points(1.0, 1.0)                            # a scalar is not a (..., n) mean
+    with pytest.raises(ValueError, match="cov: expected shape"):
+        sigma_points([0.0, 0.0], [[1.0]])
+    with pytest.raises(ValueError, match="kappa: expected a finite real number > -2"):
+        sigma_points([0.0, 0.0], np.eye(2), kappa=-2)
+    with pytest.raises(TypeError, match="cov: expected a real array, found complex"):
+        sigma_points([0.0], [[1j]])
+    points, _ = sigma_points([0.0, 0.0], np.eye(2), kappa=1)      # spread sqrt(n + kappa) = sqrt(3)
+    assert np.allclose(np.abs(points).max(), np.sqrt(3))
+
+
+def test_results_say_why_they_stopped():
+    ex = landmark_example(K=3)
+    with pytest.warns(RuntimeWarning, match="did not converge"):
+        res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                                         n_cost_runs=10, max_iterations=1)
+    assert (res.converged, res.status, res.iterations) == (False, "max_iterations", 1)
+    assert "max_iterations = 1" in res.message
+    res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+                                     n_cost_runs=10)
+    assert res.converged and res.status == "converged" and "rtol" in res.message
+    ilqg = belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0)
+    assert ilqg.converged and ilqg.status == "converged"
+    with pytest.warns(RuntimeWarning, match="did not converge"):
+        short = belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0, max_iterations=1, rtol=1e-12)
+    assert short.status in ("max_iterations", "no_progress") and not short.converged
+
+
+def test_simulate_checks_the_controller_against_the_draws():
+    from asoc.belief import MeanAffineController, simulate
+    ex = landmark_example(K=3)
+    noise = draw_noise(ex.model, ex.mean0, ex.cov0, 3, 2, np.random.default_rng(0))
+    short = MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2))
+    with pytest.raises(ValueError, match="controller: expected a horizon >= 3"):
+        simulate(ex.model, ex.cost, ex.mean0, ex.cov0, short, noise)
+    with pytest.raises(ValueError, match="policy: expected gains of shape"):
+        MeanAffineController(ex.model, AffinePolicy.zero(3, 1, 2))
+    with pytest.raises(TypeError, match="model: expected a NonlinearModel"):
+        simulate("model", ex.cost, ex.mean0, ex.cov0, short, noise)

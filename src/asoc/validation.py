@@ -170,3 +170,158 @@ def generator(rng, name: str = "rng") -> np.random.Generator:
         raise TypeError(f"{name}: expected a numpy.random.Generator (np.random.default_rng(seed)), "
                         f"found {type(rng).__name__}")
     return rng
+
+
+# --- added for asoc.belief and asoc.gp -------------------------------------------------
+
+def instance(value, types, name: str, what: str | None = None):
+    """An object of one of ``types`` (e.g. the model or system argument).
+
+    Examples
+    --------
+    >>> instance(3, int, "n")
+    3
+    >>> instance("a", (int, float), "n", "a number")
+    Traceback (most recent call last):
+    ...
+    TypeError: n: expected a number, found str 'a'
+    """
+    if not isinstance(value, types):
+        names = " or ".join(t.__name__ for t in (types if isinstance(types, tuple) else (types,)))
+        raise TypeError(f"{name}: expected {what or 'a ' + names}, found {type(value).__name__} {_describe(value)}")
+    return value
+
+
+def function(value, name: str):
+    """A callable (a model function, a density, a test function).
+
+    Examples
+    --------
+    >>> function(abs, "g")(-2)
+    2
+    >>> function(1.0, "g")
+    Traceback (most recent call last):
+    ...
+    TypeError: g: expected a callable, found float 1.0
+    """
+    if not callable(value):
+        raise TypeError(f"{name}: expected a callable, found {type(value).__name__} {_describe(value)}")
+    return value
+
+
+def choice(value, options, name: str):
+    """One of a fixed set of option strings.
+
+    Examples
+    --------
+    >>> choice("psd", ("psd", "exact"), "covariance_hessian")
+    'psd'
+    >>> choice("clip", ("psd", "exact"), "covariance_hessian")
+    Traceback (most recent call last):
+    ...
+    ValueError: covariance_hessian: expected one of ['exact', 'psd'], found 'clip'
+    """
+    if not isinstance(value, str) or value not in options:
+        raise ValueError(f"{name}: expected one of {sorted(options)}, found {_describe(value)}")
+    return value
+
+
+def boolean(value, name: str) -> bool:
+    """A flag: ``bool`` or ``numpy.bool_`` (not 0/1, not a string).
+
+    Examples
+    --------
+    >>> boolean(True, "progress")
+    True
+    >>> boolean("yes", "progress")
+    Traceback (most recent call last):
+    ...
+    TypeError: progress: expected True or False, found 'yes'
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected True or False, found {_describe(value)}")
+    return bool(value)
+
+
+def covariance(value, name: str, size: int | None = None, *, definite=False, scalar=False) -> np.ndarray:
+    """A symmetric positive semi-definite (``definite=True``: definite) ``(size, size)`` matrix.
+
+    ``scalar=True`` also accepts a number or a 1-element vector as a ``(1, 1)`` matrix.
+
+    Examples
+    --------
+    >>> covariance(2.0, "var", scalar=True)
+    array([[2.]])
+    >>> covariance([[1.0, 0.0], [0.0, -1.0]], "cov0")
+    Traceback (most recent call last):
+    ...
+    ValueError: cov0: expected a positive semi-definite matrix, found smallest eigenvalue -1
+    """
+    array = real_array(value, name)
+    if scalar and array.ndim < 2 and array.size == 1:
+        array = array.reshape(1, 1)
+    want = "(n, n)" if size is None else f"({size}, {size})"
+    if array.ndim != 2 or array.shape[0] != array.shape[1] or array.shape[0] == 0 \
+            or (size is not None and array.shape[0] != size):
+        raise ValueError(f"{name}: expected a square matrix of shape {want}, found shape {array.shape}")
+    return semidefinite(array, name, definite=definite)
+
+
+def vector(value, name: str, size: int | None = None) -> np.ndarray:
+    """A non-empty finite real vector; a number is read as a 1-vector.
+
+    Examples
+    --------
+    >>> vector(3, "mean0")
+    array([3.])
+    >>> vector([1.0, 2.0], "mean0", size=3)
+    Traceback (most recent call last):
+    ...
+    ValueError: mean0: expected shape (3,), found shape (2,)
+    """
+    array = real_array(value, name)
+    if array.ndim == 0:
+        array = array.reshape(1)
+    array = real_array(array, name, shape=(size,))
+    if array.size == 0:
+        raise ValueError(f"{name}: expected a non-empty vector, found shape {array.shape}")
+    return array
+
+
+def weights_or_equal(value, name: str, size: int) -> np.ndarray:
+    """Probability weights of ``size`` components; ``None`` means equal weights.
+
+    Examples
+    --------
+    >>> weights_or_equal(None, "wx", 4)
+    array([0.25, 0.25, 0.25, 0.25])
+    >>> weights_or_equal([0.5, float("nan")], "wx", 2)
+    Traceback (most recent call last):
+    ...
+    ValueError: wx: expected finite entries, found 1 non-finite
+    """
+    if value is None:
+        return np.full(size, 1.0 / size)
+    return probability_vector(value, name, size)
+
+
+def probability_rows(value, name: str, shape) -> np.ndarray:
+    """A matrix of the given shape whose rows are probability weights.
+
+    Examples
+    --------
+    >>> probability_rows([[0.5, 0.5], [1.0, 0.0]], "W", (2, 2)).sum(axis=1)
+    array([1., 1.])
+    >>> probability_rows([[0.5, 0.6]], "W", (1, 2))
+    Traceback (most recent call last):
+    ...
+    ValueError: W: expected each row to sum to 1, found a sum 1.1
+    """
+    rows = real_array(value, name, shape=tuple(shape))
+    if np.any(rows < 0):
+        raise ValueError(f"{name}: expected non-negative probabilities, found minimum {rows.min():.3g}")
+    sums = rows.sum(axis=-1)
+    worst = np.argmax(np.abs(sums - 1.0)) if sums.size else None
+    if worst is not None and abs(sums.flat[worst] - 1.0) > WEIGHT_ATOL:
+        raise ValueError(f"{name}: expected each row to sum to 1, found a sum {sums.flat[worst]:.10g}")
+    return rows

@@ -5,7 +5,7 @@
   and noise, sample scaling kappa = 0.5, which gives the 2n+1 points equal weights
   1/(2n+1)). Its sigma points are the Dirac mixture of the estimate (Sec. 2.2).
 * :class:`ParticleFilter`: the bootstrap particle filter [6] with systematic resampling.
-* :func:`lemma_2_1`: the empirical covariance of the next estimate from joint samples.
+* :func:`next_estimate_covariance`: the empirical covariance of the next estimate from joint samples.
 * :func:`ekf_step`: the extended Kalman filter (used by the competitor [159]).
 
 UKF functions broadcast over leading axes of ``mean`` (batches of Monte Carlo runs).
@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_psd, check_rng, check_vector, check_weights
+from .. import validation as check
+from .models import GaussianNoise, NonlinearModel
 
 KAPPA = 0.5  # sample scaling of the toolbox's UKF: w_0 = kappa / (n + kappa)
 
@@ -27,26 +28,39 @@ class DiracMixture:
     Parameters
     ----------
     points : array_like, shape (M, n)
+        Finite locations, M >= 1, n >= 1.
     weights : array_like, shape (M,), non-negative, summing to one (None: equal weights).
+
+    Raises
+    ------
+    ValueError, TypeError
+        If ``points`` is not a finite real (M, n) array or ``weights`` not probability weights.
+
+    Examples
+    --------
+    >>> mix = DiracMixture([[0.0, 0.0], [2.0, 4.0]])
+    >>> mix.mean.tolist(), mix.cov.tolist()
+    ([1.0, 2.0], [[1.0, 2.0], [2.0, 4.0]])
     """
 
     points: np.ndarray
     weights: np.ndarray = None
 
     def __post_init__(self):
-        pts = np.asarray(self.points, dtype=float)
-        if pts.ndim != 2 or pts.shape[0] == 0 or not np.all(np.isfinite(pts)):
-            raise ValueError(f"points: expected a finite array of shape (M, n), found shape {pts.shape}")
-        w = np.full(pts.shape[0], 1.0 / pts.shape[0]) if self.weights is None else self.weights
+        pts = check.real_array(self.points, "points", ndim=2)
+        if 0 in pts.shape:
+            raise ValueError(f"points: expected a non-empty array of shape (M, n), found shape {pts.shape}")
         object.__setattr__(self, "points", pts)
-        object.__setattr__(self, "weights", check_weights(w, pts.shape[0], "weights"))
+        object.__setattr__(self, "weights", check.weights_or_equal(self.weights, "weights", pts.shape[0]))
 
     @property
     def mean(self) -> np.ndarray:
+        """sum_i alpha_i x_i."""
         return self.weights @ self.points
 
     @property
     def cov(self) -> np.ndarray:
+        """sum_i alpha_i (x_i - mean)(x_i - mean)^T."""
         e = self.points - self.mean
         return (self.weights[:, None] * e).T @ e
 
@@ -60,6 +74,25 @@ def _root(cov):
         return vec * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]
 
 
+def _estimate(mean, cov, mean_name, cov_name, n=None, definite_check=True):
+    """A batch of Gaussian estimates: mean (..., n), cov (..., n, n) PSD, broadcastable."""
+    mean = check.real_array(mean, mean_name)
+    if mean.ndim == 0 or mean.shape[-1] == 0 or (n is not None and mean.shape[-1] != n):
+        raise ValueError(f"{mean_name}: expected shape (..., {n or 'n'}) with n >= 1, found shape {mean.shape}")
+    n = mean.shape[-1]
+    cov = check.real_array(cov, cov_name)
+    if cov.ndim < 2 or cov.shape[-2:] != (n, n):
+        raise ValueError(f"{cov_name}: expected shape (..., {n}, {n}), found shape {cov.shape}")
+    try:
+        np.broadcast_shapes(mean.shape[:-1], cov.shape[:-2])
+    except ValueError:
+        raise ValueError(f"{mean_name}, {cov_name}: expected broadcastable batch shapes, found "
+                         f"{mean.shape} and {cov.shape}") from None
+    if definite_check:
+        cov = check.semidefinite(cov, cov_name)
+    return mean, cov
+
+
 def sigma_points(mean, cov, kappa: float = KAPPA):
     """Sigma points m, m +- sqrt(n + kappa) L_j of N(mean, cov) and their weights [101].
 
@@ -67,6 +100,7 @@ def sigma_points(mean, cov, kappa: float = KAPPA):
     ----------
     mean : array_like, (..., n)
     cov : array_like, (..., n, n)
+        Symmetric positive semi-definite.
     kappa : float
         Spread parameter, kappa > -n.
 
@@ -77,14 +111,25 @@ def sigma_points(mean, cov, kappa: float = KAPPA):
 
     Raises
     ------
-    ValueError
-        If kappa <= -n.
+    ValueError, TypeError
+        If the shapes do not match, ``cov`` is not PSD or kappa <= -n.
+
+    Examples
+    --------
+    >>> points, weights = sigma_points([4.0], [[1.5]])
+    >>> points[:, 0].round(4).tolist(), weights.round(4).tolist()
+    ([4.0, 5.5, 2.5], [0.3333, 0.3333, 0.3333])
     """
-    mean = np.asarray(mean, dtype=float)
+    mean, cov = _estimate(mean, cov, "mean", "cov")
     n = mean.shape[-1]
-    if kappa <= -n:
-        raise ValueError(f"kappa: expected kappa > -n = {-n}, found {kappa}")
-    L = np.sqrt(n + kappa) * _root(np.asarray(cov, dtype=float))
+    kappa = check.real_scalar(kappa, "kappa", low=-n, low_open=True)
+    return _sigma_points(mean, cov, kappa)
+
+
+def _sigma_points(mean, cov, kappa):
+    n = mean.shape[-1]
+    L = np.sqrt(n + kappa) * _root(cov)
+    L = np.broadcast_to(L, np.broadcast_shapes(mean.shape[:-1], L.shape[:-2]) + (n, n))
     offsets = np.concatenate([np.zeros(L.shape[:-2] + (1, n)), np.swapaxes(L, -1, -2),
                               -np.swapaxes(L, -1, -2)], axis=-2)
     weights = np.full(2 * n + 1, 1.0 / (2 * (n + kappa)))
@@ -107,18 +152,26 @@ def _block_diag(P, Q):
     return out
 
 
-def conditional_covariance(ex, ey, weights):
+def _solve(S, B):
+    """S^{-1} B, with the pseudo-inverse where S is singular (a degenerate measurement)."""
+    try:
+        return np.linalg.solve(S, B)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(S, hermitian=True) @ B
+
+
+def _conditional_covariance(ex, ey, weights):
     """C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T and the gain from centred samples (Lemma 2.1)."""
     Cxx = np.einsum("i,...ij,...ik->...jk", weights, ex, ex)
     Cxy = np.einsum("i,...ij,...ik->...jk", weights, ex, ey)
     Cyy = np.einsum("i,...ij,...ik->...jk", weights, ey, ey)
-    gain = np.swapaxes(np.linalg.solve(Cyy, np.swapaxes(Cxy, -1, -2)), -1, -2)
+    gain = np.swapaxes(_solve(Cyy, np.swapaxes(Cxy, -1, -2)), -1, -2)
     post = Cxx - gain @ np.swapaxes(Cxy, -1, -2)
     return 0.5 * (post + np.swapaxes(post, -1, -2)), gain
 
 
-def lemma_2_1(mixture: DiracMixture, u, model, w_samples, v_samples, beta=None, gamma=None):
-    """Covariance C^{xx|y}_{k+1} of the next estimate from joint samples (Lemma 2.1).
+def next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta=None, gamma=None):
+    """Lemma 2.1: covariance C^{xx|y}_{k+1} of the next estimate from joint samples.
 
     Parameters
     ----------
@@ -128,7 +181,7 @@ def lemma_2_1(mixture: DiracMixture, u, model, w_samples, v_samples, beta=None, 
         The input u_k.
     model : NonlinearModel
         With ``a`` and ``h``.
-    w_samples, v_samples : numpy.ndarray, (R, n_w) and (S, n_v)
+    w_samples, v_samples : array_like, (R, n_w) and (S, n_v)
         Process and measurement noise samples.
     beta, gamma : array_like (R,) and (S,), optional
         Their weights (None: equal weights).
@@ -136,25 +189,48 @@ def lemma_2_1(mixture: DiracMixture, u, model, w_samples, v_samples, beta=None, 
     Returns
     -------
     numpy.ndarray, (n_x, n_x)
-        C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T over all M R S combinations.
+        C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T over all M R S combinations (the
+        pseudo-inverse where C^{yy} is singular).
 
     Raises
     ------
-    ValueError
-        If ``beta`` or ``gamma`` are not valid weights.
+    ValueError, TypeError
+        If an argument has the wrong type or shape, or ``beta``, ``gamma`` are not weights.
+
+    Examples
+    --------
+    >>> from asoc.belief import landmark_example
+    >>> ex = landmark_example()
+    >>> mix = DiracMixture(sigma_points(ex.mean0, ex.cov0)[0])
+    >>> w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    >>> v, gamma = sigma_points(ex.model.v.mean, ex.model.v.cov)
+    >>> C = next_estimate_covariance(mix, [1.0, 0.0], ex.model, w, v, beta, gamma)
+    >>> np.trace(C).round(4)
+    np.float64(0.3699)
     """
-    w_samples, v_samples = np.atleast_2d(w_samples), np.atleast_2d(v_samples)
-    R, S = w_samples.shape[0], v_samples.shape[0]
-    beta = np.full(R, 1.0 / R) if beta is None else check_weights(beta, R, "beta")
-    gamma = np.full(S, 1.0 / S) if gamma is None else check_weights(gamma, S, "gamma")
-    x_im = model.a(mixture.points[:, None, :], np.asarray(u, dtype=float), w_samples[None, :, :])
+    model = check.instance(model, NonlinearModel, "model")
+    mixture = check.instance(mixture, DiracMixture, "mixture")
+    check.real_array(mixture.points, "mixture.points", shape=(None, model.n_x))
+    u = check.vector(u, "u", model.n_u)
+    w_samples = check.real_array(w_samples, "w_samples", shape=(None, model.w.dim))
+    v_samples = check.real_array(v_samples, "v_samples", shape=(None, model.v.dim))
+    for name, samples in (("w_samples", w_samples), ("v_samples", v_samples)):
+        if samples.shape[0] == 0:
+            raise ValueError(f"{name}: expected at least one sample, found shape {samples.shape}")
+    beta = check.weights_or_equal(beta, "beta", w_samples.shape[0])
+    gamma = check.weights_or_equal(gamma, "gamma", v_samples.shape[0])
+    return _next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta, gamma)
+
+
+def _next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta, gamma):
+    x_im = model.a(mixture.points[:, None, :], u, w_samples[None, :, :])
     y_imn = model.h(x_im[:, :, None, :], v_samples[None, None, :, :])
     weights = (mixture.weights[:, None, None] * beta[None, :, None] * gamma[None, None, :]).ravel()
     xs = np.broadcast_to(x_im[:, :, None, :], y_imn.shape[:3] + x_im.shape[-1:]).reshape(-1, x_im.shape[-1])
     ys = y_imn.reshape(-1, y_imn.shape[-1])
     _, ex = _moments(xs, weights)
     _, ey = _moments(ys, weights)
-    return conditional_covariance(ex, ey, weights)[0]
+    return _conditional_covariance(ex, ey, weights)[0]
 
 
 class UKF:
@@ -162,33 +238,70 @@ class UKF:
 
     The estimate is ``(mean, cov)``; its Dirac mixture is :meth:`mixture` (sigma points).
     ``predict``/``update`` broadcast over leading axes (batches of runs).
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    kappa : float
+        Sample scaling of the joint sigma points, > -(n_x + min(n_w, n_v)).
+
+    Raises
+    ------
+    ValueError, TypeError
+        If ``model`` is not a NonlinearModel or ``kappa`` is out of range.
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> ukf = UKF(linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]]))
+    >>> mean, cov = ukf.step(ukf.initial([0.0], [[1.0]]), [0.0], [1.0])
+    >>> mean.round(4).tolist(), cov.round(4).tolist()
+    ([0.6667], [[0.6667]])
     """
 
     def __init__(self, model, kappa: float = KAPPA):
-        self.model, self.kappa = model, kappa
+        self.model = check.instance(model, NonlinearModel, "model")
+        self.kappa = check.real_scalar(kappa, "kappa", low=-(model.n_x + min(model.w.dim, model.v.dim)),
+                                       low_open=True)
 
     def initial(self, mean, cov, rng=None):
-        mean = check_vector(mean, "mean0")
-        return mean, check_psd(cov, "cov0", mean.size)
+        """The initial estimate (mean0, cov0) after checking it."""
+        mean = check.vector(mean, "mean", self.model.n_x)
+        return mean, check.covariance(cov, "cov", mean.size)
 
     def mixture(self, estimate) -> DiracMixture:
-        points, weights = sigma_points(*estimate, self.kappa)
+        """The sigma points of the estimate as a :class:`DiracMixture`."""
+        points, weights = _sigma_points(*self._checked(*_pair(estimate)), self.kappa)
         return DiracMixture(points, weights)
 
     @staticmethod
     def mean(estimate):
+        """The estimate's mean."""
         return estimate[0]
 
     @staticmethod
     def cov(estimate):
+        """The estimate's covariance."""
         return estimate[1]
+
+    def _checked(self, mean, cov, extra=None, size=None, extra_name=None):
+        mean, cov = _estimate(mean, cov, "mean", "cov", self.model.n_x, definite_check=False)
+        if extra is None:
+            return mean, cov
+        extra = check.real_array(extra, extra_name)
+        if extra.ndim == 0 or extra.shape[-1] != size:
+            raise ValueError(f"{extra_name}: expected shape (..., {size}), found shape {extra.shape}")
+        return mean, cov, extra
 
     def predict(self, mean, cov, u):
         """Time update through x_{k+1} = a(x_k, u_k, w_k) (eq. 2.1)."""
+        return self._predict(*self._checked(mean, cov, u, self.model.n_u, "u"))
+
+    def _predict(self, mean, cov, u):
         m = self.model
         n = mean.shape[-1]
         joint_mean = np.concatenate([mean, np.broadcast_to(m.w.mean, mean.shape[:-1] + m.w.mean.shape)], -1)
-        pts, wts = sigma_points(joint_mean, _block_diag(cov, m.w.cov), self.kappa)
+        pts, wts = _sigma_points(joint_mean, _block_diag(cov, m.w.cov), self.kappa)
         x_next = m.a(pts[..., :n], np.asarray(u)[..., None, :], pts[..., n:])
         mean_p, e = _moments(x_next, wts)
         return mean_p, np.einsum("i,...ij,...ik->...jk", wts, e, e)
@@ -197,26 +310,44 @@ class UKF:
         m = self.model
         n = mean.shape[-1]
         joint_mean = np.concatenate([mean, np.broadcast_to(m.v.mean, mean.shape[:-1] + m.v.mean.shape)], -1)
-        pts, wts = sigma_points(joint_mean, _block_diag(cov, m.v.cov), self.kappa)
+        pts, wts = _sigma_points(joint_mean, _block_diag(cov, m.v.cov), self.kappa)
         y = m.h(pts[..., :n], pts[..., n:])
         _, ex = _moments(pts[..., :n], wts)
         y_hat, ey = _moments(y, wts)
-        post, gain = conditional_covariance(ex, ey, wts)
+        post, gain = _conditional_covariance(ex, ey, wts)
         return y_hat, gain, post
 
     def update(self, mean, cov, y):
         """Measurement update with y_k = h(x_k, v_k) (eq. 2.2)."""
+        return self._update(*self._checked(mean, cov, y, self.model.n_y, "y"))
+
+    def _update(self, mean, cov, y):
         y_hat, gain, post = self._measurement(mean, cov)
         return mean + np.einsum("...ij,...j->...i", gain, np.asarray(y) - y_hat), post
 
     def step(self, estimate, u, y, rng=None):
         """Predict with ``u`` and update with ``y``: the next estimate."""
-        return self.update(*self.predict(*estimate, u), y)
+        mean, cov, u = self._checked(*_pair(estimate), u, self.model.n_u, "u")
+        y = self._checked(mean, cov, y, self.model.n_y, "y")[2]
+        return self._step((mean, cov), u, y)
+
+    def _step(self, estimate, u, y, rng=None):
+        return self._update(*self._predict(*estimate, u), y)
 
     def next_covariance(self, estimate, u):
         """C_{k+1} after predicting with ``u`` and fusing any measurement (Lemma 2.1 at the
         sigma points; it does not depend on the measurement's value)."""
-        return self._measurement(*self.predict(*estimate, u))[2]
+        mean, cov, u = self._checked(*_pair(estimate), u, self.model.n_u, "u")
+        return self._next_covariance((mean, cov), u)
+
+    def _next_covariance(self, estimate, u):
+        return self._measurement(*self._predict(*estimate, u))[2]
+
+
+def _pair(estimate):
+    if not isinstance(estimate, tuple) or len(estimate) != 2:
+        raise TypeError(f"estimate: expected a tuple (mean, cov), found {type(estimate).__name__}")
+    return estimate
 
 
 class ParticleFilter:
@@ -225,46 +356,73 @@ class ParticleFilter:
     Parameters
     ----------
     model : NonlinearModel with a ``likelihood``.
-    n_particles : number of particles M.
+    n_particles : int
+        Number of particles M, >= 1.
     rng : numpy.random.Generator for propagation and resampling.
-    resample_threshold : resample (systematic) when the effective sample size is below
-        this fraction of M.
+    resample_threshold : float
+        Resample (systematic) when the effective sample size is below this fraction of M,
+        in [0, 1].
+
+    Raises
+    ------
+    ValueError, TypeError
+        If the model has no likelihood, or an argument has the wrong type or range.
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> model = linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]])
+    >>> pf = ParticleFilter(model, 20_000, np.random.default_rng(0))
+    >>> est = pf.step(pf.initial([0.0], [[1.0]]), [0.0], [1.0])
+    >>> round(float(est.mean[0]), 1), round(float(est.cov[0, 0]), 1)
+    (0.7, 0.7)
     """
 
     def __init__(self, model, n_particles: int, rng, resample_threshold: float = 0.5):
+        self.model = check.instance(model, NonlinearModel, "model")
         if model.likelihood is None:
-            raise ValueError("model: the particle filter needs model.likelihood(y, x), found None")
-        if not isinstance(n_particles, (int, np.integer)) or n_particles < 1:
-            raise ValueError(f"n_particles: expected an integer >= 1, found {n_particles!r}")
-        self.model, self.M, self.rng = model, int(n_particles), check_rng(rng)
-        self.threshold = resample_threshold
-        wp, self._beta = sigma_points(model.w.mean, model.w.cov)
-        vp, self._gamma = sigma_points(model.v.mean, model.v.cov)
-        self._w_points, self._v_points = wp, vp
+            raise ValueError("model: expected a model with a likelihood(y, x) for the particle filter, found likelihood None")
+        self.M = check.integer(n_particles, "n_particles", minimum=1)
+        self.rng = check.generator(rng)
+        self.threshold = check.real_scalar(resample_threshold, "resample_threshold", low=0, high=1)
+        self._w_points, self._beta = _sigma_points(model.w.mean, model.w.cov, KAPPA)
+        self._v_points, self._gamma = _sigma_points(model.v.mean, model.v.cov, KAPPA)
 
     def initial(self, mean, cov, rng=None):
-        from .models import GaussianNoise
+        """M particles drawn from N(mean, cov)."""
+        check.vector(mean, "mean", self.model.n_x)
         return DiracMixture(GaussianNoise(mean, cov).sample(self.rng, self.M))
 
     @staticmethod
     def mixture(estimate):
+        """The particles (the estimate itself)."""
         return estimate
 
     @staticmethod
     def mean(estimate):
+        """The particles' weighted mean."""
         return estimate.mean
 
     @staticmethod
     def cov(estimate):
+        """The particles' weighted covariance."""
         return estimate.cov
 
+    def _checked(self, estimate, u, y=None):
+        check.instance(estimate, DiracMixture, "estimate")
+        check.real_array(estimate.points, "estimate.points", shape=(None, self.model.n_x))
+        u = check.vector(u, "u", self.model.n_u)
+        return estimate, u, (None if y is None else check.vector(y, "y", self.model.n_y))
+
     def step(self, estimate, u, y, rng=None):
-        rng = self.rng if rng is None else check_rng(rng)
+        """Propagate with ``u``, weight by the likelihood of ``y``, resample if degenerate."""
+        estimate, u, y = self._checked(estimate, u, y)
+        rng = self.rng if rng is None else check.generator(rng)
         m = self.model
-        x = m.a(estimate.points, np.asarray(u, dtype=float), m.w.sample(rng, estimate.points.shape[0]))
-        w = estimate.weights * m.likelihood(np.asarray(y, dtype=float), x)
+        x = m.a(estimate.points, u, m.w.sample(rng, estimate.points.shape[0]))
+        w = estimate.weights * m.likelihood(y, x)
         if not np.isfinite(w.sum()) or w.sum() <= 0:
-            raise ValueError("y: the measurement has zero likelihood under every particle")
+            raise ValueError("y: expected a measurement with positive likelihood under some particle, found zero under all")
         w = w / w.sum()
         if 1.0 / np.sum(w ** 2) < self.threshold * w.size:
             idx = np.searchsorted(np.cumsum(w), (rng.random() + np.arange(w.size)) / w.size)
@@ -273,7 +431,12 @@ class ParticleFilter:
 
     def next_covariance(self, estimate, u):
         """Lemma 2.1 with the particles and the sigma points of the noises as samples."""
-        return lemma_2_1(estimate, u, self.model, self._w_points, self._v_points, self._beta, self._gamma)
+        estimate, u, _ = self._checked(estimate, u)
+        return self._next_covariance(estimate, u)
+
+    def _next_covariance(self, estimate, u):
+        return _next_estimate_covariance(estimate, u, self.model, self._w_points, self._v_points,
+                                         self._beta, self._gamma)
 
 
 def _numeric_jacobians(model, x, u, w, v):
@@ -287,38 +450,61 @@ def _numeric_jacobians(model, x, u, w, v):
     return tuple(np.atleast_2d(J) for J in (a_x, a_u, a_w, h_x, h_v))
 
 
-def jacobians(model, x, u, w, v):
+def _jacobians(model, x, u, w, v):
     """(a_x, a_u, a_w, h_x, h_v): the model's analytic Jacobians, else numdifftools [46]."""
     if model.jacobians is not None:
         return model.jacobians(x, u, w, v)
     if np.asarray(x).ndim > 1:
-        raise ValueError("x: numerical Jacobians take one state, found a batch; give model.jacobians")
+        raise ValueError("mean: expected one state (numerical Jacobians), found a batch; give model.jacobians")
     return _numeric_jacobians(model, x, u, w, v)
 
 
 def ekf_predict(model, mean, cov, u):
-    """EKF time update [10]: linearisation of a at (mean, u, E{w})."""
+    """EKF time update [10]: linearisation of a at (mean, u, E{w}); (predicted mean, Gamma).
+
+    Broadcasts over leading axes; the arguments are not checked (see :func:`ekf_step`).
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> model = linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]])
+    >>> mean, Gamma = ekf_predict(model, np.array([1.0]), np.array([[1.0]]), np.array([0.5]))
+    >>> mean.tolist(), Gamma.tolist()
+    ([1.5], [[2.0]])
+    """
     w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
     v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
-    a_x, _, a_w, _, _ = jacobians(model, mean, u, w0, v0)
+    a_x, _, a_w, _, _ = _jacobians(model, mean, u, w0, v0)
     Gamma = a_x @ cov @ np.swapaxes(a_x, -1, -2) + a_w @ model.w.cov @ np.swapaxes(a_w, -1, -2)
     return model.a(mean, u, w0), Gamma
 
 
 def ekf_gain(model, mean, cov):
-    """EKF measurement linearisation at (mean, E{v}): (y_hat, gain K, innovation covariance, posterior)."""
+    """EKF measurement linearisation at (mean, E{v}): (y_hat, gain K, innovation covariance, posterior).
+
+    Broadcasts over leading axes; the arguments are not checked (see :func:`ekf_step`).
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> model = linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]])
+    >>> y_hat, K, S, post = ekf_gain(model, np.array([1.0]), np.array([[1.0]]))
+    >>> y_hat.tolist(), K.tolist(), S.tolist(), post.tolist()
+    ([1.0], [[0.5]], [[2.0]], [[0.5]])
+    """
     w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
     v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
     u0 = np.zeros(mean.shape[:-1] + (model.n_u,))
-    _, _, _, h_x, h_v = jacobians(model, mean, u0, w0, v0)
+    _, _, _, h_x, h_v = _jacobians(model, mean, u0, w0, v0)
     S = h_x @ cov @ np.swapaxes(h_x, -1, -2) + h_v @ model.v.cov @ np.swapaxes(h_v, -1, -2)
-    K = np.swapaxes(np.linalg.solve(S, h_x @ cov), -1, -2)
+    K = np.swapaxes(_solve(S, h_x @ cov), -1, -2)
     post = cov - K @ h_x @ cov
     return model.h(mean, v0), K, S, 0.5 * (post + np.swapaxes(post, -1, -2))
 
 
 def ekf_step(model, mean, cov, u, y):
-    """One EKF step (predict with u, update with y); broadcasts over leading axes.
+    """One step of the extended Kalman filter [10] (predict with u, update with y); broadcasts
+    over leading axes.
 
     Parameters
     ----------
@@ -326,6 +512,7 @@ def ekf_step(model, mean, cov, u, y):
         With ``a``, ``h`` and (optionally) ``jacobians``.
     mean : array_like, (..., n_x)
     cov : array_like, (..., n_x, n_x)
+        Symmetric positive semi-definite.
     u : array_like, (..., n_u)
         Input applied between the estimate and the measurement.
     y : array_like, (..., n_y)
@@ -338,10 +525,25 @@ def ekf_step(model, mean, cov, u, y):
 
     Raises
     ------
-    ValueError
-        If the model has no Jacobians and a batch of states is passed (numerical Jacobians
-        take one state).
+    ValueError, TypeError
+        If an argument has the wrong type or shape, or the model has no Jacobians and a
+        batch of states is passed (numerical Jacobians take one state).
+
+    Examples
+    --------
+    >>> from asoc.belief import linear_gaussian_model
+    >>> model = linear_gaussian_model([[1.0]], [[1.0]], [[1.0]], [[1.0]], [[1.0]])
+    >>> mean, cov = ekf_step(model, [0.0], [[1.0]], [0.0], [1.0])
+    >>> mean.round(4).tolist(), cov.round(4).tolist()
+    ([0.6667], [[0.6667]])
     """
-    mean_p, cov_p = ekf_predict(model, np.asarray(mean, dtype=float), np.asarray(cov, dtype=float), u)
+    model = check.instance(model, NonlinearModel, "model")
+    mean, cov = _estimate(mean, cov, "mean", "cov", model.n_x)
+    u = check.real_array(u, "u")
+    y = check.real_array(y, "y")
+    for name, value, size in (("u", u, model.n_u), ("y", y, model.n_y)):
+        if value.ndim == 0 or value.shape[-1] != size:
+            raise ValueError(f"{name}: expected shape (..., {size}), found shape {value.shape}")
+    mean_p, cov_p = ekf_predict(model, mean, cov, u)
     y_hat, K, _, post = ekf_gain(model, mean_p, cov_p)
-    return mean_p + np.einsum("...ij,...j->...i", K, np.asarray(y) - y_hat), post
+    return mean_p + np.einsum("...ij,...j->...i", K, y - y_hat), post

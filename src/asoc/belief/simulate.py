@@ -9,14 +9,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_rng
-from .filters import UKF, ekf_step
-from .models import GaussianNoise
+from .. import validation as check
+from .filters import UKF, KAPPA, ekf_step
+from .models import GaussianNoise, NonlinearModel, _cost_for
 
 
 @dataclass(frozen=True)
 class Noise:
-    """The random draws of N runs: initial states, process and measurement noises."""
+    """The random draws of N runs: initial states, process and measurement noises.
+
+    Examples
+    --------
+    >>> from asoc.belief import landmark_example
+    >>> ex = landmark_example(K=4)
+    >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 4, 10, np.random.default_rng(0))
+    >>> noise.x0.shape, noise.w.shape, noise.v.shape
+    ((10, 2), (10, 4, 2), (10, 4, 1))
+    """
 
     x0: np.ndarray   # (N, n_x)
     w: np.ndarray    # (N, K, n_w)
@@ -24,15 +33,15 @@ class Noise:
 
 
 def draw_noise(model, mean0, cov0, K: int, n_runs: int, rng) -> Noise:
-    """Draw x_0 ~ N(mean0, cov0), w_k ~ p^w, v_{k+1} ~ p^v for ``n_runs`` runs.
+    """Draw x_0 ~ N(mean0, cov0), w_k ~ p^w, v_{k+1} ~ p^v for ``n_runs`` runs of (2.1)-(2.2).
 
     Parameters
     ----------
     model : NonlinearModel
     mean0, cov0 : array_like
-        Gaussian initial state.
+        Gaussian initial state, (n_x,) and (n_x, n_x) PSD.
     K : int
-        Horizon.
+        Horizon, >= 1.
     n_runs : int
         Number of runs, >= 1.
     rng : numpy.random.Generator
@@ -45,48 +54,128 @@ def draw_noise(model, mean0, cov0, K: int, n_runs: int, rng) -> Noise:
 
     Raises
     ------
-    ValueError
-        If ``n_runs`` < 1 or ``rng`` is not a Generator.
+    ValueError, TypeError
+        If an argument has the wrong type, shape or range.
+
+    Examples
+    --------
+    >>> from asoc.belief import landmark_example
+    >>> ex = landmark_example()
+    >>> draw_noise(ex.model, ex.mean0, ex.cov0, 20, 3, np.random.default_rng(0)).w.shape
+    (3, 20, 2)
     """
-    rng = check_rng(rng)
-    if not isinstance(n_runs, (int, np.integer)) or n_runs < 1:
-        raise ValueError(f"n_runs: expected an integer >= 1, found {n_runs!r}")
+    model = check.instance(model, NonlinearModel, "model")
+    mean0 = check.vector(mean0, "mean0", model.n_x)
+    cov0 = check.covariance(cov0, "cov0", model.n_x)
+    K = check.integer(K, "K", minimum=1)
+    n_runs = check.integer(n_runs, "n_runs", minimum=1)
+    return _draw_noise(model, mean0, cov0, K, n_runs, check.generator(rng))
+
+
+def _draw_noise(model, mean0, cov0, K, n_runs, rng):
     x0 = GaussianNoise(mean0, cov0).sample(rng, n_runs)
     return Noise(x0, model.w.sample(rng, (n_runs, K)), model.v.sample(rng, (n_runs, K)))
 
 
 class MeanAffineController:
-    """u_k = L_k E{x_k} + d_k (eq. 2.18) with the UKF estimate (the proposed controller)."""
+    """u_k = L_k E{x_k} + d_k (eq. 2.18) with the UKF estimate (the proposed controller).
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    policy : AffinePolicy
+        Of the model's dimensions.
+    kappa : float, optional
+        The UKF's sample scaling (default 0.5).
+
+    Raises
+    ------
+    ValueError, TypeError
+        If ``model`` or ``policy`` has the wrong type or dimensions.
+
+    Examples
+    --------
+    >>> from asoc.belief import AffinePolicy, landmark_example
+    >>> ex = landmark_example(K=2)
+    >>> ctrl = MeanAffineController(ex.model, AffinePolicy(np.zeros((2, 2, 2)), np.ones((2, 2))))
+    >>> ctrl.control(0, ex.mean0, ex.cov0).tolist()
+    [1.0, 1.0]
+    """
 
     def __init__(self, model, policy, kappa=None):
-        self.filter = UKF(model) if kappa is None else UKF(model, kappa)
-        self.policy = policy
+        from .trajectory import AffinePolicy
+        model = check.instance(model, NonlinearModel, "model")
+        check.instance(policy, AffinePolicy, "policy")
+        if policy.L.shape[1:] != (model.n_u, model.n_x):
+            raise ValueError(f"policy: expected gains of shape (K, {model.n_u}, {model.n_x}), found {policy.L.shape}")
+        self.filter = UKF(model, KAPPA if kappa is None else kappa)
+        self.policy, self.horizon = policy, policy.L.shape[0]
 
     def control(self, k, mean, cov):
+        """The input at time k for the estimate (mean, cov)."""
         return mean @ self.policy.L[k].T + self.policy.d[k]
 
     def step(self, mean, cov, u, y):
-        return self.filter.step((mean, cov), u, y)
+        """The UKF's next estimate."""
+        return self.filter._step((mean, cov), u, y)
 
 
 class BeliefAffineController:
-    """u_k = u_bar_k + L_k (b_k - b_bar_k) with the EKF belief b = (mean, vec sqrt cov) [159]."""
+    """u_k = u_bar_k + L_k (b_k - b_bar_k) with the EKF belief b = (mean, vec sqrt cov) [159].
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    result : BeliefILQGResult
+        From :func:`~asoc.belief.belief_ilqg` for the same model.
+
+    Raises
+    ------
+    ValueError, TypeError
+        If ``model`` or ``result`` has the wrong type or dimensions.
+
+    Examples
+    --------
+    >>> from asoc.belief import belief_ilqg, landmark_example
+    >>> ex = landmark_example(K=2)
+    >>> ctrl = BeliefAffineController(ex.model, belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0))
+    >>> ctrl.control(0, ex.mean0, ex.cov0).round(2).tolist()
+    [4.57, -0.01]
+    """
 
     def __init__(self, model, result):
-        self.model, self.result = model, result
+        from .vdberg import BeliefILQGResult
+        self.model = check.instance(model, NonlinearModel, "model")
+        self.result = check.instance(result, BeliefILQGResult, "result")
+        if result.u_bar.shape[1] != model.n_u or result.b_bar.shape[1] != model.n_x + model.n_x * (model.n_x + 1) // 2:
+            raise ValueError(f"result: expected a belief iLQG result for n_x = {model.n_x}, n_u = {model.n_u}, "
+                             f"found beliefs {result.b_bar.shape} and inputs {result.u_bar.shape}")
+        self.horizon = result.u_bar.shape[0]
 
     def control(self, k, mean, cov):
+        """The input at time k for the EKF belief (mean, cov)."""
         from .vdberg import belief_vector
         r = self.result
         return r.u_bar[k] + (belief_vector(mean, cov) - r.b_bar[k]) @ r.L[k].T
 
     def step(self, mean, cov, u, y):
+        """The EKF's next belief."""
         return ekf_step(self.model, mean, cov, u, y)
 
 
 @dataclass(frozen=True)
 class ClosedLoop:
-    """Simulated runs: true states x (N, K+1, n), estimates (means, covs), inputs u, costs (N,)."""
+    """Simulated runs: true states x (N, K+1, n), estimates (means, covs), inputs u, costs (N,).
+
+    Examples
+    --------
+    >>> from asoc.belief import AffinePolicy, landmark_example
+    >>> ex = landmark_example(K=2)
+    >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 5, np.random.default_rng(0))
+    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2)), noise)
+    >>> run.x.shape, run.u.shape, run.costs.shape
+    ((5, 3, 2), (5, 2, 2), (5,))
+    """
 
     x: np.ndarray
     means: np.ndarray
@@ -96,16 +185,18 @@ class ClosedLoop:
 
 
 def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
-    """Run ``controller`` in closed loop for the draws ``noise``; costs by (2.3)/(2.19).
+    """Closed loop of (2.1)-(2.2) under ``controller`` for the draws ``noise``; costs by (2.3)/(2.19).
 
     Parameters
     ----------
     model : NonlinearModel
     cost : QuadraticCost
+        Its horizon ``K`` must equal the draws' horizon.
     mean0, cov0 : array_like
         Initial estimate given to the controller's filter.
     controller : object
-        E.g. :class:`BeliefAffineController` or :class:`MeanAffineController`.
+        E.g. :class:`BeliefAffineController` or :class:`MeanAffineController` (methods
+        ``control(k, mean, cov)`` and ``step(mean, cov, u, y)``).
     noise : Noise
         Draws from :func:`draw_noise` (common random numbers across controllers).
 
@@ -116,9 +207,39 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
 
     Raises
     ------
-    ValueError
-        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    ValueError, TypeError
+        If an argument has the wrong type or shape, or the controller's horizon is shorter
+        than the draws'.
+
+    Examples
+    --------
+    >>> from asoc.belief import AffinePolicy, landmark_example
+    >>> ex = landmark_example(K=3)
+    >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 3, 100, np.random.default_rng(0))
+    >>> zero = MeanAffineController(ex.model, AffinePolicy.zero(3, 2, 2))
+    >>> round(float(simulate(ex.model, ex.cost, ex.mean0, ex.cov0, zero, noise).costs.mean()), 1)
+    106.3
     """
+    model = check.instance(model, NonlinearModel, "model")
+    cost = _cost_for(cost, model)
+    mean0 = check.vector(mean0, "mean0", model.n_x)
+    cov0 = check.covariance(cov0, "cov0", model.n_x)
+    check.instance(noise, Noise, "noise")
+    N, K = noise.w.shape[:2]
+    if (noise.x0.shape != (N, model.n_x) or noise.w.shape != (N, K, model.w.dim)
+            or noise.v.shape != (N, K, model.v.dim) or K != cost.K):
+        raise ValueError(f"noise: expected draws x0 (N, {model.n_x}), w (N, {cost.K}, {model.w.dim}), "
+                         f"v (N, {cost.K}, {model.v.dim}), found {noise.x0.shape}, {noise.w.shape}, {noise.v.shape}")
+    for method in ("control", "step"):
+        if not callable(getattr(controller, method, None)):
+            raise TypeError(f"controller: expected an object with control(k, mean, cov) and step(mean, cov, u, y), "
+                            f"found {type(controller).__name__}")
+    if getattr(controller, "horizon", K) < K:
+        raise ValueError(f"controller: expected a horizon >= {K} (the draws'), found {controller.horizon}")
+    return _simulate(model, cost, mean0, cov0, controller, noise)
+
+
+def _simulate(model, cost, mean0, cov0, controller, noise):
     N, K = noise.w.shape[:2]
     x = noise.x0
     mean = np.broadcast_to(np.asarray(mean0, dtype=float), x.shape).copy()

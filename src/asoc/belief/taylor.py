@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import validation as check
 from .filters import DiracMixture, sigma_points
 
 
@@ -13,6 +14,12 @@ class QuadraticExpansion:
     """E{s + v^T x + 1/2 x^T V x}: the expansion (2.8) written as a quadratic in x.
 
     Attributes ``s`` (scalar), ``v`` (n,), ``V`` (n, n).
+
+    Examples
+    --------
+    >>> q = QuadraticExpansion(1.0, np.array([0.0, 2.0]), 2 * np.eye(2))
+    >>> float(q(np.array([1.0, 1.0]))), q.expectation([0.0, 0.0], np.eye(2))
+    (5.0, 3.0)
     """
 
     s: float
@@ -64,9 +71,20 @@ def statistical_taylor_expansion(g, mixture: DiracMixture, grad=None, hess=None)
 
     Raises
     ------
-    ValueError
-        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    TypeError
+        If ``g``, ``grad`` or ``hess`` is not callable or ``mixture`` not a DiracMixture.
+
+    Examples
+    --------
+    >>> q = statistical_taylor_expansion(lambda x: float(x @ x), DiracMixture([[1.0], [-1.0]]))
+    >>> round(q.s, 6), q.v.round(6).tolist(), q.V.round(6).tolist()
+    (0.0, [0.0], [[2.0]])
     """
+    check.function(g, "g")
+    check.instance(mixture, DiracMixture, "mixture")
+    for name, f in (("grad", grad), ("hess", hess)):
+        if f is not None:
+            check.function(f, name)
     s, v, V = 0.0, 0.0, 0.0
     for alpha, x in zip(mixture.weights, mixture.points):
         G, H = derivatives(g, x, grad, hess)
@@ -86,7 +104,7 @@ def _fig22_derivative(x):
     return np.cos(x) + 1.0
 
 
-def fig2_2_linearizations(a=_fig22_function, da=_fig22_derivative, mean=4.0, var=1.5):
+def sigma_point_linearizations(a=_fig22_function, da=_fig22_derivative, mean=4.0, var=1.5):
     """The linear approximations compared in Fig. 2.2 as ``{name: (slope, intercept)}``.
 
     The Dirac mixture is the UKF's sigma points of N(mean, var) (kappa = 0.5: the points
@@ -114,9 +132,18 @@ def fig2_2_linearizations(a=_fig22_function, da=_fig22_derivative, mean=4.0, var
 
     Raises
     ------
-    ValueError
-        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    ValueError, TypeError
+        If ``a`` or ``da`` is not callable, ``mean`` not finite or ``var`` not positive.
+
+    Examples
+    --------
+    >>> slope, intercept = sigma_point_linearizations()["mean_gradient"]
+    >>> round(float(slope), 4), round(float(intercept), 4)
+    (0.7513, 0.238)
     """
+    check.function(a, "a"), check.function(da, "da")
+    mean = check.real_scalar(mean, "mean")
+    var = check.real_scalar(var, "var", low=0, low_open=True)
     pts, w = sigma_points(np.array([mean]), np.array([[var]]))
     x = pts[:, 0]
     ya, slopes = a(x), da(x)
@@ -145,7 +172,7 @@ def statistical_taylor_linearization_error(x_true=5.7, mean=4.0, var=1.5, readin
     mean, var : float
         The Gaussian N(mean, var).
     reading : str
-        A key of :func:`fig2_2_linearizations`.
+        A key of :func:`sigma_point_linearizations`.
 
     Returns
     -------
@@ -155,14 +182,18 @@ def statistical_taylor_linearization_error(x_true=5.7, mean=4.0, var=1.5, readin
 
     Raises
     ------
-    ValueError
-        If ``var`` is not positive or ``reading`` is unknown.
+    ValueError, TypeError
+        If ``x_true`` or ``mean`` is not finite, ``var`` is not positive or ``reading`` is unknown.
+
+    Examples
+    --------
+    >>> ekf, statistical = statistical_taylor_linearization_error()
+    >>> round(ekf, 4), round(statistical, 4)
+    (1.3173, 0.6289)
     """
-    if var <= 0:
-        raise ValueError(f"var: expected a positive variance, found {var}")
-    lines = fig2_2_linearizations(mean=mean, var=var)
-    if reading not in lines:
-        raise ValueError(f"reading: expected one of {sorted(lines)}, found {reading!r}")
+    x_true = check.real_scalar(x_true, "x_true")
+    lines = sigma_point_linearizations(mean=mean, var=var)
+    check.choice(reading, lines, "reading")
     truth = _fig22_function(x_true)
     err = {name: abs(truth - (k * x_true + d)) for name, (k, d) in lines.items()}
     return float(err["ekf"]), float(err[reading])

@@ -22,8 +22,8 @@ import numpy as np
 from scipy import integrate
 from scipy.optimize import linear_sum_assignment
 from scipy.special import xlogy
+from .. import validation as check
 from ..progress import progress_bar
-
 from . import _validate as v
 
 EULER_GAMMA = float(np.euler_gamma)
@@ -34,8 +34,8 @@ DEFAULT_B_MAX = 100.0
 # 5. Modified Cramer-von Mises distance (mCvMd) via localized cumulative distributions
 # --------------------------------------------------------------------------------------
 
-def c_b(b_max: float) -> float:
-    r"""The constant of the large-``b_max`` closed form of the mCvMd.
+def mcvmd_constant(b_max: float) -> float:
+    r"""The constant :math:`c_b` of the large-``b_max`` closed form of the mCvMd (Sec. 2.6.3, item 5).
 
     Integrating the definition, :math:`\int_0^{b_{\max}} w(b) \int (P_1 - P_2)^2\,dm\,db`,
     term by term with the LCD kernel of Sec. 2.6.3 gives
@@ -57,8 +57,13 @@ def c_b(b_max: float) -> float:
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``b_max`` is not a positive finite number.
+
+    Examples
+    --------
+    >>> round(mcvmd_constant(100.0), 4)     # log(4 b_max^2) - Gamma + 1
+    11.0194
     """
     b_max = v.positive(b_max, "b_max")
     return float(np.log(4.0 * b_max**2) - EULER_GAMMA + 1.0)
@@ -76,7 +81,7 @@ def mcvmd(x, wx, y, wy, b_max: float = DEFAULT_B_MAX) -> float:
     Closed form for large ``b_max`` ([81], thesis Sec. 2.6.3):
     :math:`d = \big(\tfrac{\pi^{n_x/2}}{8}(D_1 - 2 D_{12} + D_2 + 2 c_b D_m)\big)^{1/2}`
     with :math:`D_1, D_2, D_{12}` the weighted sums of ``xlog`` of squared distances and
-    :math:`D_m` the squared distance of the means; :math:`c_b` see :func:`c_b`.
+    :math:`D_m` the squared distance of the means; :math:`c_b` see :func:`mcvmd_constant`.
     Accepts Dirac/Dirac pairs with any numbers of components and weights.
 
     Parameters
@@ -95,14 +100,23 @@ def mcvmd(x, wx, y, wy, b_max: float = DEFAULT_B_MAX) -> float:
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If locations are empty, non-finite or of different dimensions, weights are negative,
         of the wrong shape or do not sum to 1.
+
+    Examples
+    --------
+    >>> round(mcvmd([0.0, 1.0], None, [0.5], None), 4)
+    0.3919
+    >>> mcvmd([0.0, 1.0], [0.5, float("nan")], [0.5], None)
+    Traceback (most recent call last):
+    ...
+    ValueError: wx: expected finite entries, found 1 non-finite
     """
     x, y = v.locations(x, "x"), v.locations(y, "y")
     v.same_dimension(x, y, "x, y")
     wx, wy = v.weights(wx, len(x), "wx"), v.weights(wy, len(y), "wy")
-    cb = c_b(b_max)
+    cb = mcvmd_constant(b_max)
     D1 = wx @ _xlog_sq(x[:, None], x[None]) @ wx
     D2 = wy @ _xlog_sq(y[:, None], y[None]) @ wy
     D12 = wx @ _xlog_sq(x[:, None], y[None]) @ wy
@@ -135,9 +149,15 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If the sets are empty, non-finite or of different dimensions, or a weight row is
         invalid.
+
+    Examples
+    --------
+    >>> D = mcvmd_matrix(np.array([[0.0, 1.0], [0.5, 0.5], [2.0, 3.0]]))
+    >>> D.round(3).tolist()
+    [[0.0, 0.392, 4.014], [0.392, 0.0, 4.073], [4.014, 4.073, 0.0]]
     """
     X = v.mixture_set(X, "X")
     WX = v.set_weights(WX, X.shape, "WX")
@@ -145,7 +165,9 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     Y = X if symmetric else v.mixture_set(Y, "Y")
     WY = WX if symmetric else v.set_weights(WY, Y.shape, "WY")
     v.same_dimension(X, Y, "X, Y")
-    cb = c_b(b_max)
+    cb = mcvmd_constant(b_max)
+    chunk = check.integer(chunk, "chunk", minimum=1)
+    progress = check.boolean(progress, "progress")
     D1 = np.einsum("na,nab,nb->n", WX, _xlog_sq(X[:, :, None], X[:, None]), WX)
     D2 = D1 if symmetric else np.einsum("ma,mab,mb->m", WY, _xlog_sq(Y[:, :, None], Y[:, None]), WY)
     mx, my = np.einsum("na,nad->nd", WX, X), np.einsum("ma,mad->md", WY, Y)
@@ -188,14 +210,19 @@ def lcd_dirac(x, wx, m, b) -> np.ndarray:
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If locations or weights are invalid or the dimensions of ``x`` and ``m`` differ.
+
+    Examples
+    --------
+    >>> lcd_dirac([0.0, 1.0], None, [[0.0]], 1.0).round(4).tolist()
+    [0.8033]
     """
     x = v.locations(x, "x")
     wx = v.weights(wx, len(x), "wx")
     m = v.locations(m, "m")
     v.same_dimension(x, m, "x, m")
-    b = np.broadcast_to(np.asarray(b, dtype=float), (len(m),))
+    b = v.widths(b, len(m))
     sq = np.sum((m[:, None, :] - x[None]) ** 2, axis=-1)
     return np.exp(-0.5 * sq / b[:, None] ** 2) @ wx
 
@@ -223,16 +250,21 @@ def lcd_gaussian(mean, cov, m, b) -> np.ndarray:
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``cov`` is not symmetric PSD or the dimensions do not match.
+
+    Examples
+    --------
+    >>> lcd_gaussian([0.0], [[1.0]], [[0.0]], 1.0).round(4).tolist()     # b / sqrt(1 + b^2)
+    [0.7071]
     """
-    mean = np.atleast_1d(np.asarray(mean, dtype=float))
+    mean = check.vector(mean, "mean")
     C = v.covariance(cov, "cov")
     m = v.locations(m, "m")
     if C.shape[0] != len(mean) or m.shape[1] != len(mean):
         raise ValueError(f"mean, cov, m: expected dimension {len(mean)}, "
                          f"found cov {C.shape} and m {m.shape}")
-    b = np.broadcast_to(np.asarray(b, dtype=float), (len(m),))
+    b = v.widths(b, len(m))
     n = len(mean)
     S = C[None] + b[:, None, None] ** 2 * np.eye(n)[None]
     r = m - mean
@@ -274,16 +306,28 @@ def mcvmd_quadrature(lcd1, lcd2, b_max: float = DEFAULT_B_MAX, center: float = 0
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``b_max`` is not a positive finite number.
+
+    Examples
+    --------
+    >>> P = lambda m, b: lcd_dirac([0.0], None, m, b)
+    >>> Q = lambda m, b: lcd_dirac([0.3], None, m, b)
+    >>> round(mcvmd_quadrature(P, Q, b_max=10.0, spread=2.0, points=[0.0, 0.3]), 3)
+    0.593
     """
+    check.function(lcd1, "lcd1"), check.function(lcd2, "lcd2")
     b_max = v.positive(b_max, "b_max")
+    center = check.real_scalar(center, "center")
+    spread = v.positive(spread, "spread")
+    points = check.real_array(points, "points").ravel()
+    n_m = check.integer(n_m, "n_m", minimum=1)
     t, w = np.polynomial.legendre.leggauss(20)
     panels = max(n_m // 20, 1)
 
     def inner(b):
         half = spread + 12 * b
-        extra = (np.asarray(points, float).ravel()[:, None] + b * np.arange(-8, 9)[None]).ravel()
+        extra = (points[:, None] + b * np.arange(-8, 9)[None]).ravel()
         edges = np.union1d(np.linspace(center - half, center + half, panels + 1),
                            extra[np.abs(extra - center) < half])
         m = (0.5 * np.diff(edges)[:, None] * t[None] + 0.5 * (edges[:-1] + edges[1:])[:, None]).ravel()
@@ -323,10 +367,15 @@ def wasserstein_gaussian(m1, C1, m2, C2) -> float:
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If a covariance is not symmetric PSD or the dimensions do not match.
+
+    Examples
+    --------
+    >>> wasserstein_gaussian([0.0], [[1.0]], [3.0], [[4.0]])     # sqrt(3^2 + (2 - 1)^2)
+    3.1622776601683795
     """
-    m1, m2 = np.atleast_1d(np.asarray(m1, float)), np.atleast_1d(np.asarray(m2, float))
+    m1, m2 = check.vector(m1, "m1"), check.vector(m2, "m2")
     C1, C2 = v.covariance(C1, "C1"), v.covariance(C2, "C2")
     if not (m1.shape == m2.shape and C1.shape == C2.shape == (len(m1), len(m1))):
         raise ValueError(f"m1, C1, m2, C2: expected matching dimensions, found means "
@@ -354,7 +403,7 @@ def omat(x, y, q: float = 2) -> float:
     x, y : array_like, (m, d) or (m,)
         Locations of the two mixtures (same number of components).
     q : float
-        Order, q >= 1.
+        Order, 1 <= q <= 100.
 
     Returns
     -------
@@ -362,14 +411,19 @@ def omat(x, y, q: float = 2) -> float:
 
     Raises
     ------
-    ValueError
-        If the mixtures are invalid, of different dimensions or sizes, or ``q`` < 1.
+    ValueError, TypeError
+        If the mixtures are invalid, of different dimensions or sizes, or ``q`` outside [1, 100].
+
+    Examples
+    --------
+    >>> round(omat([0.0, 1.0], [1.1, 0.1]), 6)     # the assignment pairs 0 with 0.1 and 1 with 1.1
+    0.1
     """
     x, y = v.locations(x, "x"), v.locations(y, "y")
     v.same_dimension(x, y, "x, y")
-    q = v.at_least_one(q, "q")
+    q = v.order(q, "q")
     if len(x) != len(y):
-        raise ValueError(f"x, y: OMAT needs the same number of components, found {len(x)} and "
+        raise ValueError(f"x, y: expected the same number of components (OMAT), found {len(x)} and "
                          f"{len(y)} (use ospa)")
     cost = _omat_cost(x, y, q)
     rows, cols = linear_sum_assignment(cost)
@@ -388,7 +442,7 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
     Y : array_like, (M, m, d) or (M, m), optional
         None: ``X`` with itself.
     q : float
-        Order, q >= 1.
+        Order, 1 <= q <= 100.
     progress : bool
         Show a tqdm progress bar.
 
@@ -398,16 +452,22 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
 
     Raises
     ------
-    ValueError
-        If the sets are invalid, of different dimensions or numbers of components, or ``q`` < 1.
+    ValueError, TypeError
+        If the sets are invalid, of different dimensions or numbers of components, or ``q`` outside [1, 100].
+
+    Examples
+    --------
+    >>> omat_matrix(np.array([[0.0, 1.0], [0.0, 2.0]])).tolist()
+    [[0.0, 0.7071067811865476], [0.7071067811865476, 0.0]]
     """
     X = v.mixture_set(X, "X")
     symmetric = Y is None
     Y = X if symmetric else v.mixture_set(Y, "Y")
     v.same_dimension(X, Y, "X, Y")
-    q = v.at_least_one(q, "q")
+    q = v.order(q, "q")
+    progress = check.boolean(progress, "progress")
     if X.shape[1] != Y.shape[1]:
-        raise ValueError(f"X, Y: OMAT needs the same number of components, found {X.shape[1]} "
+        raise ValueError(f"X, Y: expected the same number of components (OMAT), found {X.shape[1]} "
                          f"and {Y.shape[1]}")
     out = np.zeros((len(X), len(Y)))
     for i in progress_bar(range(len(X)), progress, desc="OMAT", leave=False):
@@ -435,7 +495,7 @@ def ospa(x, y, c: float, p: float = 2) -> float:
     c : float
         Cut-off distance, > 0.
     p : float
-        Order, p >= 1.
+        Order, 1 <= p <= 100.
 
     Returns
     -------
@@ -443,12 +503,17 @@ def ospa(x, y, c: float, p: float = 2) -> float:
 
     Raises
     ------
-    ValueError
-        If the mixtures are invalid or of different dimensions, ``c`` <= 0 or ``p`` < 1.
+    ValueError, TypeError
+        If the mixtures are invalid or of different dimensions, ``c`` <= 0 or ``p`` outside [1, 100].
+
+    Examples
+    --------
+    >>> ospa([0.0], [0.0, 5.0], c=2.0)     # one unmatched component at the cut-off
+    1.4142135623730951
     """
     x, y = v.locations(x, "x"), v.locations(y, "y")
     v.same_dimension(x, y, "x, y")
-    c, p = v.positive(c, "c"), v.at_least_one(p, "p")
+    c, p = v.positive(c, "c"), v.order(p, "p")
     if len(x) > len(y):
         x, y = y, x
     m, n = len(x), len(y)
@@ -477,7 +542,7 @@ def lq_distance(p1, p2, q: float = 2, lower=-np.inf, upper=np.inf) -> float:
     p1, p2 : callable
         Densities, functions of a float.
     q : float
-        Order, q >= 1.
+        Order, 1 <= q <= 100.
     lower, upper : float
         Integration limits.
 
@@ -487,10 +552,18 @@ def lq_distance(p1, p2, q: float = 2, lower=-np.inf, upper=np.inf) -> float:
 
     Raises
     ------
-    ValueError
-        If ``q`` < 1.
+    ValueError, TypeError
+        If ``q`` outside [1, 100].
+
+    Examples
+    --------
+    >>> from scipy.stats import norm
+    >>> round(lq_distance(norm(0, 1).pdf, norm(1, 1).pdf, q=1), 4)
+    0.7658
     """
-    q = v.at_least_one(q, "q")
+    check.function(p1, "p1"), check.function(p2, "p2")
+    q = v.order(q, "q")
+    lower, upper = v.limits(lower, upper)
     return float(_quad(lambda x: abs(p1(x) - p2(x)) ** q, lower, upper) ** (1 / q))
 
 
@@ -516,7 +589,15 @@ def hellinger(p1, p2, lower=-np.inf, upper=np.inf) -> float:
     -----
     scipy.integrate.IntegrationWarning
         When the quadrature does not reach its tolerance (nothing is raised).
+
+    Examples
+    --------
+    >>> from scipy.stats import norm
+    >>> round(hellinger(norm(0, 1).pdf, norm(1, 1).pdf), 4)
+    0.3428
     """
+    check.function(p1, "p1"), check.function(p2, "p2")
+    lower, upper = v.limits(lower, upper)
     bc = _quad(lambda x: np.sqrt(max(p1(x), 0.0) * max(p2(x), 0.0)), lower, upper)
     return float(np.sqrt(max(1.0 - bc, 0.0)))
 
@@ -541,11 +622,19 @@ def hellinger_gaussian(m1, C1, m2, C2) -> float:
 
     Raises
     ------
-    ValueError
-        If a covariance is not symmetric positive semidefinite.
+    ValueError, TypeError
+        If a covariance is not symmetric positive definite or the dimensions do not match.
+
+    Examples
+    --------
+    >>> round(hellinger_gaussian([0.0], [[1.0]], [1.0], [[1.0]]), 4)
+    0.3428
     """
-    m1, m2 = np.atleast_1d(np.asarray(m1, float)), np.atleast_1d(np.asarray(m2, float))
-    C1, C2 = v.covariance(C1, "C1"), v.covariance(C2, "C2")
+    m1, m2 = check.vector(m1, "m1"), check.vector(m2, "m2")
+    C1, C2 = v.covariance(C1, "C1", definite=True), v.covariance(C2, "C2", definite=True)
+    if not (m1.shape == m2.shape and C1.shape == C2.shape == (len(m1), len(m1))):
+        raise ValueError(f"m1, C1, m2, C2: expected matching dimensions, found means "
+                         f"{m1.shape}, {m2.shape} and covariances {C1.shape}, {C2.shape}")
     Cbar = 0.5 * (C1 + C2)
     d = m1 - m2
     bc = (np.linalg.det(C1) * np.linalg.det(C2)) ** 0.25 / np.sqrt(np.linalg.det(Cbar)) \
@@ -574,7 +663,16 @@ def jensen_shannon(p1, p2, lower=-np.inf, upper=np.inf) -> float:
     -----
     scipy.integrate.IntegrationWarning
         When the quadrature does not reach its tolerance (nothing is raised).
+
+    Examples
+    --------
+    >>> from scipy.stats import norm
+    >>> round(jensen_shannon(norm(0, 1).pdf, norm(1, 1).pdf), 4)
+    0.1114
     """
+    check.function(p1, "p1"), check.function(p2, "p2")
+    lower, upper = v.limits(lower, upper)
+
     def f(x):
         a, b = max(p1(x), 0.0), max(p2(x), 0.0)
         g = 0.5 * (a + b)

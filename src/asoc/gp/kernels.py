@@ -10,19 +10,14 @@ import numpy as np
 from scipy.special import gamma as gamma_fn
 from scipy.special import kv
 
+from .. import validation as check
 from . import _validate as v
 
-
-def _delta(delta):
-    delta = np.asarray(delta, dtype=float)
-    if np.any(delta < 0) or not np.all(np.isfinite(delta)):
-        raise ValueError("delta: expected finite non-negative distances, "
-                         f"found minimum {np.nanmin(delta):.3g}")
-    return delta
+_delta = v.distances
 
 
 def squared_exponential(delta, l: float):
-    r"""Squared exponential, Table 2.1: :math:`\exp(-\tfrac12 \Delta^2 / l^2)`.
+    r"""Squared exponential covariance function, Table 2.1: :math:`\exp(-\tfrac12 \Delta^2 / l^2)`.
 
     Parameters
     ----------
@@ -38,8 +33,13 @@ def squared_exponential(delta, l: float):
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``delta`` has negative or non-finite entries, or ``l`` is not positive.
+
+    Examples
+    --------
+    >>> squared_exponential([0.0, 1.0], 1.0).round(4).tolist()
+    [1.0, 0.6065]
     """
     l = v.positive(l, "l")
     return np.exp(-0.5 * (_delta(delta) / l) ** 2)
@@ -64,8 +64,13 @@ def matern(delta, l: float, nu: float = 2.5):
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``delta`` is invalid, or ``l`` or ``nu`` is not positive.
+
+    Examples
+    --------
+    >>> matern([0.0, 1.0], 1.0, nu=2.5).round(4).tolist()
+    [1.0, 0.524]
     """
     l, nu = v.positive(l, "l"), v.positive(nu, "nu")
     r = np.sqrt(2 * nu) * _delta(delta) / l
@@ -90,8 +95,13 @@ def exponential(delta, l: float):
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``delta`` is invalid or ``l`` is not positive.
+
+    Examples
+    --------
+    >>> exponential([0.0, 1.0], 2.0).round(4).tolist()
+    [1.0, 0.6065]
     """
     l = v.positive(l, "l")
     return np.exp(-_delta(delta) / l)
@@ -116,13 +126,16 @@ def gamma_exponential(delta, l: float, gamma: float = 1.5):
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``delta`` is invalid, ``l`` is not positive or ``gamma`` is outside (0, 2].
+
+    Examples
+    --------
+    >>> gamma_exponential([0.0, 1.0], 1.0, gamma=1.5).round(4).tolist()
+    [1.0, 0.3679]
     """
     l = v.positive(l, "l")
-    gamma = float(gamma)
-    if not 0 < gamma <= 2:
-        raise ValueError(f"gamma: expected 0 < gamma <= 2, found {gamma!r}")
+    gamma = check.real_scalar(gamma, "gamma", low=0, high=2, low_open=True)
     return np.exp(-(_delta(delta) / l) ** gamma)
 
 
@@ -144,8 +157,13 @@ def rational_quadratic(delta, l: float, alpha: float = 1.0):
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``delta`` is invalid, or ``l`` or ``alpha`` is not positive.
+
+    Examples
+    --------
+    >>> rational_quadratic([0.0, 1.0], 1.0, alpha=1.0).round(4).tolist()
+    [1.0, 0.6667]
     """
     l, alpha = v.positive(l, "l"), v.positive(alpha, "alpha")
     return (1 + _delta(delta) ** 2 / (2 * alpha * l**2)) ** (-alpha)
@@ -192,15 +210,18 @@ def bilinear_product(K_distance, means_i, means_j, Sigma):
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If ``Sigma`` is not symmetric PSD or the shapes do not match.
+
+    Examples
+    --------
+    >>> bilinear_product(np.ones((1, 2)), [[1.0]], [[2.0], [3.0]], [[1.0]]).tolist()
+    [[2.0, 3.0]]
     """
     Sigma = v.covariance(Sigma, "Sigma")
-    mi, mj = np.atleast_2d(np.asarray(means_i, float)), np.atleast_2d(np.asarray(means_j, float))
-    if mi.shape[1] != Sigma.shape[0] or mj.shape[1] != Sigma.shape[0]:
-        raise ValueError(f"means_i, means_j: expected {Sigma.shape[0]} columns, "
-                         f"found {mi.shape[1]} and {mj.shape[1]}")
-    K = np.asarray(K_distance, dtype=float)
+    mi = check.real_array(means_i, "means_i", shape=(None, Sigma.shape[0]))
+    mj = check.real_array(means_j, "means_j", shape=(None, Sigma.shape[0]))
+    K = check.real_array(K_distance, "K_distance")
     if K.shape != (len(mi), len(mj)):
         raise ValueError(f"K_distance: expected shape {(len(mi), len(mj))}, found {K.shape}")
     return (mi @ Sigma @ mj.T) * K
@@ -235,8 +256,14 @@ def mean_kernel_dirac(X, Y=None, WX=None, WY=None, *, alpha: float, Lambda, chun
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If the mixtures, weights, ``alpha`` or ``Lambda`` are invalid or the dimensions differ.
+
+    Examples
+    --------
+    >>> X = np.array([[[0.0], [1.0]], [[0.0], [0.0]]])
+    >>> mean_kernel_dirac(X, alpha=1.0, Lambda=1.0).round(4).tolist()
+    [[0.8033, 0.8033], [0.8033, 1.0]]
     """
     X = v.mixture_set(X, "X")
     WX = v.set_weights(WX, X.shape, "WX")
@@ -248,6 +275,7 @@ def mean_kernel_dirac(X, Y=None, WX=None, WY=None, *, alpha: float, Lambda, chun
     v.same_dimension(X, Y, "X, Y")
     Linv = _lambda_inverse(Lambda, X.shape[2])
     alpha = v.positive(alpha, "alpha")
+    chunk = check.integer(chunk, "chunk", minimum=1)
     out = np.empty((len(X), len(Y)))
     for start in range(0, len(X), chunk):
         sl = slice(start, start + chunk)
@@ -279,19 +307,23 @@ def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lamb
 
     Raises
     ------
-    ValueError
+    ValueError, TypeError
         If shapes do not match, a covariance is not symmetric PSD, or ``alpha``/``Lambda``
         is invalid.
+
+    Examples
+    --------
+    >>> k = mean_kernel_gaussian([[0.0]], [[[1.0]]], [[0.0]], [[[1.0]]], alpha=1.0, Lambda=1.0)
+    >>> k.round(4).tolist()     # 1 / sqrt(1 + 2)
+    [[0.5774]]
     """
-    mi, mj = np.atleast_2d(np.asarray(means_i, float)), np.atleast_2d(np.asarray(means_j, float))
-    Ci, Cj = np.asarray(covs_i, float), np.asarray(covs_j, float)
+    mi = check.real_array(means_i, "means_i", ndim=2)
     d = mi.shape[1]
-    if Ci.shape != (len(mi), d, d) or Cj.shape != (len(mj), d, d) or mj.shape[1] != d:
-        raise ValueError(f"means/covs: expected (N, {d}) and (N, {d}, {d}), found "
-                         f"{mi.shape}, {Ci.shape}, {mj.shape}, {Cj.shape}")
-    for name, C in (("covs_i", Ci), ("covs_j", Cj)):
-        for c in C:
-            v.covariance(c, name)
+    mj = check.real_array(means_j, "means_j", shape=(None, d))
+    Ci = check.semidefinite(check.real_array(covs_i, "covs_i", shape=(len(mi), d, d)), "covs_i")
+    Cj = check.semidefinite(check.real_array(covs_j, "covs_j", shape=(len(mj), d, d)), "covs_j")
+    if 0 in mi.shape + mj.shape:
+        raise ValueError(f"means_i, means_j: expected non-empty (N, d) arrays, found {mi.shape} and {mj.shape}")
     Lam = np.linalg.inv(_lambda_inverse(Lambda, d))
     alpha = v.positive(alpha, "alpha")
     S = Lam + Ci[:, None] + Cj[None]                                   # (N, M, d, d)
@@ -302,11 +334,7 @@ def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lamb
 
 
 def _lambda_inverse(Lambda, d):
-    Lam = np.asarray(Lambda, dtype=float)
+    Lam = check.real_array(Lambda, "Lambda")
     if Lam.ndim == 0:
         return np.eye(d) / v.positive(Lam, "Lambda")
-    Lam = v.covariance(Lam, "Lambda")
-    if Lam.shape != (d, d) or np.linalg.eigvalsh(Lam).min() <= 0:
-        raise ValueError(f"Lambda: expected a positive definite ({d}, {d}) matrix, found "
-                         f"shape {Lam.shape}")
-    return np.linalg.inv(Lam)
+    return np.linalg.inv(check.covariance(Lam, "Lambda", d, definite=True))

@@ -30,21 +30,41 @@ import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.optimize import minimize
 
+from .. import validation as check
+from ..result import IterativeResult
 from . import _validate as v
 from .kernels import COVARIANCES, mean_kernel_dirac
 
 PARAMS = ("alpha", "l", "sigma_n")
+#: Convergence of the likelihood maximisation: every component of the projected gradient of
+#: the log marginal likelihood in log-parameters below this value, i.e. a 1 % change of any
+#: hyperparameter changes log p(y | X) by less than 1e-4 (reachable on the flat ridges where
+#: L-BFGS-B's own line search gives up).
+GRADIENT_TOL = 1e-2
+MAX_ITERATIONS = 500
 
 
-@dataclass
-class FitResult:
-    """Outcome of the hyperparameter estimation."""
+@dataclass(kw_only=True)
+class FitResult(IterativeResult):
+    """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum and why it stopped.
+
+    ``converged`` when the projected gradient of the log marginal likelihood in
+    log-parameters is below :data:`GRADIENT_TOL` at the best start (status ``converged``);
+    otherwise ``max_iterations`` or ``no_progress`` (L-BFGS-B stopped earlier).
+
+    Examples
+    --------
+    >>> x = np.linspace(-2, 2, 8)
+    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x), np.random.default_rng(0))
+    >>> gp.result.status, gp.result.gradient_norm < GRADIENT_TOL
+    ('converged', True)
+    """
     alpha: float            #: signal standard deviation (kernel amplitude alpha^2)
     l: float                #: length scale
     sigma_n: float          #: noise standard deviation
     log_ml: float           #: log marginal likelihood at the optimum
-    converged: bool         #: the best start's optimiser reported success
     iterations: int         #: iterations of the best start
+    gradient_norm: float = 0.0  #: largest projected gradient component (log-parameters) at the optimum
     starts: list = field(default_factory=list)  #: (start, optimum, log_ml, converged) per start
 
 
@@ -59,29 +79,34 @@ def _cholesky(Ky):
     raise LinAlgError("Sigma_y is not positive definite even with jitter 1e-6 * mean(diag)")
 
 
-def _converged(res, log_b, gtol=1e-2):
-    """L-BFGS-B success, or a projected gradient below ``gtol`` (in log-parameters).
+def _projected_gradient(res, log_b) -> float:
+    """Largest component of the gradient projected onto the box ``log_b`` (zero where a bound is active).
 
     On the flat ridges of the likelihood (alpha and l growing together) L-BFGS-B often
     ends with an abnormal line search at a point whose projected gradient is negligible;
-    such a start counts as converged.
+    the library's criterion is this gradient, never the optimiser's status.
     """
-    if res.success:
-        return True
     g = np.array(res.jac, dtype=float)
     at_lo, at_hi = res.x <= log_b[:, 0] + 1e-9, res.x >= log_b[:, 1] - 1e-9
     g[(at_lo & (g > 0)) | (at_hi & (g < 0))] = 0.0
-    return bool(np.max(np.abs(g)) < gtol)
+    return float(np.max(np.abs(g)))
+
+
+def _status(gradient, iterations):
+    if gradient <= GRADIENT_TOL:
+        return "converged", f"projected gradient {gradient:.2g} <= {GRADIENT_TOL:g} after {iterations} iterations"
+    if iterations >= MAX_ITERATIONS:
+        return "max_iterations", f"stopped after {iterations} iterations with projected gradient {gradient:.2g}"
+    return "no_progress", (f"L-BFGS-B stopped after {iterations} iterations with projected gradient "
+                           f"{gradient:.2g} > {GRADIENT_TOL:g}")
 
 
 class _LikelihoodGP:
     """Shared estimator: subclasses provide the unit-variance kernel and its l-derivative."""
 
     def __init__(self, n_restarts: int = 4, bounds=None):
-        if int(n_restarts) < 0:
-            raise ValueError(f"n_restarts: expected a non-negative integer, found {n_restarts!r}")
-        self.n_restarts = int(n_restarts)
-        self.bounds = bounds
+        self.n_restarts = check.integer(n_restarts, "n_restarts", minimum=0)
+        self.bounds = None if bounds is None else _bounds(bounds)
         self.result = None
 
     # -- subclasses ----------------------------------------------------------------------
@@ -94,8 +119,8 @@ class _LikelihoodGP:
 
     # -- estimation ------------------------------------------------------------------------
     def _set_outputs(self, y):
-        y = np.asarray(y, dtype=float).ravel()
-        if not np.all(np.isfinite(y)) or y.size < 2:
+        y = check.real_array(y, "y", ndim=1)
+        if y.size < 2:
             raise ValueError(f"y: expected at least two finite outputs, found {y.size} values")
         self.y, self.m = y, float(y.mean())
         return y
@@ -107,7 +132,16 @@ class _LikelihoodGP:
                 "sigma_n": (1e-4 * sy, 1.0 * sy)}
 
     def neg_log_ml(self, log_theta, grad=True):
-        """Negative log marginal likelihood (and gradient) at ``log(alpha, l, sigma_n)``."""
+        """Negative log marginal likelihood (and gradient) at ``log(alpha, l, sigma_n)`` (Sec. 2.6.1)."""
+        self._fitted_data()
+        log_theta = check.real_array(log_theta, "log_theta", shape=(3,))
+        return self._neg_log_ml(log_theta, check.boolean(grad, "grad"))
+
+    def _fitted_data(self):
+        if not hasattr(self, "y"):
+            raise RuntimeError("call fit() or condition() first: the likelihood needs training data")
+
+    def _neg_log_ml(self, log_theta, grad=True):
         alpha, l, sn = np.exp(log_theta)
         Ku, dKu = self._unit_kernel(l, grad=grad)
         Ky = alpha**2 * Ku + sn**2 * np.eye(len(Ku))
@@ -128,17 +162,14 @@ class _LikelihoodGP:
         return nll, g
 
     def log_marginal_likelihood(self, alpha, l, sigma_n) -> float:
-        """Log marginal likelihood at the given hyperparameters (for likelihood surfaces)."""
-        return -self.neg_log_ml(np.log([alpha, l, sigma_n]), grad=False)
+        """Log marginal likelihood log p(y | X) at the given hyperparameters (for likelihood surfaces)."""
+        self._fitted_data()
+        theta = [v.positive(value, name) for value, name in ((alpha, "alpha"), (l, "l"), (sigma_n, "sigma_n"))]
+        return -self._neg_log_ml(np.log(theta), grad=False)
 
     def _optimise(self, rng: np.random.Generator):
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng: expected a seeded numpy.random.Generator, found {type(rng).__name__}")
+        rng = check.generator(rng)
         bounds = self.bounds or self._default_bounds()
-        for name in PARAMS:
-            lo, hi = bounds[name]
-            if not 0 < lo < hi:
-                raise ValueError(f"bounds[{name!r}]: expected 0 < low < high, found ({lo}, {hi})")
         log_b = np.log([bounds[n] for n in PARAMS])
         sy = float(np.std(self.y)) or 1.0
         guess = np.log(np.clip([sy, self._length_scale_guess(), 1e-2 * sy],
@@ -146,16 +177,19 @@ class _LikelihoodGP:
         starts = [guess] + [rng.uniform(log_b[:, 0], log_b[:, 1]) for _ in range(self.n_restarts)]
         runs = []
         for x0 in starts:
-            res = minimize(self.neg_log_ml, x0, jac=True, method="L-BFGS-B", bounds=log_b,
-                           options={"maxiter": 500})
-            runs.append((np.exp(x0), np.exp(res.x), -float(res.fun),
-                         _converged(res, log_b), int(res.nit)))
+            res = minimize(self._neg_log_ml, x0, jac=True, method="L-BFGS-B", bounds=log_b,
+                           options={"maxiter": MAX_ITERATIONS})
+            gradient = _projected_gradient(res, log_b)
+            runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= GRADIENT_TOL, int(res.nit),
+                         gradient))
         best = max(runs, key=lambda run: run[2])
         alpha, l, sn = best[1]
-        self.result = FitResult(float(alpha), float(l), float(sn), best[2], best[3], best[4],
-                                [run[:4] for run in runs])
-        if not best[3]:
-            warnings.warn(f"{type(self).__name__}.fit: the best start did not converge", RuntimeWarning)
+        status, message = _status(best[5], best[4])
+        self.result = FitResult(alpha=float(alpha), l=float(l), sigma_n=float(sn), log_ml=best[2],
+                                iterations=best[4], gradient_norm=best[5], starts=[run[:4] for run in runs],
+                                converged=status == "converged", status=status, message=message)
+        if not self.result.converged:
+            warnings.warn(f"{type(self).__name__}.fit: the best start did not converge: {message}", RuntimeWarning)
         return self.result
 
     def _factor(self):
@@ -164,10 +198,12 @@ class _LikelihoodGP:
         self._cf = _cholesky(r.alpha**2 * Ku + r.sigma_n**2 * np.eye(len(Ku)))
         self._a = cho_solve(self._cf, self.y - self.m)
 
+    def _fitted(self):
+        if self.result is None:
+            raise RuntimeError("call fit() or condition() before predict()")
+
     def _predict(self, K_cross_unit, k_self_unit, return_var):
         """Proposition 2.7 from the unit cross kernel (N, M) and unit self-covariances (N,)."""
-        if self.result is None:
-            raise RuntimeError("call fit() before predict()")
         a2 = self.result.alpha**2
         Ks = a2 * K_cross_unit
         mean = self.m + Ks @ self._a
@@ -200,23 +236,30 @@ class DistributionGP(_LikelihoodGP):
 
     Examples
     --------
-    >>> gp = DistributionGP("se").fit(D_train, y, rng)        # doctest: +SKIP
-    >>> mean, var = gp.predict(D_test_train, return_var=True)  # doctest: +SKIP
+    >>> x = np.linspace(-3, 3, 12)                        # inputs: Dirac distributions at x
+    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x), np.random.default_rng(0))
+    >>> mean, var = gp.predict(np.abs(np.array([[0.5]]) - x[None]), return_var=True)
+    >>> round(float(mean[0]), 3), bool(var[0] < 1e-3)     # sin(0.5) = 0.479
+    (0.479, True)
     """
 
     def __init__(self, covariance: str = "se", n_restarts: int = 4, bounds=None, **shape):
-        if covariance not in COVARIANCES:
-            raise ValueError(f"covariance: expected one of {sorted(COVARIANCES)}, found {covariance!r}")
+        check.choice(covariance, COVARIANCES, "covariance")
         allowed = {"matern": {"nu"}, "gamma_exponential": {"gamma"},
                    "rational_quadratic": {"alpha_rq"}}.get(covariance, set())
         if set(shape) - allowed:
-            raise ValueError(f"shape: {covariance!r} accepts {sorted(allowed) or 'no'} shape "
-                             f"parameters, found {sorted(shape)}")
+            extra = ", ".join(sorted(set(shape) - allowed))
+            raise TypeError(f"{extra}: expected the shape parameters of {covariance!r}, {sorted(allowed) or 'none'}, "
+                            f"found {sorted(shape)}")
         super().__init__(n_restarts, bounds)
         self.covariance = covariance
         fn = COVARIANCES[covariance]
         if "alpha_rq" in shape:
-            shape = {"alpha": shape["alpha_rq"]}
+            shape = {"alpha": v.positive(shape["alpha_rq"], "alpha_rq")}
+        if "nu" in shape:
+            shape["nu"] = v.positive(shape["nu"], "nu")
+        if "gamma" in shape:
+            shape["gamma"] = check.real_scalar(shape["gamma"], "gamma", low=0, high=2, low_open=True)
         self._kappa = lambda D, l: fn(D, l, **shape)
 
     def _length_scale_guess(self):
@@ -233,18 +276,20 @@ class DistributionGP(_LikelihoodGP):
         return K, (self._kappa(self.D, l * np.exp(h)) - self._kappa(self.D, l * np.exp(-h))) / (2 * h)
 
     def fit(self, D, y, rng: np.random.Generator):
-        """Estimate the hyperparameters from the training distance matrix ``D`` (M, M)."""
+        """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs ``y`` (M,)."""
+        check.generator(rng)
         self._check_training(D, y)
         self._optimise(rng)
         self._factor()
         return self
 
     def _check_training(self, D, y):
-        D = np.asarray(D, dtype=float)
+        D = v.distances(D, "D")
         if D.ndim != 2 or D.shape[0] != D.shape[1]:
             raise ValueError(f"D: expected a square distance matrix, found shape {D.shape}")
-        if np.any(D < 0) or not np.allclose(D, D.T) or np.any(np.diag(D) != 0):
-            raise ValueError("D: expected a symmetric non-negative matrix with zero diagonal")
+        if not np.allclose(D, D.T) or np.any(np.diag(D) != 0):
+            raise ValueError(f"D: expected a symmetric distance matrix with zero diagonal, found asymmetry "
+                             f"{np.abs(D - D.T).max():.3g} and largest diagonal entry {np.abs(np.diag(D)).max():.3g}")
         y = self._set_outputs(y)
         if len(y) != len(D):
             raise ValueError(f"y: expected {len(D)} outputs (one per training input), found {len(y)}")
@@ -253,10 +298,12 @@ class DistributionGP(_LikelihoodGP):
     def condition(self, D, y, alpha: float, l: float, sigma_n: float):
         """Condition on training data with given hyperparameters (no estimation)."""
         self._check_training(D, y)
-        for name, value in (("alpha", alpha), ("l", l), ("sigma_n", sigma_n)):
-            v.positive(value, name)
-        log_ml = -self.neg_log_ml(np.log([alpha, l, sigma_n]), grad=False)
-        self.result = FitResult(float(alpha), float(l), float(sigma_n), float(log_ml), True, 0)
+        alpha, l, sigma_n = (v.positive(value, name) for value, name in ((alpha, "alpha"), (l, "l"),
+                                                                          (sigma_n, "sigma_n")))
+        log_ml = -self._neg_log_ml(np.log([alpha, l, sigma_n]), grad=False)
+        self.result = FitResult(alpha=alpha, l=l, sigma_n=sigma_n, log_ml=float(log_ml), iterations=0,
+                                converged=True, status="converged",
+                                message="conditioned on given hyperparameters (no estimation)")
         self._factor()
         return self
 
@@ -265,20 +312,23 @@ class DistributionGP(_LikelihoodGP):
 
         ``D_star`` (N, M): distances test-training; ``D_star_star`` (N, N): test-test.
         """
-        D_star, D_ss = np.atleast_2d(np.asarray(D_star, float)), np.asarray(D_star_star, float)
+        mean = self.predict(D_star)
+        D_star = np.atleast_2d(v.distances(D_star, "D_star"))
+        D_ss = v.distances(D_star_star, "D_star_star")
         if D_ss.shape != (len(D_star), len(D_star)):
             raise ValueError(f"D_star_star: expected shape {(len(D_star),) * 2}, found {D_ss.shape}")
-        mean = self.predict(D_star)
         Ks = self.result.alpha**2 * self._kappa(D_star, self.result.l)
         cov = self.result.alpha**2 * self._kappa(D_ss, self.result.l) - Ks @ cho_solve(self._cf, Ks.T)
         return mean, 0.5 * (cov + cov.T)
 
     def predict(self, D_star, return_var: bool = False):
         """Predictive mean (and variance) at test inputs from distances ``D_star`` (N, M)."""
-        D_star = np.atleast_2d(np.asarray(D_star, dtype=float))
-        if D_star.shape[1:] != (len(self.y),) or np.any(D_star < 0):
+        self._fitted()
+        D_star = np.atleast_2d(v.distances(D_star, "D_star"))
+        if D_star.ndim != 2 or D_star.shape[1] != len(self.y):
             raise ValueError(f"D_star: expected non-negative distances of shape (N, {len(self.y)}), "
                              f"found shape {D_star.shape}")
+        return_var = check.boolean(return_var, "return_var")
         return self._predict(self._kappa(D_star, self.result.l), np.ones(len(D_star)), return_var)
 
 
@@ -293,6 +343,15 @@ class MeanKernelGP(_LikelihoodGP):
     input), which keeps the kernel a valid covariance on distributions. For Gaussian inputs
     the closed form is :func:`asoc.gp.mean_kernel_gaussian`. The expected kernel matrix is
     recomputed from the component distances at every likelihood evaluation, as in [42].
+
+    Examples
+    --------
+    >>> from asoc.gp import gaussian_dirac_mixtures
+    >>> mu = np.linspace(-2, 2, 10)
+    >>> X = gaussian_dirac_mixtures(mu, np.full(10, 0.1), L=5)
+    >>> gp = MeanKernelGP(n_restarts=1).fit(X, np.sin(mu), np.random.default_rng(0))
+    >>> gp.result.status, round(float(gp.predict(gaussian_dirac_mixtures([1.0], [0.1], L=5))[0]), 2)
+    ('converged', 0.84)
     """
 
     def _length_scale_guess(self):
@@ -310,6 +369,7 @@ class MeanKernelGP(_LikelihoodGP):
 
     def fit(self, X, y, rng: np.random.Generator, W=None):
         """Estimate the hyperparameters from training mixtures ``X`` (M, L, d)."""
+        check.generator(rng)
         self.X = v.mixture_set(X, "X")
         self.W = v.set_weights(W, self.X.shape, "W")
         y = self._set_outputs(y)
@@ -322,11 +382,27 @@ class MeanKernelGP(_LikelihoodGP):
 
     def predict(self, X_star, return_var: bool = False, W_star=None):
         """Predictive mean (and variance) at test mixtures ``X_star`` (N, L', d)."""
+        self._fitted()
         X_star = v.mixture_set(X_star, "X_star")
         v.same_dimension(X_star, self.X, "X_star, X")
         W_star = v.set_weights(W_star, X_star.shape, "W_star")
+        return_var = check.boolean(return_var, "return_var")
         Lam = self.result.l**2
         K_cross = mean_kernel_dirac(X_star, self.X, W_star, self.W, alpha=1.0, Lambda=Lam)
         sq_self = np.sum((X_star[:, :, None] - X_star[:, None]) ** 2, axis=-1)
         k_self = np.einsum("na,nab,nb->n", W_star, np.exp(-0.5 * sq_self / Lam), W_star)
         return self._predict(K_cross, k_self, return_var)
+
+
+def _bounds(bounds):
+    """``{"alpha": (lo, hi), "l": (lo, hi), "sigma_n": (lo, hi)}`` with 0 < lo < hi finite."""
+    check.instance(bounds, dict, "bounds", "a dict {'alpha': (lo, hi), 'l': (lo, hi), 'sigma_n': (lo, hi)}")
+    if set(bounds) != set(PARAMS):
+        raise ValueError(f"bounds: expected the keys {list(PARAMS)}, found {sorted(bounds)}")
+    out = {}
+    for name in PARAMS:
+        pair = check.real_array(bounds[name], f"bounds[{name!r}]", shape=(2,))
+        if not 0 < pair[0] < pair[1]:
+            raise ValueError(f"bounds[{name!r}]: expected 0 < low < high, found ({pair[0]}, {pair[1]})")
+        out[name] = (float(pair[0]), float(pair[1]))
+    return out
