@@ -170,3 +170,66 @@ def generator(rng, name: str = "rng") -> np.random.Generator:
         raise TypeError(f"{name}: expected a numpy.random.Generator (np.random.default_rng(seed)), "
                         f"found {type(rng).__name__}")
     return rng
+
+
+def stochastic_matrix(value, name: str, size: int | None = None) -> np.ndarray:
+    """A row-stochastic (transition) matrix: square, at least 1 x 1, rows are probability weights.
+
+    Examples
+    --------
+    >>> stochastic_matrix([[0.9, 0.1], [0.2, 0.8]], "T").shape
+    (2, 2)
+    >>> stochastic_matrix(np.zeros((0, 0)), "T")
+    Traceback (most recent call last):
+    ...
+    ValueError: T: expected a square (M, M) matrix with M >= 1, found shape (0, 0)
+    """
+    matrix = real_array(value, name, ndim=2)
+    if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
+        raise ValueError(f"{name}: expected a square (M, M) matrix with M >= 1, found shape {matrix.shape}")
+    if size is not None and matrix.shape[0] != size:
+        raise ValueError(f"{name}: expected shape ({size}, {size}), found shape {matrix.shape}")
+    for i, row in enumerate(matrix):
+        if np.any(row < 0):
+            raise ValueError(f"{name}: expected non-negative probabilities, found {row.min():.3g} in row {i}")
+        if abs(row.sum() - 1.0) > WEIGHT_ATOL:
+            raise ValueError(f"{name}: expected rows summing to 1, found sum {row.sum():.10g} in row {i}")
+    return matrix
+
+
+def choice(value, name: str, options) -> object:
+    """One of a fixed set of options (strings, or other hashable values).
+
+    Examples
+    --------
+    >>> choice("vec", "method", ("vec", "sdp"))
+    'vec'
+    >>> choice("lu", "method", ("vec", "sdp"))
+    Traceback (most recent call last):
+    ...
+    ValueError: method: expected one of ('vec', 'sdp'), found 'lu'
+    """
+    try:
+        ok = value in options and not isinstance(value, (np.ndarray, list))
+    except TypeError:
+        ok = False
+    if not ok:
+        raise ValueError(f"{name}: expected one of {tuple(options)}, found {_describe(value)}")
+    return value
+
+
+def boolean(value, name: str) -> bool:
+    """A flag: ``True``/``False`` (or a NumPy bool); integers and strings are rejected.
+
+    Examples
+    --------
+    >>> boolean(True, "warn")
+    True
+    >>> boolean("no", "warn")
+    Traceback (most recent call last):
+    ...
+    TypeError: warn: expected True or False, found 'no'
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected True or False, found {_describe(value)}")
+    return bool(value)

@@ -50,7 +50,7 @@ def table_3_2_designs(T, x0, horizon, H=None):
     t = time.perf_counter()
     r52 = do_val_h2_state_feedback(sf)
     if not r52.feasible:
-        raise RuntimeError(f"[52] LMI infeasible for T[{T}]: {r52.status}")
+        raise RuntimeError(f"[52] LMI infeasible for T[{T}]: {r52.message}")
     designs[TABLE_3_2_ROWS[1]] = Design(sf, StaticGain(r52.L), time.perf_counter() - t)
     r165 = time_variant_feedback(sf, horizon, x0)
     designs[TABLE_3_2_ROWS[2]] = Design(sf, TimeVariantGain(r165.G), r165.seconds)

@@ -26,37 +26,37 @@ import numpy as np
 from .dynamic import (METHODS, _T, bound_costate_step, bound_moment_step, dynamic_output_feedback,
                       gains_from_bounds, noise_covariances)
 from ..progress import progress_bar
+from ..result import IterativeResult
+from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
 from .moments import second_moment_step
-from .system import MJLS, successor_average, check_distribution, check_psd
+from .system import MJLS, successor_average
 
 
-@dataclass
-class FiniteHorizonResult:
+@dataclass(kw_only=True)
+class FiniteHorizonResult(IterativeResult):
     """Result of Algorithm 3.3 (:func:`finite_horizon_dynamic_output_feedback`).
 
     Attributes
     ----------
-    F, K, L : numpy.ndarray, shapes (K, nx, nx), (K, nx, ny), (K, nu, nx)
-        The gains of (3.55) for k = 0..K-1.
+    F, K, L : numpy.ndarray, shapes (horizon, nx, nx), (horizon, nx, ny), (horizon, nu, nx)
+        The gains of (3.55) for k = 0..horizon-1.
     xhat0 : numpy.ndarray, shape (nx,)
         The controller's initial state E{x_0}.
     cost_bounds : numpy.ndarray
         Jbar_0 (3.72) after each iteration (Thm. 3.33: non-increasing).
-    converged : bool
+    converged, status, message
+        Whether and why the iteration stopped (:class:`asoc.result.IterativeResult`):
+        ``"converged"``, ``"max_iterations"`` or ``"diverged"`` (Jbar_0 became non-finite).
     iterations : int
     cost : float
         The true expected cost (3.56) of the final gains, from the exact augmented
         second-moment recursion (3.58).
-    Xbar, Xunder, Pbar, Punder : numpy.ndarray, shape (K + 1, M, nx, nx)
+    Xbar, Xunder, Pbar, Punder : numpy.ndarray, shape (horizon + 1, M, nx, nx)
         The bounds of the last iteration.
     rejected : int
         Number of step updates Step 5 rejected in the last iteration.
     seconds : float
         Wall time.
-    costs : numpy.ndarray or None
-        The exact J_0 after each iteration of
-        :func:`asoc.mjls.exact_finite_horizon_dynamic_output_feedback` (None for Alg. 3.3;
-        the exact optimiser leaves the bound arrays None).
     """
 
     F: np.ndarray
@@ -64,7 +64,6 @@ class FiniteHorizonResult:
     L: np.ndarray
     xhat0: np.ndarray
     cost_bounds: np.ndarray
-    converged: bool
     iterations: int
     cost: float
     Xbar: np.ndarray = field(repr=False)
@@ -73,13 +72,17 @@ class FiniteHorizonResult:
     Punder: np.ndarray = field(repr=False)
     rejected: int = 0
     seconds: float = 0.0
-    costs: np.ndarray | None = field(default=None, repr=False)
 
     def controller(self):
         """The controller (3.55) for :func:`asoc.mjls.simulate`."""
-        from .simulate import DynamicOutputFeedback
+        return time_variant_controller(self)
 
-        return DynamicOutputFeedback(self.F, self.K, self.L, xhat0=self.xhat0)
+
+def time_variant_controller(result):
+    """The controller (3.55) of a finite-horizon result (F, K, L per step, xhat0) for simulate."""
+    from .simulate import DynamicOutputFeedback
+
+    return DynamicOutputFeedback(result.F, result.K, result.L, xhat0=result.xhat0)
 
 
 @dataclass(frozen=True)
@@ -100,13 +103,13 @@ class Stages:
 def stages(sys, horizon):
     """Normalise ``sys`` (an MJLS, or a sequence of ``horizon`` or ``horizon + 1`` MJLS for
     the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`."""
-    if int(horizon) != horizon or horizon < 1:
-        raise ValueError(f"horizon must be an integer >= 1, found {horizon}")
-    horizon = int(horizon)
+    horizon = integer(horizon, "horizon", minimum=1)
     if isinstance(sys, MJLS):
         systems = (sys,) * horizon
         Q_final = sys.Q
     else:
+        if not isinstance(sys, (list, tuple)):
+            raise TypeError(f"sys: expected an MJLS or a sequence of MJLS, found {type(sys).__name__}")
         systems = tuple(sys)
         if len(systems) not in (horizon, horizon + 1) or not all(isinstance(s, MJLS) for s in systems):
             raise ValueError(f"sys: expected an MJLS or a sequence of {horizon} or {horizon + 1} MJLS, "
@@ -129,16 +132,9 @@ def stages(sys, horizon):
 
 def check_initial_state(M, nx, mean0, cov0, mu0):
     """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays."""
-    mu0 = check_distribution(mu0, M, "mu0")
-    mean0 = np.asarray(mean0, dtype=float)
-    if mean0.shape != (M, nx) or not np.all(np.isfinite(mean0)):
-        raise ValueError(f"mean0: expected finite per-mode means of shape ({M}, {nx}), found "
-                         f"shape {mean0.shape}")
-    cov0 = np.asarray(cov0, dtype=float)
-    if cov0.shape != (M, nx, nx) or not np.all(np.isfinite(cov0)):
-        raise ValueError(f"cov0: expected finite per-mode covariances of shape ({M}, {nx}, {nx}), "
-                         f"found shape {cov0.shape}")
-    check_psd(cov0, "cov0")
+    mu0 = probability_vector(mu0, "mu0", M)
+    mean0 = real_array(mean0, "mean0", shape=(M, nx))
+    cov0 = semidefinite(real_array(cov0, "cov0", shape=(M, nx, nx)), "cov0")
     return mean0, cov0, mu0
 
 
@@ -196,8 +192,8 @@ def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
     ----------
     sys : MJLS or sequence of MJLS
         As in :func:`finite_horizon_dynamic_output_feedback`.
-    F, K, L : array_like, shapes (K, nc, nc), (K, nc, ny), (K, nu, nc)
-        Gains per step; the horizon K is their length.
+    F, K, L : array_like, shapes (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc)
+        Gains per step; the horizon is their length.
     mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
         Mean and covariance of x_0 given theta_0 = i.
     mu0 : array_like, shape (M,)
@@ -212,16 +208,34 @@ def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS (sequence) or an array is not real.
     ValueError
-        If the initial state or ``sys`` is invalid (see :func:`finite_horizon_dynamic_output_feedback`).
+        If the gains, the initial state or ``sys`` are invalid (see
+        :func:`finite_horizon_dynamic_output_feedback`).
+
+    Examples
+    --------
+    Alg. 3.2's time-invariant controller used for 10 steps of the example of Sec. 3.7.3:
+
+    >>> from asoc.mjls import dynamic_output_feedback
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> sys = sec373_system(1)
+    >>> r = dynamic_output_feedback(sys)
+    >>> gains = [np.broadcast_to(g, (10,) + g.shape) for g in (r.F, r.K, r.L)]
+    >>> round(finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0), 2)
+    211.71
     """
-    F, K, L = (np.asarray(g, dtype=float) for g in (F, K, L))
-    st = stages(sys, len(F))
+    F = real_array(F, "F", ndim=3)
+    horizon, nc = F.shape[0], F.shape[1]
+    st = stages(sys, horizon)
     s0 = st.systems[0]
+    F = real_array(F, "F", shape=(horizon, nc, nc))
+    K = real_array(K, "K", shape=(horizon, nc, s0.ny))
+    L = real_array(L, "L", shape=(horizon, s0.nu, nc))
     mean0, cov0, mu0 = check_initial_state(s0.M, s0.nx, mean0, cov0, mu0)
-    if xhat0 is None:
-        xhat0 = mu0 @ mean0
-    nx, nc = s0.nx, F.shape[1]
+    xhat0 = mu0 @ mean0 if xhat0 is None else real_array(xhat0, "xhat0", shape=(nc,))
+    nx = s0.nx
     Acl, HHcl, Qcl = [], [], []
     for k, s in enumerate(st.systems):
         A = np.zeros((s.M, nx + nc, nx + nc))
@@ -256,15 +270,18 @@ def _initial_gains(init, st, nx, ny, nu):
     elif isinstance(init, np.random.Generator):
         return (init.random((horizon, nx, nx)) - 0.5, init.random((horizon, nx, ny)) - 0.5,
                 init.random((horizon, nu, nx)) - 0.5)
-    F, K, L = (np.asarray(g, dtype=float) for g in (init.F, init.K, init.L)) \
-        if hasattr(init, "F") else (np.asarray(g, dtype=float) for g in init)
+    if all(hasattr(init, g) for g in "FKL"):
+        init = (init.F, init.K, init.L)
+    if not (isinstance(init, (tuple, list)) and len(init) == 3):
+        raise TypeError(f"init: expected None, a Generator, a result with F, K, L or a tuple (F, K, L), "
+                        f"found {type(init).__name__}")
     out = []
-    for name, g, shape in (("F", F, (nx, nx)), ("K", K, (nx, ny)), ("L", L, (nu, nx))):
+    for name, g, shape in (("F", init[0], (nx, nx)), ("K", init[1], (nx, ny)), ("L", init[2], (nu, nx))):
+        g = real_array(g, f"init {name}")
         if g.shape == shape:
             g = np.broadcast_to(g, (horizon,) + shape)
-        if g.shape != (horizon,) + shape or not np.all(np.isfinite(g)):
-            raise ValueError(f"init: {name} must be finite of shape {shape} or {(horizon,) + shape}, "
-                             f"found {g.shape}")
+        if g.shape != (horizon,) + shape:
+            raise ValueError(f"init {name}: expected shape {shape} or {(horizon,) + shape}, found {g.shape}")
         out.append(g.copy())
     return tuple(out)
 
@@ -317,10 +334,23 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS (sequence), ``horizon`` or ``max_iter`` is not an integer,
+        a flag is not a bool, or ``init`` has the wrong type.
     ValueError
         If ``horizon``, ``tol``, ``max_iter``, ``method``, the initial state (``mean0``,
         ``cov0``, ``mu0``) or the shapes of ``init`` are invalid, or ``sys`` is not an MJLS
         (sequence) of consistent dimensions.
+
+    Examples
+    --------
+    The example of Sec. 3.7.3 (T[1], xi_0[1]) over 20 steps:
+
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = finite_horizon_dynamic_output_feedback(sec373_system(1), 20, SEC373_MEAN0[1],
+    ...                                              SEC373_COV0, SEC373_MU0)
+    >>> res.status, res.F.shape, round(res.cost, 2)
+    ('converged', (20, 2, 2), 308.22)
     """
     start = time.perf_counter()
     st = stages(sys, horizon)
@@ -328,11 +358,11 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     s0 = st.systems[0]
     M, nx, nu, ny = s0.M, s0.nx, s0.nu, s0.ny
     mean0, cov0, mu0 = check_initial_state(M, nx, mean0, cov0, mu0)
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}")
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, found {method!r}")
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    choice(method, "method", METHODS)
+    safeguard, warn, progress = (boolean(v, n) for v, n in ((safeguard, "safeguard"), (warn, "warn"),
+                                                             (progress, "progress")))
     F, K, L = _initial_gains(init, st, nx, ny, nu)
     xhat0, Xbar0, Xunder0 = initial_bounds(mean0, cov0, mu0)
     mu = mode_distributions(st, mu0)
@@ -342,7 +372,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     Punder = np.empty_like(Xbar)
     Xbar[0], Xunder[0] = Xbar0, Xunder0
     bounds = []
-    converged = False
+    status = "max_iterations"
     rejected = 0
     it = 0
 
@@ -371,21 +401,27 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         J0 = float(np.einsum("iab,iba->", Pbar[0], Xbar[0] + Xunder[0])
                    + np.einsum("iab,iba->", Punder[0], Xbar[0]) + mu0 @ omega)   # Step 7, (3.72)
         if not np.isfinite(J0):
+            status = "diverged"
             break
         bounds.append(J0)
         if len(bounds) > 1 and abs(bounds[-2] - J0) <= tol * max(1.0, abs(J0)):
-            converged = True
+            status = "converged"
             break
     bounds = np.array(bounds)
     seconds = time.perf_counter() - start
-    if warn and not converged:
-        warnings.warn(f"Algorithm 3.3 did not converge within {it} iterations", RuntimeWarning,
-                      stacklevel=2)
+    change = abs(bounds[-1] - bounds[-2]) / max(1.0, abs(bounds[-1])) if len(bounds) > 1 else np.inf
+    message = {"converged": f"converged after {it} iterations (change of Jbar_0 {change:.2g} <= tol = {tol:.2g})",
+               "max_iterations": f"did not converge within {it} iterations (change of Jbar_0 {change:.2g} "
+                                 f"> tol = {tol:.2g})",
+               "diverged": f"stopped at iteration {it}: the bound Jbar_0 became non-finite"}[status]
+    if warn and status != "converged":
+        warnings.warn(f"Algorithm 3.3 {message}", RuntimeWarning, stacklevel=2)
     increases = np.diff(bounds) > 1e-8 * np.maximum(1.0, np.abs(bounds[1:]))   # beyond rounding
     if warn and np.any(increases):
         warnings.warn(f"Algorithm 3.3: Jbar_0 increased in {int(increases.sum())} iterations "
                       f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
     cost = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
-    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds, converged=converged,
+    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds,
+                               converged=status == "converged", status=status, message=message,
                                iterations=it, cost=cost, Xbar=Xbar, Xunder=Xunder, Pbar=Pbar,
                                Punder=Punder, rejected=rejected, seconds=seconds)

@@ -36,7 +36,9 @@ import numpy as np
 
 from .finite_horizon import (_T, augmented_cost, augmented_initial_moment, check_initial_state,
                              mode_distributions, stages)
+from ..validation import real_array
 from .simulate import Controller
+from .system import check_system
 
 
 @dataclass
@@ -45,13 +47,13 @@ class ModeObservedResult:
 
     Attributes
     ----------
-    F : numpy.ndarray, shape (K, M, nu, nx)
+    F : numpy.ndarray, shape (horizon, M, nu, nx)
         LQ gains.
-    Mf : numpy.ndarray, shape (K, M, nx, ny)
+    Mf : numpy.ndarray, shape (horizon, M, nx, ny)
         Markov jump filter gains.
-    X : numpy.ndarray, shape (K + 1, M, nx, nx)
+    X : numpy.ndarray, shape (horizon + 1, M, nx, nx)
         Control Riccati solutions.
-    Y : numpy.ndarray, shape (K + 1, M, nx, nx)
+    Y : numpy.ndarray, shape (horizon + 1, M, nx, nx)
         Filter error moments.
     xhat0 : numpy.ndarray, shape (nx,)
     cost : float
@@ -80,14 +82,33 @@ class ModeObservedLQG(Controller):
         Gains of :class:`ModeObservedResult`.
     xhat0 : array_like, shape (nx,)
         Filter initial state.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> sys = sec373_system(1)
+    >>> res = mode_observed_lqg(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> controller = res.controller(sys)
+    >>> controller.observes_mode, controller.start(3).shape
+    (True, (3, 2))
     """
 
     observes_mode = True
 
     def __init__(self, sys, F, Mf, xhat0):
+        check_system(sys)
         self.A, self.B, self.C = sys.A, sys.B, sys.C
-        self.F, self.Mf = np.asarray(F, dtype=float), np.asarray(Mf, dtype=float)
-        self.xhat0 = np.asarray(xhat0, dtype=float)
+        self.F = real_array(F, "F", ndim=4)
+        horizon = self.F.shape[0]
+        self.F = real_array(F, "F", shape=(horizon, sys.M, sys.nu, sys.nx))
+        self.Mf = real_array(Mf, "Mf", shape=(horizon, sys.M, sys.nx, sys.ny))
+        self.xhat0 = real_array(xhat0, "xhat0", shape=(sys.nx,))
+        self._dims = (sys.M, sys.nx, sys.nu, sys.ny)
+
+    def check(self, sys):
+        if (sys.M, sys.nx, sys.nu, sys.ny) != self._dims:
+            raise ValueError(f"controller: built for (M, nx, nu, ny) = {self._dims}, found "
+                             f"{(sys.M, sys.nx, sys.nu, sys.ny)}")
 
     def start(self, n_runs):
         return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
@@ -148,7 +169,7 @@ def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
     sys : MJLS or sequence of MJLS
         As in :func:`finite_horizon_dynamic_output_feedback` (3.54).
     horizon : int
-        K >= 1.
+        Number of steps, >= 1.
     mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
         Mode-conditional mean and covariance of x_0.
     mu0 : array_like, shape (M,)
@@ -161,8 +182,19 @@ def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS (sequence), ``horizon`` not an integer or an array not real.
     ValueError
         If ``horizon``, ``sys`` or the initial state is invalid.
+
+    Examples
+    --------
+    Table 3.3's benchmark on the example of Sec. 3.7.3 over 20 steps:
+
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = mode_observed_lqg(sec373_system(1), 20, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res.F.shape, res.Mf.shape, round(res.cost, 2)
+    ((20, 2, 1, 2), (20, 2, 2, 1), 170.71)
     """
     st = stages(sys, horizon)
     s0 = st.systems[0]
