@@ -45,7 +45,7 @@ def test_weights_and_finiteness_are_checked():
     sys = sec354_system(1)
     with pytest.raises(ValueError, match="Q: expected a symmetric matrix"):
         sys.replace(Q=np.array([[1.0, 1.0], [0.0, 1.0]]))
-    with pytest.raises(ValueError, match="Q: .*positive semidefinite"):
+    with pytest.raises(ValueError, match="Q: .*positive semi-definite"):
         sys.replace(Q=-np.eye(2))
     with pytest.raises(ValueError, match="R: .*positive definite"):
         sys.replace(R=np.zeros((1, 1)))
