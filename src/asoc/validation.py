@@ -6,6 +6,7 @@ message reads ``"<name>: expected <what>, found <what>"``. Each returns the valu
 (a float array, an ``int``), so a caller writes ``x0 = real_array(x0, "x0", shape=(n,))``.
 """
 
+import collections.abc
 import numbers
 
 import numpy as np
@@ -210,9 +211,11 @@ def choice(value, name: str, options) -> object:
     ValueError: method: expected one of ('vec', 'sdp'), found 'lu'
     """
     try:
-        ok = value in options and not isinstance(value, (np.ndarray, list))
-    except TypeError:
+        ok = isinstance(value, collections.abc.Hashable) and value in options
+    except (TypeError, ValueError):
         ok = False
+    if isinstance(value, (bool, np.bool_)) and not any(option is value for option in options):
+        ok = False                                       # True == 1, but True is not the option 1
     if not ok:
         raise ValueError(f"{name}: expected one of {tuple(options)}, found {_describe(value)}")
     return value

@@ -24,7 +24,11 @@ from ..validation import choice, integer, probability_vector, real_array, real_s
 def _scalar_model(a, b, g, T, pi, Q, R):
     """Validated scalar modes a, b (M,), noise gain g > 0, T (M, M), pi (M,), Q >= 0, R > 0."""
     a = real_array(a, "a", ndim=1)
-    b = real_array(b, "b", shape=a.shape)
+    if a.size == 0:
+        raise ValueError("a: expected at least one mode, found none")
+    b = real_array(b, "b")
+    if b.shape != a.shape:
+        raise ValueError(f"b: expected the shape of a, {a.shape}, found shape {b.shape}")
     g = real_scalar(g, "g", low=0, low_open=True)
     T = stochastic_matrix(T, "T", a.size)
     pi = probability_vector(pi, "pi", a.size)
@@ -124,9 +128,21 @@ def _grid(J, X, U, h):
     """Validated callable J, grids X, U of one shape and step h > 0."""
     if not callable(J):
         raise TypeError(f"J: expected a function J(x, u), found {type(J).__name__}")
-    X = real_array(X, "X")
-    U = real_array(U, "U", shape=X.shape)
-    return J, X, U, real_scalar(h, "h", low=0, low_open=True)
+    return (J, *_grid_arrays(X=X, U=U), real_scalar(h, "h", low=0, low_open=True))
+
+
+def _grid_arrays(**arrays):
+    """Non-empty real arrays of one shape, the first one's (named in the message)."""
+    (first, value), *rest = arrays.items()
+    ref = real_array(value, first)
+    if ref.size == 0:
+        raise ValueError(f"{first}: expected a non-empty grid, found shape {ref.shape}")
+    out = [ref]
+    for name, value in rest:
+        out.append(real_array(value, name))
+        if out[-1].shape != ref.shape:
+            raise ValueError(f"{name}: expected the shape of {first}, {ref.shape}, found shape {out[-1].shape}")
+    return out
 
 
 def hessian(J, X, U, h=1e-3):
@@ -229,8 +245,7 @@ def quadratic_fit_residual(X, U, J):
     >>> quadratic_fit_residual(X, U, 1 + X * U + U ** 2) < 1e-12
     True
     """
-    X = real_array(X, "X")
-    U, J = real_array(U, "U", shape=X.shape), real_array(J, "J", shape=X.shape)
+    X, U, J = _grid_arrays(X=X, U=U, J=J)
     x, u, j = X.ravel(), U.ravel(), J.ravel()
     basis = np.stack([np.ones_like(x), x, u, x * x, x * u, u * u], axis=1)
     coef, *_ = np.linalg.lstsq(basis, j, rcond=None)

@@ -2,20 +2,36 @@
 
 import numpy as np
 
-from ..validation import integer, probability_vector, real_array, stochastic_matrix
+from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
 from .system import check_system, predecessor_sum
 
 
-def _moment_arguments(Acl, HHt, T, mu, X=None, X_name="X", mu_name="mu"):
+_NO_MOMENT = object()
+
+
+def _moment_arguments(Acl, HHt, T, mu, X=_NO_MOMENT, X_name="X", mu_name="mu"):
     """Validated closed loop (M, n, n), noise (M, n, n), T (M, M), mu (M,) and optional X (M, n, n)."""
     Acl = real_array(Acl, "Acl", ndim=3)
     M, n, _ = Acl.shape
     Acl = real_array(Acl, "Acl", shape=(M, n, n))
-    HHt = real_array(HHt, "HHt", shape=(M, n, n))
+    why = f"(M = {M}, n = {n} from Acl)"
+    HHt = real_array(HHt, "HHt")
+    if HHt.shape != (M, n, n):
+        raise ValueError(f"HHt: expected shape ({M}, {n}, {n}) {why}, found shape {HHt.shape}")
+    T = real_array(T, "T")
+    if T.shape != (M, M):
+        raise ValueError(f"T: expected shape ({M}, {M}) {why}, found shape {T.shape}")
     T = stochastic_matrix(T, "T", M)
+    mu = real_array(mu, mu_name)
+    if mu.shape != (M,):
+        raise ValueError(f"{mu_name}: expected shape ({M},) {why}, found shape {mu.shape}")
     mu = probability_vector(mu, mu_name, M)
-    if X is not None:
-        X = real_array(X, X_name, shape=(M, n, n))
+    semidefinite(HHt, "HHt")
+    if X is not _NO_MOMENT:
+        X = real_array(X, X_name)
+        if X.shape != (M, n, n):
+            raise ValueError(f"{X_name}: expected shape ({M}, {n}, {n}) {why}, found shape {X.shape}")
+        semidefinite(X, X_name)
     return Acl, HHt, T, mu, X
 
 
@@ -190,7 +206,7 @@ def h2_cost(sys, L, X_inf):
 
     check_system(sys)
     L = gain_matrix(L, "L", sys.nu, sys.ny)
-    X_inf = real_array(X_inf, "X_inf", shape=(sys.M, sys.nx, sys.nx))
+    X_inf = semidefinite(real_array(X_inf, "X_inf", shape=(sys.M, sys.nx, sys.nx)), "X_inf")
     LC = L @ sys.C
     weight = sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
     return float(np.einsum("iab,iba->", weight, X_inf))

@@ -138,7 +138,9 @@ class DynamicOutputFeedback(Controller):
             raise ValueError(f"F: expected shape (nc, nc) or (horizon, nc, nc), found shape {self.F.shape}")
         self.time_variant = self.F.ndim == 3
         nc = self.F.shape[-1]
-        self.xhat0 = np.zeros(nc) if xhat0 is None else real_array(xhat0, "xhat0", shape=(nc,))
+        self.xhat0 = np.zeros(nc) if xhat0 is None else real_array(xhat0, "xhat0")
+        if self.xhat0.shape != (nc,):
+            raise ValueError(f"xhat0: expected shape ({nc},) (nc = {nc} from F), found shape {self.xhat0.shape}")
 
     def check(self, sys):
         lead = self.F.shape[:-2]

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.linalg
 
 from ..result import IterativeResult
-from ..validation import boolean, choice, integer, real_array, real_scalar
+from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .moments import h2_cost, moment_operator, steady_state_second_moment
 from .stability import closed_loop, ms_spectral_radius
 from .system import check_system, predecessor_sum, successor_average
@@ -89,8 +89,8 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
     array([[-0.1447]])
     """
     check_system(sys)
-    X = real_array(X, "X", shape=(sys.M, sys.nx, sys.nx))
-    P = real_array(P, "P", shape=(sys.M, sys.nx, sys.nx))
+    X = semidefinite(real_array(X, "X", shape=(sys.M, sys.nx, sys.nx)), "X")
+    P = semidefinite(real_array(P, "P", shape=(sys.M, sys.nx, sys.nx)), "P")
     if R is not None:
         R = real_array(R, "R", shape=(sys.M, sys.nu, sys.nu))
     choice(method, "method", ("vec", "sdp"))

@@ -18,11 +18,12 @@ from ..validation import probability_vector, real_array, real_scalar, semidefini
 STATIONARY_ATOL = 1e-8     # |mu T - mu| allowed for a given stationary distribution
 
 
-def _stack(value, name, M=None, shape2=None):
+def _stack(value, name, M=None, shape2=None, source=""):
     """Stack a list of 2-D arrays (or one 2-D array for all modes) into (M, r, c).
 
     A list counts as per-mode matrices when each element is 2-D; ``[[1, 0]]`` is one matrix.
-    Complex, non-numeric and non-finite entries are rejected (naming ``name``).
+    Complex, non-numeric and non-finite entries are rejected (naming ``name``); ``source``
+    says where the expected sizes come from (e.g. "nx from A").
     """
     if isinstance(value, (list, tuple)) and value and all(np.ndim(v) >= 2 for v in value):
         mats = [np.atleast_2d(real_array(v, f"{name}[{i}]", finite=False)) for i, v in enumerate(value)]
@@ -46,8 +47,8 @@ def _stack(value, name, M=None, shape2=None):
         for axis, want in enumerate(shape2):
             if want is not None and arr.shape[1 + axis] != want:
                 exp = tuple("*" if w is None else w for w in shape2)
-                raise ValueError(f"{name}: expected shape (M, {exp[0]}, {exp[1]}) = "
-                                 f"({M}, {exp[0]}, {exp[1]}), found {arr.shape}")
+                raise ValueError(f"{name}: expected shape ({M}, {exp[0]}, {exp[1]})"
+                                 f"{f' ({source})' if source else ''}, found {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name}: expected finite entries, found {int(np.size(arr) - np.isfinite(arr).sum())} "
                          f"non-finite")
@@ -265,13 +266,15 @@ class MJLS:
         nx = A.shape[1]
         if A.shape[2] != nx:
             raise ValueError(f"A: expected square (M, nx, nx), found {A.shape}")
-        B = _stack(B, "B", M, (nx, None))
-        C = _stack(C, "C", M, (None, nx))
-        H = _stack(H, "H", M, (nx, None))
-        Q = semidefinite(_stack(Q, "Q", M, (nx, nx)), "Q")
-        R = semidefinite(_stack(R, "R", M, (B.shape[2], B.shape[2])), "R", definite=True)
+        from_A = f"nx = {nx} from A"
+        B = _stack(B, "B", M, (nx, None), from_A)
+        C = _stack(C, "C", M, (None, nx), from_A)
+        H = _stack(H, "H", M, (nx, None), from_A)
+        Q = semidefinite(_stack(Q, "Q", M, (nx, nx), from_A), "Q")
+        R = semidefinite(_stack(R, "R", M, (B.shape[2], B.shape[2]), f"nu = {B.shape[2]} from B"), "R",
+                         definite=True)
         if J is not None:
-            J = _stack(J, "J", M, (C.shape[1], None))
+            J = _stack(J, "J", M, (C.shape[1], None), f"ny = {C.shape[1]} from C")
         if mu_inf is None:
             mu_inf = stationary_distribution(T)
         else:
