@@ -116,6 +116,13 @@ class TimeVariantResult(IterativeResult):
         (the cost became non-finite).
     iterations : int
     seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = time_variant_feedback(sec354_system(1, "state"), 5, [3.0, 0.0])
+    >>> res.status, res.G.shape
+    ('converged', (5, 1, 2))
     """
 
     G: np.ndarray

@@ -35,7 +35,17 @@ def _T(X):
 
 
 def noise_covariances(sys):
-    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny); J = None means noise-free outputs."""
+    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny) of (3.36); J = None means noise-free outputs.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> HHt, JJt = noise_covariances(sys)
+    >>> HHt.shape, JJt.ravel().round(4)
+    ((2, 2, 2), array([0.01, 0.01]))
+    """
+    check_system(sys)
     HHt = sys.H @ _T(sys.H)
     JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
     return HHt, JJt
@@ -84,6 +94,14 @@ def augmented_closed_loop(sys, F, K, L):
     ------
     ValueError
         If a gain has the wrong shape or non-finite entries.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> At, Wt, Qt = augmented_closed_loop(sys, 0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))
+    >>> At.shape, At[0, 2:, :2].tolist()
+    ((2, 4, 4), [[1.0, 0.0], [1.0, 0.0]])
     """
     F, K, L = check_gains(sys, F, K, L)
     M, nx, nc = sys.M, sys.nx, F.shape[0]
@@ -126,6 +144,15 @@ def steady_state_cost(sys, F, K, L):
     ------
     ValueError
         If a gain has the wrong shape or non-finite entries.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> r = dynamic_output_feedback(sys)
+    >>> cost, X, rho = steady_state_cost(sys, r.F, r.K, r.L)
+    >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1)
+    (True, True)
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
     rho = ms_spectral_radius(At, sys.T)
@@ -138,7 +165,20 @@ def steady_state_cost(sys, F, K, L):
 def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     """One step of the second-moment bounds, (3.45)-(3.46) / (3.66)-(3.67).
 
+    An inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+
     Returns (Xbar_next, Xunder_next), each (M, nx, nx).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> HHt, JJt = noise_covariances(sys)
+    >>> Z = np.zeros((2, 2, 2))
+    >>> Xbar, Xunder = bound_moment_step(sys, np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)), Z, Z,
+    ...                                  sys.mu_inf, HHt, JJt)
+    >>> np.allclose(Xbar, sys.predecessor_sum(sys.mu_inf[:, None, None] * HHt)), np.abs(Xunder).max()
+    (True, np.float64(0.0))
     """
     KC = K @ sys.C
     AKC = sys.A - KC
@@ -155,7 +195,18 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
 def bound_costate_step(sys, F, K, L, EPbar, EPunder):
     """One step of the multiplier bounds, (3.47)-(3.48) / (3.68)-(3.69).
 
+    An inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+
     ``EPbar``, ``EPunder`` are E_i(Pbar), E_i(Punder) of the next step. Returns (Pbar, Punder).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> Z = np.zeros((2, 2, 2))
+    >>> Pbar, Punder = bound_costate_step(sys, np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)), Z, Z)
+    >>> np.allclose(Pbar, sys.Q), np.abs(Punder).max()
+    (True, np.float64(0.0))
     """
     BL = sys.B @ L
     ABL = sys.A + BL
@@ -178,7 +229,17 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     """The matrix and vector of (3.49)/(3.70), built from (3.50).
 
     Unknown z = [vec F; vec K; vec L] (column-stacking vec); the conditions read H z + rho = 0.
-    H is (half) the Hessian of the bounded cost (A.7)/(B.5), hence symmetric PSD.
+    H is (half) the Hessian of the bounded cost (A.7)/(B.5), hence symmetric PSD. An
+    inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> H, rho = optimality_system(sys, I, I, I, I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> H.shape, rho.shape, np.allclose(H, H.T)
+    ((8, 8), (8,), True)
     """
     A, B, C, R = sys.A, sys.B, sys.C, sys.R
     S = Xbar + Xunder
@@ -211,8 +272,19 @@ def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"
     ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
     (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
     F and K do not enter the cost); ``"sdp"``: the SDP after Alg. 3.2 (min lambda with
-    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel.
+    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. An inner-loop
+    helper of Algs. 3.2-3.3: only ``method`` is validated.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> F, K, L = gains_from_bounds(sys, I, I, I, I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> F.shape, K.shape, L.shape
+    ((2, 2), (2, 1), (1, 2))
     """
+    choice(method, "method", METHODS)
     n, ny, nu = sys.nx, sys.ny, sys.nu
     H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
     if method == "lstsq":
@@ -275,6 +347,14 @@ class DynamicOutputFeedbackResult(IterativeResult):
         Traces of Xbar_i, Xunder_i, Pbar_i, Punder_i per iteration, each (iterations + 1, M).
     seconds : float
         Wall time.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> res = dynamic_output_feedback(sys)
+    >>> res.converged, res.status, res.Xbar.shape
+    (True, 'converged', (2, 2, 2))
     """
 
     F: np.ndarray

@@ -63,6 +63,14 @@ class ExactDynamicOutputFeedbackResult(IterativeResult):
     history : dict
         ``"cost"``: the exact cost after each iteration.
     seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> res = exact_dynamic_output_feedback(sys, max_iter=3, warn=False)
+    >>> res.status, res.iterations, sorted(res.history)
+    ('max_iterations', 3, ['cost'])
     """
 
     F: np.ndarray
@@ -94,6 +102,14 @@ class MinRadiusResult(IterativeResult):
     history : dict
         ``"rho"``: rho after each iteration.
     seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> res = min_radius_dynamic_output_feedback(sys, max_iter=3)
+    >>> res.status, res.iterations, sorted(res.history)
+    ('max_iterations', 3, ['rho'])
     """
 
     F: np.ndarray
@@ -125,6 +141,16 @@ class ExactFiniteHorizonResult(IterativeResult):
     costs : numpy.ndarray
         The exact J_0 after each iteration.
     seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = exact_finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+    ...                                                    max_iter=3, warn=False)
+    >>> res.status, res.F.shape, res.costs.size
+    ('max_iterations', (5, 2, 2), 4)
     """
 
     F: np.ndarray
@@ -178,6 +204,17 @@ def gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     Returns
     -------
     (gF, gK, gL) : arrays of the shapes of F, K, L.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
+    >>> I = np.broadcast_to(np.eye(4), (2, 4, 4))
+    >>> gF, gK, gL = gain_gradient(sys, K, L, At, I, I, noise_covariances(sys)[1], sys.mu_inf)
+    >>> gF.shape, gK.shape, gL.shape
+    ((2, 2), (2, 1), (1, 2))
     """
     nx = sys.nx
     gF, gK, gL = _closed_loop_gradient(sys, 2.0 * EP @ At @ X)        # dJ/dA~_i
@@ -202,6 +239,19 @@ def average_cost_and_gradient(sys, F, K, L):
     -------
     (cost, (gF, gK, gL)) : cost is inf and the gradient None when A~ is not mean-square
         stable (Cor. 3.2).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> cost, gradient = average_cost_and_gradient(sys, F, K, L)
+    >>> cost, gradient
+    (inf, None)
+    >>> r = dynamic_output_feedback(sys)
+    >>> cost, (gF, gK, gL) = average_cost_and_gradient(sys, r.F, r.K, r.L)
+    >>> round(cost, 3), gL.shape
+    (23.313, (1, 2))
     """
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     M, n, _ = At.shape
@@ -226,7 +276,16 @@ def _positive_definite(Y):
 
 
 def closed_loop_radius(sys, F, K, L):
-    """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39)."""
+    """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> round(closed_loop_radius(sys, F, K, L), 4)
+    1.3449
+    """
     At = augmented_closed_loop(sys, F, K, L)[0]
     return float(np.max(np.abs(np.linalg.eigvals(moment_operator(At, sys.T)))))
 
@@ -248,6 +307,15 @@ def radius_and_gradient(sys, F, K, L):
     Returns
     -------
     (rho, (gF, gK, gL)) : the gradient is zero where <V, X> vanishes (rho not differentiable).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> rho, (gF, gK, gL) = radius_and_gradient(sys, F, K, L)
+    >>> round(rho, 4), gF.shape
+    (1.3449, (2, 2))
     """
     At = augmented_closed_loop(sys, F, K, L)[0]
     M, n, _ = At.shape
@@ -327,6 +395,14 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None, targe
     -------
     (z, f, status, iterations, history) : status a key of :data:`BFGS_STATUS`; history holds
         f after each iteration.
+
+    Examples
+    --------
+    >>> fun = lambda z: ((z[0] - 1) ** 2 + 10 * (z[1] - z[0] ** 2) ** 2,
+    ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2), 20 * (z[1] - z[0] ** 2)]))
+    >>> z, f, status, iterations, history = bfgs(fun, np.array([-1.0, 1.0]), 1e-14, 200)
+    >>> status, z.round(4)
+    ('converged', array([1., 1.]))
     """
     z = np.asarray(z0, dtype=float)
     f, g = fun(z)
@@ -393,6 +469,14 @@ def averaged_lqg(sys, nc):
     A start for the stabilising phase when Alg. 3.2 gives none (predictor-form Kalman gain
     and LQ gain from the two discrete algebraic Riccati equations). Returns (F, K, L), or
     None when nc != nx or a Riccati equation has no stabilising solution.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = averaged_lqg(sys, 2)
+    >>> F.shape, K.shape, L.shape
+    ((2, 2), (2, 1), (1, 2))
     """
     if nc != sys.nx:
         return None
@@ -604,6 +688,19 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     Returns
     -------
     (cost, (gF, gK, gL)) : gradients of the shapes of F, K, L (backward adjoint recursion).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
+    >>> st = stages(sys, 3)
+    >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))]
+    >>> X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, SEC373_MU0 @ SEC373_MEAN0[1])
+    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0, mode_distributions(st, SEC373_MU0))
+    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0))), gL.shape
+    (True, (3, 1, 2))
     """
     m = _stacked(st)
     HHt, JJt = np.stack(st.HHt), np.stack(st.JJt)

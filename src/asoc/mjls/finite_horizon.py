@@ -57,6 +57,15 @@ class FiniteHorizonResult(IterativeResult):
         Number of step updates Step 5 rejected in the last iteration.
     seconds : float
         Wall time.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res.status, res.Xbar.shape, res.controller().time_variant
+    ('converged', (6, 2, 2, 2), True)
     """
 
     F: np.ndarray
@@ -79,7 +88,17 @@ class FiniteHorizonResult(IterativeResult):
 
 
 def time_variant_controller(result):
-    """The controller (3.55) of a finite-horizon result (F, K, L per step, xhat0) for simulate."""
+    """The controller (3.55) of a finite-horizon result (F, K, L per step, xhat0) for simulate.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> time_variant_controller(res).xhat0.tolist()
+    [5.0, 0.0]
+    """
     from .simulate import DynamicOutputFeedback
 
     return DynamicOutputFeedback(result.F, result.K, result.L, xhat0=result.xhat0)
@@ -88,7 +107,16 @@ def time_variant_controller(result):
 @dataclass(frozen=True)
 class Stages:
     """The time-variant MJLS (3.54) over a horizon: one MJLS per step k = 0..K-1 and the
-    terminal weight Q_K (M, nx, nx); noise covariances HHt, JJt per step."""
+    terminal weight Q_K (M, nx, nx); noise covariances HHt, JJt per step.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> st = stages(sys, 4)
+    >>> st.horizon, len(st.HHt)
+    (4, 4)
+    """
 
     systems: tuple
     Q_final: np.ndarray
@@ -102,7 +130,16 @@ class Stages:
 
 def stages(sys, horizon):
     """Normalise ``sys`` (an MJLS, or a sequence of ``horizon`` or ``horizon + 1`` MJLS for
-    the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`."""
+    the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> st = stages([sys, sys, sys.replace(Q=2 * np.eye(2))], 2)
+    >>> st.horizon, float(st.Q_final[0, 0, 0])
+    (2, 2.0)
+    """
     horizon = integer(horizon, "horizon", minimum=1)
     if isinstance(sys, MJLS):
         systems = (sys,) * horizon
@@ -131,7 +168,15 @@ def stages(sys, horizon):
 
 
 def check_initial_state(M, nx, mean0, cov0, mu0):
-    """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays."""
+    """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> mean0, cov0, mu0 = check_initial_state(2, 2, SEC373_MEAN0[1], SEC373_COV0, [1, 0])
+    >>> mu0
+    array([1., 0.])
+    """
     mu0 = probability_vector(mu0, "mu0", M)
     mean0 = real_array(mean0, "mean0", shape=(M, nx))
     cov0 = semidefinite(real_array(cov0, "cov0", shape=(M, nx, nx)), "cov0")
@@ -139,7 +184,15 @@ def check_initial_state(M, nx, mean0, cov0, mu0):
 
 
 def initial_bounds(mean0, cov0, mu0):
-    """x^_0 = E{x_0} and the bounds Xbar_{i,0}, Xunder_{i,0} (Thm. 3.31, Alg. 3.3 Step 2)."""
+    """x^_0 = E{x_0} and the bounds Xbar_{i,0}, Xunder_{i,0} (Thm. 3.31, Alg. 3.3 Step 2).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> xhat0, Xbar0, Xunder0 = initial_bounds(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> xhat0.tolist(), float(Xunder0[0, 0, 0])
+    ([5.0, 0.0], 25.0)
+    """
     xhat0 = mu0 @ mean0
     dev = mean0 - xhat0
     m = mu0[:, None, None]
@@ -149,7 +202,15 @@ def initial_bounds(mean0, cov0, mu0):
 
 
 def mode_distributions(st, mu0):
-    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..K, shape (K+1, M)."""
+    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..K, shape (K+1, M).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> mode_distributions(stages(sys, 2), np.array([1.0, 0.0])).round(3).tolist()
+    [[1.0, 0.0], [0.7, 0.3], [0.67, 0.33]]
+    """
     mu = np.empty((st.horizon + 1, len(mu0)))
     mu[0] = mu0
     for k, s in enumerate(st.systems):
@@ -158,7 +219,14 @@ def mode_distributions(st, mu0):
 
 
 def augmented_initial_moment(mean0, cov0, mu0, xhat0):
-    """X~_0^i = E{[x_0; x^_0][x_0; x^_0]^T 1(theta_0 = i)} for a constant x^_0 = xhat0."""
+    """X~_0^i = E{[x_0; x^_0][x_0; x^_0]^T 1(theta_0 = i)} for a constant x^_0 = xhat0.
+
+    Examples
+    --------
+    >>> X0 = augmented_initial_moment(np.array([[1.0]]), np.zeros((1, 1, 1)), np.array([1.0]), np.array([1.0]))
+    >>> X0.tolist()
+    [[[1.0, 1.0], [1.0, 1.0]]]
+    """
     M, nx = mean0.shape
     nc = xhat0.size
     X0 = np.zeros((M, nx + nc, nx + nc))
@@ -175,6 +243,14 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
     Acl, HHt_cl, Qcl: sequences of K stacks (M, n, n) (mode-dependent, e.g. the augmented
     closed loop (3.59)-(3.60)); Q_final (M, n, n); Ts: K transition matrices; X0 (M, n, n):
     E{x~_0 x~_0^T 1(theta_0 = i)}. Returns sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K} X~_K^i].
+
+    Examples
+    --------
+    >>> A = [np.array([[[0.5]]])] * 2
+    >>> cost = augmented_cost(A, [np.ones((1, 1, 1))] * 2, [np.ones((1, 1, 1))] * 2, np.ones((1, 1, 1)),
+    ...                       [np.ones((1, 1))] * 2, np.ones((1, 1, 1)), np.array([1.0]))
+    >>> round(cost, 4)
+    3.5625
     """
     X, mu = X0, np.asarray(mu0, dtype=float)
     cost = 0.0

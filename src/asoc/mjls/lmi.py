@@ -39,6 +39,13 @@ class LMIResult(IterativeResult):
         The solver's own status string (e.g. "optimal", "infeasible").
     rho : float
         Mean-square spectral radius of the closed loop with L (nan without a gain).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = static_output_lmi(sec354_system(1, "state"))
+    >>> res.feasible, res.status, res.solver_status, bool(res.rho < 1)
+    (True, 'converged', 'optimal', True)
     """
 
     feasible: bool
@@ -49,7 +56,13 @@ class LMIResult(IterativeResult):
 
 
 def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan):
-    """The LMIResult of a solve: feasible iff the solver's status is optimal and rho < 1."""
+    """The LMIResult of a solve: feasible iff the solver's status is optimal and rho < 1.
+
+    Examples
+    --------
+    >>> lmi_result("optimal", np.array([[1.0]]), 2.0, rho=1.2).message[:40]
+    "the solver reports 'optimal', but the re"
+    """
     if L is None:
         return LMIResult(feasible=False, L=None, bound=np.inf, solver_status=solver_status, rho=rho,
                          converged=False, status="infeasible",
@@ -65,7 +78,15 @@ def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan):
 
 
 def performance_output(sys):
-    """D_i = [Q_i^{1/2}; 0], E_i = [0; R_i^{1/2}] of (3.12), by Cholesky (PSD-safe for Q)."""
+    """D_i = [Q_i^{1/2}; 0], E_i = [0; R_i^{1/2}] of (3.12), by Cholesky (PSD-safe for Q).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> D, E = performance_output(sec354_system(1))
+    >>> D.shape, E[0].ravel().tolist()
+    ((2, 3, 2), [0.0, 0.0, 1.0])
+    """
     nx, nu = sys.nx, sys.nu
     D = np.zeros((sys.M, nx + nu, nx))
     E = np.zeros((sys.M, nx + nu, nu))
@@ -165,7 +186,13 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
 
 
 def check_solver(solver, name="solver"):
-    """An installed cvxpy solver name."""
+    """An installed cvxpy solver name.
+
+    Examples
+    --------
+    >>> check_solver("CLARABEL")
+    'CLARABEL'
+    """
     if not isinstance(solver, str):
         raise TypeError(f"{name}: expected a cvxpy solver name (str), found {type(solver).__name__}")
     if solver not in cp.installed_solvers():

@@ -122,6 +122,11 @@ def moment_operator(Acl, T):
     """The matrix of X -> D_j(Acl X Acl^T) on row-major vecs (3.29): block (j, i) = p_ij Acl_i (x) Acl_i.
 
     Its spectral radius is that of Cor. 3.2; its transpose maps vec P to vec(Acl_i^T E_i(P) Acl_i).
+
+    Examples
+    --------
+    >>> moment_operator(np.array([[[0.5]], [[2.0]]]), np.array([[0.5, 0.5], [0.5, 0.5]])).tolist()
+    [[0.125, 2.0], [0.125, 2.0]]
     """
     M, n, _ = Acl.shape
     kron = np.einsum("iab,icd->iacbd", Acl, Acl).reshape(M, n * n, n * n)    # Acl_i (x) Acl_i

@@ -45,6 +45,13 @@ class ObservedModeResult(IterativeResult):
         ``"diverged"`` (max |P| > 1e100) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
     iterations : int
     seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = observed_mode_state_feedback(sec354_system(1, "state"), max_iter=5, warn=False)
+    >>> res.status, res.iterations
+    ('max_iterations', 5)
     """
 
     L: np.ndarray

@@ -58,6 +58,15 @@ class ModeObservedResult:
     xhat0 : numpy.ndarray, shape (nx,)
     cost : float
         The exact expected cost (3.56) of the closed loop (augmented second-moment recursion).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = mode_observed_lqg(sys, 4, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res.X.shape, res.Y.shape, res.xhat0.tolist()
+    ((5, 2, 2, 2), (5, 2, 2, 2), [5.0, 0.0])
     """
 
     F: np.ndarray
@@ -123,7 +132,17 @@ class ModeObservedLQG(Controller):
 
 
 def control_riccati(st):
-    """Coupled Riccati difference equations of the LQ problem with observed mode ([38], Ch. 4)."""
+    """Coupled Riccati difference equations of the LQ problem with observed mode ([38], Ch. 4).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.finite_horizon import stages
+    >>> F, X = control_riccati(stages(sys, 3))
+    >>> F.shape, np.allclose(X[-1], sys.Q)
+    ((3, 2, 1, 2), True)
+    """
     K_ = st.horizon
     s0 = st.systems[0]
     X = np.empty((K_ + 1, s0.M, s0.nx, s0.nx))
@@ -140,7 +159,18 @@ def control_riccati(st):
 
 
 def markov_jump_filter(st, Y0, mu):
-    """Gains M_i(k) and error moments Y_i(k) of the Markov jump filter ([38], Ch. 5)."""
+    """Gains M_i(k) and error moments Y_i(k) of the Markov jump filter ([38], Ch. 5).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.finite_horizon import mode_distributions, stages
+    >>> st = stages(sys, 3)
+    >>> Mf, Y = markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st, sys.mu_inf))
+    >>> Mf.shape, Y.shape
+    ((3, 2, 2, 1), (4, 2, 2, 2))
+    """
     K_ = st.horizon
     s0 = st.systems[0]
     Y = np.empty((K_ + 1, s0.M, s0.nx, s0.nx))

@@ -166,7 +166,14 @@ class DynamicOutputFeedback(Controller):
 @dataclass
 class SimulationResult:
     """Per-run costs of (3.3): cost = sum_{k<K} (x'Q x + u'R u) + x_K' Q x_K, and, on request,
-    trajectories x (N, K+1, nx), u (N, K, nu), theta (N, K+1)."""
+    trajectories x (N, K+1, nx), u (N, K, nu), theta (N, K+1).
+
+    Examples
+    --------
+    >>> res = SimulationResult(cost=np.array([10.0, 20.0]), horizon=10)
+    >>> res.average_cost
+    array([1., 2.])
+    """
 
     cost: np.ndarray
     horizon: int

@@ -112,7 +112,13 @@ def closed_loop(sys, L):
 
 
 def gain_matrix(L, name, nu, ny):
-    """A finite real gain of shape (nu, ny); a scalar or a flat array is accepted when nu = ny = 1."""
+    """A finite real gain of shape (nu, ny); a scalar or a flat array is accepted when nu = ny = 1.
+
+    Examples
+    --------
+    >>> gain_matrix(-0.5, "L", 1, 1)
+    array([[-0.5]])
+    """
     L = real_array(L, name)
     if L.size == 1 and nu == ny == 1:
         return L.reshape(1, 1)

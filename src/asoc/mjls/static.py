@@ -41,6 +41,13 @@ class StaticOutputFeedbackResult(IterativeResult):
         ``trace_X`` and ``trace_P``: traces of X^i and P^i per iteration, (iterations + 1, M).
     seconds : float
         Wall time of the iteration.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = static_output_feedback(sec354_system(1), max_iter=3, warn=False)
+    >>> res.converged, res.status, res.iterations
+    (False, 'max_iterations', 3)
     """
 
     L: np.ndarray
