@@ -191,7 +191,7 @@ def time_variant_feedback(sys, horizon, x0, mu0=None, x0_cov=None, G0=None, tol=
 
     Parameters
     ----------
-    horizon : K >= 1.
+    horizon : int >= 1.
     x0 : (nx,) known initial state; ``x0_cov`` an optional (nx, nx) covariance.
     mu0 : initial mode distribution (default stationary).
     G0 : initial gain sequence (horizon, nu, ny), default zeros (the thesis suggests Alg. 3.1's

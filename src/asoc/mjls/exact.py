@@ -672,7 +672,7 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
 
 
 def _stacked(st):
-    """The matrices of all steps stacked over k: A, B, C, Q, R (K, M, ., .), T (K, M, M)."""
+    """The matrices of all steps stacked over k: A, B, C, Q, R (horizon, M, ., .), T (horizon, M, M)."""
     return {name: np.stack([getattr(s, name) for s in st.systems]) for name in "ABCQRT"}
 
 
@@ -682,8 +682,8 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     Parameters
     ----------
     st : :class:`asoc.mjls.finite_horizon.Stages` of the horizon.
-    F, K, L : (K, nc, nc), (K, nc, ny), (K, nu, nc) gains of (3.55).
-    X0 : (M, n, n) E{x~_0 x~_0^T 1(theta_0 = i)}; mu : (K + 1, M) mode distributions.
+    F, K, L : (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc) gains of (3.55).
+    X0 : (M, n, n) E{x~_0 x~_0^T 1(theta_0 = i)}; mu : (horizon + 1, M) mode distributions.
 
     Returns
     -------

@@ -202,7 +202,7 @@ def initial_bounds(mean0, cov0, mu0):
 
 
 def mode_distributions(st, mu0):
-    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..K, shape (K+1, M).
+    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..horizon, shape (horizon + 1, M).
 
     Examples
     --------
@@ -373,7 +373,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         One MJLS, or ``horizon`` (or ``horizon + 1``, the last giving Q_K) MJLS for
         time-variant system matrices (3.54).
     horizon : int
-        K >= 1.
+        Number of steps, >= 1.
     mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
         Mean and covariance of x_0 given theta_0 = i.
     mu0 : array_like, shape (M,)

@@ -166,7 +166,7 @@ class DynamicOutputFeedback(Controller):
 @dataclass
 class SimulationResult:
     """Per-run costs of (3.3): cost = sum_{k<K} (x'Q x + u'R u) + x_K' Q x_K, and, on request,
-    trajectories x (N, K+1, nx), u (N, K, nu), theta (N, K+1).
+    trajectories x (N, horizon + 1, nx), u (N, horizon, nu), theta (N, horizon + 1).
 
     Examples
     --------
@@ -183,7 +183,7 @@ class SimulationResult:
 
     @property
     def average_cost(self):
-        """Per-run cost divided by the horizon K (the finite-K reading of (3.9))."""
+        """Per-run cost divided by the horizon (the finite-horizon reading of (3.9))."""
         return self.cost / self.horizon
 
 
@@ -271,7 +271,7 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     x0 : array_like, (nx,) or (M, nx)
         Initial state, or per-mode means of a Gaussian mixture (Sec. 3.7).
     horizon : int
-        K >= 1 steps.
+        Number of steps, >= 1.
     n_runs : int
         N >= 1 runs.
     rng : numpy.random.Generator

@@ -120,11 +120,20 @@ def stationary_distribution(T):
     array([0.6667, 0.3333])
     """
     T = stochastic_matrix(T, "T")
+    _warn_if_not_unique(T, stacklevel=3)
+    return _least_squares_stationary(T)
+
+
+def _warn_if_not_unique(T, stacklevel):
+    n_closed = closed_classes(T)
+    if n_closed > 1:
+        warnings.warn(f"T: the chain has {n_closed} closed classes, so its stationary distribution is "
+                      f"not unique; pass the intended one as MJLS(..., mu_inf=...)", RuntimeWarning,
+                      stacklevel=stacklevel)
+
+
+def _least_squares_stationary(T):
     M = T.shape[0]
-    if closed_classes(T) > 1:
-        warnings.warn(f"T: the chain has {closed_classes(T)} closed classes, so its stationary "
-                      f"distribution is not unique; pass the intended one as MJLS(..., mu_inf=...)",
-                      RuntimeWarning, stacklevel=2)
     lhs = np.vstack([T.T - np.eye(M), np.ones((1, M))])
     rhs = np.concatenate([np.zeros(M), [1.0]])
     mu, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
@@ -276,7 +285,8 @@ class MJLS:
         if J is not None:
             J = _stack(J, "J", M, (C.shape[1], None), f"ny = {C.shape[1]} from C")
         if mu_inf is None:
-            mu_inf = stationary_distribution(T)
+            _warn_if_not_unique(T, stacklevel=3)
+            mu_inf = _least_squares_stationary(T)
         else:
             mu_inf = probability_vector(mu_inf, "mu_inf", M)
             gap = np.abs(mu_inf @ T - mu_inf).max()
