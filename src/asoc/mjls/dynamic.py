@@ -28,6 +28,7 @@ from .system import check_system, predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
 DIVERGED = 1e100          # bounds beyond this are treated as diverging (the iteration stops)
+GAIN_FLOOR = 1e-12        # absolute floor of a gain's norm in its relative change (a zero gain converges)
 
 
 def _T(X):
@@ -385,9 +386,10 @@ def _initial_bounds(sys, init, rng):
     return out
 
 
-def _rel_change(old, new):
+def _rel_change(old, new, floor=1e-150):
+    """||new - old|| / max(||new||, floor) (Frobenius); the absolute floor lets a zero iterate converge."""
     d = new - old
-    return float(np.sqrt(np.vdot(d, d) / max(np.vdot(new, new), 1e-300)))
+    return float(np.sqrt(np.vdot(d, d) / max(np.vdot(new, new), floor ** 2)))
 
 
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
@@ -473,7 +475,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
             break
         changes = [_rel_change(o, n) for o, n in zip((Xbar, Xunder, Pbar, Punder), (*new_X, *new_P))]
         if gains is not None:
-            changes += [_rel_change(o, n) for o, n in zip(gains, (F, K, L))]
+            changes += [_rel_change(o, n, GAIN_FLOOR) for o, n in zip(gains, (F, K, L))]
         iterates.append(np.stack([*new_X, *new_P]))
         gains = (F, K, L)
         Xbar, Xunder = new_X
