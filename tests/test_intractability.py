@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from asoc.mjls.examples import SEC34_A, SEC34_B, SEC34_G, SEC34_PI, SEC34_T
-from asoc.mjls.intractability import (expected_cost_K2, hessian, hessian_min_eigenvalue, min_curvature_in_u,
+from asoc.mjls.intractability import (expected_cost_two_steps_before_horizon, hessian, hessian_min_eigenvalue, min_curvature_in_u,
                                       nonconvex_radius)
 
 
 def J(x, u, terms="full", g=SEC34_G):
-    return expected_cost_K2(x, u, SEC34_A, SEC34_B, g, SEC34_T, SEC34_PI, n_nodes=60, terms=terms)
+    return expected_cost_two_steps_before_horizon(x, u, SEC34_A, SEC34_B, g, SEC34_T, SEC34_PI, n_nodes=60, terms=terms)
 
 
 def test_full_cost_is_stage_cost_plus_last_term():

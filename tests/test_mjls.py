@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from asoc.mjls import (MJLS, ModeDependentGain, StaticGain, TimeVariantGain, closed_loop, h2_cost,
+from asoc.mjls import (MJLS, dynamic_output_feedback, ModeDependentGain, StaticGain, TimeVariantGain, closed_loop, h2_cost,
                        ms_spectral_radius, second_moments, simulate, static_output_feedback,
                        steady_state_second_moment)
 from asoc.mjls.baselines import do_val_h2_state_feedback, time_variant_feedback
 from asoc.mjls.examples import sec354_system
-from asoc.mjls.intractability import expected_cost_K2
+from asoc.mjls.intractability import expected_cost_two_steps_before_horizon
 from asoc.mjls.lmi import static_output_lmi
 from asoc.mjls.observed import observed_mode_state_feedback
 
@@ -29,7 +29,7 @@ def random_mjls(rng, M=3, nx=3, nu=2, ny=2, scale=0.6):
 # --- validation ------------------------------------------------------------------------------
 
 def test_bad_transition_matrix_names_the_row():
-    with pytest.raises(ValueError, match=r"T: row 1"):
+    with pytest.raises(ValueError, match=r"T: expected rows summing to 1, found sum 1.1 in row 1"):
         sec354_system(1).replace(T=[[0.7, 0.3], [0.5, 0.6]])
 
 
@@ -43,13 +43,13 @@ def test_wrong_shape_names_matrix_and_shapes():
 
 def test_weights_and_finiteness_are_checked():
     sys = sec354_system(1)
-    with pytest.raises(ValueError, match="Q: mode 1 matrix is not symmetric"):
+    with pytest.raises(ValueError, match="Q: expected a symmetric matrix"):
         sys.replace(Q=np.array([[1.0, 1.0], [0.0, 1.0]]))
-    with pytest.raises(ValueError, match="Q: .*positive semidefinite"):
+    with pytest.raises(ValueError, match="Q: .*positive semi-definite"):
         sys.replace(Q=-np.eye(2))
     with pytest.raises(ValueError, match="R: .*positive definite"):
         sys.replace(R=np.zeros((1, 1)))
-    with pytest.raises(ValueError, match="A: found non-finite"):
+    with pytest.raises(ValueError, match="A: expected finite entries"):
         sys.replace(A=np.full((2, 2, 2), np.nan))
 
 
@@ -221,7 +221,7 @@ def test_simulation_is_deterministic_and_validates_input():
         simulate(sys, StaticGain([[0.0]]), np.zeros(2), 0, 10, np.random.default_rng(0))
     with pytest.raises(ValueError, match="mode0"):
         simulate(sys, StaticGain([[0.0]]), np.zeros(2), 5, 10, np.random.default_rng(0), mode0=2)
-    with pytest.raises(ValueError, match="rng"):
+    with pytest.raises(TypeError, match="rng"):
         simulate(sys, StaticGain([[0.0]]), np.zeros(2), 5, 10, 0)
     with pytest.raises(ValueError, match="x0"):
         simulate(sys, StaticGain([[0.0]]), np.zeros(3), 5, 10, np.random.default_rng(0))
@@ -229,7 +229,7 @@ def test_simulation_is_deterministic_and_validates_input():
 
 def test_mode_chain_has_the_transition_frequencies_of_T():
     sys = sec354_system(1)
-    run = simulate(sys, ModeDependentGain(np.zeros((2, 1, 2))), np.zeros(2), 50, 4000,
+    run = simulate(sys, ModeDependentGain(np.zeros((2, 1, 1))), np.zeros(2), 50, 4000,
                    np.random.default_rng(8), trajectories=True)
     th = run.theta
     for i in range(2):
@@ -240,14 +240,109 @@ def test_mode_chain_has_the_transition_frequencies_of_T():
 
 # --- Sec. 3.4 --------------------------------------------------------------------------------
 
-def test_expected_cost_K2_matches_monte_carlo():
+def test_expected_cost_two_steps_before_horizon_matches_monte_carlo():
     a, b, g = np.array([1.0, 0.3]), np.array([1.0, 0.8]), 0.2
     T, pi = np.array([[0.7, 0.3], [0.2, 0.8]]), np.array([0.4, 0.6])
     x, u = 1.5, -0.7
-    J = expected_cost_K2(x, u, a, b, g, T, pi)
+    J = expected_cost_two_steps_before_horizon(x, u, a, b, g, T, pi)
     rng = np.random.default_rng(9)
     q = rng.choice(2, size=400_000, p=pi)
     xn = a[q] * x + b[q] * u + g * rng.standard_normal(q.size)
     from asoc.mjls.intractability import psi
     samples = x ** 2 + u ** 2 + xn ** 2 * psi(xn, np.full_like(xn, x), np.full_like(xn, u), a, b, g, T, pi)
     assert J == pytest.approx(samples.mean(), abs=4 * samples.std() / np.sqrt(q.size))
+
+
+# --- issue 15: named errors, zero optimum, reducible chains, why an iteration stopped --------
+
+def _plant(**changes):
+    A = [np.array([[0.5, 0.1], [0.0, 0.3]]), np.array([[0.2, 0.0], [0.1, 0.4]])]
+    fields = dict(A=A, B=np.zeros((2, 1)), C=np.array([[1.0, 0.0]]), H=np.eye(2), Q=np.eye(2), R=np.eye(1),
+                  T=[[0.9, 0.1], [0.2, 0.8]])
+    fields.update(changes)
+    return MJLS(**fields)
+
+
+def test_zero_optimal_gain_converges():
+    res = static_output_feedback(_plant())
+    assert res.status == "converged" and res.iterations < 100 and np.all(res.L == 0)
+    res = dynamic_output_feedback(_plant(J=0.1 * np.ones((1, 1))))
+    assert res.status == "converged" and np.all(res.L == 0)
+
+
+def test_reducible_chain_warns_and_takes_mu_inf():
+    with pytest.warns(RuntimeWarning, match="T: the chain has 2 closed classes.*mu_inf"):
+        _plant(T=np.eye(2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sys = _plant(T=np.eye(2), mu_inf=[0.25, 0.75])
+    np.testing.assert_array_equal(sys.mu_inf, [0.25, 0.75])
+    with pytest.raises(ValueError, match=r"mu_inf: expected a stationary distribution of T"):
+        _plant(mu_inf=[0.5, 0.5])
+    with pytest.raises(ValueError, match=r"mu_inf: expected probabilities summing to 1"):
+        _plant(T=np.eye(2), mu_inf=[0.5, 0.6])
+
+
+@pytest.mark.parametrize("changes, error, match", [
+    (dict(A=np.eye(2) * (1 + 1j)), TypeError, r"A: expected a real array, found complex"),
+    (dict(T=np.array([[0.9, 0.1], [0.2, 0.8]]) + 0j), TypeError, r"T: expected a real array, found complex"),
+    (dict(T=np.zeros((0, 0))), ValueError, r"T: expected a square \(M, M\) matrix with M >= 1, found shape \(0, 0\)"),
+    (dict(T=[[np.nan, 1.0], [0.5, 0.5]]), ValueError, r"T: expected finite entries"),
+    (dict(B=np.zeros((3, 1))), ValueError, r"B: expected shape \(2, 2, \*\) \(nx = 2 from A\)"),
+    (dict(Q=[["a", "b"], ["c", "d"]]), TypeError, r"Q: expected a real array"),
+])
+def test_bad_system_matrices_are_named(changes, error, match):
+    with pytest.raises(error, match=match):
+        _plant(**changes)
+
+
+def test_a_non_system_is_a_type_error():
+    with pytest.raises(TypeError, match=r"sys: expected an MJLS \(asoc.mjls.MJLS\), found dict"):
+        static_output_feedback({"A": 1})
+    with pytest.raises(TypeError, match=r"sys: expected an MJLS"):
+        closed_loop("plant", [[0.0]])
+
+
+def test_lmi_margin_must_be_positive():
+    with pytest.raises(ValueError, match=r"eps: expected a finite real number > 0, found -1"):
+        static_output_lmi(sec354_system(1), eps=-1)
+
+
+@pytest.mark.parametrize("value, error", [(2.5, TypeError), (True, TypeError), ("10", TypeError),
+                                          (float("nan"), TypeError), (0, ValueError)])
+def test_integer_counts_are_checked(value, error):
+    with pytest.raises(error, match="max_iter: expected an integer"):
+        static_output_feedback(sec354_system(1), max_iter=value)
+
+
+def test_simulate_checks_the_controller_and_the_initial_state():
+    sys, rng = sec354_system(1), np.random.default_rng(0)
+    with pytest.raises(ValueError, match=r"x0: expected finite entries"):
+        simulate(sys, StaticGain([[0.0]]), [np.nan, 0.0], 5, 10, rng)
+    with pytest.raises(ValueError, match=r"L: expected finite entries"):
+        simulate(sys, StaticGain([[np.nan]]), np.zeros(2), 5, 10, rng)
+    with pytest.raises(ValueError, match=r"L: expected shape \(1, 1\) for the system"):
+        simulate(sys, StaticGain([[0.0, 1.0]]), np.zeros(2), 5, 10, rng)
+    with pytest.raises(TypeError, match=r"mode0: expected an integer, found 1.5"):
+        simulate(sys, StaticGain([[0.0]]), np.zeros(2), 5, 10, rng, mode0=1.5)
+    with pytest.raises(ValueError, match=r"x0_cov: expected a symmetric matrix"):
+        simulate(sys, StaticGain([[0.0]]), np.zeros(2), 5, 10, rng, x0_cov=[[1.0, 0.5], [0.0, 1.0]])
+    with pytest.raises(TypeError, match=r"controller: expected an asoc.mjls.Controller"):
+        simulate(sys, [[0.0]], np.zeros(2), 5, 10, rng)
+
+
+def test_results_say_why_they_stopped():
+    sys = sec354_system(1)
+    with pytest.warns(RuntimeWarning, match=r"Algorithm 3.1 did not converge within 3 iterations"):
+        res = static_output_feedback(sys, max_iter=3)
+    assert (res.converged, res.status) == (False, "max_iterations") and "relative change" in res.message
+    assert static_output_feedback(sys).status == "converged"
+    unstabilisable = _plant(A=2 * np.eye(2))                       # B = 0, unstable
+    with pytest.warns(RuntimeWarning, match="diverges"):
+        obs = observed_mode_state_feedback(unstabilisable)
+    assert obs.status == "diverged" and not obs.converged
+    with pytest.warns(RuntimeWarning, match="Algorithm 3.2 stopped at iteration .* the bounds diverged"):
+        dyn = dynamic_output_feedback(_plant(A=3 * np.eye(2), J=0.1 * np.ones((1, 1))))
+    assert dyn.status == "diverged"
+    lmi = static_output_lmi(sec354_system(1, "C=[1 0]"))
+    assert (lmi.feasible, lmi.status, lmi.solver_status) == (False, "infeasible", "infeasible")

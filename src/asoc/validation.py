@@ -6,6 +6,7 @@ message reads ``"<name>: expected <what>, found <what>"``. Each returns the valu
 (a float array, an ``int``), so a caller writes ``x0 = real_array(x0, "x0", shape=(n,))``.
 """
 
+import collections.abc
 import numbers
 
 import numpy as np
@@ -209,34 +210,65 @@ def function(value, name: str):
     return value
 
 
-def choice(value, options, name: str):
-    """One of a fixed set of option strings.
+def stochastic_matrix(value, name: str, size: int | None = None) -> np.ndarray:
+    """A row-stochastic (transition) matrix: square, at least 1 x 1, rows are probability weights.
 
     Examples
     --------
-    >>> choice("psd", ("psd", "exact"), "covariance_hessian")
-    'psd'
-    >>> choice("clip", ("psd", "exact"), "covariance_hessian")
+    >>> stochastic_matrix([[0.9, 0.1], [0.2, 0.8]], "T").shape
+    (2, 2)
+    >>> stochastic_matrix(np.zeros((0, 0)), "T")
     Traceback (most recent call last):
     ...
-    ValueError: covariance_hessian: expected one of ['exact', 'psd'], found 'clip'
+    ValueError: T: expected a square (M, M) matrix with M >= 1, found shape (0, 0)
     """
-    if not isinstance(value, str) or value not in options:
-        raise ValueError(f"{name}: expected one of {sorted(options)}, found {_describe(value)}")
+    matrix = real_array(value, name, ndim=2)
+    if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
+        raise ValueError(f"{name}: expected a square (M, M) matrix with M >= 1, found shape {matrix.shape}")
+    if size is not None and matrix.shape[0] != size:
+        raise ValueError(f"{name}: expected shape ({size}, {size}), found shape {matrix.shape}")
+    for i, row in enumerate(matrix):
+        if np.any(row < 0):
+            raise ValueError(f"{name}: expected non-negative probabilities, found {row.min():.3g} in row {i}")
+        if abs(row.sum() - 1.0) > WEIGHT_ATOL:
+            raise ValueError(f"{name}: expected rows summing to 1, found sum {row.sum():.10g} in row {i}")
+    return matrix
+
+
+def choice(value, name: str, options) -> object:
+    """One of a fixed set of options (strings, or other hashable values).
+
+    Examples
+    --------
+    >>> choice("vec", "method", ("vec", "sdp"))
+    'vec'
+    >>> choice("lu", "method", ("vec", "sdp"))
+    Traceback (most recent call last):
+    ...
+    ValueError: method: expected one of ('vec', 'sdp'), found 'lu'
+    """
+    try:
+        ok = isinstance(value, collections.abc.Hashable) and value in options
+    except (TypeError, ValueError):
+        ok = False
+    if isinstance(value, (bool, np.bool_)) and not any(option is value for option in options):
+        ok = False                                       # True == 1, but True is not the option 1
+    if not ok:
+        raise ValueError(f"{name}: expected one of {tuple(options)}, found {_describe(value)}")
     return value
 
 
 def boolean(value, name: str) -> bool:
-    """A flag: ``bool`` or ``numpy.bool_`` (not 0/1, not a string).
+    """A flag: ``True``/``False`` (or a NumPy bool); integers and strings are rejected.
 
     Examples
     --------
-    >>> boolean(True, "progress")
+    >>> boolean(True, "warn")
     True
-    >>> boolean("yes", "progress")
+    >>> boolean("no", "warn")
     Traceback (most recent call last):
     ...
-    TypeError: progress: expected True or False, found 'yes'
+    TypeError: warn: expected True or False, found 'no'
     """
     if not isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{name}: expected True or False, found {_describe(value)}")

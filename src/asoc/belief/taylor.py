@@ -193,7 +193,7 @@ def statistical_taylor_linearization_error(x_true=5.7, mean=4.0, var=1.5, readin
     """
     x_true = check.real_scalar(x_true, "x_true")
     lines = sigma_point_linearizations(mean=mean, var=var)
-    check.choice(reading, lines, "reading")
+    check.choice(reading, "reading", lines)
     truth = _fig22_function(x_true)
     err = {name: abs(truth - (k * x_true + d)) for name, (k, d) in lines.items()}
     return float(err["ekf"]), float(err[reading])

@@ -141,7 +141,7 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
     policy = _policy_for(policy, check.instance(policy, AffinePolicy, "policy").L.shape[0], model)
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
-    mode = check.choice(mode, ("nominal", "sampled"), "mode")
+    mode = check.choice(mode, "mode", ("nominal", "sampled"))
     if mode == "sampled":
         rng = check.generator(rng)
     return _reference_trajectory(model, filt, policy, mean0, cov0, mode, rng)
@@ -324,7 +324,7 @@ class StageProblem:
                  covariance_term=True):
         self.model = check.instance(model, NonlinearModel, "model")
         self.cost, self.filt = _cost_for(cost, model), _filter_for(filt, model)
-        self.covariance_hessian = check.choice(covariance_hessian, COVARIANCE_HESSIANS, "covariance_hessian")
+        self.covariance_hessian = check.choice(covariance_hessian, "covariance_hessian", COVARIANCE_HESSIANS)
         self.covariance_term = check.boolean(covariance_term, "covariance_term")
         self.nxt = check.instance(nxt, Value, "nxt")
         if nxt.v.shape != (model.n_x,):
@@ -365,7 +365,7 @@ class StageProblem:
         differentiated by numdifftools [46]. ``"numdifftools"`` differentiates all of phi.
         """
         import numdifftools as nd
-        derivatives = check.choice(derivatives, ("analytic", "numdifftools"), "derivatives")
+        derivatives = check.choice(derivatives, "derivatives", ("analytic", "numdifftools"))
         u_bar = check.real_array(u_bar, "u_bar", shape=(self.model.n_u,))
         X, alpha = self.mixture.points, self.mixture.weights
         nx, nu = X.shape[1], np.size(u_bar)
@@ -746,9 +746,9 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
 
 
 def _options(derivatives, alpha_min, covariance_hessian, covariance_term):
-    return (check.choice(derivatives, ("analytic", "numdifftools"), "derivatives"),
+    return (check.choice(derivatives, "derivatives", ("analytic", "numdifftools")),
             check.real_scalar(alpha_min, "alpha_min", low=0, high=1, low_open=True),
-            check.choice(covariance_hessian, COVARIANCE_HESSIANS, "covariance_hessian"),
+            check.choice(covariance_hessian, "covariance_hessian", COVARIANCE_HESSIANS),
             check.boolean(covariance_term, "covariance_term"))
 
 
@@ -844,7 +844,7 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     n_cost_runs = check.integer(n_cost_runs, "n_cost_runs", minimum=1)
     rng = check.generator(rng)
-    reference_mode = check.choice(reference_mode, ("nominal", "sampled"), "reference_mode")
+    reference_mode = check.choice(reference_mode, "reference_mode", ("nominal", "sampled"))
     options = _options(derivatives, alpha_min, covariance_hessian, covariance_term)
     progress = check.boolean(progress, "progress")
     w_points, beta = _sigma_points(model.w.mean, model.w.cov, KAPPA)

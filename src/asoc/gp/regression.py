@@ -244,7 +244,7 @@ class DistributionGP(_LikelihoodGP):
     """
 
     def __init__(self, covariance: str = "se", n_restarts: int = 4, bounds=None, **shape):
-        check.choice(covariance, COVARIANCES, "covariance")
+        check.choice(covariance, "covariance", COVARIANCES)
         allowed = {"matern": {"nu"}, "gamma_exponential": {"gamma"},
                    "rational_quadratic": {"alpha_rq"}}.get(covariance, set())
         if set(shape) - allowed:

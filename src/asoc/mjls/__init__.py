@@ -14,7 +14,8 @@ examples), ``comparison`` (Table 3.2).
 
 from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
                       steady_state_cost)
-from .exact import (average_cost_and_gradient, exact_dynamic_output_feedback,
+from .exact import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, MinRadiusResult,
+                    average_cost_and_gradient, exact_dynamic_output_feedback,
                     exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
                     radius_and_gradient)
 from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
@@ -39,4 +40,5 @@ __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribut
            "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
-           "min_radius_dynamic_output_feedback", "radius_and_gradient"]
+           "min_radius_dynamic_output_feedback", "radius_and_gradient", "ExactDynamicOutputFeedbackResult",
+           "ExactFiniteHorizonResult", "MinRadiusResult"]

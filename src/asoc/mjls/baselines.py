@@ -25,8 +25,11 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
-from .lmi import EPS, LMIResult, performance_output
-from .system import check_distribution
+from ..result import IterativeResult
+from ..validation import boolean, integer, probability_vector, real_array, real_scalar, semidefinite
+from .lmi import EPS, check_solver, lmi_result, performance_output
+from .stability import ms_spectral_radius
+from .system import check_system
 
 
 def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):
@@ -39,7 +42,36 @@ def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):
 
     with Xbar_i = sum_j p_ji Y_j; K = F G^{-1}. Using G^T Xbar^{-1} G >= G + G^T - Xbar, the
     optimum bounds the H2 cost sum_i tr((Q_i + K^T R_i K) X_i) of the closed loop from above.
+
+    Parameters
+    ----------
+    sys : MJLS
+        The state-feedback model (C_i is not used: u = K x).
+    eps : float
+        Margin of the strict inequalities (>= eps I), > 0.
+    solver : str
+        An installed cvxpy solver.
+
+    Returns
+    -------
+    LMIResult
+        The gain K (nu, nx) in ``L``; feasible when the solver is optimal and K stabilises.
+
+    Raises
+    ------
+    TypeError, ValueError
+        For a sys that is not an MJLS, eps <= 0 or an unknown solver.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = do_val_h2_state_feedback(sec354_system(1, "state"))
+    >>> res.feasible, res.L.shape
+    (True, (1, 2))
     """
+    check_system(sys)
+    eps = real_scalar(eps, "eps", low=0, low_open=True)
+    check_solver(solver)
     M_, nx, nu = sys.M, sys.nx, sys.nu
     D, E = performance_output(sys)
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
@@ -62,20 +94,39 @@ def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):
     try:
         prob.solve(solver=solver)
     except cp.SolverError as err:
-        return LMIResult(False, None, np.inf, f"solver error: {err}")
+        return lmi_result(f"solver error: {err}")
     if prob.status != cp.OPTIMAL:
-        return LMIResult(False, None, np.inf, prob.status)
-    return LMIResult(True, F.value @ np.linalg.inv(G.value), float(prob.value), prob.status)
+        return lmi_result(prob.status)
+    K = F.value @ np.linalg.inv(G.value)
+    return lmi_result(prob.status, K, float(prob.value), ms_spectral_radius(sys.A + sys.B @ K, sys.T))
 
 
-@dataclass
-class TimeVariantResult:
-    """Gains G (K, nu, ny); cost J(G) per iteration (non-increasing); converged; iterations;
-    seconds."""
+@dataclass(kw_only=True)
+class TimeVariantResult(IterativeResult):
+    """Result of :func:`time_variant_feedback` ([163], [165]).
+
+    Attributes
+    ----------
+    G : numpy.ndarray, shape (horizon, nu, ny)
+        The gain sequence.
+    costs : numpy.ndarray
+        J(G) after each sweep (non-increasing).
+    converged, status, message
+        Why the sweeps stopped: ``"converged"``, ``"max_iterations"`` or ``"diverged"``
+        (the cost became non-finite).
+    iterations : int
+    seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = time_variant_feedback(sec354_system(1, "state"), 5, [3.0, 0.0])
+    >>> res.status, res.G.shape
+    ('converged', (5, 1, 2))
+    """
 
     G: np.ndarray
     costs: np.ndarray
-    converged: bool
     iterations: int
     seconds: float
 
@@ -140,34 +191,66 @@ def time_variant_feedback(sys, horizon, x0, mu0=None, x0_cov=None, G0=None, tol=
 
     Parameters
     ----------
-    horizon : K >= 1.
+    horizon : int >= 1.
     x0 : (nx,) known initial state; ``x0_cov`` an optional (nx, nx) covariance.
     mu0 : initial mode distribution (default stationary).
-    G0 : initial gain sequence (K, nu, ny), default zeros (the thesis suggests Alg. 3.1's
+    G0 : initial gain sequence (horizon, nu, ny), default zeros (the thesis suggests Alg. 3.1's
         gain as a faster start, Sec. 3.5.4).
+    tol : stop when the relative decrease of J is below tol (> 0).
+    max_iter : sweep limit.
+    warn : warn when the sweeps do not converge.
+
+    Returns
+    -------
+    TimeVariantResult
+
+    Raises
+    ------
+    TypeError
+        For a sys that is not an MJLS, a non-integer horizon or max_iter, a non-bool warn or a
+        non-real array.
+    ValueError
+        For horizon or max_iter < 1, tol <= 0, or x0, mu0, x0_cov, G0 of the wrong shape or
+        invalid (non-finite, x0_cov not positive semidefinite).
+
+    Examples
+    --------
+    [165] on the state-feedback example of Sec. 3.5.4 over 20 steps from x0 = [3, 0]:
+
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = time_variant_feedback(sec354_system(1, "state"), 20, [3.0, 0.0])
+    >>> res.status, res.G.shape, bool(res.costs[-1] <= res.costs[0])
+    ('converged', (20, 1, 2), True)
     """
-    if int(horizon) != horizon or horizon < 1:
-        raise ValueError(f"horizon must be an integer >= 1, found {horizon}")
-    K = int(horizon)
-    x0 = np.asarray(x0, dtype=float)
-    if x0.shape != (sys.nx,):
-        raise ValueError(f"x0: expected shape ({sys.nx},), found {x0.shape}")
-    mu0 = sys.mu_inf if mu0 is None else check_distribution(mu0, sys.M)
-    second = np.outer(x0, x0) + (0 if x0_cov is None else np.asarray(x0_cov, float))
+    check_system(sys)
+    K = integer(horizon, "horizon", minimum=1)
+    x0 = real_array(x0, "x0", shape=(sys.nx,))
+    mu0 = sys.mu_inf if mu0 is None else probability_vector(mu0, "mu0", sys.M)
+    if x0_cov is not None:
+        x0_cov = semidefinite(real_array(x0_cov, "x0_cov", shape=(sys.nx, sys.nx)), "x0_cov")
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    warn = boolean(warn, "warn")
+    second = np.outer(x0, x0) + (0 if x0_cov is None else x0_cov)
     X0 = mu0[:, None, None] * second
-    G = np.zeros((K, sys.nu, sys.ny)) if G0 is None else np.array(G0, dtype=float)
-    if G.shape != (K, sys.nu, sys.ny):
-        raise ValueError(f"G0: expected shape ({K}, {sys.nu}, {sys.ny}), found {G.shape}")
+    G = np.zeros((K, sys.nu, sys.ny)) if G0 is None else real_array(G0, "G0", shape=(K, sys.nu, sys.ny))
     start = time.perf_counter()
-    costs, converged = [], False
+    costs, status = [], "max_iterations"
     for it in range(1, max_iter + 1):
         X, pi = _forward_moments(sys, G, X0, mu0)
         G, J = _backward_sweep(sys, G, X, pi)
         costs.append(J)
-        if it > 1 and costs[-2] - J <= tol * abs(J):
-            converged = True
+        if not np.isfinite(J):
+            status = "diverged"
             break
-    if warn and not converged:
-        warnings.warn(f"variational method did not converge in {max_iter} sweeps", RuntimeWarning,
-                      stacklevel=2)
-    return TimeVariantResult(G, np.array(costs), converged, it, time.perf_counter() - start)
+        if it > 1 and costs[-2] - J <= tol * abs(J):
+            status = "converged"
+            break
+    decrease = (costs[-2] - costs[-1]) / abs(costs[-1]) if len(costs) > 1 else np.inf
+    message = {"converged": f"converged after {it} sweeps (relative decrease {decrease:.2g} <= tol = {tol:.2g})",
+               "max_iterations": f"did not converge in {it} sweeps (relative decrease {decrease:.2g} > tol = {tol:.2g})",
+               "diverged": f"stopped at sweep {it}: the cost became non-finite"}[status]
+    if warn and status != "converged":
+        warnings.warn(f"variational method {message}", RuntimeWarning, stacklevel=2)
+    return TimeVariantResult(G=G, costs=np.array(costs), converged=status == "converged", status=status,
+                             message=message, iterations=it, seconds=time.perf_counter() - start)

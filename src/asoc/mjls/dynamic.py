@@ -20,12 +20,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..result import IterativeResult
+from ..validation import boolean, choice, generator, integer, real_array, real_scalar
 from .moments import second_moment_step, steady_state_second_moment
 from .stability import ms_spectral_radius
-from .system import predecessor_sum, successor_average
+from .system import check_system, predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
 DIVERGED = 1e100          # bounds beyond this are treated as diverging (the iteration stops)
+GAIN_FLOOR = 1e-12        # absolute floor of a gain's norm in its relative change (a zero gain converges)
 
 
 def _T(X):
@@ -33,21 +36,42 @@ def _T(X):
 
 
 def noise_covariances(sys):
-    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny); J = None means noise-free outputs."""
+    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny) of (3.36); J = None means noise-free outputs.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> HHt, JJt = noise_covariances(sys)
+    >>> HHt.shape, JJt.ravel().round(4)
+    ((2, 2, 2), array([0.01, 0.01]))
+    """
+    check_system(sys)
     HHt = sys.H @ _T(sys.H)
     JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
     return HHt, JJt
 
 
 def check_gains(sys, F, K, L):
-    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays."""
-    F, K, L = (np.atleast_2d(np.asarray(g, dtype=float)) for g in (F, K, L))
+    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
+    Traceback (most recent call last):
+    ...
+    ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys), found shape (1, 3)
+    """
+    check_system(sys)
+    F = np.atleast_2d(real_array(F, "F"))
     nc = F.shape[0]
-    for name, g, shape in (("F", F, (nc, nc)), ("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
+    F = real_array(F, "F", shape=(nc, nc))
+    K, L = np.atleast_2d(real_array(K, "K")), np.atleast_2d(real_array(L, "L"))
+    for name, g, shape in (("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
         if g.shape != shape:
-            raise ValueError(f"{name}: expected shape {shape}, found {g.shape}")
-        if not np.all(np.isfinite(g)):
-            raise ValueError(f"{name}: found non-finite entries")
+            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny = {sys.ny} "
+                             f"from sys), found shape {g.shape}")
     return F, K, L
 
 
@@ -71,6 +95,14 @@ def augmented_closed_loop(sys, F, K, L):
     ------
     ValueError
         If a gain has the wrong shape or non-finite entries.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> At, Wt, Qt = augmented_closed_loop(sys, 0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))
+    >>> At.shape, At[0, 2:, :2].tolist()
+    ((2, 4, 4), [[1.0, 0.0], [1.0, 0.0]])
     """
     F, K, L = check_gains(sys, F, K, L)
     M, nx, nc = sys.M, sys.nx, F.shape[0]
@@ -113,6 +145,15 @@ def steady_state_cost(sys, F, K, L):
     ------
     ValueError
         If a gain has the wrong shape or non-finite entries.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> r = dynamic_output_feedback(sys)
+    >>> cost, X, rho = steady_state_cost(sys, r.F, r.K, r.L)
+    >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1)
+    (True, True)
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
     rho = ms_spectral_radius(At, sys.T)
@@ -125,7 +166,20 @@ def steady_state_cost(sys, F, K, L):
 def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     """One step of the second-moment bounds, (3.45)-(3.46) / (3.66)-(3.67).
 
+    An inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+
     Returns (Xbar_next, Xunder_next), each (M, nx, nx).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> HHt, JJt = noise_covariances(sys)
+    >>> Z = np.zeros((2, 2, 2))
+    >>> Xbar, Xunder = bound_moment_step(sys, np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)), Z, Z,
+    ...                                  sys.mu_inf, HHt, JJt)
+    >>> np.allclose(Xbar, sys.predecessor_sum(sys.mu_inf[:, None, None] * HHt)), np.abs(Xunder).max()
+    (True, np.float64(0.0))
     """
     KC = K @ sys.C
     AKC = sys.A - KC
@@ -142,7 +196,18 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
 def bound_costate_step(sys, F, K, L, EPbar, EPunder):
     """One step of the multiplier bounds, (3.47)-(3.48) / (3.68)-(3.69).
 
+    An inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+
     ``EPbar``, ``EPunder`` are E_i(Pbar), E_i(Punder) of the next step. Returns (Pbar, Punder).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> Z = np.zeros((2, 2, 2))
+    >>> Pbar, Punder = bound_costate_step(sys, np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)), Z, Z)
+    >>> np.allclose(Pbar, sys.Q), np.abs(Punder).max()
+    (True, np.float64(0.0))
     """
     BL = sys.B @ L
     ABL = sys.A + BL
@@ -165,7 +230,17 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     """The matrix and vector of (3.49)/(3.70), built from (3.50).
 
     Unknown z = [vec F; vec K; vec L] (column-stacking vec); the conditions read H z + rho = 0.
-    H is (half) the Hessian of the bounded cost (A.7)/(B.5), hence symmetric PSD.
+    H is (half) the Hessian of the bounded cost (A.7)/(B.5), hence symmetric PSD. An
+    inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> H, rho = optimality_system(sys, I, I, I, I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> H.shape, rho.shape, np.allclose(H, H.T)
+    ((8, 8), (8,), True)
     """
     A, B, C, R = sys.A, sys.B, sys.C, sys.R
     S = Xbar + Xunder
@@ -198,8 +273,19 @@ def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"
     ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
     (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
     F and K do not enter the cost); ``"sdp"``: the SDP after Alg. 3.2 (min lambda with
-    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel.
+    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. An inner-loop
+    helper of Algs. 3.2-3.3: only ``method`` is validated.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> F, K, L = gains_from_bounds(sys, I, I, I, I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> F.shape, K.shape, L.shape
+    ((2, 2), (2, 1), (1, 2))
     """
+    choice(method, "method", METHODS)
     n, ny, nu = sys.nx, sys.ny, sys.nu
     H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
     if method == "lstsq":
@@ -233,15 +319,18 @@ def _gains_sdp(H, rho, n, ny, nu):
                            L.value.reshape(-1, order="F")])
 
 
-@dataclass
-class DynamicOutputFeedbackResult:
+@dataclass(kw_only=True)
+class DynamicOutputFeedbackResult(IterativeResult):
     """Result of Algorithm 3.2 (:func:`dynamic_output_feedback`).
 
     Attributes
     ----------
     F, K, L : numpy.ndarray, shapes (nx, nx), (nx, ny), (nu, nx)
         The controller (3.37).
-    converged : bool
+    converged, status, message
+        Whether and why the iteration stopped (:class:`asoc.result.IterativeResult`):
+        ``"converged"``, ``"max_iterations"``, ``"diverged"`` (the bounds grew beyond
+        1e100) or ``"linalg_error"`` (solving (3.51) failed).
     iterations : int
     rho : float
         Mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2).
@@ -260,14 +349,18 @@ class DynamicOutputFeedbackResult:
     seconds : float
         Wall time.
 
-    For :func:`asoc.mjls.exact_dynamic_output_feedback`: bound = nan, the four blocks None,
-    and history["cost"] the exact cost per iteration.
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> res = dynamic_output_feedback(sys)
+    >>> res.converged, res.status, res.Xbar.shape
+    (True, 'converged', (2, 2, 2))
     """
 
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
-    converged: bool
     iterations: int
     rho: float
     stabilizing: bool
@@ -285,8 +378,7 @@ def _initial_bounds(sys, init, rng):
     M, n = sys.M, sys.nx
     if rng is None:
         return [np.broadcast_to(init * np.eye(n), (M, n, n)).copy() for _ in range(4)]
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError("rng: pass a seeded numpy.random.Generator (or None for init * I)")
+    generator(rng, "rng")
     out = []
     for _ in range(4):
         G = rng.standard_normal((M, n, n))
@@ -294,9 +386,10 @@ def _initial_bounds(sys, init, rng):
     return out
 
 
-def _rel_change(old, new):
+def _rel_change(old, new, floor=1e-150):
+    """||new - old|| / max(||new||, floor) (Frobenius); the absolute floor lets a zero iterate converge."""
     d = new - old
-    return float(np.sqrt(np.vdot(d, d) / max(np.vdot(new, new), 1e-300)))
+    return float(np.sqrt(np.vdot(d, d) / max(np.vdot(new, new), floor ** 2)))
 
 
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
@@ -336,63 +429,86 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS, ``max_iter`` is not an integer, ``rng`` is not a
+        Generator or ``warn`` not a bool.
     ValueError
-        If ``tol`` or ``init`` is not positive, ``max_iter`` is not an integer >= 1,
-        ``method`` is unknown or ``rng`` is not a Generator.
+        If ``tol`` or ``init`` is not a finite positive number, ``max_iter`` < 1 or
+        ``method`` is unknown.
     FloatingPointError
-        If the bounds diverge already in the first iteration.
+        If the bounds diverge (or (3.51) fails) already in the first iteration.
+
+    Examples
+    --------
+    The example of Sec. 3.7.3 with T[1]:
+
+    >>> from asoc.mjls.examples import sec373_system
+    >>> res = dynamic_output_feedback(sec373_system(1))
+    >>> res.status, res.stabilizing, round(res.cost, 3), round(res.bound, 3)
+    ('converged', True, 23.313, 18.03)
     """
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1 or not init > 0:
-        raise ValueError(f"tol and init must be > 0 and max_iter an integer >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}, init={init}")
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, found {method!r}")
+    check_system(sys)
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    init = real_scalar(init, "init", low=0, low_open=True)
+    choice(method, "method", METHODS)
+    warn = boolean(warn, "warn")
     start = time.perf_counter()
     HHt, JJt = noise_covariances(sys)
     mu = sys.mu_inf
     Xbar, Xunder, Pbar, Punder = _initial_bounds(sys, init, rng)
     iterates = [np.stack([Xbar, Xunder, Pbar, Punder])]
     gains = None
-    converged = False
+    status, change = "max_iterations", np.inf
     it = 0
     for it in range(1, int(max_iter) + 1):
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
         try:
             F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method)
         except np.linalg.LinAlgError:
+            status = "linalg_error"
             break
         new_X = bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt)
         new_P = bound_costate_step(sys, F, K, L, EPbar, EPunder)
         if not all(np.abs(v).max() < DIVERGED for v in (*new_X, *new_P)):
-            break                                   # the bounds diverge: not stabilisable this way
+            status = "diverged"                     # the bounds diverge: not stabilisable this way
+            break
         changes = [_rel_change(o, n) for o, n in zip((Xbar, Xunder, Pbar, Punder), (*new_X, *new_P))]
         if gains is not None:
-            changes += [_rel_change(o, n) for o, n in zip(gains, (F, K, L))]
+            changes += [_rel_change(o, n, GAIN_FLOOR) for o, n in zip(gains, (F, K, L))]
         iterates.append(np.stack([*new_X, *new_P]))
         gains = (F, K, L)
         Xbar, Xunder = new_X
         Pbar, Punder = new_P
-        if it > 1 and max(changes) < tol:
-            converged = True
+        change = max(changes)
+        if it > 1 and change < tol:
+            status = "converged"
             break
     seconds = time.perf_counter() - start
     if gains is None:
-        raise FloatingPointError("Algorithm 3.2: the bounds diverged in the first iteration")
+        raise FloatingPointError(f"Algorithm 3.2: {'(3.51) could not be solved' if status == 'linalg_error' else 'the bounds diverged'} "
+                                 f"in the first iteration")
     F, K, L = gains
     cost, _, rho = steady_state_cost(sys, F, K, L)
     stabilizing = bool(rho < 1)
     bound = float(np.einsum("iab,iba->", sys.Q, Xbar + Xunder)
                   + np.einsum("iab,iba->", L.T @ sys.R @ L, Xunder))
-    if warn and not converged:
-        warnings.warn(f"Algorithm 3.2 did not converge within {it} iterations (rho = {rho:.4f})",
-                      RuntimeWarning, stacklevel=2)
+    message = {"converged": f"converged after {it} iterations (relative change {change:.2g} < tol = {tol:.2g})",
+               "max_iterations": f"did not converge within {it} iterations (relative change {change:.2g} "
+                                 f">= tol = {tol:.2g}, rho = {rho:.4f})",
+               "diverged": f"stopped at iteration {it}: the bounds diverged beyond {DIVERGED:.0e} "
+                           f"(rho = {rho:.4f})",
+               "linalg_error": f"stopped at iteration {it}: solving (3.51) failed (rho = {rho:.4f})"}[status]
+    if warn and status != "converged":
+        warnings.warn(f"Algorithm 3.2 {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"Algorithm 3.2 converged, but the controller does not stabilise the MJLS in "
                       f"the mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning,
                       stacklevel=2)
     traces = np.trace(np.array(iterates), axis1=-2, axis2=-1)           # (iterations + 1, 4, M)
     history = {f"trace_{k}": traces[:, j] for j, k in enumerate(("Xbar", "Xunder", "Pbar", "Punder"))}
-    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
+    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=status == "converged", status=status,
+                                       message=message, iterations=it, rho=rho,
                                        stabilizing=stabilizing, cost=cost, bound=bound, Xbar=Xbar,
                                        Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history,
                                        seconds=seconds)

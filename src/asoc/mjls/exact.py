@@ -15,24 +15,156 @@ dJ/dQ~_i = X_i; the finite-horizon case uses the same relations step by step.
 
 import time
 import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
 
 from ..progress import progress_bar
-from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
-                      noise_covariances)
-from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_initial_moment,
-                             check_initial_state, finite_horizon_cost,
-                             finite_horizon_dynamic_output_feedback, mode_distributions, stages)
+from ..result import IterativeResult
+from ..validation import boolean, integer, real_scalar
+from .dynamic import augmented_closed_loop, dynamic_output_feedback, noise_covariances
+from .finite_horizon import (_initial_gains, augmented_initial_moment, check_initial_state, finite_horizon_cost,
+                             finite_horizon_dynamic_output_feedback, mode_distributions, stages,
+                             time_variant_controller)
 from .moments import moment_operator
-from .system import predecessor_sum, successor_average
+from .system import check_system, predecessor_sum, successor_average
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
 MIN_STEP = 2.0 ** -40         # the line search gives up below this step length
 RHO_START = 0.999             # the stabilising search stops once rho is below this
 RADIUS_MAX_ITER = 1000        # BFGS iterations of a search that minimises rho
 LBFGS_MEMORY = 200            # pairs kept by L-BFGS for the K (nc^2 + nc ny + nu nc) time-variant gains
+
+
+BFGS_STATUS = {"converged": "the decrease the quasi-Newton model predicts fell below tol * |f|",
+               "max_iterations": "the iteration limit was reached",
+               "no_progress": "the line search found no decrease even along the gradient"}
+
+
+@dataclass(kw_only=True)
+class ExactDynamicOutputFeedbackResult(IterativeResult):
+    """Result of :func:`exact_dynamic_output_feedback` (BFGS on the exact cost (3.42)).
+
+    Attributes
+    ----------
+    F, K, L : numpy.ndarray, shapes (nc, nc), (nc, ny), (nu, nc)
+        The controller (3.37).
+    converged, status, message
+        Why BFGS stopped: ``"converged"`` (the decrease its model predicts is below
+        tol * cost), ``"max_iterations"`` or ``"no_progress"`` (no descent step, or no
+        mean-square stabilising start was found).
+    iterations : int
+    rho : float
+        Mean-square spectral radius of the closed loop (Cor. 3.2).
+    stabilizing : bool
+    cost : float
+        Exact average cost (3.42) (Prop. 3.24); inf if not stabilizing.
+    history : dict
+        ``"cost"``: the exact cost after each iteration.
+    seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> res = exact_dynamic_output_feedback(sys, max_iter=3, warn=False)
+    >>> res.status, res.iterations, sorted(res.history)
+    ('max_iterations', 3, ['cost'])
+    """
+
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    iterations: int
+    rho: float
+    stabilizing: bool
+    cost: float
+    history: dict = field(repr=False)
+    seconds: float = 0.0
+
+
+@dataclass(kw_only=True)
+class MinRadiusResult(IterativeResult):
+    """Result of :func:`min_radius_dynamic_output_feedback` (BFGS on rho, Cor. 3.2).
+
+    Attributes
+    ----------
+    F, K, L : numpy.ndarray
+        The controller (3.37) of smallest rho found.
+    converged, status, message
+        Why BFGS stopped (as :class:`ExactDynamicOutputFeedbackResult`).
+    iterations : int
+    rho : float
+    stabilizing : bool
+    cost : float
+        Exact average cost (3.42) if stabilizing, else inf.
+    history : dict
+        ``"rho"``: rho after each iteration.
+    seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> res = min_radius_dynamic_output_feedback(sys, max_iter=3)
+    >>> res.status, res.iterations, sorted(res.history)
+    ('max_iterations', 3, ['rho'])
+    """
+
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    iterations: int
+    rho: float
+    stabilizing: bool
+    cost: float
+    history: dict = field(repr=False)
+    seconds: float = 0.0
+
+
+@dataclass(kw_only=True)
+class ExactFiniteHorizonResult(IterativeResult):
+    """Result of :func:`exact_finite_horizon_dynamic_output_feedback` (L-BFGS on J_0 (3.56)).
+
+    Attributes
+    ----------
+    F, K, L : numpy.ndarray, shapes (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc)
+        The gains of (3.55) per step.
+    xhat0 : numpy.ndarray, shape (nc,)
+        The controller's initial state E{x_0}.
+    converged, status, message
+        Why L-BFGS stopped (as :class:`ExactDynamicOutputFeedbackResult`).
+    iterations : int
+    cost : float
+        The exact expected cost J_0 (3.56) of the final gains.
+    costs : numpy.ndarray
+        The exact J_0 after each iteration.
+    seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = exact_finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+    ...                                                    max_iter=3, warn=False)
+    >>> res.status, res.F.shape, res.costs.size
+    ('max_iterations', (5, 2, 2), 4)
+    """
+
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    xhat0: np.ndarray
+    iterations: int
+    cost: float
+    costs: np.ndarray = field(repr=False)
+    seconds: float = 0.0
+
+    def controller(self):
+        """The controller (3.55) for :func:`asoc.mjls.simulate`."""
+        return time_variant_controller(self)
 
 
 def _pack(F, K, L):
@@ -72,6 +204,17 @@ def gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     Returns
     -------
     (gF, gK, gL) : arrays of the shapes of F, K, L.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
+    >>> I = np.broadcast_to(np.eye(4), (2, 4, 4))
+    >>> gF, gK, gL = gain_gradient(sys, K, L, At, I, I, noise_covariances(sys)[1], sys.mu_inf)
+    >>> gF.shape, gK.shape, gL.shape
+    ((2, 2), (2, 1), (1, 2))
     """
     nx = sys.nx
     gF, gK, gL = _closed_loop_gradient(sys, 2.0 * EP @ At @ X)        # dJ/dA~_i
@@ -96,6 +239,19 @@ def average_cost_and_gradient(sys, F, K, L):
     -------
     (cost, (gF, gK, gL)) : cost is inf and the gradient None when A~ is not mean-square
         stable (Cor. 3.2).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> cost, gradient = average_cost_and_gradient(sys, F, K, L)
+    >>> cost, gradient
+    (inf, None)
+    >>> r = dynamic_output_feedback(sys)
+    >>> cost, (gF, gK, gL) = average_cost_and_gradient(sys, r.F, r.K, r.L)
+    >>> round(cost, 3), gL.shape
+    (23.313, (1, 2))
     """
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     M, n, _ = At.shape
@@ -120,7 +276,16 @@ def _positive_definite(Y):
 
 
 def closed_loop_radius(sys, F, K, L):
-    """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39)."""
+    """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> round(closed_loop_radius(sys, F, K, L), 4)
+    1.3449
+    """
     At = augmented_closed_loop(sys, F, K, L)[0]
     return float(np.max(np.abs(np.linalg.eigvals(moment_operator(At, sys.T)))))
 
@@ -142,6 +307,15 @@ def radius_and_gradient(sys, F, K, L):
     Returns
     -------
     (rho, (gF, gK, gL)) : the gradient is zero where <V, X> vanishes (rho not differentiable).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
+    >>> rho, (gF, gK, gL) = radius_and_gradient(sys, F, K, L)
+    >>> round(rho, 4), gF.shape
+    (1.3449, (2, 2))
     """
     At = augmented_closed_loop(sys, F, K, L)[0]
     M, n, _ = At.shape
@@ -219,7 +393,16 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None, targe
 
     Returns
     -------
-    (z, f, converged, iterations, history) : history holds f after each iteration.
+    (z, f, status, iterations, history) : status a key of :data:`BFGS_STATUS`; history holds
+        f after each iteration.
+
+    Examples
+    --------
+    >>> fun = lambda z: ((z[0] - 1) ** 2 + 10 * (z[1] - z[0] ** 2) ** 2,
+    ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2), 20 * (z[1] - z[0] ** 2)]))
+    >>> z, f, status, iterations, history = bfgs(fun, np.array([-1.0, 1.0]), 1e-14, 200)
+    >>> status, z.round(4)
+    ('converged', array([1., 1.]))
     """
     z = np.asarray(z0, dtype=float)
     f, g = fun(z)
@@ -227,14 +410,14 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None, targe
         raise ValueError("z0: the start is outside the domain (cost is inf)")
     Hinv = _InverseHessian(z.size, memory)
     history = [f]
-    converged = False
+    status = "max_iterations"
     it = 0
     for it in progress_bar(range(1, int(max_iter) + 1), progress, desc=desc, leave=False):
         fresh = Hinv.empty
         d = -Hinv.apply(g)
         slope = float(g @ d)
         if -0.5 * slope <= tol * abs(f) or f <= target:
-            converged = True
+            status = "converged"
             break
         t = 1.0
         while t >= MIN_STEP:
@@ -245,13 +428,14 @@ def bfgs(fun, z0, tol, max_iter, progress=False, desc="BFGS", memory=None, targe
             t *= 0.5
         else:
             if fresh:                                  # no descent even along -g: stop
+                status = "no_progress"
                 break
             Hinv.reset()                               # restart from a scaled gradient step
             continue
         Hinv.update(z_new - z, g_new - g)
         z, f, g = z_new, f_new, g_new
         history.append(f)
-    return z, f, converged, it, np.array(history)
+    return z, f, status, it, np.array(history)
 
 
 def _start_gains(sys, init, nc):
@@ -267,10 +451,11 @@ def _start_gains(sys, init, nc):
         m = min(nc, sys.nx)
         F0[:m, :m], K0[:m], L0[:, :m] = r.F[:m, :m], r.K[:m], r.L[:, :m]
         return F0, K0, L0
-    gains = (init.F, init.K, init.L) if isinstance(init, DynamicOutputFeedbackResult) else init
+    gains = (init.F, init.K, init.L) if all(hasattr(init, g) for g in "FKL") else init
     if not (isinstance(gains, (tuple, list)) and len(gains) == 3):
-        raise ValueError(f"init: expected a DynamicOutputFeedbackResult or a tuple (F, K, L), "
-                         f"found {type(init).__name__}")
+        raise TypeError(f"init: expected a result with F, K, L (e.g. of dynamic_output_feedback) or a "
+                        f"tuple (F, K, L), found {type(init).__name__}"
+                        f"{f' of length {len(init)}' if isinstance(init, (tuple, list)) else ''}")
     F = np.atleast_2d(np.asarray(gains[0], dtype=float))
     if nc is not None and F.shape[0] != nc:
         raise ValueError(f"nc: expected the controller order of init, {F.shape[0]}, found {nc}")
@@ -284,6 +469,14 @@ def averaged_lqg(sys, nc):
     A start for the stabilising phase when Alg. 3.2 gives none (predictor-form Kalman gain
     and LQ gain from the two discrete algebraic Riccati equations). Returns (F, K, L), or
     None when nc != nx or a Riccati equation has no stabilising solution.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> F, K, L = averaged_lqg(sys, 2)
+    >>> F.shape, K.shape, L.shape
+    ((2, 2), (2, 1), (1, 2))
     """
     if nc != sys.nx:
         return None
@@ -308,7 +501,7 @@ def averaged_lqg(sys, nc):
 def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False):
     """BFGS on rho (Cor. 3.2) over (F, K, L) from z, stopping early once rho <= target.
 
-    Returns (z, rho, converged, iterations, history of rho)."""
+    Returns (z, rho, status, iterations, history of rho)."""
     fun = lambda v: _flat(radius_and_gradient(sys, *_unpack(v, shapes)))
     return bfgs(fun, z, 1e-12, max_iter, progress, "min rho", target=target)
 
@@ -351,42 +544,54 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=RADIUS_
     Parameters
     ----------
     sys : MJLS (Sec. 3.6).
-    init : start: a :class:`DynamicOutputFeedbackResult`, a tuple (F, K, L), or None for
-        Algorithm 3.2's controller (as in :func:`exact_dynamic_output_feedback`).
+    init : start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a
+        tuple (F, K, L), or None for Algorithm 3.2's controller (as in
+        :func:`exact_dynamic_output_feedback`).
     nc : controller order (default: that of ``init``, else nx).
     max_iter : BFGS iteration limit.
     progress : show a tqdm bar over iterations.
 
     Returns
     -------
-    DynamicOutputFeedbackResult
+    MinRadiusResult
         F, K, L; rho, stabilizing; cost: exact average cost (3.42) if stabilising, else inf;
-        converged (BFGS stopped at a stationary point), iterations, seconds;
-        history["rho"]: rho after each iteration.
+        status (why BFGS stopped), iterations, seconds; history["rho"]: rho after each iteration.
 
     Raises
     ------
+    TypeError
+        if sys is not an MJLS, max_iter or nc not an integer, or init of the wrong type.
     ValueError
-        if max_iter is not a positive integer, or nc or init are invalid.
+        if max_iter or nc is not positive, or init has the wrong shapes.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> res = min_radius_dynamic_output_feedback(sec373_system(1), max_iter=20)
+    >>> res.stabilizing, bool(res.history["rho"][-1] <= res.history["rho"][0])
+    (True, True)
     """
-    if int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"max_iter: expected an integer >= 1, found {max_iter}")
+    check_system(sys)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    progress = boolean(progress, "progress")
     start = time.perf_counter()
     F, K, L = _start_gains(sys, init, _checked_order(nc))
     shapes = (F.shape, K.shape, L.shape)
-    z, rho, converged, it, history = _min_radius(sys, _pack(F, K, L), shapes, max_iter, progress=progress)
+    z, rho, status, it, history = _min_radius(sys, _pack(F, K, L), shapes, max_iter, progress=progress)
     F, K, L = _unpack(z, shapes)
     cost = average_cost_and_gradient(sys, F, K, L)[0]
-    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
-                                       stabilizing=bool(rho < 1), cost=cost, bound=np.nan, Xbar=None,
-                                       Xunder=None, Pbar=None, Punder=None, history={"rho": history},
-                                       seconds=time.perf_counter() - start)
+    return MinRadiusResult(F=F, K=K, L=L, converged=status == "converged", status=status,
+                           message=_bfgs_message(status, it, rho, "rho"), iterations=it, rho=rho,
+                           stabilizing=bool(rho < 1), cost=cost, history={"rho": history},
+                           seconds=time.perf_counter() - start)
 
 
 def _checked_order(nc):
-    if nc is not None and (int(nc) != nc or nc < 1):
-        raise ValueError(f"nc must be an integer >= 1, found {nc}")
-    return nc
+    return None if nc is None else integer(nc, "nc", minimum=1)
+
+
+def _bfgs_message(status, it, value, name):
+    return f"{BFGS_STATUS[status]} after {it} iterations ({name} {value:.6g})"
 
 
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
@@ -400,8 +605,8 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     Parameters
     ----------
     sys : MJLS with measurement noise J (Sec. 3.6; J = None means y = C x).
-    init : start: a :class:`DynamicOutputFeedbackResult`, a tuple (F, K, L), or None for
-        Algorithm 3.2's controller. A non-stabilising start (and, failing it, the LQG
+    init : start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a tuple
+        (F, K, L), or None for Algorithm 3.2's controller. A non-stabilising start (and, failing it, the LQG
         compensator of the mode-averaged system) is first moved into the stabilising set by
         minimising the mean-square spectral radius (:func:`min_radius_dynamic_output_feedback`).
     nc : controller order (default: that of ``init``, else nx; Alg. 3.2's controller is
@@ -413,20 +618,31 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
 
     Returns
     -------
-    DynamicOutputFeedbackResult
-        F, K, L; cost (exact, Prop. 3.24), rho, stabilizing, converged, iterations, seconds;
-        bound = nan and Xbar, Xunder, Pbar, Punder = None (no bound is involved);
-        history["cost"]: exact cost after each iteration.
+    ExactDynamicOutputFeedbackResult
+        F, K, L; cost (exact, Prop. 3.24), rho, stabilizing, status (why BFGS stopped),
+        iterations, seconds; history["cost"]: exact cost after each iteration.
 
     Raises
     ------
+    TypeError
+        if sys is not an MJLS, max_iter or nc is not an integer, a flag not a bool, or init
+        has the wrong type.
     ValueError
-        if tol or max_iter are not positive, nc is not a positive integer, or init has
-        the wrong type or shapes.
+        if tol or max_iter are not positive, nc < 1, or init has the wrong shapes.
+
+    Examples
+    --------
+    On the example of Sec. 3.7.3 the exact optimum is below Alg. 3.2's cost (23.313):
+
+    >>> from asoc.mjls.examples import sec373_system
+    >>> res = exact_dynamic_output_feedback(sec373_system(1))
+    >>> res.status, round(res.cost, 3)
+    ('converged', 22.892)
     """
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}")
+    check_system(sys)
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    warn, progress = boolean(warn, "warn"), boolean(progress, "progress")
     start = time.perf_counter()
     F, K, L = _start_gains(sys, init, _checked_order(nc))
     shapes = (F.shape, K.shape, L.shape)
@@ -437,26 +653,26 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
                           f"(smallest rho reached {rho:.4f}); pass a stabilising init", RuntimeWarning,
                           stacklevel=2)
         F, K, L = _unpack(z, shapes)
-        return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=False, iterations=0, rho=rho,
-                                           stabilizing=False, cost=np.inf, bound=np.nan, Xbar=None,
-                                           Xunder=None, Pbar=None, Punder=None,
-                                           history={"cost": np.array([np.inf])},
-                                           seconds=time.perf_counter() - start)
+        return ExactDynamicOutputFeedbackResult(
+            F=F, K=K, L=L, converged=False, status="no_progress",
+            message=f"found no mean-square stabilising start (smallest rho reached {rho:.4f})",
+            iterations=0, rho=rho, stabilizing=False, cost=np.inf, history={"cost": np.array([np.inf])},
+            seconds=time.perf_counter() - start)
     fun = lambda v: _flat(average_cost_and_gradient(sys, *_unpack(v, shapes)))
-    z, cost, converged, it, history = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
+    z, cost, status, it, history = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
     F, K, L = _unpack(z, shapes)
     rho = closed_loop_radius(sys, F, K, L)
-    if warn and not converged:
-        warnings.warn(f"exact_dynamic_output_feedback did not converge within {it} iterations "
-                      f"(cost {cost:.6g})", RuntimeWarning, stacklevel=2)
-    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=converged, iterations=it, rho=rho,
-                                       stabilizing=bool(rho < 1), cost=cost, bound=np.nan, Xbar=None,
-                                       Xunder=None, Pbar=None, Punder=None, history={"cost": history},
-                                       seconds=time.perf_counter() - start)
+    message = _bfgs_message(status, it, cost, "cost")
+    if warn and status != "converged":
+        warnings.warn(f"exact_dynamic_output_feedback: {message}", RuntimeWarning, stacklevel=2)
+    return ExactDynamicOutputFeedbackResult(F=F, K=K, L=L, converged=status == "converged", status=status,
+                                            message=message, iterations=it, rho=rho, stabilizing=bool(rho < 1),
+                                            cost=cost, history={"cost": history},
+                                            seconds=time.perf_counter() - start)
 
 
 def _stacked(st):
-    """The matrices of all steps stacked over k: A, B, C, Q, R (K, M, ., .), T (K, M, M)."""
+    """The matrices of all steps stacked over k: A, B, C, Q, R (horizon, M, ., .), T (horizon, M, M)."""
     return {name: np.stack([getattr(s, name) for s in st.systems]) for name in "ABCQRT"}
 
 
@@ -466,12 +682,25 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     Parameters
     ----------
     st : :class:`asoc.mjls.finite_horizon.Stages` of the horizon.
-    F, K, L : (K, nc, nc), (K, nc, ny), (K, nu, nc) gains of (3.55).
-    X0 : (M, n, n) E{x~_0 x~_0^T 1(theta_0 = i)}; mu : (K + 1, M) mode distributions.
+    F, K, L : (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc) gains of (3.55).
+    X0 : (M, n, n) E{x~_0 x~_0^T 1(theta_0 = i)}; mu : (horizon + 1, M) mode distributions.
 
     Returns
     -------
     (cost, (gF, gK, gL)) : gradients of the shapes of F, K, L (backward adjoint recursion).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
+    >>> st = stages(sys, 3)
+    >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))]
+    >>> X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, SEC373_MU0 @ SEC373_MEAN0[1])
+    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0, mode_distributions(st, SEC373_MU0))
+    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0))), gL.shape
+    (True, (3, 1, 2))
     """
     m = _stacked(st)
     HHt, JJt = np.stack(st.HHt), np.stack(st.JJt)
@@ -514,18 +743,18 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
                                                  max_iter=5000, warn=True, progress=False):
     """The time-variant controller (3.55) minimising the exact J_0 (3.56)/(3.58); not in the thesis.
 
-    L-BFGS over all gains F_k, K_k, L_k (k = 0..K-1) with the analytic gradient (the adjoint
+    L-BFGS over all gains F_k, K_k, L_k (k = 0..horizon-1) with the analytic gradient (the adjoint
     of the augmented forward recursion (3.58)); the controller starts at x^_0 = E{x_0} as in
     :func:`finite_horizon_dynamic_output_feedback`.
 
     Parameters
     ----------
     sys : MJLS, or a sequence of ``horizon`` (or ``horizon + 1``) MJLS (3.54).
-    horizon : K >= 1.
+    horizon : int >= 1.
     mean0, cov0, mu0 : the Gaussian-mixture initial state, as for Alg. 3.3.
-    init : start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a
-        FiniteHorizonResult, a DynamicOutputFeedbackResult or a tuple (F, K, L), constant
-        or per step.
+    init : start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a result
+        with F, K, L (e.g. FiniteHorizonResult, DynamicOutputFeedbackResult) or a tuple
+        (F, K, L), constant or per step.
     tol : stop when the decrease the quasi-Newton model predicts is below tol * J_0. The
         problem is ill-conditioned (the time-variant state transformations of x^_k leave
         J_0 unchanged), so the model underestimates the remaining decrease: on Sec. 3.7.3,
@@ -536,19 +765,29 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
 
     Returns
     -------
-    FiniteHorizonResult
-        F, K, L (per step), xhat0, cost (exact J_0), converged, iterations, seconds;
-        costs: exact J_0 after each iteration; cost_bounds empty and Xbar, Xunder, Pbar,
-        Punder None (no bound is involved).
+    ExactFiniteHorizonResult
+        F, K, L (per step), xhat0, cost (exact J_0), status (why L-BFGS stopped), iterations,
+        seconds; costs: exact J_0 after each iteration.
 
     Raises
     ------
+    TypeError
+        for a sys that is not an MJLS (sequence), a non-integer horizon or max_iter, a flag
+        that is not a bool or an init of the wrong type.
     ValueError
         for an invalid horizon, initial state, init, tol or max_iter.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = exact_finite_horizon_dynamic_output_feedback(sec373_system(1), 10, SEC373_MEAN0[1],
+    ...                                                    SEC373_COV0, SEC373_MU0)
+    >>> res.status, bool(res.cost <= res.costs[0])
+    ('converged', True)
     """
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}")
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    warn, progress = boolean(warn, "warn"), boolean(progress, "progress")
     start = time.perf_counter()
     st = stages(sys, horizon)
     s0 = st.systems[0]
@@ -561,13 +800,14 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
     mu = mode_distributions(st, mu0)
     shapes = (F.shape, K.shape, L.shape)
     fun = lambda v: _flat(finite_horizon_cost_and_gradient(st, *_unpack(v, shapes), X0, mu))
-    z, cost, converged, it, history = bfgs(fun, _pack(F, K, L), tol, max_iter, progress, "exact (3.56)",
-                                           memory=LBFGS_MEMORY)
+    z, cost, status, it, history = bfgs(fun, _pack(F, K, L), tol, max_iter, progress, "exact (3.56)",
+                                        memory=LBFGS_MEMORY)
     F, K, L = _unpack(z, shapes)
-    if warn and not converged:
-        warnings.warn(f"exact_finite_horizon_dynamic_output_feedback did not converge within {it} "
-                      f"iterations (J_0 {cost:.6g})", RuntimeWarning, stacklevel=2)
-    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=np.array([]), converged=converged,
-                               iterations=it, cost=finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0),
-                               Xbar=None, Xunder=None, Pbar=None, Punder=None,
-                               seconds=time.perf_counter() - start, costs=history)
+    message = _bfgs_message(status, it, cost, "J_0")
+    if warn and status != "converged":
+        warnings.warn(f"exact_finite_horizon_dynamic_output_feedback: {message}", RuntimeWarning,
+                      stacklevel=2)
+    return ExactFiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, converged=status == "converged",
+                                    status=status, message=message, iterations=it,
+                                    cost=finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0),
+                                    costs=history, seconds=time.perf_counter() - start)

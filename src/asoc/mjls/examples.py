@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ..validation import choice
 from .system import MJLS
 
 # Sec. 3.2: two stable modes whose switching makes the MJLS mean-square unstable (Fig. 3.2).
@@ -28,7 +29,14 @@ SEC354_X0 = {1: np.array([0.0, 0.0]), 2: np.array([3.0, 0.0])}
 
 
 def sec32_system() -> MJLS:
-    """x_{k+1} = A_theta x_k of Sec. 3.2 as an MJLS without input and noise."""
+    """x_{k+1} = A_theta x_k of Sec. 3.2 as an MJLS without input and noise.
+
+    Examples
+    --------
+    >>> sys = sec32_system()
+    >>> sys.M, sys.nx
+    (2, 2)
+    """
     return MJLS(A=SEC32_A, B=np.zeros((2, 1)), C=np.eye(2), H=np.zeros((2, 1)),
                 Q=np.eye(2), R=np.eye(1), T=SEC32_T)
 
@@ -37,11 +45,15 @@ def sec354_system(T: int = 1, C: str = "C1=[1 2], C2=[2 1]", H=SEC354_H) -> MJLS
     """The MJLS of Sec. 3.5.4 with transition matrix T[1] or T[2] and output matrices ``C``.
 
     Q_i = I and R_i = 1 (the thesis writes R_i = I_{n_x}; with one input, R_i is 1 x 1).
+
+    Examples
+    --------
+    >>> sys = sec354_system(2, "C=[1 0]")
+    >>> sys.T.tolist(), sys.C[1].tolist()
+    ([[0.9, 0.1], [0.1, 0.9]], [[1.0, 0.0]])
     """
-    if T not in SEC354_T:
-        raise ValueError(f"T must be 1 or 2, found {T!r}")
-    if C not in SEC354_C:
-        raise ValueError(f"C must be one of {list(SEC354_C)}, found {C!r}")
+    choice(T, "T", tuple(SEC354_T))
+    choice(C, "C", tuple(SEC354_C))
     return MJLS(A=SEC354_A, B=SEC354_B, C=SEC354_C[C], H=H, Q=np.eye(2), R=np.eye(1),
                 T=SEC354_T[T])
 
@@ -56,8 +68,14 @@ SEC373_COV0 = np.stack([0.1 ** 2 * np.eye(2), np.zeros((2, 2))])              # 
 
 def sec373_system(T: int = 1) -> MJLS:
     """The MJLS of Sec. 3.7.3 (A, B as in Sec. 3.5.4, C1 = [1 0], C2 = [0.8 0], H = 0.2 I,
-    J = 0.1, Q = I, R = 1) with transition matrix T[1] or T[2]."""
-    if T not in SEC373_T:
-        raise ValueError(f"T must be 1 or 2, found {T!r}")
+    J = 0.1, Q = I, R = 1) with transition matrix T[1] or T[2].
+
+    Examples
+    --------
+    >>> sys = sec373_system(1)
+    >>> sys.J.ravel().tolist(), sys.C[1].tolist()
+    ([0.1, 0.1], [[0.8, 0.0]])
+    """
+    choice(T, "T", tuple(SEC373_T))
     return MJLS(A=SEC354_A, B=SEC354_B, C=SEC373_C, H=0.2 * np.eye(2), Q=np.eye(2), R=np.eye(1),
                 T=SEC373_T[T], J=0.1 * np.ones((1, 1)))

@@ -26,37 +26,46 @@ import numpy as np
 from .dynamic import (METHODS, _T, bound_costate_step, bound_moment_step, dynamic_output_feedback,
                       gains_from_bounds, noise_covariances)
 from ..progress import progress_bar
+from ..result import IterativeResult
+from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
 from .moments import second_moment_step
-from .system import MJLS, successor_average, check_distribution, check_psd
+from .system import MJLS, successor_average
 
 
-@dataclass
-class FiniteHorizonResult:
+@dataclass(kw_only=True)
+class FiniteHorizonResult(IterativeResult):
     """Result of Algorithm 3.3 (:func:`finite_horizon_dynamic_output_feedback`).
 
     Attributes
     ----------
-    F, K, L : numpy.ndarray, shapes (K, nx, nx), (K, nx, ny), (K, nu, nx)
-        The gains of (3.55) for k = 0..K-1.
+    F, K, L : numpy.ndarray, shapes (horizon, nx, nx), (horizon, nx, ny), (horizon, nu, nx)
+        The gains of (3.55) for k = 0..horizon-1.
     xhat0 : numpy.ndarray, shape (nx,)
         The controller's initial state E{x_0}.
     cost_bounds : numpy.ndarray
         Jbar_0 (3.72) after each iteration (Thm. 3.33: non-increasing).
-    converged : bool
+    converged, status, message
+        Whether and why the iteration stopped (:class:`asoc.result.IterativeResult`):
+        ``"converged"``, ``"max_iterations"`` or ``"diverged"`` (Jbar_0 became non-finite).
     iterations : int
     cost : float
         The true expected cost (3.56) of the final gains, from the exact augmented
         second-moment recursion (3.58).
-    Xbar, Xunder, Pbar, Punder : numpy.ndarray, shape (K + 1, M, nx, nx)
+    Xbar, Xunder, Pbar, Punder : numpy.ndarray, shape (horizon + 1, M, nx, nx)
         The bounds of the last iteration.
     rejected : int
         Number of step updates Step 5 rejected in the last iteration.
     seconds : float
         Wall time.
-    costs : numpy.ndarray or None
-        The exact J_0 after each iteration of
-        :func:`asoc.mjls.exact_finite_horizon_dynamic_output_feedback` (None for Alg. 3.3;
-        the exact optimiser leaves the bound arrays None).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res.status, res.Xbar.shape, res.controller().time_variant
+    ('converged', (6, 2, 2, 2), True)
     """
 
     F: np.ndarray
@@ -64,7 +73,6 @@ class FiniteHorizonResult:
     L: np.ndarray
     xhat0: np.ndarray
     cost_bounds: np.ndarray
-    converged: bool
     iterations: int
     cost: float
     Xbar: np.ndarray = field(repr=False)
@@ -73,19 +81,42 @@ class FiniteHorizonResult:
     Punder: np.ndarray = field(repr=False)
     rejected: int = 0
     seconds: float = 0.0
-    costs: np.ndarray | None = field(default=None, repr=False)
 
     def controller(self):
         """The controller (3.55) for :func:`asoc.mjls.simulate`."""
-        from .simulate import DynamicOutputFeedback
+        return time_variant_controller(self)
 
-        return DynamicOutputFeedback(self.F, self.K, self.L, xhat0=self.xhat0)
+
+def time_variant_controller(result):
+    """The controller (3.55) of a finite-horizon result (F, K, L per step, xhat0) for simulate.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> time_variant_controller(res).xhat0.tolist()
+    [5.0, 0.0]
+    """
+    from .simulate import DynamicOutputFeedback
+
+    return DynamicOutputFeedback(result.F, result.K, result.L, xhat0=result.xhat0)
 
 
 @dataclass(frozen=True)
 class Stages:
     """The time-variant MJLS (3.54) over a horizon: one MJLS per step k = 0..K-1 and the
-    terminal weight Q_K (M, nx, nx); noise covariances HHt, JJt per step."""
+    terminal weight Q_K (M, nx, nx); noise covariances HHt, JJt per step.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> st = stages(sys, 4)
+    >>> st.horizon, len(st.HHt)
+    (4, 4)
+    """
 
     systems: tuple
     Q_final: np.ndarray
@@ -99,14 +130,23 @@ class Stages:
 
 def stages(sys, horizon):
     """Normalise ``sys`` (an MJLS, or a sequence of ``horizon`` or ``horizon + 1`` MJLS for
-    the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`."""
-    if int(horizon) != horizon or horizon < 1:
-        raise ValueError(f"horizon must be an integer >= 1, found {horizon}")
-    horizon = int(horizon)
+    the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> st = stages([sys, sys, sys.replace(Q=2 * np.eye(2))], 2)
+    >>> st.horizon, float(st.Q_final[0, 0, 0])
+    (2, 2.0)
+    """
+    horizon = integer(horizon, "horizon", minimum=1)
     if isinstance(sys, MJLS):
         systems = (sys,) * horizon
         Q_final = sys.Q
     else:
+        if not isinstance(sys, (list, tuple)):
+            raise TypeError(f"sys: expected an MJLS or a sequence of MJLS, found {type(sys).__name__}")
         systems = tuple(sys)
         if len(systems) not in (horizon, horizon + 1) or not all(isinstance(s, MJLS) for s in systems):
             raise ValueError(f"sys: expected an MJLS or a sequence of {horizon} or {horizon + 1} MJLS, "
@@ -128,22 +168,31 @@ def stages(sys, horizon):
 
 
 def check_initial_state(M, nx, mean0, cov0, mu0):
-    """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays."""
-    mu0 = check_distribution(mu0, M, "mu0")
-    mean0 = np.asarray(mean0, dtype=float)
-    if mean0.shape != (M, nx) or not np.all(np.isfinite(mean0)):
-        raise ValueError(f"mean0: expected finite per-mode means of shape ({M}, {nx}), found "
-                         f"shape {mean0.shape}")
-    cov0 = np.asarray(cov0, dtype=float)
-    if cov0.shape != (M, nx, nx) or not np.all(np.isfinite(cov0)):
-        raise ValueError(f"cov0: expected finite per-mode covariances of shape ({M}, {nx}, {nx}), "
-                         f"found shape {cov0.shape}")
-    check_psd(cov0, "cov0")
+    """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> mean0, cov0, mu0 = check_initial_state(2, 2, SEC373_MEAN0[1], SEC373_COV0, [1, 0])
+    >>> mu0
+    array([1., 0.])
+    """
+    mu0 = probability_vector(mu0, "mu0", M)
+    mean0 = real_array(mean0, "mean0", shape=(M, nx))
+    cov0 = semidefinite(real_array(cov0, "cov0", shape=(M, nx, nx)), "cov0")
     return mean0, cov0, mu0
 
 
 def initial_bounds(mean0, cov0, mu0):
-    """x^_0 = E{x_0} and the bounds Xbar_{i,0}, Xunder_{i,0} (Thm. 3.31, Alg. 3.3 Step 2)."""
+    """x^_0 = E{x_0} and the bounds Xbar_{i,0}, Xunder_{i,0} (Thm. 3.31, Alg. 3.3 Step 2).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> xhat0, Xbar0, Xunder0 = initial_bounds(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> xhat0.tolist(), float(Xunder0[0, 0, 0])
+    ([5.0, 0.0], 25.0)
+    """
     xhat0 = mu0 @ mean0
     dev = mean0 - xhat0
     m = mu0[:, None, None]
@@ -153,7 +202,15 @@ def initial_bounds(mean0, cov0, mu0):
 
 
 def mode_distributions(st, mu0):
-    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..K, shape (K+1, M)."""
+    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..horizon, shape (horizon + 1, M).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> mode_distributions(stages(sys, 2), np.array([1.0, 0.0])).round(3).tolist()
+    [[1.0, 0.0], [0.7, 0.3], [0.67, 0.33]]
+    """
     mu = np.empty((st.horizon + 1, len(mu0)))
     mu[0] = mu0
     for k, s in enumerate(st.systems):
@@ -162,7 +219,14 @@ def mode_distributions(st, mu0):
 
 
 def augmented_initial_moment(mean0, cov0, mu0, xhat0):
-    """X~_0^i = E{[x_0; x^_0][x_0; x^_0]^T 1(theta_0 = i)} for a constant x^_0 = xhat0."""
+    """X~_0^i = E{[x_0; x^_0][x_0; x^_0]^T 1(theta_0 = i)} for a constant x^_0 = xhat0.
+
+    Examples
+    --------
+    >>> X0 = augmented_initial_moment(np.array([[1.0]]), np.zeros((1, 1, 1)), np.array([1.0]), np.array([1.0]))
+    >>> X0.tolist()
+    [[[1.0, 1.0], [1.0, 1.0]]]
+    """
     M, nx = mean0.shape
     nc = xhat0.size
     X0 = np.zeros((M, nx + nc, nx + nc))
@@ -179,6 +243,14 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
     Acl, HHt_cl, Qcl: sequences of K stacks (M, n, n) (mode-dependent, e.g. the augmented
     closed loop (3.59)-(3.60)); Q_final (M, n, n); Ts: K transition matrices; X0 (M, n, n):
     E{x~_0 x~_0^T 1(theta_0 = i)}. Returns sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K} X~_K^i].
+
+    Examples
+    --------
+    >>> A = [np.array([[[0.5]]])] * 2
+    >>> cost = augmented_cost(A, [np.ones((1, 1, 1))] * 2, [np.ones((1, 1, 1))] * 2, np.ones((1, 1, 1)),
+    ...                       [np.ones((1, 1))] * 2, np.ones((1, 1, 1)), np.array([1.0]))
+    >>> round(cost, 4)
+    3.5625
     """
     X, mu = X0, np.asarray(mu0, dtype=float)
     cost = 0.0
@@ -196,8 +268,8 @@ def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
     ----------
     sys : MJLS or sequence of MJLS
         As in :func:`finite_horizon_dynamic_output_feedback`.
-    F, K, L : array_like, shapes (K, nc, nc), (K, nc, ny), (K, nu, nc)
-        Gains per step; the horizon K is their length.
+    F, K, L : array_like, shapes (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc)
+        Gains per step; the horizon is their length.
     mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
         Mean and covariance of x_0 given theta_0 = i.
     mu0 : array_like, shape (M,)
@@ -212,16 +284,34 @@ def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS (sequence) or an array is not real.
     ValueError
-        If the initial state or ``sys`` is invalid (see :func:`finite_horizon_dynamic_output_feedback`).
+        If the gains, the initial state or ``sys`` are invalid (see
+        :func:`finite_horizon_dynamic_output_feedback`).
+
+    Examples
+    --------
+    Alg. 3.2's time-invariant controller used for 10 steps of the example of Sec. 3.7.3:
+
+    >>> from asoc.mjls import dynamic_output_feedback
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> sys = sec373_system(1)
+    >>> r = dynamic_output_feedback(sys)
+    >>> gains = [np.broadcast_to(g, (10,) + g.shape) for g in (r.F, r.K, r.L)]
+    >>> round(finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0), 2)
+    211.71
     """
-    F, K, L = (np.asarray(g, dtype=float) for g in (F, K, L))
-    st = stages(sys, len(F))
+    F = real_array(F, "F", ndim=3)
+    horizon, nc = F.shape[0], F.shape[1]
+    st = stages(sys, horizon)
     s0 = st.systems[0]
+    F = real_array(F, "F", shape=(horizon, nc, nc))
+    K = real_array(K, "K", shape=(horizon, nc, s0.ny))
+    L = real_array(L, "L", shape=(horizon, s0.nu, nc))
     mean0, cov0, mu0 = check_initial_state(s0.M, s0.nx, mean0, cov0, mu0)
-    if xhat0 is None:
-        xhat0 = mu0 @ mean0
-    nx, nc = s0.nx, F.shape[1]
+    xhat0 = mu0 @ mean0 if xhat0 is None else real_array(xhat0, "xhat0", shape=(nc,))
+    nx = s0.nx
     Acl, HHcl, Qcl = [], [], []
     for k, s in enumerate(st.systems):
         A = np.zeros((s.M, nx + nc, nx + nc))
@@ -256,15 +346,18 @@ def _initial_gains(init, st, nx, ny, nu):
     elif isinstance(init, np.random.Generator):
         return (init.random((horizon, nx, nx)) - 0.5, init.random((horizon, nx, ny)) - 0.5,
                 init.random((horizon, nu, nx)) - 0.5)
-    F, K, L = (np.asarray(g, dtype=float) for g in (init.F, init.K, init.L)) \
-        if hasattr(init, "F") else (np.asarray(g, dtype=float) for g in init)
+    if all(hasattr(init, g) for g in "FKL"):
+        init = (init.F, init.K, init.L)
+    if not (isinstance(init, (tuple, list)) and len(init) == 3):
+        raise TypeError(f"init: expected None, a Generator, a result with F, K, L or a tuple (F, K, L), "
+                        f"found {type(init).__name__}")
     out = []
-    for name, g, shape in (("F", F, (nx, nx)), ("K", K, (nx, ny)), ("L", L, (nu, nx))):
+    for name, g, shape in (("F", init[0], (nx, nx)), ("K", init[1], (nx, ny)), ("L", init[2], (nu, nx))):
+        g = real_array(g, f"init {name}")
         if g.shape == shape:
             g = np.broadcast_to(g, (horizon,) + shape)
-        if g.shape != (horizon,) + shape or not np.all(np.isfinite(g)):
-            raise ValueError(f"init: {name} must be finite of shape {shape} or {(horizon,) + shape}, "
-                             f"found {g.shape}")
+        if g.shape != (horizon,) + shape:
+            raise ValueError(f"init {name}: expected shape {shape} or {(horizon,) + shape}, found {g.shape}")
         out.append(g.copy())
     return tuple(out)
 
@@ -280,7 +373,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         One MJLS, or ``horizon`` (or ``horizon + 1``, the last giving Q_K) MJLS for
         time-variant system matrices (3.54).
     horizon : int
-        K >= 1.
+        Number of steps, >= 1.
     mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
         Mean and covariance of x_0 given theta_0 = i.
     mu0 : array_like, shape (M,)
@@ -317,10 +410,23 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS (sequence), ``horizon`` or ``max_iter`` is not an integer,
+        a flag is not a bool, or ``init`` has the wrong type.
     ValueError
         If ``horizon``, ``tol``, ``max_iter``, ``method``, the initial state (``mean0``,
         ``cov0``, ``mu0``) or the shapes of ``init`` are invalid, or ``sys`` is not an MJLS
         (sequence) of consistent dimensions.
+
+    Examples
+    --------
+    The example of Sec. 3.7.3 (T[1], xi_0[1]) over 20 steps:
+
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = finite_horizon_dynamic_output_feedback(sec373_system(1), 20, SEC373_MEAN0[1],
+    ...                                              SEC373_COV0, SEC373_MU0)
+    >>> res.status, res.F.shape, round(res.cost, 2)
+    ('converged', (20, 2, 2), 308.22)
     """
     start = time.perf_counter()
     st = stages(sys, horizon)
@@ -328,11 +434,11 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     s0 = st.systems[0]
     M, nx, nu, ny = s0.M, s0.nx, s0.nu, s0.ny
     mean0, cov0, mu0 = check_initial_state(M, nx, mean0, cov0, mu0)
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}")
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, found {method!r}")
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    choice(method, "method", METHODS)
+    safeguard, warn, progress = (boolean(v, n) for v, n in ((safeguard, "safeguard"), (warn, "warn"),
+                                                             (progress, "progress")))
     F, K, L = _initial_gains(init, st, nx, ny, nu)
     xhat0, Xbar0, Xunder0 = initial_bounds(mean0, cov0, mu0)
     mu = mode_distributions(st, mu0)
@@ -342,7 +448,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     Punder = np.empty_like(Xbar)
     Xbar[0], Xunder[0] = Xbar0, Xunder0
     bounds = []
-    converged = False
+    status = "max_iterations"
     rejected = 0
     it = 0
 
@@ -371,21 +477,27 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         J0 = float(np.einsum("iab,iba->", Pbar[0], Xbar[0] + Xunder[0])
                    + np.einsum("iab,iba->", Punder[0], Xbar[0]) + mu0 @ omega)   # Step 7, (3.72)
         if not np.isfinite(J0):
+            status = "diverged"
             break
         bounds.append(J0)
         if len(bounds) > 1 and abs(bounds[-2] - J0) <= tol * max(1.0, abs(J0)):
-            converged = True
+            status = "converged"
             break
     bounds = np.array(bounds)
     seconds = time.perf_counter() - start
-    if warn and not converged:
-        warnings.warn(f"Algorithm 3.3 did not converge within {it} iterations", RuntimeWarning,
-                      stacklevel=2)
+    change = abs(bounds[-1] - bounds[-2]) / max(1.0, abs(bounds[-1])) if len(bounds) > 1 else np.inf
+    message = {"converged": f"converged after {it} iterations (change of Jbar_0 {change:.2g} <= tol = {tol:.2g})",
+               "max_iterations": f"did not converge within {it} iterations (change of Jbar_0 {change:.2g} "
+                                 f"> tol = {tol:.2g})",
+               "diverged": f"stopped at iteration {it}: the bound Jbar_0 became non-finite"}[status]
+    if warn and status != "converged":
+        warnings.warn(f"Algorithm 3.3 {message}", RuntimeWarning, stacklevel=2)
     increases = np.diff(bounds) > 1e-8 * np.maximum(1.0, np.abs(bounds[1:]))   # beyond rounding
     if warn and np.any(increases):
         warnings.warn(f"Algorithm 3.3: Jbar_0 increased in {int(increases.sum())} iterations "
                       f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
     cost = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
-    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds, converged=converged,
+    return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds,
+                               converged=status == "converged", status=status, message=message,
                                iterations=it, cost=cost, Xbar=Xbar, Xunder=Xunder, Pbar=Pbar,
                                Punder=Punder, rejected=rejected, seconds=seconds)

@@ -2,7 +2,37 @@
 
 import numpy as np
 
-from .system import predecessor_sum
+from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
+from .system import check_system, predecessor_sum
+
+
+_NO_MOMENT = object()
+
+
+def _moment_arguments(Acl, HHt, T, mu, X=_NO_MOMENT, X_name="X", mu_name="mu"):
+    """Validated closed loop (M, n, n), noise (M, n, n), T (M, M), mu (M,) and optional X (M, n, n)."""
+    Acl = real_array(Acl, "Acl", ndim=3)
+    M, n, _ = Acl.shape
+    Acl = real_array(Acl, "Acl", shape=(M, n, n))
+    why = f"(M = {M}, n = {n} from Acl)"
+    HHt = real_array(HHt, "HHt")
+    if HHt.shape != (M, n, n):
+        raise ValueError(f"HHt: expected shape ({M}, {n}, {n}) {why}, found shape {HHt.shape}")
+    T = real_array(T, "T")
+    if T.shape != (M, M):
+        raise ValueError(f"T: expected shape ({M}, {M}) {why}, found shape {T.shape}")
+    T = stochastic_matrix(T, "T", M)
+    mu = real_array(mu, mu_name)
+    if mu.shape != (M,):
+        raise ValueError(f"{mu_name}: expected shape ({M},) {why}, found shape {mu.shape}")
+    mu = probability_vector(mu, mu_name, M)
+    semidefinite(HHt, "HHt")
+    if X is not _NO_MOMENT:
+        X = real_array(X, X_name)
+        if X.shape != (M, n, n):
+            raise ValueError(f"{X_name}: expected shape ({M}, {n}, {n}) {why}, found shape {X.shape}")
+        semidefinite(X, X_name)
+    return Acl, HHt, T, mu, X
 
 
 def second_moment_step(Acl, HHt, T, X, mu):
@@ -28,9 +58,18 @@ def second_moment_step(Acl, HHt, T, X, mu):
 
     Raises
     ------
-    ValueError
-        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    TypeError, ValueError
+        Naming the argument, if an array is not real, not finite, of inconsistent shape, T
+        not stochastic or mu not a distribution.
+
+    Examples
+    --------
+    >>> step = second_moment_step(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]],
+    ...                           np.array([[[4.0]]]), [1.0])
+    >>> step
+    array([[[2.]]])
     """
+    Acl, HHt, T, mu, X = _moment_arguments(Acl, HHt, T, mu, X)
     inner = Acl @ X @ np.swapaxes(Acl, 1, 2) + mu[:, None, None] * HHt
     return predecessor_sum(T, inner)
 
@@ -58,9 +97,18 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
 
     Raises
     ------
-    ValueError
-        If the array shapes are inconsistent (raised by NumPy); nothing else is validated here.
+    TypeError, ValueError
+        As :func:`second_moment_step`, and for a horizon that is not an integer >= 0.
+
+    Examples
+    --------
+    >>> X, mu = second_moments(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]],
+    ...                        np.zeros((1, 1, 1)), [1.0], 2)
+    >>> X.ravel()
+    array([0.  , 1.  , 1.25])
     """
+    Acl, HHt, T, mu0, X0 = _moment_arguments(Acl, HHt, T, mu0, X0, "X0", "mu0")
+    horizon = integer(horizon, "horizon", minimum=0)
     X = np.empty((horizon + 1,) + np.shape(X0))
     mu = np.empty((horizon + 1, len(mu0)))
     X[0], mu[0] = X0, mu0
@@ -74,6 +122,11 @@ def moment_operator(Acl, T):
     """The matrix of X -> D_j(Acl X Acl^T) on row-major vecs (3.29): block (j, i) = p_ij Acl_i (x) Acl_i.
 
     Its spectral radius is that of Cor. 3.2; its transpose maps vec P to vec(Acl_i^T E_i(P) Acl_i).
+
+    Examples
+    --------
+    >>> moment_operator(np.array([[[0.5]], [[2.0]]]), np.array([[0.5, 0.5], [0.5, 0.5]])).tolist()
+    [[0.125, 2.0], [0.125, 2.0]]
     """
     M, n, _ = Acl.shape
     kron = np.einsum("iab,icd->iacbd", Acl, Acl).reshape(M, n * n, n * n)    # Acl_i (x) Acl_i
@@ -102,9 +155,19 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
 
     Raises
     ------
+    TypeError, ValueError
+        As :func:`second_moment_step` (``mu_inf`` a distribution).
     numpy.linalg.LinAlgError
         If I - M is singular (rho(M) = 1).
+
+    Examples
+    --------
+    x+ = 0.5 x + w has stationary variance 1 / (1 - 0.25):
+
+    >>> steady_state_second_moment(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]], [1.0]).round(4)
+    array([[[1.3333]]])
     """
+    Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
     M, n, _ = Acl.shape
     rhs = predecessor_sum(T, mu_inf[:, None, None] * HHt).reshape(M * n * n)
     X = np.linalg.solve(np.eye(M * n * n) - moment_operator(Acl, T), rhs).reshape(M, n, n)
@@ -129,10 +192,26 @@ def h2_cost(sys, L, X_inf):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS or an array is not real.
     ValueError
-        If ``L`` does not have nu * ny entries.
+        If ``L`` does not have shape (nu, ny) or ``X_inf`` not (M, nx, nx), or they are not finite.
+
+    Examples
+    --------
+    >>> from asoc.mjls import closed_loop
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> X = steady_state_second_moment(closed_loop(sys, [[-0.4]]), sys.H @ np.swapaxes(sys.H, 1, 2),
+    ...                                sys.T, sys.mu_inf)
+    >>> round(h2_cost(sys, [[-0.4]], X), 4)
+    0.7999
     """
-    L = np.asarray(L, dtype=float).reshape(sys.nu, sys.ny)
+    from .stability import gain_matrix
+
+    check_system(sys)
+    L = gain_matrix(L, "L", sys.nu, sys.ny)
+    X_inf = semidefinite(real_array(X_inf, "X_inf", shape=(sys.M, sys.nx, sys.nx)), "X_inf")
     LC = L @ sys.C
     weight = sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
     return float(np.einsum("iab,iba->", weight, X_inf))

@@ -19,13 +19,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..result import IterativeResult
+from ..validation import boolean, integer, real_scalar
 from .stability import ms_spectral_radius
+from .system import check_system
 
 DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as Alg. 3.2's bounds)
 
 
-@dataclass
-class ObservedModeResult:
+@dataclass(kw_only=True)
+class ObservedModeResult(IterativeResult):
     """Result of :func:`observed_mode_state_feedback`.
 
     Attributes
@@ -36,22 +39,40 @@ class ObservedModeResult:
         Solution of the coupled algebraic Riccati equations.
     rho : float
         Mean-square spectral radius of the closed loop (Cor. 3.2).
-    stabilizing, converged : bool
+    stabilizing : bool
+    converged, status, message
+        Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
+        ``"diverged"`` (max |P| > 1e100) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
     iterations : int
     seconds : float
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = observed_mode_state_feedback(sec354_system(1, "state"), max_iter=5, warn=False)
+    >>> res.status, res.iterations
+    ('max_iterations', 5)
     """
 
     L: np.ndarray
     P: np.ndarray
     rho: float
     stabilizing: bool
-    converged: bool
     iterations: int
     seconds: float
 
 
 def riccati_step(sys, P):
-    """One step of the coupled Riccati difference equation; returns (L, P_new)."""
+    """One step of the coupled Riccati difference equation; returns (L, P_new).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> L, P = riccati_step(sec354_system(1, "state"), np.zeros((2, 2, 2)))
+    >>> L.shape, float(P[0, 0, 0])
+    ((2, 1, 2), 1.0)
+    """
+    check_system(sys)
     EP = sys.successor_average(P)
     BT = np.swapaxes(sys.B, 1, 2)
     S = sys.R + BT @ EP @ sys.B
@@ -87,33 +108,55 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
 
     Raises
     ------
+    TypeError
+        if sys is not an MJLS, max_iter is not an integer or warn not a bool.
     ValueError
-        if tol is not positive or max_iter is not a positive integer.
+        if tol is not a finite positive number or max_iter < 1.
+
+    Examples
+    --------
+    State feedback with observed mode on the example of Sec. 3.5.4 (Table 3.2, [38]):
+
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = observed_mode_state_feedback(sec354_system(1, "state"))
+    >>> res.status, res.stabilizing, res.L.shape
+    ('converged', True, (2, 1, 2))
     """
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"tol must be > 0 and max_iter an integer >= 1, found tol={tol}, max_iter={max_iter}")
+    check_system(sys)
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    warn = boolean(warn, "warn")
     start = time.perf_counter()
     P = np.zeros((sys.M, sys.nx, sys.nx))
-    converged = diverged = False
+    status, delta = "max_iterations", np.inf
     it = 0
     for it in range(1, max_iter + 1):
-        L, P_new = riccati_step(sys, P)
+        try:
+            L, P_new = riccati_step(sys, P)
+        except np.linalg.LinAlgError:
+            status = "linalg_error"
+            break
         if not np.abs(P_new).max() <= DIVERGED:
-            diverged = True
+            status = "diverged"
             break
         delta = np.abs(P_new - P).max() / (1 + np.abs(P_new).max())
         P = P_new
         if delta < tol:
-            converged = True
+            status = "converged"
             break
-    L, _ = riccati_step(sys, P)
-    rho = ms_spectral_radius(sys.A + sys.B @ L, sys.T)
-    if warn and diverged:
-        warnings.warn(f"coupled Riccati iteration diverges (max |P| > {DIVERGED:.0e} after {it} steps): the "
-                      f"MJLS is not mean-square stabilisable even with observed mode", RuntimeWarning, stacklevel=2)
-    elif warn and not converged:
-        warnings.warn(f"coupled Riccati iteration did not converge in {max_iter} steps", RuntimeWarning,
-                      stacklevel=2)
+    try:
+        L, _ = riccati_step(sys, P)
+        rho = ms_spectral_radius(sys.A + sys.B @ L, sys.T)
+    except np.linalg.LinAlgError:
+        L, rho = np.full((sys.M, sys.nu, sys.nx), np.nan), np.inf
+    message = {"converged": f"converged after {it} steps (relative change {delta:.2g} < tol = {tol:.2g})",
+               "max_iterations": f"did not converge in {it} steps (relative change {delta:.2g} >= tol = {tol:.2g})",
+               "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "
+                           f"stabilisable even with observed mode",
+               "linalg_error": f"stopped at step {it}: R_i + B_i^T E_i(P) B_i is singular"}[status]
+    if warn and status != "converged":
+        warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
     elif warn and rho >= 1:
         warnings.warn(f"CARE gains do not stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning, stacklevel=2)
-    return ObservedModeResult(L, P, rho, bool(rho < 1), converged, it, time.perf_counter() - start)
+    return ObservedModeResult(L=L, P=P, rho=rho, stabilizing=bool(rho < 1), converged=status == "converged",
+                              status=status, message=message, iterations=it, seconds=time.perf_counter() - start)

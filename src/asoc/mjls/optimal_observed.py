@@ -36,7 +36,9 @@ import numpy as np
 
 from .finite_horizon import (_T, augmented_cost, augmented_initial_moment, check_initial_state,
                              mode_distributions, stages)
+from ..validation import real_array
 from .simulate import Controller
+from .system import check_system
 
 
 @dataclass
@@ -45,17 +47,26 @@ class ModeObservedResult:
 
     Attributes
     ----------
-    F : numpy.ndarray, shape (K, M, nu, nx)
+    F : numpy.ndarray, shape (horizon, M, nu, nx)
         LQ gains.
-    Mf : numpy.ndarray, shape (K, M, nx, ny)
+    Mf : numpy.ndarray, shape (horizon, M, nx, ny)
         Markov jump filter gains.
-    X : numpy.ndarray, shape (K + 1, M, nx, nx)
+    X : numpy.ndarray, shape (horizon + 1, M, nx, nx)
         Control Riccati solutions.
-    Y : numpy.ndarray, shape (K + 1, M, nx, nx)
+    Y : numpy.ndarray, shape (horizon + 1, M, nx, nx)
         Filter error moments.
     xhat0 : numpy.ndarray, shape (nx,)
     cost : float
         The exact expected cost (3.56) of the closed loop (augmented second-moment recursion).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = mode_observed_lqg(sys, 4, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res.X.shape, res.Y.shape, res.xhat0.tolist()
+    ((5, 2, 2, 2), (5, 2, 2, 2), [5.0, 0.0])
     """
 
     F: np.ndarray
@@ -80,14 +91,33 @@ class ModeObservedLQG(Controller):
         Gains of :class:`ModeObservedResult`.
     xhat0 : array_like, shape (nx,)
         Filter initial state.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> sys = sec373_system(1)
+    >>> res = mode_observed_lqg(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> controller = res.controller(sys)
+    >>> controller.observes_mode, controller.start(3).shape
+    (True, (3, 2))
     """
 
     observes_mode = True
 
     def __init__(self, sys, F, Mf, xhat0):
+        check_system(sys)
         self.A, self.B, self.C = sys.A, sys.B, sys.C
-        self.F, self.Mf = np.asarray(F, dtype=float), np.asarray(Mf, dtype=float)
-        self.xhat0 = np.asarray(xhat0, dtype=float)
+        self.F = real_array(F, "F", ndim=4)
+        horizon = self.F.shape[0]
+        self.F = real_array(F, "F", shape=(horizon, sys.M, sys.nu, sys.nx))
+        self.Mf = real_array(Mf, "Mf", shape=(horizon, sys.M, sys.nx, sys.ny))
+        self.xhat0 = real_array(xhat0, "xhat0", shape=(sys.nx,))
+        self._dims = (sys.M, sys.nx, sys.nu, sys.ny)
+
+    def check(self, sys):
+        if (sys.M, sys.nx, sys.nu, sys.ny) != self._dims:
+            raise ValueError(f"controller: built for (M, nx, nu, ny) = {self._dims}, found "
+                             f"{(sys.M, sys.nx, sys.nu, sys.ny)}")
 
     def start(self, n_runs):
         return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
@@ -102,7 +132,17 @@ class ModeObservedLQG(Controller):
 
 
 def control_riccati(st):
-    """Coupled Riccati difference equations of the LQ problem with observed mode ([38], Ch. 4)."""
+    """Coupled Riccati difference equations of the LQ problem with observed mode ([38], Ch. 4).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.finite_horizon import stages
+    >>> F, X = control_riccati(stages(sys, 3))
+    >>> F.shape, np.allclose(X[-1], sys.Q)
+    ((3, 2, 1, 2), True)
+    """
     K_ = st.horizon
     s0 = st.systems[0]
     X = np.empty((K_ + 1, s0.M, s0.nx, s0.nx))
@@ -119,7 +159,18 @@ def control_riccati(st):
 
 
 def markov_jump_filter(st, Y0, mu):
-    """Gains M_i(k) and error moments Y_i(k) of the Markov jump filter ([38], Ch. 5)."""
+    """Gains M_i(k) and error moments Y_i(k) of the Markov jump filter ([38], Ch. 5).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> from asoc.mjls.finite_horizon import mode_distributions, stages
+    >>> st = stages(sys, 3)
+    >>> Mf, Y = markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st, sys.mu_inf))
+    >>> Mf.shape, Y.shape
+    ((3, 2, 2, 1), (4, 2, 2, 2))
+    """
     K_ = st.horizon
     s0 = st.systems[0]
     Y = np.empty((K_ + 1, s0.M, s0.nx, s0.nx))
@@ -148,7 +199,7 @@ def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
     sys : MJLS or sequence of MJLS
         As in :func:`finite_horizon_dynamic_output_feedback` (3.54).
     horizon : int
-        K >= 1.
+        Number of steps, >= 1.
     mean0, cov0 : array_like, shapes (M, nx) and (M, nx, nx)
         Mode-conditional mean and covariance of x_0.
     mu0 : array_like, shape (M,)
@@ -161,8 +212,19 @@ def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS (sequence), ``horizon`` not an integer or an array not real.
     ValueError
         If ``horizon``, ``sys`` or the initial state is invalid.
+
+    Examples
+    --------
+    Table 3.3's benchmark on the example of Sec. 3.7.3 over 20 steps:
+
+    >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
+    >>> res = mode_observed_lqg(sec373_system(1), 20, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res.F.shape, res.Mf.shape, round(res.cost, 2)
+    ((20, 2, 1, 2), (20, 2, 2, 1), 170.71)
     """
     st = stages(sys, horizon)
     s0 = st.systems[0]

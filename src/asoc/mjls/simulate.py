@@ -13,7 +13,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 from ..progress import progress_bar
 
-from .system import check_distribution
+from ..validation import boolean, generator, integer, probability_vector, real_array, semidefinite
+from .system import check_system
 
 
 class Controller:
@@ -22,59 +23,130 @@ class Controller:
     ``start(n_runs)`` returns the initial controller state; ``input(k, y, theta, state)``
     returns ``(u, state)`` for measurements ``y`` (N, ny). ``theta`` (N,) is passed to
     every controller, but only controllers with ``observes_mode = True`` may use it.
+    ``check(sys)`` raises a ValueError when the controller does not fit the system; it runs
+    before the simulation.
+
+    Examples
+    --------
+    A user-defined controller: u = -0.5 y.
+
+    >>> class Proportional(Controller):
+    ...     def input(self, k, y, theta, state):
+    ...         return -0.5 * y, state
+    >>> Proportional().start(3) is None
+    True
     """
 
     observes_mode = False
 
     def start(self, n_runs):
+        """The initial controller state for ``n_runs`` runs (None: stateless)."""
         return None
 
     def input(self, k, y, theta, state):
+        """``(u, state)`` at step k for measurements ``y`` (N, ny) and modes ``theta`` (N,)."""
         raise NotImplementedError
+
+    def check(self, sys):
+        """Raise a ValueError when the controller does not fit ``sys`` (default: accept)."""
+
+
+def _fit(array, name, shape, sys):
+    if array.shape != shape:
+        raise ValueError(f"{name}: expected shape {shape} for the system (M={sys.M}, nx={sys.nx}, "
+                         f"nu={sys.nu}, ny={sys.ny}), found shape {array.shape}")
 
 
 class StaticGain(Controller):
-    """u_k = L y_k, mode-independent (3.8)."""
+    """u_k = L y_k, mode-independent (3.8).
+
+    Examples
+    --------
+    >>> StaticGain([[-0.5]]).input(0, np.array([[2.0]]), None, None)[0]
+    array([[-1.]])
+    """
 
     def __init__(self, L):
-        self.L = np.atleast_2d(np.asarray(L, dtype=float))
+        self.L = np.atleast_2d(real_array(L, "L"))
 
     def input(self, k, y, theta, state):
         return y @ self.L.T, state
 
+    def check(self, sys):
+        _fit(self.L, "L", (sys.nu, sys.ny), sys)
+
 
 class ModeDependentGain(Controller):
-    """u_k = L_{theta_k} y_k (3.24): requires the mode, e.g. the optimal controller of [38]."""
+    """u_k = L_{theta_k} y_k (3.24): requires the mode, e.g. the optimal controller of [38].
+
+    Examples
+    --------
+    >>> c = ModeDependentGain([[[-1.0]], [[-2.0]]])
+    >>> c.input(0, np.array([[1.0], [1.0]]), np.array([0, 1]), None)[0]
+    array([[-1.],
+           [-2.]])
+    """
 
     observes_mode = True
 
     def __init__(self, L):
-        self.L = np.asarray(L, dtype=float)
+        self.L = real_array(L, "L", ndim=3)
 
     def input(self, k, y, theta, state):
         return np.einsum("nab,nb->na", self.L[theta], y), state
 
+    def check(self, sys):
+        _fit(self.L, "L", (sys.M, sys.nu, sys.ny), sys)
+
 
 class TimeVariantGain(Controller):
-    """u_k = L_k y_k with a gain sequence L of shape (K, nu, ny) (e.g. [165], [163])."""
+    """u_k = L_k y_k with a gain sequence L of shape (horizon, nu, ny) (e.g. [165], [163]).
+
+    Examples
+    --------
+    >>> c = TimeVariantGain([[[-1.0]], [[-2.0]]])
+    >>> c.input(1, np.array([[1.0]]), None, None)[0]
+    array([[-2.]])
+    """
 
     def __init__(self, L):
-        self.L = np.asarray(L, dtype=float)
+        self.L = real_array(L, "L", ndim=3)
 
     def input(self, k, y, theta, state):
         return y @ self.L[min(k, len(self.L) - 1)].T, state
 
+    def check(self, sys):
+        _fit(self.L, "L", (len(self.L), sys.nu, sys.ny), sys)
+
 
 class DynamicOutputFeedback(Controller):
-    """x^_{k+1} = F_k x^_k + K_k y_k, u_k = L_k x^_k (3.37); F, K, L constant or (K, ...).
+    """x^_{k+1} = F_k x^_k + K_k y_k, u_k = L_k x^_k (3.37); F, K, L constant or (horizon, ...).
 
     ``xhat0`` is the controller's initial state (nc,), default zero.
+
+    Examples
+    --------
+    >>> c = DynamicOutputFeedback([[0.5]], [[1.0]], [[-1.0]], xhat0=[2.0])
+    >>> u, xhat = c.input(0, np.array([[1.0]]), None, c.start(1))
+    >>> u, xhat
+    (array([[-2.]]), array([[2.]]))
     """
 
     def __init__(self, F, K, L, xhat0=None):
-        self.F, self.K, self.L = (np.asarray(a, dtype=float) for a in (F, K, L))
+        self.F, self.K, self.L = (real_array(a, name) for a, name in ((F, "F"), (K, "K"), (L, "L")))
+        if self.F.ndim not in (2, 3) or self.F.shape[-1] != self.F.shape[-2]:
+            raise ValueError(f"F: expected shape (nc, nc) or (horizon, nc, nc), found shape {self.F.shape}")
         self.time_variant = self.F.ndim == 3
-        self.xhat0 = np.zeros(self.F.shape[-1]) if xhat0 is None else np.asarray(xhat0, float)
+        nc = self.F.shape[-1]
+        self.xhat0 = np.zeros(nc) if xhat0 is None else real_array(xhat0, "xhat0")
+        if self.xhat0.shape != (nc,):
+            raise ValueError(f"xhat0: expected shape ({nc},) (nc = {nc} from F), found shape {self.xhat0.shape}")
+
+    def check(self, sys):
+        lead = self.F.shape[:-2]
+        nc = self.F.shape[-1]
+        _fit(self.K, "K", lead + (nc, sys.ny), sys)
+        _fit(self.L, "L", lead + (sys.nu, nc), sys)
 
     def _at(self, k):
         if not self.time_variant:
@@ -94,7 +166,14 @@ class DynamicOutputFeedback(Controller):
 @dataclass
 class SimulationResult:
     """Per-run costs of (3.3): cost = sum_{k<K} (x'Q x + u'R u) + x_K' Q x_K, and, on request,
-    trajectories x (N, K+1, nx), u (N, K, nu), theta (N, K+1)."""
+    trajectories x (N, horizon + 1, nx), u (N, horizon, nu), theta (N, horizon + 1).
+
+    Examples
+    --------
+    >>> res = SimulationResult(cost=np.array([10.0, 20.0]), horizon=10)
+    >>> res.average_cost
+    array([1., 2.])
+    """
 
     cost: np.ndarray
     horizon: int
@@ -104,12 +183,11 @@ class SimulationResult:
 
     @property
     def average_cost(self):
-        """Per-run cost divided by the horizon K (the finite-K reading of (3.9))."""
+        """Per-run cost divided by the horizon (the finite-horizon reading of (3.9))."""
         return self.cost / self.horizon
 
 
 def _initial_states(sys, x0, x0_cov, theta0, n_runs, rng):
-    x0 = np.asarray(x0, dtype=float)
     if x0.shape == (sys.nx,):
         mean = np.broadcast_to(x0, (n_runs, sys.nx))
     elif x0.shape == (sys.M, sys.nx):
@@ -118,12 +196,9 @@ def _initial_states(sys, x0, x0_cov, theta0, n_runs, rng):
         raise ValueError(f"x0: expected shape ({sys.nx},) or ({sys.M}, {sys.nx}), found {x0.shape}")
     if x0_cov is None:
         return mean.copy()
-    cov = np.asarray(x0_cov, dtype=float)
+    cov = x0_cov
     if cov.shape == (sys.nx, sys.nx):
         cov = np.broadcast_to(cov, (sys.M, sys.nx, sys.nx))
-    if cov.shape != (sys.M, sys.nx, sys.nx):
-        raise ValueError(f"x0_cov: expected shape ({sys.nx}, {sys.nx}) or ({sys.M}, {sys.nx}, "
-                         f"{sys.nx}), found {cov.shape}")
     roots = np.stack([_psd_sqrt(c, i) for i, c in enumerate(cov)])
     return mean + np.einsum("nab,nb->na", roots[theta0], rng.standard_normal((n_runs, sys.nx)))
 
@@ -180,12 +255,13 @@ class _ModeStack:
         return self._pick(np.concatenate([x, u, w], axis=1) @ self.ABH, rows)
 
 
-def simulate(sys, controller, *args, **kwargs):
+def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0_cov=None,
+             trajectories=False, progress=False):
     """Monte Carlo of ``n_runs`` closed-loop runs of ``horizon`` steps, vectorised over runs.
 
-    Called as ``simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None,
-    x0_cov=None, trajectories=False, progress=False)``. BLAS is limited to one thread here:
-    the products are small (N x 5 by 5 x 4), and threading them costs more than it gains.
+    BLAS is limited to one thread here: the products are small (N x 5 by 5 x 4), and
+    threading them costs more than it gains. Every argument, and the controller against the
+    system (:meth:`Controller.check`), is checked before the first step.
 
     Parameters
     ----------
@@ -195,7 +271,7 @@ def simulate(sys, controller, *args, **kwargs):
     x0 : array_like, (nx,) or (M, nx)
         Initial state, or per-mode means of a Gaussian mixture (Sec. 3.7).
     horizon : int
-        K >= 1 steps.
+        Number of steps, >= 1.
     n_runs : int
         N >= 1 runs.
     rng : numpy.random.Generator
@@ -219,45 +295,55 @@ def simulate(sys, controller, *args, **kwargs):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS, ``controller`` not a Controller, ``rng`` not a Generator,
+        ``horizon``, ``n_runs`` or ``mode0`` not an integer, a flag not a bool, or an array
+        not real.
     ValueError
-        If ``rng`` is not a Generator, ``horizon`` or ``n_runs`` is not an integer >= 1,
-        ``mode0`` is out of range, or ``mu0``, ``x0``, ``x0_cov`` have the wrong shape or
-        are invalid.
+        If ``horizon`` or ``n_runs`` is < 1, ``mode0`` is out of range, ``mu0``, ``x0``,
+        ``x0_cov`` have the wrong shape or are invalid (non-finite, ``x0_cov`` not symmetric
+        positive semidefinite), or the controller does not fit the system.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> res = simulate(sys, StaticGain([[-0.4]]), [3.0, 0.0], 50, 200, np.random.default_rng(1))
+    >>> res.cost.shape, bool(res.average_cost.mean() < 10)
+    ((200,), True)
     """
-    with threadpool_limits(limits=1, user_api="blas"):
-        return _simulate(sys, controller, *args, **kwargs)
-
-
-def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0_cov=None,
-             trajectories=False, progress=False):
-    """Simulate ``n_runs`` closed-loop runs of ``horizon`` steps; return per-run costs.
-
-    Parameters
-    ----------
-    sys : MJLS
-    controller : Controller
-    x0 : (nx,) initial state, or (M, nx) per-mode means of a Gaussian mixture (Sec. 3.7).
-    horizon : K >= 1 steps.
-    n_runs : N >= 1 runs.
-    rng : numpy.random.Generator.
-    mode0 : fixed initial mode (0-based), or None to draw theta_0 from ``mu0``.
-    mu0 : initial mode distribution (default: the stationary distribution).
-    x0_cov : optional (nx, nx) or (M, nx, nx) covariance of x_0 given theta_0.
-    trajectories : also return x, u and theta of every run.
-    """
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError("rng: pass a seeded numpy.random.Generator")
-    if int(horizon) != horizon or horizon < 1:
-        raise ValueError(f"horizon must be an integer >= 1, found {horizon}")
-    if int(n_runs) != n_runs or n_runs < 1:
-        raise ValueError(f"n_runs must be an integer >= 1, found {n_runs}")
-    N, K = int(n_runs), int(horizon)
+    check_system(sys)
+    if not isinstance(controller, Controller):
+        raise TypeError(f"controller: expected an asoc.mjls.Controller (e.g. StaticGain), "
+                        f"found {type(controller).__name__}")
+    controller.check(sys)
+    x0 = real_array(x0, "x0")
+    if x0.shape not in ((sys.nx,), (sys.M, sys.nx)):
+        raise ValueError(f"x0: expected shape ({sys.nx},) or ({sys.M}, {sys.nx}), found shape {x0.shape}")
+    horizon = integer(horizon, "horizon", minimum=1)
+    n_runs = integer(n_runs, "n_runs", minimum=1)
+    generator(rng, "rng")
     if mode0 is not None:
-        if not 0 <= mode0 < sys.M:
-            raise ValueError(f"mode0 must be in 0..{sys.M - 1}, found {mode0}")
-        theta = np.full(N, int(mode0))
+        mode0 = integer(mode0, "mode0", minimum=0, maximum=sys.M - 1)
+    mu0 = sys.mu_inf if mu0 is None else probability_vector(mu0, "mu0", sys.M)
+    if x0_cov is not None:
+        x0_cov = real_array(x0_cov, "x0_cov")
+        if x0_cov.shape not in ((sys.nx, sys.nx), (sys.M, sys.nx, sys.nx)):
+            raise ValueError(f"x0_cov: expected shape ({sys.nx}, {sys.nx}) or ({sys.M}, {sys.nx}, {sys.nx}), "
+                             f"found shape {x0_cov.shape}")
+        x0_cov = semidefinite(x0_cov, "x0_cov")
+    trajectories, progress = boolean(trajectories, "trajectories"), boolean(progress, "progress")
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _simulate(sys, controller, x0, horizon, n_runs, rng, mode0, mu0, x0_cov, trajectories,
+                         progress)
+
+
+def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0, mu0, x0_cov, trajectories, progress):
+    """Simulate ``n_runs`` closed-loop runs of ``horizon`` steps (arguments checked by simulate)."""
+    N, K = n_runs, horizon
+    if mode0 is not None:
+        theta = np.full(N, mode0)
     else:
-        mu0 = sys.mu_inf if mu0 is None else check_distribution(mu0, sys.M)
         theta = rng.choice(sys.M, size=N, p=mu0)
     x = _initial_states(sys, x0, x0_cov, theta, N, rng)
     cumT = np.cumsum(sys.T, axis=1)

@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from .system import check_transition_matrix, _stack
+from ..validation import real_array, stochastic_matrix
+from .system import _stack, check_system
 
 
 def ms_operator(A_stack, T):
@@ -25,9 +26,17 @@ def ms_operator(A_stack, T):
     ValueError
         If ``A_stack`` is not an (M, n, n) stack of finite matrices, ``T`` is not
         row-stochastic, or their numbers of modes differ.
+    TypeError
+        If ``A_stack`` or ``T`` is complex or not numeric.
+
+    Examples
+    --------
+    >>> ms_operator([[[0.5]], [[2.0]]], [[0.5, 0.5], [0.5, 0.5]])
+    array([[0.125, 0.125],
+           [2.   , 2.   ]])
     """
     A_stack = _stack(A_stack, "A_stack")
-    T = check_transition_matrix(T)
+    T = stochastic_matrix(T, "T")
     M, n, _ = A_stack.shape
     if T.shape[0] != M:
         raise ValueError(f"T: expected shape ({M}, {M}) for {M} modes, found {T.shape}")
@@ -57,6 +66,16 @@ def ms_spectral_radius(A_stack, T) -> float:
     ------
     ValueError
         As :func:`ms_operator`, e.g. for non-finite matrices.
+    TypeError
+        If ``A_stack`` or ``T`` is complex or not numeric.
+
+    Examples
+    --------
+    Two stable modes whose switching is mean-square unstable (Sec. 3.2):
+
+    >>> from asoc.mjls.examples import SEC32_A, SEC32_T
+    >>> round(ms_spectral_radius(SEC32_A, SEC32_T), 4)
+    1.4198
     """
     return float(np.max(np.abs(np.linalg.eigvals(ms_operator(A_stack, T)))))
 
@@ -76,8 +95,33 @@ def closed_loop(sys, L):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS or ``L`` is not a real array.
     ValueError
-        If ``L`` does not have nu * ny entries.
+        If ``L`` does not have shape (nu, ny) or is not finite.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> closed_loop(sec354_system(1, "C=[1 0]"), [[-0.5]])[0].tolist()
+    [[1.2, 1.2], [-0.5, 1.0]]
     """
-    L = np.asarray(L, dtype=float).reshape(sys.nu, sys.ny)
+    check_system(sys)
+    L = gain_matrix(L, "L", sys.nu, sys.ny)
     return sys.A + sys.B @ L @ sys.C
+
+
+def gain_matrix(L, name, nu, ny):
+    """A finite real gain of shape (nu, ny); a scalar or a flat array is accepted when nu = ny = 1.
+
+    Examples
+    --------
+    >>> gain_matrix(-0.5, "L", 1, 1)
+    array([[-0.5]])
+    """
+    L = real_array(L, name)
+    if L.size == 1 and nu == ny == 1:
+        return L.reshape(1, 1)
+    if L.shape != (nu, ny):
+        raise ValueError(f"{name}: expected shape ({nu}, {ny}), found shape {L.shape}")
+    return L

@@ -7,20 +7,27 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from ..result import IterativeResult
+from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .moments import h2_cost, moment_operator, steady_state_second_moment
 from .stability import closed_loop, ms_spectral_radius
-from .system import predecessor_sum, successor_average
+from .system import check_system, predecessor_sum, successor_average
+
+GAIN_FLOOR = 1e-12     # absolute floor of the gain's norm in its relative change (a zero gain converges)
 
 
-@dataclass
-class StaticOutputFeedbackResult:
+@dataclass(kw_only=True)
+class StaticOutputFeedbackResult(IterativeResult):
     """Result of Algorithm 3.1 (:func:`static_output_feedback`).
 
     Attributes
     ----------
     L : numpy.ndarray, shape (nu, ny)
         Regulator gain.
-    converged : bool
+    converged, status, message
+        Whether and why the iteration stopped (:class:`asoc.result.IterativeResult`):
+        ``"converged"``, ``"max_iterations"``, ``"diverged"`` (an iterate became
+        non-finite) or ``"linalg_error"`` (the gain equation (3.34) was singular).
     iterations : int
     rho : float
         Mean-square spectral radius of the closed loop (Cor. 3.2).
@@ -34,10 +41,16 @@ class StaticOutputFeedbackResult:
         ``trace_X`` and ``trace_P``: traces of X^i and P^i per iteration, (iterations + 1, M).
     seconds : float
         Wall time of the iteration.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = static_output_feedback(sec354_system(1), max_iter=3, warn=False)
+    >>> res.converged, res.status, res.iterations
+    (False, 'max_iterations', 3)
     """
 
     L: np.ndarray
-    converged: bool
     iterations: int
     rho: float
     stabilizing: bool
@@ -67,19 +80,33 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS or an array is not real.
     ValueError
-        If ``method`` is not "vec" or "sdp".
+        If ``method`` is not "vec" or "sdp", or an array has the wrong shape or is not finite.
     numpy.linalg.LinAlgError
         If the linear system is singular or the SDP fails.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> X = P = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> gain_from_moments(sys, X, P).round(4)
+    array([[-0.1447]])
     """
+    check_system(sys)
+    X = semidefinite(real_array(X, "X", shape=(sys.M, sys.nx, sys.nx)), "X")
+    P = semidefinite(real_array(P, "P", shape=(sys.M, sys.nx, sys.nx)), "P")
+    if R is not None:
+        R = real_array(R, "R", shape=(sys.M, sys.nu, sys.nu))
+    choice(method, "method", ("vec", "sdp"))
     EP = successor_average(sys.T, P)
     S = (sys.R if R is None else R) + np.swapaxes(sys.B, 1, 2) @ EP @ sys.B                     # (M, nu, nu)
     W = sys.C @ X @ np.swapaxes(sys.C, 1, 2)                                # (M, ny, ny)
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
     if method == "sdp":
         return _gain_sdp(S, W, N)
-    if method != "vec":
-        raise ValueError(f"method must be 'vec' or 'sdp', found {method!r}")
     lhs = np.einsum("iab,icd->acbd", W, S).reshape(W.shape[1] * S.shape[1], -1)  # sum W_i (x) S_i
     vec_L = -np.linalg.solve(lhs, N.reshape(-1, order="F"))
     return vec_L.reshape(S.shape[1], W.shape[1], order="F")
@@ -156,19 +183,25 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
     diag = np.arange(n)
     traces_X, traces_P = [Xs[:, diag, diag].sum(1)], [Ps[:, diag, diag].sum(1)]
     logs = [(0.0, 0.0)]
-    converged = stabilized = False
+    stabilized = False
+    status, change = "max_iterations", np.inf
     L = np.zeros((sys.nu, sys.ny))
     it = 0
     for it in range(1, max_iter + 1):
         cX, cP = np.exp(-log_sX), np.exp(-log_sP)
         EP = (sys.T @ Ps.reshape(M, -1)).reshape(Ps.shape)
-        if method == "vec":
-            L_new = rec.gain(Xs, EP, cP)
-        else:
-            L_new = gain_from_moments(sys, Xs, Ps, "sdp", R=sys.R * cP)
+        try:
+            if method == "vec":
+                L_new = rec.gain(Xs, EP, cP)
+            else:
+                L_new = gain_from_moments(sys, Xs, Ps, "sdp", R=sys.R * cP)
+        except np.linalg.LinAlgError:
+            status = "linalg_error"
+            break
         X_new, P_new = rec.moments(L_new, Xs, Ps, EP, cX, cP)
         sX, sP = abs(X_new).max(), abs(P_new).max()
-        if not (np.isfinite(sX) and np.isfinite(sP)):
+        if not (np.isfinite(sX) and np.isfinite(sP) and np.all(np.isfinite(L_new))):
+            status = "diverged"
             break
         X_new, P_new = X_new / sX, P_new / sP
         change = max(_relative_change(L, L_new), _relative_change(Xs, X_new), _relative_change(Ps, P_new))
@@ -178,14 +211,14 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
         traces_P.append(Ps[:, diag, diag].sum(1))
         logs.append((log_sX, log_sP))
         if it > 1 and change < tol:
-            converged = True
+            status = "converged"
             break
         if until_stabilizing and _ms_radius(closed_loop(sys, L), sys.T) < 1:
             stabilized = True
             break
     logs = np.array(logs)
-    return dict(L=L, X=np.exp(log_sX) * Xs, P=np.exp(log_sP) * Ps, converged=converged, iterations=it,
-                stabilized=stabilized, trace_X=np.exp(logs[:, :1]) * np.array(traces_X),
+    return dict(L=L, X=np.exp(log_sX) * Xs, P=np.exp(log_sP) * Ps, status=status, change=change,
+                iterations=it, stabilized=stabilized, trace_X=np.exp(logs[:, :1]) * np.array(traces_X),
                 trace_P=np.exp(logs[:, 1:]) * np.array(traces_P))
 
 
@@ -200,14 +233,15 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     M, n = sys.M, sys.nx
     rhs_X = predecessor_sum(sys.T, rec.muHHt).ravel()
     trace_X, trace_P = [], []
-    converged, stabilized = False, True
+    stabilized = True
+    status, change = "max_iterations", np.inf
     X = P = None
     it = 0
     for it in range(1, max_iter + 1):
         Acl = closed_loop(sys, L)
         op = moment_operator(Acl, sys.T)
         if not np.max(np.abs(np.linalg.eigvals(op))) < 1:
-            stabilized = False
+            stabilized, status = False, "diverged"
             break
         lu = scipy.linalg.lu_factor(np.eye(M * n * n) - op)
         LC = L @ sys.C
@@ -217,13 +251,18 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
         X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
-        L_new = rec.gain(X, successor_average(sys.T, P), 1.0) if method == "vec" else gain_from_moments(sys, X, P, "sdp")
+        try:
+            L_new = (rec.gain(X, successor_average(sys.T, P), 1.0) if method == "vec"
+                     else gain_from_moments(sys, X, P, "sdp"))
+        except np.linalg.LinAlgError:
+            status = "linalg_error"
+            break
         change = _relative_change(L, L_new)
         L = L_new
         if change < tol:
-            converged = True
+            status = "converged"
             break
-    return dict(L=L, X=X, P=P, converged=converged, iterations=it, stabilized=stabilized,
+    return dict(L=L, X=X, P=P, status=status, change=change, iterations=it, stabilized=stabilized,
                 trace_X=np.array(trace_X).reshape(-1, M), trace_P=np.array(trace_P).reshape(-1, M))
 
 
@@ -274,17 +313,28 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
 
     Raises
     ------
+    TypeError
+        If ``sys`` is not an MJLS, ``max_iter`` not an integer or ``warn`` not a bool.
     ValueError
-        If ``tol`` or ``init`` is not positive, ``max_iter`` < 1, or ``method`` or
-        ``moments`` is unknown.
+        If ``tol`` or ``init`` is not a finite positive number, ``max_iter`` < 1, or
+        ``method`` or ``moments`` is unknown.
+
+    Examples
+    --------
+    The example of Sec. 3.5.4 with C1 = [1 2], C2 = [2 1] and T[1]:
+
+    >>> from asoc.mjls.examples import sec354_system
+    >>> res = static_output_feedback(sec354_system(1))
+    >>> res.status, res.stabilizing, res.L.round(4)
+    ('converged', True, array([[-0.635]]))
     """
-    if not tol > 0 or max_iter < 1 or not init > 0:
-        raise ValueError(f"tol and init must be > 0 and max_iter >= 1, found tol={tol}, "
-                         f"max_iter={max_iter}, init={init}")
-    if method not in ("vec", "sdp"):
-        raise ValueError(f"method must be 'vec' or 'sdp', found {method!r}")
-    if moments not in MOMENTS:
-        raise ValueError(f"moments must be one of {MOMENTS}, found {moments!r}")
+    check_system(sys)
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    init = real_scalar(init, "init", low=0, low_open=True)
+    choice(method, "method", ("vec", "sdp"))
+    choice(moments, "moments", MOMENTS)
+    warn = boolean(warn, "warn")
     start = time.perf_counter()
     rec = _Recursion(sys)
     run = _step_iteration(sys, rec, tol, max_iter, init, method, moments == "exact")
@@ -304,24 +354,35 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     rho = ms_spectral_radius(Acl, sys.T)
     stabilizing = bool(rho < 1)
     cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf
-    if warn and not run["converged"]:
-        warnings.warn(f"Algorithm 3.1 did not converge within {run['iterations']} iterations",
-                      RuntimeWarning, stacklevel=2)
+    status, message = run["status"], _message(run, tol)
+    if warn and status != "converged":
+        warnings.warn(f"Algorithm 3.1 {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"Algorithm 3.1 converged, but the gain does not stabilise the MJLS in the "
                       f"mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning, stacklevel=2)
     history = {"trace_X": run["trace_X"], "trace_P": run["trace_P"]}
-    return StaticOutputFeedbackResult(L=L, converged=run["converged"], iterations=run["iterations"],
-                                      rho=rho, stabilizing=stabilizing, cost=cost, X=run["X"],
+    return StaticOutputFeedbackResult(L=L, converged=status == "converged", status=status,
+                                      message=message, iterations=run["iterations"], rho=rho, stabilizing=stabilizing, cost=cost, X=run["X"],
                                       P=run["P"], history=history, seconds=seconds)
+
+
+def _message(run, tol):
+    """One sentence: why the iteration stopped."""
+    it, change = run["iterations"], run["change"]
+    return {"converged": f"converged after {it} iterations (relative change {change:.2g} < tol = {tol:.2g})",
+            "max_iterations": f"did not converge within {it} iterations (relative change {change:.2g} "
+                              f">= tol = {tol:.2g})",
+            "diverged": f"stopped at iteration {it}: an iterate became non-finite (or, with "
+                        f"moments='exact', left the stabilising set)",
+            "linalg_error": f"stopped at iteration {it}: the gain equation (3.34) is singular"}[run["status"]]
 
 
 def _relative_change(old, new):
     """||new/||new|| - old/||old|| ||_F over all modes: change of the iterate's direction
-    (for the gain L, whose scale matters, ||new - old|| / ||new||)."""
+    (for the gain L, whose scale matters, ||new - old|| / max(||new||, GAIN_FLOOR), so that a
+    zero gain converges)."""
     a, b = old.ravel(), new.ravel()
     if old.ndim == 2:
-        nn = np.sqrt(b @ b)
-        return float(np.sqrt((b - a) @ (b - a)) / nn) if nn > 0 else np.inf
+        return float(np.sqrt((b - a) @ (b - a)) / max(np.sqrt(b @ b), GAIN_FLOOR))
     d = b / np.sqrt(b @ b) - a / np.sqrt(a @ a)
     return float(np.sqrt(d @ d))

@@ -7,28 +7,37 @@ with w_k, v_k zero-mean, identity covariance, and a Markov chain theta_k with tr
 matrix T = (p_ij), p_ij = P(theta_{k+1} = j | theta_k = i).
 """
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse.csgraph import connected_components
+
+from ..validation import probability_vector, real_array, real_scalar, semidefinite, stochastic_matrix
+
+STATIONARY_ATOL = 1e-8     # |mu T - mu| allowed for a given stationary distribution
 
 
-def _stack(value, name, M=None, shape2=None):
+def _stack(value, name, M=None, shape2=None, source=""):
     """Stack a list of 2-D arrays (or one 2-D array for all modes) into (M, r, c).
 
     A list counts as per-mode matrices when each element is 2-D; ``[[1, 0]]`` is one matrix.
+    Complex, non-numeric and non-finite entries are rejected (naming ``name``); ``source``
+    says where the expected sizes come from (e.g. "nx from A").
     """
     if isinstance(value, (list, tuple)) and value and all(np.ndim(v) >= 2 for v in value):
-        mats = [np.atleast_2d(np.asarray(v, dtype=float)) for v in value]
+        mats = [np.atleast_2d(real_array(v, f"{name}[{i}]", finite=False)) for i, v in enumerate(value)]
         if len({m.shape for m in mats}) > 1:
-            raise ValueError(f"{name}: all modes need one shape, found {[m.shape for m in mats]}")
-        arr = np.stack(mats) if mats else np.zeros((0, 0, 0))
+            raise ValueError(f"{name}: expected one shape for all modes, found {[m.shape for m in mats]}")
+        arr = np.stack(mats)
     else:
-        arr = np.asarray(value, dtype=float)
+        arr = real_array(value, name, finite=False)
         if arr.ndim < 2:
             arr = np.atleast_2d(arr)
         if arr.ndim == 2:
             if M is None:
-                raise ValueError(f"{name}: give a list or an (M, r, c) array")
+                raise ValueError(f"{name}: expected a list of matrices or an (M, r, c) array, "
+                                 f"found shape {arr.shape}")
             arr = np.broadcast_to(arr, (M,) + arr.shape).copy()
     if arr.ndim != 3:
         raise ValueError(f"{name}: expected shape (M, r, c), found {arr.shape}")
@@ -38,49 +47,43 @@ def _stack(value, name, M=None, shape2=None):
         for axis, want in enumerate(shape2):
             if want is not None and arr.shape[1 + axis] != want:
                 exp = tuple("*" if w is None else w for w in shape2)
-                raise ValueError(f"{name}: expected shape (M, {exp[0]}, {exp[1]}) = "
-                                 f"({M}, {exp[0]}, {exp[1]}), found {arr.shape}")
+                raise ValueError(f"{name}: expected shape ({M}, {exp[0]}, {exp[1]})"
+                                 f"{f' ({source})' if source else ''}, found {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: found non-finite entries")
+        raise ValueError(f"{name}: expected finite entries, found {int(np.size(arr) - np.isfinite(arr).sum())} "
+                         f"non-finite")
     return arr
 
 
-def check_transition_matrix(T, name="T"):
-    """Validate a row-stochastic matrix; return it as an array."""
-    T = np.asarray(T, dtype=float)
-    if T.ndim != 2 or T.shape[0] != T.shape[1]:
-        raise ValueError(f"{name}: expected a square (M, M) matrix, found shape {T.shape}")
-    if not np.all(np.isfinite(T)):
-        raise ValueError(f"{name}: found non-finite entries")
-    for i, row in enumerate(T):
-        if np.any(row < 0) or abs(row.sum() - 1) > 1e-10:
-            raise ValueError(f"{name}: row {i} must be non-negative and sum to 1, found {row}")
-    return T
+def check_system(sys, name="sys"):
+    """Check that ``sys`` is an :class:`MJLS`; return it.
+
+    Examples
+    --------
+    >>> check_system("not a system")
+    Traceback (most recent call last):
+    ...
+    TypeError: sys: expected an MJLS (asoc.mjls.MJLS), found str
+    """
+    if not isinstance(sys, MJLS):
+        raise TypeError(f"{name}: expected an MJLS (asoc.mjls.MJLS), found {type(sys).__name__}")
+    return sys
 
 
-def check_distribution(mu, M, name="mu0"):
-    """Validate a probability vector of length M."""
-    mu = np.asarray(mu, dtype=float)
-    if mu.shape != (M,):
-        raise ValueError(f"{name}: expected shape ({M},), found {mu.shape}")
-    if not np.all(np.isfinite(mu)) or np.any(mu < 0) or abs(mu.sum() - 1) > 1e-10:
-        raise ValueError(f"{name}: must be non-negative and sum to 1, found {mu}")
-    return mu
+def closed_classes(T):
+    """The number of closed communicating classes of the chain T (1 iff mu_inf is unique).
 
-
-def check_psd(S, name, definite=False, tol=1e-10):
-    """Validate a stack (M, n, n) of symmetric positive (semi)definite matrices."""
-    for i, Si in enumerate(S):
-        if not np.allclose(Si, Si.T, atol=1e-10 * max(1.0, np.abs(Si).max())):
-            raise ValueError(f"{name}: mode {i + 1} matrix is not symmetric")
-        lam = np.linalg.eigvalsh(Si).min()
-        if definite and lam <= tol:
-            raise ValueError(f"{name}: mode {i + 1} matrix must be positive definite, "
-                             f"smallest eigenvalue {lam:.3g}")
-        if not definite and lam < -tol * max(1.0, np.abs(Si).max()):
-            raise ValueError(f"{name}: mode {i + 1} matrix must be positive semidefinite, "
-                             f"smallest eigenvalue {lam:.3g}")
-    return S
+    Examples
+    --------
+    >>> closed_classes(np.eye(2)), closed_classes([[0.9, 0.1], [0.2, 0.8]])
+    (2, 1)
+    """
+    T = stochastic_matrix(T, "T")
+    n_classes, label = connected_components(T > 0, directed=True, connection="strong")
+    leaves = np.ones(n_classes, dtype=bool)
+    rows, cols = np.nonzero(T > 0)
+    leaves[label[rows][label[rows] != label[cols]]] = False
+    return int(leaves.sum())
 
 
 def stationary_distribution(T):
@@ -101,8 +104,35 @@ def stationary_distribution(T):
     ------
     ValueError
         If ``T`` is not square, not finite, or a row is negative or does not sum to 1.
+    TypeError
+        If ``T`` is complex or not numeric.
+
+    Warns
+    -----
+    RuntimeWarning
+        When T has several closed classes (e.g. T = I): the stationary distribution is not
+        unique and the one returned is only one of many; pass the intended one as
+        ``MJLS(..., mu_inf=...)``.
+
+    Examples
+    --------
+    >>> stationary_distribution([[0.9, 0.1], [0.2, 0.8]]).round(4)
+    array([0.6667, 0.3333])
     """
-    T = check_transition_matrix(T)
+    T = stochastic_matrix(T, "T")
+    _warn_if_not_unique(T, stacklevel=3)
+    return _least_squares_stationary(T)
+
+
+def _warn_if_not_unique(T, stacklevel):
+    n_closed = closed_classes(T)
+    if n_closed > 1:
+        warnings.warn(f"T: the chain has {n_closed} closed classes, so its stationary distribution is "
+                      f"not unique; pass the intended one as MJLS(..., mu_inf=...)", RuntimeWarning,
+                      stacklevel=stacklevel)
+
+
+def _least_squares_stationary(T):
     M = T.shape[0]
     lhs = np.vstack([T.T - np.eye(M), np.ones((1, M))])
     rhs = np.concatenate([np.zeros(M), [1.0]])
@@ -129,6 +159,11 @@ def successor_average(T, P):
     ------
     ValueError
         If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
+
+    Examples
+    --------
+    >>> successor_average(np.array([[0.5, 0.5], [0.0, 1.0]]), np.array([2.0, 4.0]))
+    array([3., 4.])
     """
     return np.einsum("ij,j...->i...", T, P)
 
@@ -152,8 +187,20 @@ def predecessor_sum(T, Y):
     ------
     ValueError
         If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
+
+    Examples
+    --------
+    >>> predecessor_sum(np.array([[0.5, 0.5], [0.0, 1.0]]), np.array([2.0, 4.0]))
+    array([1., 5.])
     """
     return np.einsum("ji,j...->i...", T, Y)
+
+
+def _sampling_time(dt, name="dt"):
+    """None (unspecified), True (discrete, unspecified period, as python-control) or a period > 0."""
+    if dt is None or dt is True:
+        return dt
+    return real_scalar(dt, name, low=0, low_open=True)
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,9 +225,15 @@ class MJLS:
     R : array_like, (M, nu, nu) or (nu, nu)
         Symmetric positive definite input weights.
     T : array_like, shape (M, M)
-        Row-stochastic transition matrix, p_ij = P(theta_{k+1} = j | theta_k = i).
+        Row-stochastic transition matrix, p_ij = P(theta_{k+1} = j | theta_k = i), M >= 1.
     J : array_like, (M, ny, nv), optional
         Measurement-noise matrices of y = C x + J v (Sec. 3.6); None means y = C x.
+    mu_inf : array_like, shape (M,), optional
+        The stationary mode distribution used by the average-cost designs. Default: computed
+        from T (:func:`stationary_distribution`); give it when T has several closed classes
+        (e.g. T = I), where it is not unique. Must satisfy mu_inf T = mu_inf.
+    dt : float or True, optional
+        Sampling time (for :meth:`to_statespace`); True: discrete time, period unspecified.
 
     Attributes
     ----------
@@ -192,7 +245,16 @@ class MJLS:
     ValueError
         Naming the argument, when a shape does not fit, an entry is not finite, ``T`` is not
         row-stochastic, ``Q`` is not symmetric positive semidefinite or ``R`` not positive
-        definite.
+        definite, or ``mu_inf`` is not a stationary distribution of ``T``.
+    TypeError
+        If a matrix is complex or not numeric.
+
+    Examples
+    --------
+    >>> sys = MJLS(A=[[[1.2]], [[0.5]]], B=[[1.0]], C=[[1.0]], H=[[0.1]], Q=[[1.0]], R=[[1.0]],
+    ...            T=[[0.9, 0.1], [0.3, 0.7]])
+    >>> sys.M, sys.nx, sys.nu, sys.ny, sys.mu_inf.round(3)
+    (2, 1, 1, 1, array([0.75, 0.25]))
     """
 
     A: np.ndarray
@@ -203,22 +265,36 @@ class MJLS:
     R: np.ndarray
     T: np.ndarray
     J: np.ndarray | None = None
+    mu_inf: np.ndarray | None = None
+    dt: float | bool | None = None
 
-    def __init__(self, A, B, C, H, Q, R, T, J=None):
-        T = check_transition_matrix(T)
+    def __init__(self, A, B, C, H, Q, R, T, J=None, mu_inf=None, dt=None):
+        T = stochastic_matrix(T, "T")
         M = T.shape[0]
         A = _stack(A, "A", M)
         nx = A.shape[1]
         if A.shape[2] != nx:
             raise ValueError(f"A: expected square (M, nx, nx), found {A.shape}")
-        B = _stack(B, "B", M, (nx, None))
-        C = _stack(C, "C", M, (None, nx))
-        H = _stack(H, "H", M, (nx, None))
-        Q = check_psd(_stack(Q, "Q", M, (nx, nx)), "Q")
-        R = check_psd(_stack(R, "R", M, (B.shape[2], B.shape[2])), "R", definite=True)
+        from_A = f"nx = {nx} from A"
+        B = _stack(B, "B", M, (nx, None), from_A)
+        C = _stack(C, "C", M, (None, nx), from_A)
+        H = _stack(H, "H", M, (nx, None), from_A)
+        Q = semidefinite(_stack(Q, "Q", M, (nx, nx), from_A), "Q")
+        R = semidefinite(_stack(R, "R", M, (B.shape[2], B.shape[2]), f"nu = {B.shape[2]} from B"), "R",
+                         definite=True)
         if J is not None:
-            J = _stack(J, "J", M, (C.shape[1], None))
-        for name, value in dict(A=A, B=B, C=C, H=H, Q=Q, R=R, T=T, J=J).items():
+            J = _stack(J, "J", M, (C.shape[1], None), f"ny = {C.shape[1]} from C")
+        if mu_inf is None:
+            _warn_if_not_unique(T, stacklevel=3)
+            mu_inf = _least_squares_stationary(T)
+        else:
+            mu_inf = probability_vector(mu_inf, "mu_inf", M)
+            gap = np.abs(mu_inf @ T - mu_inf).max()
+            if gap > STATIONARY_ATOL:
+                raise ValueError(f"mu_inf: expected a stationary distribution of T (mu_inf T = mu_inf), "
+                                 f"found max |mu_inf T - mu_inf| = {gap:.3g}")
+        dt = _sampling_time(dt)
+        for name, value in dict(A=A, B=B, C=C, H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf, dt=dt).items():
             object.__setattr__(self, name, value)
 
     @property
@@ -228,35 +304,177 @@ class MJLS:
 
     @property
     def nx(self) -> int:
+        """State dimension."""
         return self.A.shape[1]
 
     @property
     def nu(self) -> int:
+        """Input dimension."""
         return self.B.shape[2]
 
     @property
     def ny(self) -> int:
+        """Output dimension."""
         return self.C.shape[1]
 
     @property
     def nw(self) -> int:
+        """Process-noise dimension."""
         return self.H.shape[2]
 
-    @property
-    def mu_inf(self) -> np.ndarray:
-        """Stationary mode distribution lim P(theta_k = i)."""
-        return stationary_distribution(self.T)
-
     def successor_average(self, P):
-        """E_i(P) = sum_j p_ij P_j."""
+        """E_i(P) = sum_j p_ij P_j (:func:`successor_average`)."""
         return successor_average(self.T, P)
 
     def predecessor_sum(self, Y):
-        """D_i(Y) = sum_j p_ji Y_j."""
+        """D_i(Y) = sum_j p_ji Y_j (:func:`predecessor_sum`)."""
         return predecessor_sum(self.T, Y)
 
     def replace(self, **changes) -> "MJLS":
-        """A copy with some matrices replaced, e.g. ``sys.replace(T=T2, C=C2)``."""
-        fields = dict(A=self.A, B=self.B, C=self.C, H=self.H, Q=self.Q, R=self.R, T=self.T, J=self.J)
+        """A copy with some matrices replaced, e.g. ``sys.replace(T=T2, C=C2)``.
+
+        A new ``T`` drops the old ``mu_inf`` (recomputed unless given).
+
+        Examples
+        --------
+        >>> sys = MJLS(A=[[[1.2]], [[0.5]]], B=[[1.0]], C=[[1.0]], H=[[0.1]], Q=[[1.0]],
+        ...            R=[[1.0]], T=[[0.9, 0.1], [0.3, 0.7]])
+        >>> sys.replace(T=[[0.5, 0.5], [0.5, 0.5]]).mu_inf
+        array([0.5, 0.5])
+        """
+        fields = dict(A=self.A, B=self.B, C=self.C, H=self.H, Q=self.Q, R=self.R, T=self.T, J=self.J,
+                      mu_inf=None if "T" in changes else self.mu_inf, dt=self.dt)
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise TypeError(f"replace: expected keywords among {sorted(fields)}, found {sorted(unknown)}")
         fields.update(changes)
         return MJLS(**fields)
+
+    @classmethod
+    def from_statespace(cls, systems, T, *, Q, R, H, J=None, dt=None, mu_inf=None) -> "MJLS":
+        """The MJLS (3.7) whose mode i is the discrete-time ``control.StateSpace`` ``systems[i]``.
+
+        The model (3.7) has no feedthrough (y = C x + J v), so every D must be zero: a
+        nonzero D is rejected. The noise and cost matrices are not part of a StateSpace and
+        are given as keywords, as in :class:`MJLS`.
+
+        Parameters
+        ----------
+        systems : sequence of control.StateSpace
+            M discrete-time systems (A_i, B_i, C_i, D_i = 0) of equal sizes and sampling time.
+        T : array_like, shape (M, M)
+            Transition matrix.
+        Q, R, H, J, mu_inf
+            As for :class:`MJLS`.
+        dt : float, optional
+            The sampling time the systems must have; default: theirs.
+
+        Returns
+        -------
+        MJLS
+            With ``dt`` the systems' common sampling time (True if unspecified).
+
+        Raises
+        ------
+        ImportError
+            If python-control is not installed (``pip install asoc[control]``).
+        TypeError
+            If an entry of ``systems`` is not a ``control.StateSpace``.
+        ValueError
+            If ``systems`` does not hold M systems, one is continuous-time (dt = 0), the
+            sampling times differ from each other or from ``dt``, the sizes differ, or a D is
+            nonzero.
+
+        Examples
+        --------
+        >>> import control
+        >>> modes = [control.ss([[1.2]], [[1.0]], [[1.0]], [[0.0]], 0.1),
+        ...          control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], 0.1)]
+        >>> sys = MJLS.from_statespace(modes, [[0.9, 0.1], [0.3, 0.7]], Q=[[1.0]], R=[[1.0]],
+        ...                            H=[[0.1]])
+        >>> sys.M, sys.dt, float(sys.A[0, 0, 0])
+        (2, 0.1, 1.2)
+        """
+        control = _import_control()
+        T = stochastic_matrix(T, "T")
+        if isinstance(systems, control.StateSpace) or not isinstance(systems, (list, tuple)):
+            raise TypeError(f"systems: expected a list of {T.shape[0]} control.StateSpace, "
+                            f"found {type(systems).__name__}")
+        if len(systems) != T.shape[0]:
+            raise ValueError(f"systems: expected {T.shape[0]} systems (one per mode of T), found {len(systems)}")
+        for i, s in enumerate(systems):
+            if not isinstance(s, control.StateSpace):
+                raise TypeError(f"systems[{i}]: expected a control.StateSpace, found {type(s).__name__}")
+            if s.dt is None or (s.dt is not True and s.dt == 0):
+                raise ValueError(f"systems[{i}]: expected a discrete-time system (dt > 0 or True), "
+                                 f"found continuous-time dt = {s.dt}; discretise it, e.g. control.c2d")
+        periods = {s.dt for s in systems if s.dt is not True}
+        if len(periods) > 1:
+            raise ValueError(f"systems: expected one sampling time, found {sorted(periods)}")
+        found = periods.pop() if periods else True
+        if dt is not None:
+            dt = _sampling_time(dt)
+            if found is not True and dt is not True and not np.isclose(found, dt, rtol=1e-12, atol=0):
+                raise ValueError(f"dt: expected the systems' sampling time {found}, found {dt}")
+            found = dt if found is True else found
+        sizes = [(s.nstates, s.ninputs, s.noutputs) for s in systems]
+        if len(set(sizes)) > 1:
+            raise ValueError(f"systems: expected equal sizes (nstates, ninputs, noutputs), found {sizes}")
+        for i, s in enumerate(systems):
+            if np.any(np.asarray(s.D) != 0):
+                raise ValueError(f"systems[{i}]: expected D = 0 (the MJLS (3.7) has no feedthrough), "
+                                 f"found max |D| = {np.abs(s.D).max():.3g}")
+        return cls(A=[np.asarray(s.A, float) for s in systems], B=[np.asarray(s.B, float) for s in systems],
+                   C=[np.asarray(s.C, float) for s in systems], H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf,
+                   dt=found)
+
+    def to_statespace(self, dt=None) -> list:
+        """The M modes as discrete-time ``control.StateSpace`` (A_i, B_i, C_i, 0).
+
+        Noise (H, J), costs (Q, R) and T are not part of a StateSpace and are dropped.
+
+        Parameters
+        ----------
+        dt : float or True, optional
+            Sampling time; default the system's ``dt`` (True, unspecified, if it has none).
+            A ``dt`` that contradicts the system's is a ValueError.
+
+        Returns
+        -------
+        list of control.StateSpace
+
+        Raises
+        ------
+        ImportError
+            If python-control is not installed.
+        ValueError
+            If ``dt`` is not positive, or differs from the system's sampling time.
+
+        Examples
+        --------
+        >>> sys = MJLS(A=[[[1.2]], [[0.5]]], B=[[1.0]], C=[[1.0]], H=[[0.1]], Q=[[1.0]],
+        ...            R=[[1.0]], T=[[0.9, 0.1], [0.3, 0.7]])
+        >>> modes = sys.to_statespace(dt=0.1)
+        >>> len(modes), modes[1].dt, float(modes[1].A[0, 0])
+        (2, 0.1, 0.5)
+        """
+        control = _import_control()
+        if dt is None:
+            dt = True if self.dt is None else self.dt
+        dt = _sampling_time(dt)
+        if dt is None:
+            dt = True
+        fixed = self.dt is not None and self.dt is not True
+        if fixed and dt is not True and not np.isclose(dt, self.dt, rtol=1e-12, atol=0):
+            raise ValueError(f"dt: expected the system's sampling time {self.dt}, found {dt}")
+        return [control.ss(self.A[i], self.B[i], self.C[i], np.zeros((self.ny, self.nu)), dt)
+                for i in range(self.M)]
+
+
+def _import_control():
+    try:
+        import control
+    except ImportError as err:
+        raise ImportError("python-control is needed for the StateSpace interop: "
+                          "pip install 'asoc[control]' (or pip install control)") from err
+    return control
