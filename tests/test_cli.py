@@ -100,25 +100,31 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
     def fake_run(info, fidelity, output_dir=None, **kwargs):
         ran.append(info.name)
         atomic_write_json(out / "values" / f"{info.name}.json", {"notebook": info.name, "values": {"a": 1}})
-        return info.path
+        executed = nbformat.read(info.path, as_version=4)
+        for count, cell in enumerate(executed.cells, 1):
+            cell.execution_count = count
+        target = nbs.executed_path(info, fidelity, out)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        nbformat.write(executed, target)
+        return target
 
     monkeypatch.setattr(nbs, "notebooks", lambda book=None: {"secX_1": info})
     monkeypatch.setattr(nbs, "default_output_dir", lambda fidelity: out)
     monkeypatch.setattr(nbs, "run", fake_run)
     monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
-    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] and "never run" in capsys.readouterr().out
-    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] and "secX_1.ipynb: up to date, skipped" in capsys.readouterr().out
     nb = nbformat.read(info.path, as_version=4)
     nb.cells[1].source = "x = 2"
     nbformat.write(nb, info.path)
-    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] * 2 and "changed: source" in capsys.readouterr().out
-    assert cli.main(["reproduce", "--fidelity", "ci", "--force"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--force", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] * 3
     entry = manifest.load_manifest(out)["secX_1"]
-    assert set(entry) == {"source", "parameters", "src", "environment", "depends"}
+    assert set(entry) == {"source", "parameters", "modules", "environment", "depends"}
 
 
 def test_dependencies_run_first_and_enter_the_hash(tmp_path):
