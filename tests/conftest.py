@@ -1,5 +1,10 @@
 """Shared fixtures: the notebooks are run once per session at ci fidelity; the book is built
-once and opened in headless Chromium."""
+once and opened in headless Chromium.
+
+The benchmark suite (``tests/benchmarks``) is collected only by ``make bench``
+(``--benchmark-only``): its full-fidelity workloads take minutes and time the machine, not
+the code's correctness, so the normal test run leaves them out.
+"""
 
 import shutil
 import subprocess
@@ -13,6 +18,13 @@ from asoc_companion import notebooks as nbs
 from asoc_companion.paths import BOOK, CI_OUTPUT
 
 NOTEBOOKS = nbs.notebooks()
+HERE = Path(__file__).resolve().parent
+
+
+def pytest_ignore_collect(collection_path, config):
+    if Path(collection_path).resolve() == HERE / "benchmarks" and not config.getoption("benchmark_only", False):
+        return True
+    return None
 
 # Property tests draw the same examples on every run and machine (no example database), so
 # a test run is reproducible like everything else (DESIGN.md, "Determinism").

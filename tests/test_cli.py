@@ -217,9 +217,8 @@ def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_p
 
 def test_outside_a_checkout_the_command_says_how_to_find_one(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.delenv("ASOC_COMPANION_ROOT", raising=False)
+    monkeypatch.setenv("ASOC_COMPANION_ROOT", "")        # empty: not configured; restored afterwards
     assert cli.main(["list"]) == 2
     assert "no checkout of the companion found" in capsys.readouterr().err
     assert cli.main(["--root", str(tmp_path), "list"]) == 2
     assert "is not a checkout of the companion" in capsys.readouterr().err
-    monkeypatch.delenv("ASOC_COMPANION_ROOT", raising=False)

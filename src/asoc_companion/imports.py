@@ -11,6 +11,7 @@ manifest hashes exactly these files (:mod:`asoc_companion.manifest`), so editing
 
 import ast
 import json
+from functools import lru_cache
 from pathlib import Path
 
 
@@ -54,6 +55,12 @@ def imported_names(code: str, package: str | None = None) -> set:
     return names
 
 
+@lru_cache(maxsize=4096)
+def _file_imports(path: str, mtime_ns: int, size: int, package: str) -> frozenset:
+    """:func:`imported_names` of a source file, cached while the file is unchanged."""
+    return frozenset(imported_names(Path(path).read_text(), package))
+
+
 def module_file(name: str, src) -> Path | None:
     """The file of module ``name`` under ``src`` (``a/b.py`` or ``a/b/__init__.py``), or None."""
     base = Path(src).joinpath(*name.split("."))
@@ -80,7 +87,8 @@ def closure(names, src, exclude=()) -> dict:
                 continue
             found[module] = path
             package = module if path.name == "__init__.py" else module.rpartition(".")[0]
-            todo.extend(imported_names(path.read_text(), package))
+            stat = path.stat()
+            todo.extend(_file_imports(str(path), stat.st_mtime_ns, stat.st_size, package))
     return found
 
 
