@@ -26,6 +26,26 @@ def pytest_ignore_collect(collection_path, config):
         return True
     return None
 
+
+SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")     # module-scoped clone / wheel
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist (``--dist loadgroup``), tests that share an expensive fixture run on one
+    worker: the book build, one notebook's ci run, a module's clone or wheel."""
+    for item in items:
+        fixtures = getattr(item, "fixturenames", ())
+        if item.get_closest_marker("book") or "html" in fixtures:
+            group = "book"
+        elif "ci_run" in fixtures and hasattr(item, "callspec"):
+            group = f"ci-{item.callspec.params.get('name')}"
+        elif Path(str(item.fspath)).stem in SHARED_FIXTURE_MODULES:
+            group = Path(str(item.fspath)).stem
+        else:
+            continue
+        item.add_marker(pytest.mark.xdist_group(group))
+
 # Property tests draw the same examples on every run and machine (no example database), so
 # a test run is reproducible like everything else (DESIGN.md, "Determinism").
 settings.register_profile("deterministic", derandomize=True, database=None)
