@@ -53,6 +53,7 @@ def _run_and_record(info, fidelity, progress_bar=None):
 
 
 def _worker_init(root, single_thread):
+    signal.signal(signal.SIGTERM, _terminate)      # clean up the staging folder and the kernel
     os.environ[paths.ENV_VAR] = str(root)
     if single_thread:
         for name in THREAD_VARIABLES:
@@ -111,32 +112,44 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
     context = get_context("spawn")
     with ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_init,
                              initargs=(paths.project().root, True)) as pool:
-        running = {}
-        while len(done) + len(failed) < len(todo):
-            for name in todo:
-                if name in running.values() or name in done or name in failed:
-                    continue
-                if any(d in failed for d in waits[name]):
-                    failed.append(name)
-                    print(f"{name}.ipynb: skipped, a notebook it depends on failed", flush=True)
-                elif all(d in done for d in waits[name]) and len(running) < jobs:
-                    running[pool.submit(_worker_run, name, fidelity)] = name
-            if not running:
-                continue
-            finished, _ = wait(running, return_when=FIRST_COMPLETED)
-            for future in finished:
-                name = running.pop(future)
-                try:
-                    future.result()
-                except Exception as err:       # noqa: BLE001
-                    failed.append(name)
-                    print(f"{name}.ipynb: FAILED: {type(err).__name__}: "
-                          f"{str(err).splitlines()[0] if str(err) else ''}", flush=True)
-                    continue
-                out = nbs.default_output_dir(fidelity)
-                manifest.update_manifest(todo[name], nbs.harness_parameters(todo[name], fidelity, out), out)
-                done.add(name)
+        try:
+            _schedule(pool, todo, waits, jobs, fidelity, done, failed)
+        except KeyboardInterrupt:
+            # stop the workers too: each removes its staging folder, nothing moves into place
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
     return 1 if failed else 0
+
+
+def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
+    """Submit each notebook when its dependencies are done; write its manifest entry when it finishes."""
+    running = {}
+    while len(done) + len(failed) < len(todo):
+        for name in todo:
+            if name in running.values() or name in done or name in failed:
+                continue
+            if any(d in failed for d in waits[name]):
+                failed.append(name)
+                print(f"{name}.ipynb: skipped, a notebook it depends on failed", flush=True)
+            elif all(d in done for d in waits[name]) and len(running) < jobs:
+                running[pool.submit(_worker_run, name, fidelity)] = name
+        if not running:
+            continue          # every remaining notebook was just marked failed or skipped
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in finished:
+            name = running.pop(future)
+            try:
+                future.result()
+            except Exception as err:       # noqa: BLE001
+                failed.append(name)
+                print(f"{name}.ipynb: FAILED: {type(err).__name__}: "
+                      f"{str(err).splitlines()[0] if str(err) else ''}", flush=True)
+                continue
+            out = nbs.default_output_dir(fidelity)
+            manifest.update_manifest(todo[name], nbs.harness_parameters(todo[name], fidelity, out), out)
+            done.add(name)
 
 
 def _short(value) -> str:
