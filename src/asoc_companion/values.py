@@ -42,6 +42,17 @@ def _shown(path) -> str:
         return str(path)
 
 
+def _repair_hint(path) -> str:
+    """How to get a good values file back: the command that regenerates it (and, for a committed
+    file, the git command that restores it)."""
+    hint = f"regenerate it with `{regenerate_command(path.stem, path.parent.parent)}`"
+    try:
+        committed = path.resolve().parent == (paths.project().figures / "values").resolve()
+    except RuntimeError:
+        committed = False
+    return hint + (f" or restore the committed one with `git checkout -- {_shown(path)}`" if committed else "")
+
+
 def read_values_file(path) -> dict:
     """The parsed values file at ``path`` (``{"notebook", "fidelity", "values"}``).
 
@@ -57,11 +68,7 @@ def read_values_file(path) -> dict:
         if not isinstance(data, dict) or not isinstance(data.get("values"), dict):
             raise ValueError("no 'values' object")
     except ValueError as err:      # json.JSONDecodeError is a ValueError
-        notebook = path.stem
-        raise CorruptValuesError(
-            f"{_shown(path)}: corrupt values file ({err}); regenerate it with "
-            f"`{regenerate_command(notebook, path.parent.parent)}` or restore the committed one "
-            f"with `git checkout -- {_shown(path)}`") from None
+        raise CorruptValuesError(f"{_shown(path)}: corrupt values file ({err}); {_repair_hint(path)}") from None
     return data
 
 
