@@ -9,6 +9,7 @@ bare repr, so another CPU's BLAS kernels (``make test-portable``) cannot change 
 """
 
 import ast
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,6 +17,8 @@ from pathlib import Path
 import nbformat
 import pytest
 from papermill.parameterize import parameterize_notebook
+
+from asoc_companion import paths
 
 from conftest import NOTEBOOKS
 
@@ -37,7 +40,9 @@ def test_nbval_checked_cells(name, tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--nbval-lax",
          "--nbval-sanitize-with", str(HERE / "nbval_sanitize.cfg"), str(copy)],
-        cwd=NOTEBOOKS[name].path.parent, capture_output=True, text=True, timeout=1200)
+        cwd=NOTEBOOKS[name].path.parent, capture_output=True, text=True, timeout=1200,
+        # the kernel runs next to the copy, outside the checkout: name the project explicitly
+        env={**os.environ, paths.ENV_VAR: str(paths.project().root)})
     assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-2000:]
 
 
