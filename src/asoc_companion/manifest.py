@@ -52,8 +52,8 @@ def tree_hash(folder) -> str:
 # The harness's own machinery: it runs in the process that starts the kernels, never inside a
 # notebook, so an edit to it re-runs nothing (an edit to recording, figures, captions, prose,
 # the ledger's badges or the library does).
-HARNESS_ONLY = ("asoc_companion.__main__", "asoc_companion.notebooks", "asoc_companion.manifest",
-                "asoc_companion.imports", "asoc_companion.book")
+HARNESS_ONLY = ("asoc_companion.__main__", "asoc_companion.build", "asoc_companion.notebooks",
+                "asoc_companion.manifest", "asoc_companion.imports", "asoc_companion.book")
 
 
 def module_hashes(notebook_path, src=None) -> dict:
