@@ -4,7 +4,8 @@ that quote its values, nothing else; ``reproduce`` runs independent notebooks in
 dependency order, one BLAS thread each."""
 
 import json
-import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -127,9 +128,12 @@ def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependenci
     for name in ("secA_1", "secB_1"):
         _notebook(project.book, name, record.format(name=name))
     _notebook(project.book, "findings", record.format(name="findings"), depends=["secA_1"])
-    monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
     start = time.monotonic()
-    assert cli.main(["reproduce", "--jobs", "2"]) == 0, capsys.readouterr()
+    # the real entry point: spawned workers must find their functions under `python -m`
+    proc = subprocess.run([sys.executable, "-m", "asoc_companion", "reproduce", "--jobs", "2"], cwd=project.book,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert "2 at a time" in proc.stdout
     values = {n: json.loads((project.figures / "values" / f"{n}.json").read_text())["values"]
               for n in ("secA_1", "secB_1", "findings")}
     assert values["secA_1"]["start"] < values["secB_1"]["end"] and values["secB_1"]["start"] < values["secA_1"]["end"], \
@@ -137,6 +141,7 @@ def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependenci
     assert values["findings"]["start"] >= values["secA_1"]["end"], "findings started before the notebook it quotes"
     assert {v["threads"] for v in values.values()} == {"1"}
     assert set(manifest.load_manifest(project.figures)) == {"secA_1", "secB_1", "findings"}
+    monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
     assert cli.main(["reproduce", "--jobs", "2"]) == 0
     assert capsys.readouterr().out.count("up to date, skipped") == 3
     assert time.monotonic() - start < 120

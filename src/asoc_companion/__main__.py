@@ -57,8 +57,8 @@ def _ledger(fidelity):
         else (project.ci_output / "ledger.md", load_all_values(project.ci_output))
     _write_if_changed(path, ledger_markdown(values=values),
                       "" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)")
-    if fidelity == "full":
-        intro = project.book / "intro.md"
+    intro = project.book / "intro.md"
+    if fidelity == "full" and intro.exists():
         _write_if_changed(intro, intro_markdown(intro.read_text(), ledger_rows(values=values)), " (summary)")
 
 

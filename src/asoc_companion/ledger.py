@@ -317,7 +317,10 @@ def summary_markdown(rows=None) -> str:
 
 def findings_markdown(path=None) -> str:
     """The intro's list of findings: one link per section of ``book/findings.ipynb``, with its kind."""
-    cells = json.loads((path or paths.project().book / "findings.ipynb").read_text())["cells"]
+    path = path or paths.project().book / "findings.ipynb"
+    if not path.exists():
+        return ""                      # a book without a findings page lists none
+    cells = json.loads(path.read_text())["cells"]
     found = [m for c in cells if c["cell_type"] == "markdown" for m in _FINDING.finditer("".join(c["source"]))]
     return "".join(f"- {{ref}}`{m[1]}` {m[3]}\n" for m in found)
 
