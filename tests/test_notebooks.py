@@ -1,4 +1,4 @@
-"""Papermill runs every notebook at ci fidelity; recorded values are checked against
+"""Every notebook runs at ci fidelity (once per session, under nbval: conftest's ``ci_execution``); recorded values are checked against
 the reference file (deterministic values against the thesis or, where the ledger
 documents a deviation, against our full-fidelity value) and against our own
 full-fidelity values (Monte Carlo medians, within ``ci_rtol``). A ``ci_rtol`` tighter than
