@@ -1,10 +1,13 @@
 # Two commands for a fresh machine (README.md):
 #   make book   build every figure, table, the ledger and the HTML book at full thesis fidelity
-#   make test   run the tests (unit, papermill at ci fidelity, nbval, the book in Chromium),
-#               then the notebook tests again under another CPU's BLAS kernels (test-portable)
+#   make test   run the tests (unit, doctests, papermill at ci fidelity, nbval, the book in Chromium,
+#               the wheel in a fresh venv, the kill test) on both cores, then the numerical tests
+#               once more on the farthest emulated CPU (test-corner)
 # Both create or refresh .venv from environment.txt themselves. `make book` is incremental:
-# a notebook is re-executed only when it, its parameters, src/asoc or environment.txt
-# changed (figures/values/manifest.json); `make -B book` rebuilds everything.
+# a notebook is re-executed only when its cells, its parameters, a module it imports
+# (directly or transitively), environment.txt or the values it quotes changed, or its
+# committed outputs are incomplete (figures/values/manifest.json); `make -B book` rebuilds
+# everything, independent notebooks in parallel on all cores.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -12,10 +15,20 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 # `make -B` / `--always-make`: pass --force to reproduce and --all to jupyter-book
 ALWAYS := $(findstring B,$(firstword -$(MAKEFLAGS)))
-# another CPU's BLAS kernels for test-portable (OpenBLAS; Haswell, Sandybridge, Prescott, ...)
-PORTABLE_CORETYPE ?= Sandybridge
+# pytest workers (pytest-xdist); tests of one notebook share a worker (--dist loadgroup)
+JOBS   ?= 2
+# Emulating other x86-64 CPUs (DESIGN.md, "Portability"): OpenBLAS kernels of another core
+# type, and NumPy's own SIMD dispatch with the AVX-512 (X86_V4) or also the AVX2 (X86_V3)
+# groups switched off. test-portable runs every corner; make test runs the farthest one.
+CORETYPES    ?= Sandybridge Prescott Haswell
+FAR_CORETYPE ?= Prescott
+FAR_DISABLED ?= X86_V3 X86_V4
+# what runs on an emulated CPU: every numerical test and every notebook at ci fidelity
+# (not the book build, the wheel or the kill test, which do not depend on the CPU's kernels)
+PORTABLE_TESTS := -q -p no:cacheprovider -n $(JOBS) --dist loadgroup -m "not book and not packaging" \
+                  --ignore=tests/test_crash_safety.py
 
-.PHONY: venv figures ledger book html test test-portable bench clean chromium
+.PHONY: venv figures ledger book html test test-corner test-portable bench clean chromium
 
 venv: $(STAMP)
 
@@ -44,16 +57,24 @@ chromium:
 	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null; }
 
 test: venv chromium
-	$(PY) -m pytest
-	$(MAKE) --no-print-directory test-portable
+	$(PY) -m pytest -n $(JOBS) --dist loadgroup
+	$(MAKE) --no-print-directory test-corner
 
-# The notebook comparisons and nbval once more under other BLAS kernels: results must not
-# depend on the last bits of a CPU's floating-point kernels (DESIGN.md, "Portability").
+# The farthest corner of the emulation matrix: the oldest OpenBLAS kernels and NumPy without
+# its AVX2 and AVX-512 code paths. Results must not depend on the last bits of a CPU.
+test-corner: venv
+	OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" $(PY) -m pytest $(PORTABLE_TESTS)
+
+# Every corner: each OpenBLAS core type with NumPy's X86_V4 off, and with X86_V3 and X86_V4 off.
 test-portable: venv
-	OPENBLAS_CORETYPE=$(PORTABLE_CORETYPE) $(PY) -m pytest -q -m notebook tests/test_notebooks.py tests/test_nbval.py
+	@set -e; for core in $(CORETYPES); do for disabled in "X86_V4" "X86_V3 X86_V4"; do \
+	  echo "== OPENBLAS_CORETYPE=$$core NPY_DISABLE_CPU_FEATURES=\"$$disabled\""; \
+	  OPENBLAS_CORETYPE=$$core NPY_DISABLE_CPU_FEATURES="$$disabled" $(PY) -m pytest $(PORTABLE_TESTS); \
+	done; done
 
+# The benchmark suite (pytest-benchmark, one process): medians against targets, in-process ratios.
 bench: venv
-	$(PY) -m asoc_companion.bench
+	$(PY) -m pytest tests/benchmarks --benchmark-only -p no:cacheprovider -q
 
 clean:
 	rm -rf book/_build book/_static/mathjax

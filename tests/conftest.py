@@ -1,18 +1,54 @@
 """Shared fixtures: the notebooks are run once per session at ci fidelity; the book is built
-once and opened in headless Chromium."""
+once and opened in headless Chromium.
 
+The benchmark suite (``tests/benchmarks``) is collected only by ``make bench``
+(``--benchmark-only``): its full-fidelity workloads take minutes and time the machine, not
+the code's correctness, so the normal test run leaves them out.
+"""
+
+import os
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import nbformat
 import pytest
 from hypothesis import settings
+from papermill.parameterize import parameterize_notebook
 
 from asoc_companion import notebooks as nbs
+from asoc_companion import paths
 from asoc_companion.paths import BOOK, CI_OUTPUT
 
 NOTEBOOKS = nbs.notebooks()
+HERE = Path(__file__).resolve().parent
+
+
+def pytest_ignore_collect(collection_path, config):
+    if Path(collection_path).resolve() == HERE / "benchmarks" and not config.getoption("benchmark_only", False):
+        return True
+    return None
+
+
+SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")     # module-scoped clone / wheel
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist (``--dist loadgroup``), tests that share an expensive fixture run on one
+    worker: the book build, one notebook's ci run, a module's clone or wheel."""
+    for item in items:
+        fixtures = getattr(item, "fixturenames", ())
+        if item.get_closest_marker("book") or "html" in fixtures:
+            group = "book"
+        elif ("ci_run" in fixtures or "ci_execution" in fixtures) and hasattr(item, "callspec"):
+            group = f"ci-{item.callspec.params.get('name')}"
+        elif Path(str(item.fspath)).stem in SHARED_FIXTURE_MODULES:
+            group = Path(str(item.fspath)).stem
+        else:
+            continue
+        item.add_marker(pytest.mark.xdist_group(group))
 
 # Property tests draw the same examples on every run and machine (no example database), so
 # a test run is reproducible like everything else (DESIGN.md, "Determinism").
@@ -21,18 +57,43 @@ settings.load_profile("deterministic")
 
 
 @pytest.fixture(scope="session")
-def ci_run():
-    """Run a notebook at ci fidelity (once per session) and return its output folder."""
+def ci_execution():
+    """Execute a notebook once per session at ci fidelity, under nbval; ``run(name)`` returns
+    (output folder, nbval's completed process).
+
+    One execution serves both notebook tests: nbval re-executes the committed notebook with
+    papermill's ci parameters injected and compares the cells marked ``# NBVAL_CHECK_OUTPUT``
+    with their stored outputs (tests/test_nbval.py), and the same execution records the values,
+    figures and tables that tests/test_notebooks.py checks against the reference.
+    """
     done = {}
 
     def run(name):
         if name not in done:
             out = CI_OUTPUT / "test" / name
-            nbs.run(NOTEBOOKS[name], "ci", output_dir=out)
-            done[name] = out
+            shutil.rmtree(out, ignore_errors=True)
+            out.mkdir(parents=True)
+            nb = nbformat.read(NOTEBOOKS[name].path, as_version=4)
+            nb = parameterize_notebook(nb, {"fidelity": "ci", "output_dir": str(out)})
+            copy = out / f"{name}.ipynb"
+            nbformat.write(nb, copy)
+            proc = subprocess.run(
+                [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+                 "-o", "addopts=", "--nbval-lax", "--nbval-sanitize-with", str(HERE / "nbval_sanitize.cfg"),
+                 str(copy)],
+                cwd=out, capture_output=True, text=True, timeout=1800,
+                # the kernel runs next to the copy, outside book/: name the project explicitly
+                env={**os.environ, paths.ENV_VAR: str(paths.project().root)})
+            done[name] = out, proc
         return done[name]
 
     return run
+
+
+@pytest.fixture(scope="session")
+def ci_run(ci_execution):
+    """The output folder of a notebook's ci-fidelity execution (values, figures, tables)."""
+    return lambda name: ci_execution(name)[0]
 
 
 @pytest.fixture(scope="session")

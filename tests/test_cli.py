@@ -100,25 +100,31 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
     def fake_run(info, fidelity, output_dir=None, **kwargs):
         ran.append(info.name)
         atomic_write_json(out / "values" / f"{info.name}.json", {"notebook": info.name, "values": {"a": 1}})
-        return info.path
+        executed = nbformat.read(info.path, as_version=4)
+        for count, cell in enumerate(executed.cells, 1):
+            cell.execution_count = count
+        target = nbs.executed_path(info, fidelity, out)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        nbformat.write(executed, target)
+        return target
 
     monkeypatch.setattr(nbs, "notebooks", lambda book=None: {"secX_1": info})
     monkeypatch.setattr(nbs, "default_output_dir", lambda fidelity: out)
     monkeypatch.setattr(nbs, "run", fake_run)
     monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
-    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] and "never run" in capsys.readouterr().out
-    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] and "secX_1.ipynb: up to date, skipped" in capsys.readouterr().out
     nb = nbformat.read(info.path, as_version=4)
     nb.cells[1].source = "x = 2"
     nbformat.write(nb, info.path)
-    assert cli.main(["reproduce", "--fidelity", "ci"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] * 2 and "changed: source" in capsys.readouterr().out
-    assert cli.main(["reproduce", "--fidelity", "ci", "--force"]) == 0
+    assert cli.main(["reproduce", "--fidelity", "ci", "--force", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] * 3
     entry = manifest.load_manifest(out)["secX_1"]
-    assert set(entry) == {"source", "parameters", "src", "environment", "depends"}
+    assert set(entry) == {"source", "parameters", "modules", "environment", "depends"}
 
 
 def test_dependencies_run_first_and_enter_the_hash(tmp_path):
@@ -163,3 +169,56 @@ def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
     assert nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5}).read_bytes() == data
     with pytest.raises(ValueError, match="valid names: seed"):
         nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"n": 5})
+
+
+@pytest.mark.parametrize("args, message", [
+    (["-p", "seed", "notanumber"], "parameter seed of sec3_2.ipynb (default 3) takes an integer, found 'notanumber'"),
+    (["-p", "seed", "-1"], "is a seed: it takes an integer >= 0, found -1"),
+    (["-p", "seed", "2.5"], "takes an integer, found 2.5"),
+    (["-p", "seed", "True"], "takes an integer, found True"),
+    (["-p", "steps", "0"], "parameter steps of sec3_2.ipynb (default 30) is a count: it takes an integer >= 1, found 0"),
+    (["-p", "steps", "-5"], "is a count: it takes an integer >= 1, found -5"),
+    (["-p", "seed", "7", "-p", "seed", "8"], "-p seed given twice (7 and '8'); give it once"),
+])
+def test_bad_parameter_values_fail_before_anything_runs(args, message, capsys, monkeypatch):
+    monkeypatch.setattr(nbs, "run", lambda *a, **k: pytest.fail("a notebook ran despite a bad -p value"))
+    assert cli.main(["figure", "3.2", "--fidelity", "ci", *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_parameter_values_are_checked_against_the_defaults_type(tmp_path):
+    info = _notebook(tmp_path, "secX_3", params='fidelity = "full"\noutput_dir = "."\nseed = 3\nn_runs_ci = 2_000\n'
+                                                 'rate = 0.5\nflag = True\nlabel = "a"\nshift = 0')
+    assert nbs.parse_overrides(info, [("n_runs_ci", "500"), ("rate", "2"), ("flag", "False"), ("label", "b"),
+                                      ("shift", "-3"), ("seed", "0")]) == \
+        {"n_runs_ci": 500, "rate": 2.0, "flag": False, "label": "b", "shift": -3, "seed": 0}
+    for name, value, message in [("n_runs_ci", "-5", "count"), ("rate", "nan", "finite number"),
+                                 ("rate", "x", "finite number"), ("flag", "1", "True or False")]:
+        with pytest.raises(ValueError, match=message):
+            nbs.parse_overrides(info, [(name, value)])
+
+
+def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_path, capsys, monkeypatch):
+    from asoc_companion.values import CorruptValuesError, load_all_values, load_values
+
+    (tmp_path / "values").mkdir()
+    (tmp_path / "values" / "sec3_5.json").write_text('{"notebook": "sec3_5", "values": {"rho": 1.2')
+    for load in (lambda: load_values("sec3_5", tmp_path), lambda: load_all_values(tmp_path)):
+        with pytest.raises(CorruptValuesError, match=r"sec3_5\.json: corrupt values file .*"
+                                                     r"`python -m asoc_companion run sec3_5`"):
+            load()
+    monkeypatch.setattr(cli, "load_all_values", lambda: load_all_values(tmp_path))
+    assert cli.main(["ledger"]) == 2
+    err = capsys.readouterr().err
+    assert "sec3_5.json: corrupt values file" in err and "python -m asoc_companion run sec3_5" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_outside_a_checkout_the_command_says_how_to_find_one(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("ASOC_COMPANION_ROOT", "")        # empty: not configured; restored afterwards
+    assert cli.main(["list"]) == 2
+    assert "no checkout of the companion found" in capsys.readouterr().err
+    assert cli.main(["--root", str(tmp_path), "list"]) == 2
+    assert "is not a checkout of the companion" in capsys.readouterr().err

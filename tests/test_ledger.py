@@ -30,13 +30,14 @@ def test_committed_ledger_is_current():
 
 
 def test_notebooks_have_figures_in_figures_folder():
-    from asoc_companion.paths import FIGURES
+    from asoc_companion.figures import file_stem
     from asoc_companion.notebooks import notebooks
+    from asoc_companion.paths import FIGURES
     for info in notebooks().values():
         for number in info.figures:
-            assert (FIGURES / f"fig{number.replace('.', '_')}.png").exists(), number
+            assert (FIGURES / f"{file_stem('fig', number)}.png").exists(), number
         for number in info.tables:
-            assert (FIGURES / f"table{number.replace('.', '_')}.md").exists(), number
+            assert (FIGURES / f"{file_stem('table', number)}.md").exists(), number
 
 
 # --- the page layout (issue 9): intro summary, shared notes, precision, links, captions ---------

@@ -6,40 +6,29 @@ size (spectral radii, gains, errors); nbval re-executes the notebook with paperm
 ci parameters injected and requires those printed outputs to be identical. They print
 numbers rounded to what is meant (the thesis's decimals, or a stated accuracy), never a
 bare repr, so another CPU's BLAS kernels (``make test-portable``) cannot change them.
+The same execution serves the value checks of tests/test_notebooks.py (conftest's
+``ci_execution``): each notebook runs once per test session, not twice.
 """
 
 import ast
-import subprocess
-import sys
-from pathlib import Path
 
 import nbformat
 import pytest
-from papermill.parameterize import parameterize_notebook
 
 from conftest import NOTEBOOKS
-
-HERE = Path(__file__).parent
 
 
 @pytest.mark.notebook
 @pytest.mark.parametrize("name", sorted(NOTEBOOKS))
-def test_nbval_checked_cells(name, tmp_path):
+def test_nbval_checked_cells(name, ci_execution):
     nb = nbformat.read(NOTEBOOKS[name].path, as_version=4)
     checked = [c for c in nb.cells if c.cell_type == "code" and "NBVAL_CHECK_OUTPUT" in c.source]
     info = NOTEBOOKS[name]
     # every numerical section checks its key numbers; other pages are at least re-executed
     assert checked or not (info.figures or info.tables), f"{name}: no cell is marked # NBVAL_CHECK_OUTPUT"
     assert all(c.get("outputs") for c in checked), f"{name}: a checked cell has no stored output"
-    nb = parameterize_notebook(nb, {"fidelity": "ci", "output_dir": str(tmp_path / "out")})
-    copy = tmp_path / f"{name}.ipynb"
-    nbformat.write(nb, copy)
-    proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--nbval-lax",
-         "--nbval-sanitize-with", str(HERE / "nbval_sanitize.cfg"), str(copy)],
-        cwd=NOTEBOOKS[name].path.parent, capture_output=True, text=True, timeout=1200)
+    _, proc = ci_execution(name)          # nbval on the committed notebook with ci parameters injected
     assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-2000:]
-
 
 
 def _ends_in_displayed_expression(source: str) -> bool:

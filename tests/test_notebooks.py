@@ -1,13 +1,14 @@
-"""Papermill runs every notebook at ci fidelity; recorded values are checked against
+"""Every notebook runs at ci fidelity (once per session, under nbval: conftest's ``ci_execution``); recorded values are checked against
 the reference file (deterministic values against the thesis or, where the ledger
 documents a deviation, against our full-fidelity value) and against our own
 full-fidelity values (Monte Carlo medians, within ``ci_rtol``). A ``ci_rtol`` tighter than
 the Monte Carlo error of the comparison (four combined standard errors) is itself a failure:
-tolerances are derived from the quantity's accuracy (src/asoc/repro/reference.py)."""
+tolerances are derived from the quantity's accuracy (src/asoc_companion/reference.py)."""
 
 import pytest
 
 from asoc_companion import load_reference, load_values, status
+from asoc_companion.figures import file_stem
 from asoc_companion.reference import agrees_with_full, monte_carlo_rtol
 
 from conftest import NOTEBOOKS
@@ -56,9 +57,9 @@ def test_notebook_writes_its_figures_and_tables(name, ci_run):
     out = ci_run(name)
     info = NOTEBOOKS[name]
     for number in info.figures:
-        stem = "fig" + number.replace(".", "_")
+        stem = file_stem("fig", number)
         for ext in ("png", "pdf"):
             assert (out / f"{stem}.{ext}").stat().st_size > 1000, f"{stem}.{ext} missing or empty"
     for number in info.tables:
-        stem = "table" + number.replace(".", "_")
+        stem = file_stem("table", number)
         assert (out / f"{stem}.csv").exists() and (out / f"{stem}.md").exists()

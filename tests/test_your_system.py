@@ -72,7 +72,7 @@ def test_mode_observing_benchmark_and_monte_carlo(full):
         # the per-run cost is right-skewed: the median lies below the exact mean (the text says so)
         assert mc["ci"][1] < v[f"expected_{name}"]
     assert v["mc_opt38"]["ci"][1] < v["mc_exact"]["ci"][0] and v["mc_exact"]["ci"][1] < v["mc_alg32"]["ci"][0]
-    for stem in ("fig10_1", "fig10_2", "fig10_3"):
+    for stem in ("fig_own_1", "fig_own_2", "fig_own_3"):
         assert (out / f"{stem}.png").stat().st_size > 1000
-    table = (out / "table10_1.md").read_text()
+    table = (out / "table_own_1.md").read_text()
     assert "[38] (mode observed)" in table and "exact-cost optimum (not in the thesis)" in table

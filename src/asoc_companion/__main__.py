@@ -1,51 +1,28 @@
-"""Command line: ``python -m asoc_companion list | figure N | table N | reproduce | ledger``.
+"""Command line: ``python -m asoc_companion list | run NAME | figure N | table N | reproduce | ledger``.
 
 Each command takes ``--fidelity full|ci``. ``full`` runs the thesis's settings and
 updates ``figures/`` and the executed notebooks in ``book/``; ``ci`` runs small
 Monte Carlo sizes and writes to ``book/_build/ci/`` only. ``reproduce`` re-executes a
-notebook only when its inputs changed (``figures/values/manifest.json``; ``--force``
-runs all). ``figure N -p name value`` runs with other parameters into
-``book/_build/runs/<notebook>-<hash>/`` and never touches tracked files.
+notebook only when its inputs changed or its outputs are incomplete
+(``figures/values/manifest.json``; ``--force`` runs all), independent notebooks in
+parallel (``--jobs``). ``figure N -p name value`` runs with other parameters into
+``book/_build/runs/<notebook>-<hash>/`` and never touches tracked files. Every run
+executes into a staging folder and moves into place only when it succeeds.
+``--root`` names the checkout (default: ``$ASOC_COMPANION_ROOT`` or the nearest one above
+the current directory).
 """
 
 import argparse
+import os
+import signal
 import sys
-import time
 
-from . import manifest
+from . import build, paths
 from . import notebooks as nbs
+from .build import rel as _rel
 from .io import atomic_write_text
 from .ledger import intro_markdown, ledger_markdown, ledger_rows
-from .paths import BOOK, CI_OUTPUT, ROOT
 from .values import load_all_values, load_values
-
-
-def _run(info, fidelity, output_dir=None, overrides=None):
-    start = time.perf_counter()
-    print(f"running {info.path.name} ({info.title}) at fidelity={fidelity} ...", flush=True)
-    executed = nbs.run(info, fidelity, output_dir=output_dir, overrides=overrides)
-    print(f"  done in {time.perf_counter() - start:.1f} s -> {_rel(executed)}", flush=True)
-
-
-def _rel(path) -> str:
-    try:
-        return str(path.resolve().relative_to(ROOT))
-    except ValueError:
-        return str(path)
-
-
-def _run_tracked(info, fidelity, force):
-    """Run ``info`` into its default folder unless its manifest entry is up to date."""
-    out = nbs.default_output_dir(fidelity)
-    params = nbs.harness_parameters(info, fidelity, out)
-    changed = ["--force"] if force else manifest.changed_inputs(info, params, out)
-    if not changed:
-        print(f"{info.path.name}: up to date, skipped", flush=True)
-        return
-    print(f"{info.path.name}: changed: {', '.join(changed)}", flush=True)
-    _run(info, fidelity)
-    manifest.update_manifest(info, params, out)
-
 
 def _short(value) -> str:
     """A recorded value in a few characters (Monte Carlo record -> its estimate, claim -> verdict)."""
@@ -75,12 +52,13 @@ def compare_with_committed(name, output_dir) -> str:
 
 
 def _ledger(fidelity):
-    path, values = (BOOK / "ledger.md", load_all_values()) if fidelity == "full" \
-        else (CI_OUTPUT / "ledger.md", load_all_values(CI_OUTPUT))
+    project = paths.project()
+    path, values = (project.book / "ledger.md", load_all_values()) if fidelity == "full" \
+        else (project.ci_output / "ledger.md", load_all_values(project.ci_output))
     _write_if_changed(path, ledger_markdown(values=values),
                       "" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)")
-    if fidelity == "full":
-        intro = BOOK / "intro.md"
+    intro = project.book / "intro.md"
+    if fidelity == "full" and intro.exists():
         _write_if_changed(intro, intro_markdown(intro.read_text(), ledger_rows(values=values)), " (summary)")
 
 
@@ -92,12 +70,10 @@ def _write_if_changed(path, text, remark=""):
     print(f"wrote {_rel(path)}{remark}")
 
 
-def _overrides(pairs, info) -> dict:
-    return nbs.check_overrides(info, {name: nbs.parse_value(value) for name, value in pairs or ()})
-
-
-def main(argv=None) -> int:
+def _parser():
     parser = argparse.ArgumentParser(prog="python -m asoc_companion", description=__doc__.splitlines()[0])
+    parser.add_argument("--root", help=f"the checkout to work on (default: ${paths.ENV_VAR}, "
+                                       "else the nearest one above the current directory)")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, help_ in [("list", "list notebooks, figures and tables"),
                         ("reproduce", "run every notebook whose inputs changed, then write the ledger"),
@@ -106,15 +82,41 @@ def main(argv=None) -> int:
         p.add_argument("--fidelity", choices=("full", "ci"), default="full")
         if name == "reproduce":
             p.add_argument("--force", action="store_true", help="re-execute every notebook")
-    for name in ("figure", "table"):
-        p = sub.add_parser(name, help=f"regenerate one {name} by its thesis number, e.g. 3.4")
-        p.add_argument("number")
+            p.add_argument("--jobs", "-j", type=int, default=None,
+                           help="notebooks run at the same time (default: the number of cores)")
+    for name, what, help_ in [("figure", "number", "regenerate one figure by its number, e.g. 3.4 or own.1"),
+                              ("table", "number", "regenerate one table by its number, e.g. 3.2"),
+                              ("run", "name", "run one notebook by its name, e.g. sec3_5 or findings")]:
+        p = sub.add_parser(name, help=help_)
+        p.add_argument(what)
         p.add_argument("--fidelity", choices=("full", "ci"), default="full")
         p.add_argument("-p", "--parameter", nargs=2, action="append", metavar=("NAME", "VALUE"),
                        help="override a parameter of the notebook (papermill's -p); "
                             "the run goes to book/_build/runs/, tracked files stay unchanged")
-    args = parser.parse_args(argv)
+    return parser
 
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    if args.root:
+        os.environ[paths.ENV_VAR] = os.path.abspath(args.root)     # notebook kernels inherit it
+    try:
+        signal.signal(signal.SIGTERM, build.terminate)
+    except ValueError:            # not the main thread (e.g. called from a test runner thread)
+        pass
+    try:
+        return _command(args)
+    except (ValueError, RuntimeError) as err:
+        # bad input and a corrupt values file are one-line messages, not tracebacks
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted: nothing was moved into place", file=sys.stderr)
+        return 130
+
+
+def _command(args) -> int:
+    paths.project()              # fail early, with the message, outside a checkout
     if args.command == "list":
         for info in nbs.notebooks().values():
             figs = ", ".join(f"Fig. {f}" for f in info.figures)
@@ -123,29 +125,25 @@ def main(argv=None) -> int:
             print(f"{info.name:10s} {info.title}\n{'':10s} {'; '.join(x for x in (figs, tabs) if x)}\n"
                   f"{'':10s} parameters (-p): {params}")
         return 0
-    if args.command in ("figure", "table"):
-        try:
-            info = nbs.find(args.command, args.number)
-            overrides = _overrides(args.parameter, info)
-        except ValueError as err:
-            print(err, file=sys.stderr)
-            return 2
+    if args.command in ("figure", "table", "run"):
+        info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command, args.number)
+        overrides = nbs.parse_overrides(info, args.parameter)
         if not overrides:
-            _run(info, args.fidelity)
             if args.fidelity == "full":
-                out = nbs.default_output_dir("full")
-                manifest.update_manifest(info, nbs.harness_parameters(info, "full", out), out)
+                build.run_and_record(info, "full")
+            else:
+                build.run_one(info, args.fidelity)
             return 0
         out = nbs.run_folder(info, args.fidelity, overrides)
-        _run(info, args.fidelity, output_dir=out, overrides=overrides)
+        build.run_one(info, args.fidelity, output_dir=out, overrides=overrides)
         print(f"this run (figures, values, executed notebook): {_rel(out)}/")
         print(compare_with_committed(info.name, out))
         return 0
+    status = 0
     if args.command == "reproduce":
-        for info in nbs.build_order(nbs.notebooks().values()):
-            _run_tracked(info, args.fidelity, args.force)
+        status = build.reproduce(args.fidelity, args.force, args.jobs)
     _ledger(args.fidelity)
-    return 0
+    return status
 
 
 if __name__ == "__main__":

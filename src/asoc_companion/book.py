@@ -11,16 +11,16 @@ import sys
 from importlib.util import find_spec
 from pathlib import Path
 
-from .paths import BOOK
+from . import paths
 
 
-def install_mathjax(book=BOOK) -> Path:
+def install_mathjax(book=None) -> Path:
     """Copy MathJax's es5 folder into ``book/_static/mathjax``; return the target."""
     spec = find_spec("mathjax")
     if spec is None or not spec.submodule_search_locations:
         raise RuntimeError("MathJax not installed: pip install -r environment.txt")
     source = Path(list(spec.submodule_search_locations)[0]) / "static" / "mathjax" / "es5"
-    target = Path(book) / "_static" / "mathjax"
+    target = Path(book or paths.project().book) / "_static" / "mathjax"
     if not (target / "tex-chtml.js").exists():
         shutil.copytree(source, target, dirs_exist_ok=True)
     return target

@@ -9,16 +9,21 @@ renders the caption.
 
 import yaml
 
+from . import paths
 from .ledger import badge, ledger_label
-from .paths import REFERENCE
 from .reference import load_reference, status
 
-CLAIMS = REFERENCE.parent / "figure_claims.yaml"
+CLAIMS_NAME = "figure_claims.yaml"
+
+
+def claims_path():
+    """``tests/reference/figure_claims.yaml`` of the project."""
+    return paths.project().reference.parent / CLAIMS_NAME
 
 
 def load_claims(path=None) -> dict:
     """``{figure number: {"where", "claim", "keys"}}`` from the registry, validated."""
-    with open(path or CLAIMS) as handle:
+    with open(path or claims_path()) as handle:
         raw = yaml.safe_load(handle) or {}
     for number, spec in raw.items():
         missing = {"where", "claim", "keys"} - set(spec)
@@ -41,7 +46,7 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
     claims = claims if claims is not None else load_claims()
     reference = reference if reference is not None else load_reference()
     if number not in claims:
-        raise ValueError(f"number: figure {number!r} has no entry in {CLAIMS.name}; known: {', '.join(claims)}")
+        raise ValueError(f"number: figure {number!r} has no entry in {CLAIMS_NAME}; known: {', '.join(claims)}")
     spec = claims[number]
     unknown = [k for k in spec["keys"] if k not in reference]
     if unknown:
@@ -67,12 +72,9 @@ def figure_caption(number: str):
     """Markdown for a notebook cell: the caption of figure ``number`` from the current values."""
     from IPython.display import Markdown
 
-    from .values import _session, load_all_values
+    from .session import current_values
 
-    values = load_all_values()
-    if _session.notebook is not None:
-        values.update({f"{_session.notebook}.{k}": v for k, v in _session.values.items()})
-    return Markdown(caption_markdown(str(number), values=values))
+    return Markdown(caption_markdown(str(number), values=current_values()))
 
 
 def _caption_cell(number, output, count):

@@ -1,14 +1,19 @@
-"""One plotting style for every figure; atomic saving under the thesis's numbering."""
+"""One plotting style for every figure; atomic saving under the thesis's numbering.
+
+A figure or table the thesis has is saved under its number ("3.4" -> ``fig3_4.png``); one
+the thesis does not have (the own-system chapter) gets an id of its own, ``own.<n>``
+("own.1" -> ``fig_own_1.png``), never a chapter number the thesis lacks.
+"""
 
 import csv
 import io
 import re
+from pathlib import Path
 
 import matplotlib
 import matplotlib.pyplot as plt
 
 from .io import atomic_write_bytes, atomic_write_text
-from . import values
 
 STYLE = {
     "figure.figsize": (6.4, 4.0),
@@ -47,22 +52,28 @@ def apply_style():
     matplotlib.rcParams.update(STYLE)
 
 
-def _stem(kind: str, number: str) -> str:
-    if not re.fullmatch(r"\d+\.\d+", str(number)):
-        raise ValueError(f"number must look like '3.4' (thesis numbering), found {number!r}")
-    return f"{kind}{str(number).replace('.', '_')}"
+NUMBER = re.compile(r"(\d+)\.(\d+)|own\.(\d+)")
 
 
-def save_figure(fig, number: str, output_dir=None):
+def file_stem(kind: str, number: str) -> str:
+    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other numbers."""
+    match = NUMBER.fullmatch(str(number))
+    if match is None:
+        raise ValueError(f"number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis), "
+                         f"found {number!r}")
+    return f"{kind}{match[1]}_{match[2]}" if match[3] is None else f"{kind}_own_{match[3]}"
+
+
+def save_figure(fig, number: str, output_dir):
     """Save ``fig`` as ``fig<chapter>_<n>.png`` and ``.pdf`` (atomically); return the PNG path.
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
     number : str
-        Thesis-style number such as "3.4".
-    output_dir : path, optional
-        Default: the current notebook's output folder (:func:`setup`).
+        Thesis number such as "3.4", or "own.1" for a figure the thesis does not have.
+    output_dir : path
+        The folder (a notebook run's: see :func:`asoc_companion.save_figure`).
 
     Returns
     -------
@@ -72,10 +83,10 @@ def save_figure(fig, number: str, output_dir=None):
     Raises
     ------
     ValueError
-        If ``number`` does not look like "3.4".
+        If ``number`` does not look like "3.4" or "own.1".
     """
-    out = output_dir or values.current_output_dir()
-    stem = _stem("fig", number)
+    out = Path(output_dir)
+    stem = file_stem("fig", number)
     paths = []
     for ext in ("png", "pdf"):
         buf = io.BytesIO()
@@ -109,19 +120,19 @@ def markdown_table(header, rows) -> str:
     return "\n".join(lines) + "\n"
 
 
-def save_table(number: str, header, rows, output_dir=None) -> str:
+def save_table(number: str, header, rows, output_dir) -> str:
     """Save a table as ``table<chapter>_<n>.csv`` and ``.md`` (atomically); return the Markdown.
 
     Parameters
     ----------
     number : str
-        Thesis-style number such as "3.2".
+        Thesis number such as "3.2", or "own.1" for a table the thesis does not have.
     header : sequence
         Column titles.
     rows : sequence of sequences
         One list of cells per row.
-    output_dir : path, optional
-        Default: the current notebook's output folder.
+    output_dir : path
+        The folder.
 
     Returns
     -------
@@ -131,13 +142,13 @@ def save_table(number: str, header, rows, output_dir=None) -> str:
     Raises
     ------
     ValueError
-        If ``number`` does not look like "3.2", or a row has a different number of cells than
+        If ``number`` does not look like "3.2" or "own.1", or a row has a different number of cells than
         ``header``.
     """
     if any(len(row) != len(header) for row in rows):
         raise ValueError("rows: every row needs as many cells as header")
-    out = output_dir or values.current_output_dir()
-    stem = _stem("table", number)
+    out = Path(output_dir)
+    stem = file_stem("table", number)
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(header)

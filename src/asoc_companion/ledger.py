@@ -16,7 +16,7 @@ from docutils.nodes import make_id
 from .figures import markdown_table
 from .io import atomic_write_text
 from .notebooks import notebooks
-from .paths import BOOK
+from . import paths
 from .prose import fill
 from .reference import load_reference, status
 from .values import load_all_values
@@ -317,7 +317,10 @@ def summary_markdown(rows=None) -> str:
 
 def findings_markdown(path=None) -> str:
     """The intro's list of findings: one link per section of ``book/findings.ipynb``, with its kind."""
-    cells = json.loads((path or BOOK / "findings.ipynb").read_text())["cells"]
+    path = path or paths.project().book / "findings.ipynb"
+    if not path.exists():
+        return ""                      # a book without a findings page lists none
+    cells = json.loads(path.read_text())["cells"]
     found = [m for c in cells if c["cell_type"] == "markdown" for m in _FINDING.finditer("".join(c["source"]))]
     return "".join(f"- {{ref}}`{m[1]}` {m[3]}\n" for m in found)
 
@@ -334,7 +337,7 @@ def intro_markdown(text, rows=None) -> str:
 
 def write_summary(intro=None, rows=None) -> str:
     """Refresh the generated blocks of ``book/intro.md``; return the new text."""
-    path = intro or BOOK / "intro.md"
+    path = intro or paths.project().book / "intro.md"
     new = intro_markdown(path.read_text(), rows)
     atomic_write_text(path, new)
     return new
@@ -360,7 +363,7 @@ def write_ledger(path=None) -> str:
         If the file cannot be written (the previous file is kept: atomic write).
     """
     text = ledger_markdown()
-    atomic_write_text(path or BOOK / "ledger.md", text)
+    atomic_write_text(path or paths.project().book / "ledger.md", text)
     if path is None:
         write_summary()
     return text

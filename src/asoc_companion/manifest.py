@@ -6,26 +6,26 @@ full-fidelity run) holds, per notebook, content hashes of everything its results
 ``source``       the notebook's cells (type and source, not outputs; papermill's injected
                  parameters cell excluded) and its ``asoc`` metadata;
 ``parameters``   the parameters papermill injects (fidelity, output folder, overrides);
-``src``          every file under ``src/asoc`` (sorted paths, content hashes);
+``modules``      ``{path under src/: hash}`` of the modules the notebook imports, directly
+                 or transitively (:mod:`asoc_companion.imports`): the library modules it
+                 calls and the tooling modules that write its values and figures;
 ``environment``  ``environment.txt``, the pinned requirements;
 ``depends``      the recorded values of the notebooks named in its metadata
                  (``metadata.asoc.depends``, e.g. a findings page that quotes other pages).
 
-A notebook is up to date when its entry equals the hashes computed now and its values file
-exists; ``python -m asoc_companion reproduce`` skips it then (``--force`` re-executes everything).
+A notebook is up to date when its entry equals the hashes computed now and its outputs
+are complete (:func:`incomplete_outputs`); ``python -m asoc_companion reproduce`` skips it
+then (``--force`` re-executes everything).
 """
 
 import hashlib
 import json
 from pathlib import Path
 
+from . import paths
+from .imports import notebook_modules
 from .io import atomic_write_json
-from .paths import ROOT
-from .values import values_path
-
-SRC = ROOT / "src" / "asoc"
-ENVIRONMENT = ROOT / "environment.txt"
-MANIFEST_NAME = "manifest.json"
+from .values import MANIFEST_NAME, CorruptValuesError, read_values_file, values_path
 
 
 def _sha256(data: bytes) -> str:
@@ -40,13 +40,28 @@ def source_hash(path) -> str:
     return _sha256(json.dumps([cells, nb["metadata"].get("asoc")], sort_keys=True).encode())
 
 
-def tree_hash(folder=SRC) -> str:
+def tree_hash(folder) -> str:
     """Hash of every file below ``folder`` (relative paths and contents; caches skipped)."""
     folder = Path(folder)
     files = sorted(p for p in folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts
                    and p.suffix != ".pyc" and not p.name.endswith(".tmp"))
     lines = [f"{p.relative_to(folder).as_posix()}\0{_sha256(p.read_bytes())}\n" for p in files]
     return _sha256("".join(lines).encode())
+
+
+# The harness's own machinery: it runs in the process that starts the kernels, never inside a
+# notebook, so an edit to it re-runs nothing (an edit to recording, figures, captions, prose,
+# the ledger's badges or the library does).
+HARNESS_ONLY = ("asoc_companion.__main__", "asoc_companion.build", "asoc_companion.notebooks",
+                "asoc_companion.manifest", "asoc_companion.imports", "asoc_companion.book")
+
+
+def module_hashes(notebook_path, src=None) -> dict:
+    """``{path relative to src: hash}`` of the modules the notebook imports, directly or
+    transitively (the harness's own modules, :data:`HARNESS_ONLY`, excepted)."""
+    src = Path(src or paths.project().src)
+    files = notebook_modules(notebook_path, src, exclude=HARNESS_ONLY).values()
+    return {p.relative_to(src).as_posix(): _sha256(p.read_bytes()) for p in sorted(files)}
 
 
 def dependencies(path) -> list:
@@ -64,9 +79,11 @@ def entry(info, parameters: dict, output_dir) -> dict:
     for name in dependencies(info.path):
         values = values_path(name, output_dir)
         depends[name] = _sha256(values.read_bytes()) if values.exists() else None
+    environment = paths.project().environment
     return {"source": source_hash(info.path),
             "parameters": _sha256(json.dumps(parameters, sort_keys=True).encode()),
-            "src": tree_hash(SRC), "environment": _sha256(ENVIRONMENT.read_bytes()),
+            "modules": module_hashes(info.path),
+            "environment": _sha256(environment.read_bytes()) if environment.exists() else None,
             "depends": depends}
 
 
@@ -78,16 +95,74 @@ def manifest_path(output_dir) -> Path:
 def load_manifest(output_dir) -> dict:
     """``{notebook: entry}`` of the runs recorded in ``output_dir`` (``{}`` if none)."""
     path = manifest_path(output_dir)
-    return json.loads(path.read_text()) if path.exists() else {}
+    if not path.exists():
+        return {}
+    try:
+        return json.loads(path.read_text())
+    except ValueError:
+        return {}          # a corrupt manifest: every notebook counts as never run
 
 
-def changed_inputs(info, parameters: dict, output_dir) -> list:
-    """What changed since ``info`` was last run into ``output_dir`` (empty: up to date)."""
+def incomplete_notebook(path) -> str:
+    """Why the executed notebook at ``path`` is incomplete ("" if it is not): a code cell never
+    executed, or papermill's record of an exception."""
+    nb = json.loads(Path(path).read_text())
+    if nb.get("metadata", {}).get("papermill", {}).get("exception"):
+        return "papermill recorded an exception"
+    unrun = [i for i, c in enumerate(nb["cells"]) if c["cell_type"] == "code"
+             and "".join(c["source"]).strip() and c.get("execution_count") is None]
+    return f"code cells {unrun} were not executed" if unrun else ""
+
+
+def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
+    """What is missing from the results of ``info``'s last run into ``output_dir`` (empty: complete).
+
+    The values file must exist and parse and hold every key the reference expects of the
+    notebook; the executed notebook (``executed``, if given) must have every code cell executed.
+    """
+    from .reference import load_reference
+
+    problems = []
+    path = values_path(info.name, output_dir)
+    try:
+        recorded = read_values_file(path)["values"] if path.exists() else None
+    except CorruptValuesError:
+        recorded, problems = None, problems + ["values file corrupt"]
+    if recorded is None and not problems:
+        problems.append("no values file")
+    if recorded is not None:
+        reference = reference if reference is not None else load_reference()
+        missing = [e.name for e in reference.values() if e.notebook == info.name and e.name not in recorded]
+        if missing:
+            problems.append(f"values missing: {', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''}")
+    if executed is not None:
+        try:
+            why = incomplete_notebook(executed) if Path(executed).exists() else "no executed notebook"
+        except (ValueError, KeyError):
+            why = "executed notebook unreadable"
+        if why:
+            problems.append(why)
+    return problems
+
+
+def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
+    """What changed since ``info`` was last run into ``output_dir``, or what its outputs lack (empty: up to date)."""
     old = load_manifest(output_dir).get(info.name)
-    if old is None or not values_path(info.name, output_dir).exists():
+    if old is None:
         return ["never run"]
+    incomplete = incomplete_outputs(info, output_dir, executed)
+    if incomplete:
+        return [f"outputs incomplete ({'; '.join(incomplete)})"]
     new = entry(info, parameters, output_dir)
-    return [key for key in new if old.get(key) != new[key]]
+    changed = []
+    for key in new:
+        if key == "modules" and isinstance(old.get(key), dict):
+            edited = sorted(p for p in set(new[key]) | set(old[key]) if new[key].get(p) != old[key].get(p))
+            if edited:
+                changed.append(f"modules ({', '.join(edited[:3])}{', ...' if len(edited) > 3 else ''})")
+        elif old.get(key) != new[key]:
+            changed.append(key)
+    return changed
 
 
 def update_manifest(info, parameters: dict, output_dir) -> dict:

@@ -1,31 +1,45 @@
-"""The notebooks of the book and how to run them through papermill.
+"""The notebooks of the book and how to run them through papermill, crash-safely.
 
 Every notebook in ``book/`` whose metadata has an ``asoc`` entry is run by the harness;
 the entry declares which thesis figures and tables it regenerates
 (``metadata.asoc = {"title": ..., "figures": [...], "tables": [...]}``) and, optionally,
 the notebooks whose recorded values it reads (``"depends": ["sec3_5", ...]``, run first).
-``full`` fidelity at the default parameters executes the notebook in place (the book
-renders the executed file) and writes ``figures/``; ``ci`` fidelity writes to
+``full`` fidelity at the default parameters replaces the notebook in ``book/`` (the book
+renders the executed file) and its results in ``figures/``; ``ci`` fidelity writes to
 ``book/_build/ci/``; a run with parameter overrides writes to
 ``book/_build/runs/<notebook>-<hash>/``. Only the first changes tracked files.
 
-Executed notebooks are normalised (no timestamps, durations or machine paths), so an
-unchanged computation gives a byte-identical file.
+Crash safety (DESIGN.md): every run executes into a fresh staging folder
+``book/_build/staging/<notebook>-<random>/``; only when papermill finishes without error
+are its figures, tables, values and executed notebook moved into place (``os.replace``,
+signals held off meanwhile); the caller writes the manifest entry last. An interrupted or
+failed run leaves every tracked file as it was, and its staging folder is removed.
+
+Executed notebooks are normalised (no timestamps, durations or machine paths; the
+injected parameters name the final folder, not the staging one), so an unchanged
+computation gives a byte-identical file.
 """
 
+import ast
+import errno
 import hashlib
 import json
+import math
 import os
 import re
+import shutil
+import signal
 import sys
+import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from .manifest import dependencies
-from .paths import BOOK, CI_OUTPUT, FIGURES, ROOT
+from . import paths
+from .io import atomic_write_bytes
+from .manifest import dependencies, incomplete_notebook
 from .values import FIDELITIES
 
-RUNS = BOOK / "_build" / "runs"
 HARNESS_PARAMETERS = ("fidelity", "output_dir")   # set by the harness, not by -p
 
 
@@ -38,10 +52,10 @@ class NotebookInfo:
     tables: tuple
 
 
-def notebooks(book=BOOK) -> dict:
+def notebooks(book=None) -> dict:
     """``{name: NotebookInfo}`` for every notebook with ``asoc`` metadata, in thesis order (sections, then others)."""
     found = {}
-    for path in sorted(Path(book).glob("*.ipynb")):
+    for path in sorted(Path(book or paths.project().book).glob("*.ipynb")):
         meta = json.loads(path.read_text())["metadata"].get("asoc")
         if meta is None:
             continue
@@ -50,7 +64,7 @@ def notebooks(book=BOOK) -> dict:
     return dict(sorted(found.items(), key=lambda item: (not item[0].startswith("sec"), item[0])))
 
 
-def find(kind: str, number: str, book=BOOK) -> NotebookInfo:
+def find(kind: str, number: str, book=None) -> NotebookInfo:
     """The notebook that regenerates figure or table ``number``."""
     for info in notebooks(book).values():
         if number in (info.figures if kind == "figure" else info.tables):
@@ -82,11 +96,24 @@ def build_order(infos) -> list:
     return ordered
 
 
-def default_parameters(info: NotebookInfo) -> dict:
-    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's inspection)."""
+def by_name(name: str, book=None) -> NotebookInfo:
+    """The notebook called ``name`` (e.g. "sec3_5", "findings")."""
+    found = notebooks(book)
+    if name not in found:
+        raise ValueError(f"notebook {name!r} is not a notebook of the book; known: {', '.join(found)}")
+    return found[name]
+
+
+def parameter_specs(info: NotebookInfo) -> dict:
+    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (``default`` is source text)."""
     import papermill
 
-    return {name: spec["default"] for name, spec in papermill.inspect_notebook(str(info.path)).items()}
+    return dict(papermill.inspect_notebook(str(info.path)))
+
+
+def default_parameters(info: NotebookInfo) -> dict:
+    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's inspection)."""
+    return {name: spec["default"] for name, spec in parameter_specs(info).items()}
 
 
 def parse_value(text: str):
@@ -103,22 +130,77 @@ def parse_value(text: str):
     return text
 
 
+def _default_value(source: str):
+    try:
+        return ast.literal_eval(source)
+    except (ValueError, SyntaxError):
+        return None          # an expression: no type to check against
+
+
+def check_value(name: str, value, default_source: str, notebook: str):
+    """``value`` for parameter ``name`` if it has the type (and range) of the default; ValueError otherwise.
+
+    The type is the default's: an int parameter takes an int (not a bool, float or text), a
+    float parameter a finite int or float, a bool ``True``/``False``, a string anything. The
+    range follows the names: an int parameter called ``seed...`` takes a non-negative int;
+    every other int parameter whose default is positive is a count (Monte Carlo runs, steps,
+    grid points, iterations) and takes a positive int.
+    """
+    default = _default_value(default_source)
+    where = f"parameter {name} of {notebook} (default {default_source})"
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ValueError(f"{where} takes True or False, found {value!r}")
+    elif isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"{where} takes an integer, found {value!r}")
+        if name.startswith("seed") and value < 0:
+            raise ValueError(f"{where} is a seed: it takes an integer >= 0, found {value}")
+        if not name.startswith("seed") and default > 0 and value < 1:
+            raise ValueError(f"{where} is a count: it takes an integer >= 1, found {value}")
+    elif isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"{where} takes a finite number, found {value!r}")
+        value = float(value)
+    return value
+
+
+def parse_overrides(info: NotebookInfo, pairs) -> dict:
+    """``-p name value`` pairs as checked overrides ``{name: value}``, before anything runs.
+
+    Raises
+    ------
+    ValueError
+        A name given twice, a name that is not a parameter (the message lists the valid
+        ones), or a value of the wrong type or range (:func:`check_value`).
+    """
+    overrides = {}
+    for name, text in pairs or ():
+        if name in overrides:
+            raise ValueError(f"parameters: -p {name} given twice ({overrides[name]!r} and {text!r}); give it once")
+        overrides[name] = parse_value(text)
+    return check_overrides(info, overrides)
+
+
 def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
-    """``overrides`` if every name is a parameter of the notebook; ValueError listing the valid ones."""
-    valid = [name for name in default_parameters(info) if name not in HARNESS_PARAMETERS]
-    for name in overrides:
+    """``overrides`` if every name is a parameter of the notebook with a value of its type and range."""
+    specs = parameter_specs(info)
+    valid = [name for name in specs if name not in HARNESS_PARAMETERS]
+    checked = {}
+    for name, value in overrides.items():
         if name == "fidelity":
             raise ValueError("parameters: set the fidelity with --fidelity, not -p fidelity")
         if name not in valid:
             raise ValueError(f"parameters: {name!r} is not a parameter of {info.path.name}; "
                              f"valid names: {', '.join(valid)}")
-    return dict(overrides)
+        checked[name] = check_value(name, value, specs[name]["default"], info.path.name)
+    return checked
 
 
 def run_folder(info: NotebookInfo, fidelity: str, overrides: dict) -> Path:
     """``book/_build/runs/<notebook>-<hash of parameters and fidelity>`` for a run with overrides."""
     key = json.dumps({"fidelity": fidelity, **overrides}, sort_keys=True).encode()
-    return RUNS / f"{info.name}-{hashlib.sha256(key).hexdigest()[:10]}"
+    return paths.project().runs / f"{info.name}-{hashlib.sha256(key).hexdigest()[:10]}"
 
 
 def harness_parameters(info: NotebookInfo, fidelity: str, output_dir, overrides=None) -> dict:
@@ -132,37 +214,96 @@ def default_output_dir(fidelity: str) -> Path:
     """``figures/`` at full fidelity, ``book/_build/ci/`` at ci fidelity (ValueError for others)."""
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, found {fidelity!r}")
-    return FIGURES if fidelity == "full" else CI_OUTPUT
+    project = paths.project()
+    return project.figures if fidelity == "full" else project.ci_output
+
+
+def executed_path(info: NotebookInfo, fidelity: str, output_dir, overrides=None) -> Path:
+    """Where a run's executed notebook goes: the notebook itself for a default full run into
+    ``figures/``, else ``<output_dir>/notebooks/<notebook>.ipynb``."""
+    in_place = (fidelity == "full" and Path(output_dir).resolve() == paths.project().figures.resolve()
+                and not overrides)
+    return info.path if in_place else Path(output_dir) / "notebooks" / info.path.name
 
 
 def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=False,
-        overrides=None) -> Path:
-    """Execute ``info``'s notebook with papermill at ``fidelity``; return the executed file.
+        overrides=None, progress_bar=None) -> Path:
+    """Execute ``info``'s notebook with papermill at ``fidelity``, crash-safely; return the executed file.
 
     ``overrides`` ({name: value}) replace defaults of the ``parameters`` cell (checked by
-    :func:`check_overrides`). The notebook itself is overwritten only by a full-fidelity run
-    into ``figures/`` without overrides; every other run writes ``<output_dir>/notebooks/``.
+    :func:`check_overrides`). The run executes into a staging folder; its results move to
+    ``output_dir`` (and the executed notebook to :func:`executed_path`) only on success.
     """
     import papermill
 
+    project = paths.project()
     output_dir = Path(default_output_dir(fidelity) if output_dir is None else output_dir).resolve()
     overrides = check_overrides(info, overrides or {})
-    in_place = fidelity == "full" and output_dir == FIGURES.resolve() and not overrides
-    executed = info.path if in_place else output_dir / "notebooks" / info.path.name
-    executed.parent.mkdir(parents=True, exist_ok=True)
-    papermill.execute_notebook(str(info.path), str(executed), cwd=str(info.path.parent),
-                               parameters=harness_parameters(info, fidelity, output_dir, overrides),
-                               progress_bar=sys.stderr.isatty(), log_output=log_output,
-                               kernel_name="python3")
-    normalise(executed)
-    return executed
+    target = executed_path(info, fidelity, output_dir, overrides)
+    project.staging.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f"{info.name}-", dir=project.staging))
+    try:
+        staged = stage / "notebooks" / info.path.name
+        staged.parent.mkdir(parents=True)
+        staged_parameters = harness_parameters(info, fidelity, stage, overrides)
+        shown = harness_parameters(info, fidelity, output_dir, overrides)
+        papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
+                                   parameters=staged_parameters,
+                                   progress_bar=sys.stderr.isatty() if progress_bar is None else progress_bar,
+                                   log_output=log_output, kernel_name="python3")
+        normalise(staged, shown_parameters=shown, output_path=target,
+                  replace={str(stage): shown["output_dir"], staged_parameters["output_dir"]: shown["output_dir"]})
+        problems = incomplete_notebook(staged)
+        if problems:
+            raise RuntimeError(f"{info.path.name}: the executed notebook is incomplete ({problems}); nothing moved")
+        commit(stage, output_dir, staged, target)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return target
+
+
+@contextmanager
+def signals_held():
+    """Hold off SIGINT and SIGTERM (delivered on exit) while files move into place."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    except (AttributeError, ValueError, OSError):       # no POSIX signal masks here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _move(source: Path, target: Path):
+    target.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        os.replace(source, target)
+    except OSError as err:
+        if err.errno != errno.EXDEV:
+            raise
+        atomic_write_bytes(target, source.read_bytes())       # another file system: copy, then rename
+
+
+def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook: Path):
+    """Move a finished run's files from ``stage`` into ``output_dir``: figures and tables, then
+    values, then the executed notebook (the caller writes the manifest entry last)."""
+    files = [p for p in stage.rglob("*") if p.is_file() and p != staged_notebook
+             and not p.name.endswith(".tmp")]
+    files.sort(key=lambda p: (p.parent.name == "values", str(p)))
+    with signals_held():
+        for source in files:
+            _move(source, Path(output_dir) / source.relative_to(stage))
+        _move(staged_notebook, Path(target_notebook))
 
 
 PAPERMILL_TIMES = ("start_time", "end_time", "duration")
 KERNEL_CELL_FILE = re.compile(r"\S*ipykernel_\d+[/\\]\d+\.py")   # a warning's source: a new name per kernel
 
 
-def normalise(path: Path):
+def normalise(path: Path, shown_parameters=None, output_path=None, replace=None):
     """Make an executed notebook reproducible byte for byte.
 
     Stores papermill's input/output paths relative to the project (no machine paths) and
@@ -171,33 +312,53 @@ def normalise(path: Path):
     gives its injected-parameters cell, the timing-dependent split of printed text into
     stream chunks (adjacent chunks of one stream are merged) and the per-kernel file name
     of a cell in warnings (``<cell>``). Paths inside the project are printed relative to it.
+    A staged run is shown as the run it stands for: ``shown_parameters`` replace the injected
+    ones, ``output_path`` papermill's output path, and ``replace`` ({staging path: output
+    folder}) rewrites printed text.
     """
     import nbformat
+    from papermill.translators import translate_parameters
 
+    root = paths.project().root
     nb = nbformat.read(path, as_version=4)
     meta = nb.metadata.get("papermill", {})
+    if output_path is not None:
+        meta["output_path"] = str(output_path)
+    if shown_parameters is not None:
+        meta["parameters"] = shown_parameters
     for key in ("input_path", "output_path"):
         if meta.get(key):
-            meta[key] = os.path.relpath(meta[key], ROOT)
+            meta[key] = os.path.relpath(meta[key], root)
     for key in PAPERMILL_TIMES:
         meta.pop(key, None)
     for cell in nb.cells:
         if "injected-parameters" in cell.metadata.get("tags", []):
             cell.id = "injected-parameters"
+            if shown_parameters is not None:
+                cell.source = translate_parameters("python3", "python", shown_parameters, "Parameters")
         cell.metadata.pop("execution", None)
         for key in PAPERMILL_TIMES:
             cell.metadata.get("papermill", {}).pop(key, None)
         if cell.cell_type == "code":
-            cell.outputs = _merged_streams(cell.outputs)
+            cell.outputs = _merged_streams(cell.outputs, root, replace)
+            for out in cell.outputs:
+                if "text/plain" in out.get("data", {}):
+                    out.data["text/plain"] = _replaced(out.data["text/plain"], replace)
     nbformat.write(nb, path)
 
 
-def _merged_streams(outputs) -> list:
+def _replaced(text, replace):
+    for old, new in (replace or {}).items():
+        text = text.replace(old, new)
+    return text
+
+
+def _merged_streams(outputs, root, replace=None) -> list:
     """Adjacent stream outputs of one name merged into one; project paths made relative."""
     merged = []
     for out in outputs:
         if out.output_type == "stream":
-            out.text = KERNEL_CELL_FILE.sub("<cell>", out.text.replace(f"{ROOT}{os.sep}", ""))
+            out.text = KERNEL_CELL_FILE.sub("<cell>", _replaced(out.text, replace).replace(f"{root}{os.sep}", ""))
             if merged and merged[-1].output_type == "stream" and merged[-1].name == out.name:
                 merged[-1].text += out.text
                 continue

@@ -1,9 +1,116 @@
-"""Where the project's files live (src layout: this file is src/asoc_companion/paths.py)."""
+"""Where the project's files live, found by configuration, not by the package's location.
 
+The project root is, in this order:
+
+1. the folder in the environment variable ``ASOC_COMPANION_ROOT`` (the command line's
+   ``--root`` sets it, so notebook kernels started by the harness inherit it);
+2. the nearest folder, from the current directory upwards, that holds ``book/_toc.yml``
+   and ``figures/`` (the checkout you work in; notebooks run with ``book/`` as their
+   current directory).
+
+The reference data (``tests/reference/``) is read from the root found, never from the
+installed package. ``ROOT``, ``BOOK``, ``FIGURES``, ``REFERENCE``, ``CI_OUTPUT`` and ``RUNS``
+are looked up on first access (``from asoc_companion.paths import BOOK`` works), so
+importing the package outside a checkout does not fail; using a path there does, with a
+message saying how to point at a checkout.
+"""
+
+import os
+from dataclasses import dataclass
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-BOOK = ROOT / "book"
-FIGURES = ROOT / "figures"
-REFERENCE = ROOT / "tests" / "reference" / "thesis_values"   # one <notebook>.yaml each
-CI_OUTPUT = BOOK / "_build" / "ci"
+ENV_VAR = "ASOC_COMPANION_ROOT"
+MARKERS = (Path("book") / "_toc.yml", Path("figures"))
+
+
+@dataclass(frozen=True)
+class Project:
+    """The folders of one checkout of the companion."""
+
+    root: Path
+
+    @property
+    def book(self) -> Path:
+        return self.root / "book"
+
+    @property
+    def figures(self) -> Path:
+        return self.root / "figures"
+
+    @property
+    def reference(self) -> Path:
+        """``tests/reference/thesis_values``: one ``<notebook>.yaml`` each."""
+        return self.root / "tests" / "reference" / "thesis_values"
+
+    @property
+    def src(self) -> Path:
+        return self.root / "src"
+
+    @property
+    def environment(self) -> Path:
+        return self.root / "environment.txt"
+
+    @property
+    def ci_output(self) -> Path:
+        return self.book / "_build" / "ci"
+
+    @property
+    def runs(self) -> Path:
+        return self.book / "_build" / "runs"
+
+    @property
+    def staging(self) -> Path:
+        """Where runs execute before their results move into place (crash safety)."""
+        return self.book / "_build" / "staging"
+
+
+def is_project(folder) -> bool:
+    """Whether ``folder`` holds ``book/_toc.yml`` and ``figures/``."""
+    return all((Path(folder) / marker).exists() for marker in MARKERS)
+
+
+def find_root(start=None) -> Path:
+    """The project root: ``$ASOC_COMPANION_ROOT``, else the nearest project folder above ``start``.
+
+    Parameters
+    ----------
+    start : path, optional
+        Where the upward search begins; default the current directory.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    RuntimeError
+        If the variable names a folder that is not a project, or no project is found.
+    """
+    configured = os.environ.get(ENV_VAR)
+    if configured:
+        root = Path(configured).expanduser().resolve()
+        if not is_project(root):
+            raise RuntimeError(f"{ENV_VAR}={configured!r} is not a checkout of the companion "
+                               f"(expected book/_toc.yml and figures/ in it)")
+        return root
+    here = Path(start or Path.cwd()).resolve()
+    for folder in (here, *here.parents):
+        if is_project(folder):
+            return folder
+    raise RuntimeError(f"no checkout of the companion found above {here} (a folder with book/_toc.yml and "
+                       f"figures/): run from inside one, pass --root, or set {ENV_VAR}")
+
+
+def project(root=None) -> Project:
+    """The :class:`Project` at ``root`` (default :func:`find_root`)."""
+    return Project(Path(root).resolve() if root is not None else find_root())
+
+
+_NAMES = {"ROOT": "root", "BOOK": "book", "FIGURES": "figures", "REFERENCE": "reference",
+          "CI_OUTPUT": "ci_output", "RUNS": "runs", "SRC": "src"}
+
+
+def __getattr__(name):
+    if name in _NAMES:
+        return getattr(project(), _NAMES[name])
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

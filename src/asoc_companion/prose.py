@@ -110,12 +110,11 @@ def prose(text: str):
     """
     from IPython.display import Markdown
 
-    from .values import _session, load_all_values
+    from .session import active, current_values
 
-    values = {**thesis_values(), **load_all_values()}
-    if _session.notebook is not None:
-        values.update({f"{_session.notebook}.{k}": v for k, v in _session.values.items()})
-    return Markdown(fill(text, values, _session.notebook))
+    recorder = active(required=False)
+    values = {**thesis_values(), **current_values()}
+    return Markdown(fill(text, values, recorder.notebook if recorder else None))
 
 
 __all__ = ["fill", "format_value", "lookup", "prose", "thesis_values"]

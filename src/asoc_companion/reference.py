@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .paths import REFERENCE
+from . import paths
 
 KINDS = ("deterministic", "monte_carlo", "claim", "measured")
 EXPECT = ("reproduced", "deviates", "new")
@@ -86,7 +86,7 @@ def load_reference(path=None) -> dict:
         If a key appears twice, sits in the wrong file, is not ``<notebook>.<name>``, or an
         entry has an unknown kind or expect, or a deterministic entry has no ``tol``.
     """
-    path = Path(path or REFERENCE)
+    path = Path(path or paths.project().reference)
     raw = {}
     for file in sorted(path.glob("*.yaml")) if path.is_dir() else [path]:
         with open(file) as handle:

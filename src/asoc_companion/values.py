@@ -1,115 +1,75 @@
-"""Recording the numbers a notebook computes (DESIGN.md, "The flow of one number").
+"""The values files ``<output_dir>/values/<notebook>.json``: where they are, reading them.
 
-A notebook calls :func:`setup` once, right after its ``parameters`` cell, then
-:func:`record` for every number the thesis prints. Values are written at once to
-``<output_dir>/values/<notebook>.json`` (atomically), so a crashed run keeps what it had.
+Writing happens through a :class:`asoc_companion.session.Recorder`. A values file that is not
+valid JSON (a truncated write from an old version, a bad merge) is reported with its path and
+the command that regenerates it (:class:`CorruptValuesError`), never as a bare
+``JSONDecodeError``.
 """
 
 import json
-from dataclasses import dataclass, field
 from pathlib import Path
 
-from .io import atomic_write_json, to_jsonable
-from .paths import FIGURES
+from . import paths
 
 FIDELITIES = ("full", "ci")
+MANIFEST_NAME = "manifest.json"
 
 
-@dataclass
-class _Session:
-    notebook: str | None = None
-    fidelity: str = "full"
-    output_dir: Path = FIGURES
-    values: dict = field(default_factory=dict)
-
-
-_session = _Session()
-
-
-def setup(notebook: str, fidelity: str = "full", output_dir=None) -> Path:
-    """Start recording for ``notebook`` at ``fidelity`` into ``output_dir`` (default figures/).
-
-    Also applies the project's plotting style.
-
-    Parameters
-    ----------
-    notebook : str
-        Plain name such as "sec3_5".
-    fidelity : {"full", "ci"}
-    output_dir : path, optional
-        Default ``figures/``.
-
-    Returns
-    -------
-    pathlib.Path
-        The output folder.
-
-    Raises
-    ------
-    ValueError
-        If ``fidelity`` is unknown or ``notebook`` is not a plain name.
-    """
-    if fidelity not in FIDELITIES:
-        raise ValueError(f"fidelity must be one of {FIDELITIES}, found {fidelity!r}")
-    if not notebook or "/" in notebook or "." in notebook:
-        raise ValueError(f"notebook must be a plain name such as 'sec3_5', found {notebook!r}")
-    from .figures import apply_style
-
-    out = Path(output_dir) if output_dir else FIGURES
-    _session.notebook, _session.fidelity, _session.output_dir = notebook, fidelity, out
-    _session.values = {}
-    apply_style()
-    _write()
-    return out
-
-
-def current_output_dir() -> Path:
-    """The folder figures and tables of the current notebook are saved to."""
-    return _session.output_dir
-
-
-def record(key: str, value):
-    """Record ``value`` under ``key`` for the current notebook and return it unchanged.
-
-    ``value`` may be a number, bool, string, list/array, or a dict of those (e.g. a Monte
-    Carlo median with its bootstrap interval: ``{"median": m, "ci": [lo, hi], "n": N}``).
-
-    Parameters
-    ----------
-    key : str
-        Non-empty, without spaces.
-    value : object
-
-    Returns
-    -------
-    object
-        ``value``.
-
-    Raises
-    ------
-    RuntimeError
-        If :func:`setup` has not been called.
-    ValueError
-        If ``key`` is empty or contains spaces.
-    """
-    if _session.notebook is None:
-        raise RuntimeError("call asoc_companion.setup(notebook, fidelity, output_dir) before record()")
-    if not isinstance(key, str) or not key or " " in key:
-        raise ValueError(f"key must be a non-empty string without spaces, found {key!r}")
-    _session.values[key] = to_jsonable(value)
-    _write()
-    return value
-
-
-def _write():
-    path = values_path(_session.notebook, _session.output_dir)
-    atomic_write_json(path, {"notebook": _session.notebook, "fidelity": _session.fidelity,
-                             "values": _session.values})
+class CorruptValuesError(ValueError):
+    """A values file that cannot be read; the message names it and how to regenerate it."""
 
 
 def values_path(notebook: str, output_dir=None) -> Path:
-    """Path of the JSON file holding ``notebook``'s recorded values."""
-    return Path(output_dir or FIGURES) / "values" / f"{notebook}.json"
+    """Path of the JSON file holding ``notebook``'s recorded values (default folder ``figures/``)."""
+    return Path(output_dir or paths.project().figures) / "values" / f"{notebook}.json"
+
+
+def regenerate_command(notebook: str, output_dir=None) -> str:
+    """The command line that rewrites ``notebook``'s values in ``output_dir``."""
+    command = f"python -m asoc_companion run {notebook}"
+    try:
+        ci = Path(output_dir).resolve() == paths.project().ci_output.resolve() if output_dir else False
+    except RuntimeError:
+        ci = False
+    return command + (" --fidelity ci" if ci else "")
+
+
+def _shown(path) -> str:
+    """``path`` relative to the project root when it lies inside it."""
+    try:
+        return str(Path(path).resolve().relative_to(paths.project().root))
+    except (RuntimeError, ValueError):
+        return str(path)
+
+
+def _repair_hint(path) -> str:
+    """How to get a good values file back: the command that regenerates it (and, for a committed
+    file, the git command that restores it)."""
+    hint = f"regenerate it with `{regenerate_command(path.stem, path.parent.parent)}`"
+    try:
+        committed = path.resolve().parent == (paths.project().figures / "values").resolve()
+    except RuntimeError:
+        committed = False
+    return hint + (f" or restore the committed one with `git checkout -- {_shown(path)}`" if committed else "")
+
+
+def read_values_file(path) -> dict:
+    """The parsed values file at ``path`` (``{"notebook", "fidelity", "values"}``).
+
+    Raises
+    ------
+    CorruptValuesError
+        If the file is not valid JSON or lacks ``values``; the message names the file and
+        the command that regenerates it.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+        if not isinstance(data, dict) or not isinstance(data.get("values"), dict):
+            raise ValueError("no 'values' object")
+    except ValueError as err:      # json.JSONDecodeError is a ValueError
+        raise CorruptValuesError(f"{_shown(path)}: corrupt values file ({err}); {_repair_hint(path)}") from None
+    return data
 
 
 def load_values(notebook: str, output_dir=None) -> dict:
@@ -127,13 +87,13 @@ def load_values(notebook: str, output_dir=None) -> dict:
 
     Raises
     ------
-    json.JSONDecodeError
-        If the values file is not valid JSON.
+    CorruptValuesError
+        If the values file is not valid JSON (a ``ValueError`` naming the file).
     """
     path = values_path(notebook, output_dir)
     if not path.exists():
         return {}
-    return json.loads(path.read_text())["values"]
+    return read_values_file(path)["values"]
 
 
 def load_all_values(output_dir=None) -> dict:
@@ -150,15 +110,15 @@ def load_all_values(output_dir=None) -> dict:
 
     Raises
     ------
-    json.JSONDecodeError
-        If a values file is not valid JSON.
+    CorruptValuesError
+        If a values file is not valid JSON (a ``ValueError`` naming the file).
     """
-    folder = Path(output_dir or FIGURES) / "values"
+    folder = Path(output_dir or paths.project().figures) / "values"
     out = {}
     for path in sorted(folder.glob("*.json")):
-        if path.name == "manifest.json":
+        if path.name == MANIFEST_NAME:
             continue
-        data = json.loads(path.read_text())
+        data = read_values_file(path)
         for key, value in data["values"].items():
-            out[f"{data['notebook']}.{key}"] = value
+            out[f"{data.get('notebook', path.stem)}.{key}"] = value
     return out

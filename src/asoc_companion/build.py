@@ -1,0 +1,151 @@
+"""Running notebooks for the command line: one run, and the incremental parallel build.
+
+``reproduce`` runs every notebook whose inputs changed (:mod:`asoc_companion.manifest`),
+independent notebooks side by side in worker processes (``jobs``), each after the notebooks
+it depends on (``metadata.asoc.depends``), with one BLAS/OpenMP thread per worker so two
+notebooks do not oversubscribe the cores. Each run is crash-safe
+(:func:`asoc_companion.notebooks.run`); the parent writes a notebook's manifest entry after
+its files are in place. The workers' functions live here, in an importable module, so the
+spawned processes find them whatever the parent's ``__main__`` is.
+"""
+
+import os
+import signal
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from multiprocessing import get_context
+
+from . import manifest, paths
+from . import notebooks as nbs
+
+
+def rel(path) -> str:
+    """``path`` relative to the project root when inside it."""
+    try:
+        return str(path.resolve().relative_to(paths.project().root))
+    except ValueError:
+        return str(path)
+
+
+def terminate(signum, frame):
+    """SIGTERM ends the run like Ctrl-C: the staging folder is removed, tracked files stay."""
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+# one BLAS/OpenMP thread per notebook when notebooks run side by side (no oversubscription)
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
+
+
+def run_one(info, fidelity, output_dir=None, overrides=None, progress_bar=None):
+    start = time.perf_counter()
+    print(f"running {info.path.name} ({info.title}) at fidelity={fidelity} ...", flush=True)
+    executed = nbs.run(info, fidelity, output_dir=output_dir, overrides=overrides, progress_bar=progress_bar)
+    print(f"  {info.path.name} done in {time.perf_counter() - start:.1f} s -> {rel(executed)}", flush=True)
+    return executed
+
+
+def run_and_record(info, fidelity, progress_bar=None):
+    """Run ``info`` into its default folder, then write its manifest entry (last)."""
+    run_one(info, fidelity, progress_bar=progress_bar)
+    out = nbs.default_output_dir(fidelity)
+    manifest.update_manifest(info, nbs.harness_parameters(info, fidelity, out), out)
+
+
+def _worker_init(root, single_thread):
+    signal.signal(signal.SIGTERM, terminate)      # clean up the staging folder and the kernel
+    os.environ[paths.ENV_VAR] = str(root)
+    if single_thread:
+        for name in THREAD_VARIABLES:
+            os.environ[name] = "1"
+
+
+def _worker_run(name, fidelity):
+    """Run one notebook in a worker process (the parent writes the manifest)."""
+    info = nbs.by_name(name)
+    run_one(info, fidelity, progress_bar=False)
+    return name
+
+
+def _pending(infos, fidelity, force) -> list:
+    """The notebooks to run, each with why (in build order)."""
+    out = nbs.default_output_dir(fidelity)
+    todo = []
+    for info in infos:
+        params = nbs.harness_parameters(info, fidelity, out)
+        changed = ["--force"] if force else manifest.changed_inputs(
+            info, params, out, executed=nbs.executed_path(info, fidelity, out))
+        if changed:
+            print(f"{info.path.name}: {', '.join(changed) if changed[0].startswith('outputs') else 'changed: ' + ', '.join(changed)}", flush=True)
+            todo.append(info)
+        else:
+            print(f"{info.path.name}: up to date, skipped", flush=True)
+    return todo
+
+
+def reproduce(fidelity, force=False, jobs=None) -> int:
+    """Run every notebook whose inputs changed (all with ``force``), ``jobs`` at a time; 0 if all succeeded.
+
+    A notebook starts when the notebooks it depends on (``metadata.asoc.depends``) have
+    finished; a failed notebook's dependants are skipped, the others still run.
+    """
+    ordered = nbs.build_order(nbs.notebooks().values())
+    todo = {info.name: info for info in _pending(ordered, fidelity, force)}
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
+    waits = {name: [d for d in manifest.dependencies(info.path) if d in todo] for name, info in todo.items()}
+    failed = []
+    if jobs == 1:
+        for name, info in todo.items():
+            if any(d in failed for d in waits[name]):
+                failed.append(name)
+                print(f"{info.path.name}: skipped, a notebook it depends on failed", flush=True)
+                continue
+            try:
+                run_and_record(info, fidelity)
+            except Exception as err:           # noqa: BLE001 -- report, go on with the others
+                failed.append(name)
+                print(f"{info.path.name}: FAILED: {type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}",
+                      flush=True)
+        return 1 if failed else 0
+    print(f"running {len(todo)} notebook(s), {jobs} at a time (one BLAS thread each)", flush=True)
+    done = set()
+    context = get_context("spawn")
+    with ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_init,
+                             initargs=(paths.project().root, True)) as pool:
+        try:
+            _schedule(pool, todo, waits, jobs, fidelity, done, failed)
+        except KeyboardInterrupt:
+            # stop the workers too: each removes its staging folder, nothing moves into place
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
+    return 1 if failed else 0
+
+
+def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
+    """Submit each notebook when its dependencies are done; write its manifest entry when it finishes."""
+    running = {}
+    while len(done) + len(failed) < len(todo):
+        for name in todo:
+            if name in running.values() or name in done or name in failed:
+                continue
+            if any(d in failed for d in waits[name]):
+                failed.append(name)
+                print(f"{name}.ipynb: skipped, a notebook it depends on failed", flush=True)
+            elif all(d in done for d in waits[name]) and len(running) < jobs:
+                running[pool.submit(_worker_run, name, fidelity)] = name
+        if not running:
+            continue          # every remaining notebook was just marked failed or skipped
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in finished:
+            name = running.pop(future)
+            try:
+                future.result()
+            except Exception as err:       # noqa: BLE001
+                failed.append(name)
+                print(f"{name}.ipynb: FAILED: {type(err).__name__}: "
+                      f"{str(err).splitlines()[0] if str(err) else ''}", flush=True)
+                continue
+            out = nbs.default_output_dir(fidelity)
+            manifest.update_manifest(todo[name], nbs.harness_parameters(todo[name], fidelity, out), out)
+            done.add(name)

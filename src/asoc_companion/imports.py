@@ -1,0 +1,107 @@
+"""Which source files a notebook runs: its imports of the project's packages, and their closure.
+
+Static analysis (no code is executed): the ``import`` statements of the notebook's code
+cells that name a package under ``src/`` (``asoc``, ``asoc_companion``), then, file by file,
+the imports of those modules (absolute and relative, at any depth of a module, including
+imports inside functions), until nothing new is found. Importing ``a.b.c`` runs
+``a/__init__.py`` and ``a/b/__init__.py`` too, so they belong to the closure. The build
+manifest hashes exactly these files (:mod:`asoc_companion.manifest`), so editing
+``asoc/gp`` re-runs only the notebooks that import it.
+"""
+
+import ast
+import json
+from functools import lru_cache
+from pathlib import Path
+
+
+def _code_of_notebook(path) -> list:
+    """The sources of a notebook's code cells, IPython magics and shell lines removed."""
+    nb = json.loads(Path(path).read_text())
+    cells = []
+    for cell in nb["cells"]:
+        if cell["cell_type"] != "code":
+            continue
+        source = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        cells.append("\n".join("" if line.lstrip().startswith(("%", "!")) else line
+                               for line in source.splitlines()))
+    return cells
+
+
+def imported_names(code: str, package: str | None = None) -> set:
+    """Dotted names ``code`` imports; for ``from X import a`` both ``X`` and ``X.a``.
+
+    ``package`` resolves relative imports (the package the code belongs to).
+
+    Raises
+    ------
+    SyntaxError
+        If ``code`` does not parse.
+    """
+    names = set()
+    for node in ast.walk(ast.parse(code)):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                if package is None:
+                    continue
+                parts = package.split(".")
+                base = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+            else:
+                base = node.module
+            names.add(base)
+            names.update(f"{base}.{alias.name}" for alias in node.names if alias.name != "*")
+    return names
+
+
+@lru_cache(maxsize=4096)
+def _file_imports(path: str, mtime_ns: int, size: int, package: str) -> frozenset:
+    """:func:`imported_names` of a source file, cached while the file is unchanged."""
+    return frozenset(imported_names(Path(path).read_text(), package))
+
+
+def module_file(name: str, src) -> Path | None:
+    """The file of module ``name`` under ``src`` (``a/b.py`` or ``a/b/__init__.py``), or None."""
+    base = Path(src).joinpath(*name.split("."))
+    for candidate in (base.with_suffix(".py"), base / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def closure(names, src, exclude=()) -> dict:
+    """``{module name: file}`` of the modules under ``src`` that importing ``names`` runs
+    (modules in ``exclude`` are neither listed nor followed)."""
+    src = Path(src)
+    found, todo = {}, list(names)
+    while todo:
+        name = todo.pop()
+        parts = name.split(".")
+        for depth in range(1, len(parts) + 1):          # parents run first
+            module = ".".join(parts[:depth])
+            if module in found or module in exclude:
+                continue
+            path = module_file(module, src)
+            if path is None:
+                continue
+            found[module] = path
+            package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+            stat = path.stat()
+            todo.extend(_file_imports(str(path), stat.st_mtime_ns, stat.st_size, package))
+    return found
+
+
+def notebook_modules(path, src, exclude=()) -> dict:
+    """``{module name: file}`` of the project modules the notebook at ``path`` imports, transitively.
+
+    A cell that does not parse makes the whole of ``src`` count (a conservative answer).
+    """
+    names = set()
+    for code in _code_of_notebook(path):
+        try:
+            names |= imported_names(code)
+        except SyntaxError:
+            return {p.relative_to(src).with_suffix("").as_posix().replace("/", "."): p
+                    for p in sorted(Path(src).rglob("*.py")) if "__pycache__" not in p.parts}
+    return closure(names, src, exclude)

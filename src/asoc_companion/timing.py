@@ -1,0 +1,65 @@
+"""The one timing helper of the companion: median wall time, and two computations timed alternately.
+
+Used by the notebooks that print run times (Sec. 3.5) and by the benchmark suite
+(``tests/benchmarks``, ``make bench``) for in-process ratios; single computations there are
+timed by pytest-benchmark itself.
+"""
+
+import statistics
+import time
+
+
+def median_seconds(fn, repeat: int = 15) -> float:
+    """Median wall time of ``repeat`` calls of ``fn()``.
+
+    Parameters
+    ----------
+    fn : callable
+        Called without arguments.
+    repeat : int
+        Number of calls, at least 1.
+
+    Returns
+    -------
+    float
+        Seconds.
+
+    Raises
+    ------
+    ValueError
+        If ``repeat`` is not a positive integer.
+
+    Examples
+    --------
+    >>> median_seconds(lambda: sum(range(10)), repeat=3) >= 0
+    True
+    """
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+        raise ValueError(f"repeat must be a positive integer, found {repeat!r}")
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return float(statistics.median(times))
+
+
+def alternating_medians(reference, candidate, repeat: int = 15) -> tuple[float, float]:
+    """Median wall times of ``reference()`` and ``candidate()``, called alternately in this process.
+
+    Alternating keeps a change of the machine's load from favouring one of the two, so
+    their ratio is a fair speed-up.
+
+    Returns
+    -------
+    (float, float)
+        Seconds of the reference, seconds of the candidate.
+
+    Examples
+    --------
+    >>> ref, cand = alternating_medians(lambda: sum(range(1000)), lambda: None, repeat=3)
+    >>> ref >= 0 and cand >= 0
+    True
+    """
+    pairs = [(median_seconds(reference, 1), median_seconds(candidate, 1)) for _ in range(repeat)]
+    return float(statistics.median(p[0] for p in pairs)), float(statistics.median(p[1] for p in pairs))
