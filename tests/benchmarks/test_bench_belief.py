@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 
 from asoc.belief.models import landmark_example
-from asoc.belief.trajectory import algorithm_2_2
+from asoc.belief.trajectory import optimize_belief_trajectory
 from asoc.belief.vdberg import belief_ilqg
 
 
@@ -23,7 +23,7 @@ def test_alg22_full_run(benchmark):
     ex = landmark_example()
     benchmark.extra_info["target_s"] = 60.0
     # a fresh generator per round (set-up, not timed): every round runs the same computation
-    benchmark.pedantic(_quiet(algorithm_2_2), rounds=3,
+    benchmark.pedantic(_quiet(optimize_belief_trajectory), rounds=3,
                        setup=lambda: ((ex.model, ex.cost, ex.mean0, ex.cov0), {"rng": np.random.default_rng(2017)}))
 
 

@@ -3,15 +3,15 @@
 import numpy as np
 import pytest
 
-from asoc.gp import (DistributionGP, gaussian_dirac_mixtures, mcvmd_matrix, omat_matrix, test_grid,
-                     training_gaussians, v2)
+from asoc.gp import (DistributionGP, gaussian_dirac_mixtures, mcvmd_matrix, omat_matrix, evaluation_grid,
+                     training_gaussians, modified_rosenbrock)
 
 
 @pytest.fixture(scope="module")
 def inputs():
     """200 training Gaussians of Sec. 2.6.4 and the 4040-point test grid, as 10-point Dirac mixtures."""
     mu, var = training_gaussians(200, np.random.default_rng(2017))
-    mu_axis, var_axis = test_grid(0.1)
+    mu_axis, var_axis = evaluation_grid(0.1)
     MU, VAR = np.meshgrid(mu_axis, var_axis)
     return mu, var, gaussian_dirac_mixtures(mu, var, 10), gaussian_dirac_mixtures(MU.ravel(), VAR.ravel(), 10)
 
@@ -33,7 +33,7 @@ def test_omat_distance_matrix(benchmark, inputs):
 def test_gp_fit(benchmark, inputs):
     """DistributionGP fit, 200 inputs, SE kernel, 1 + 4 starts."""
     mu, var, train, _ = inputs
-    distances, targets = mcvmd_matrix(train), v2(mu, var)
+    distances, targets = mcvmd_matrix(train), modified_rosenbrock(mu, var)
     benchmark.extra_info["target_s"] = 10.0
     benchmark.pedantic(lambda: DistributionGP("se", n_restarts=4).fit(distances, targets, np.random.default_rng(7)),
                        rounds=3)
