@@ -215,7 +215,15 @@ def check_3_11(rng):
 
 def check_3_9(rng):
     """Thm. 3.9: feasible LMIs -> L = F M^{-1} stabilises; also records SOF stabilisability (search)."""
-    sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable"))
+    return decide_3_9(draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable")))
+
+
+def decide_3_9(sys, mu=None):
+    """Thm. 3.9 on one SISO system. ``mu``: the mode weights of the noise term mu_i H_i H_i^T in the
+    LMIs (default the stationary distribution, as printed); another ``mu`` is imposed through the
+    equivalent noise H_i sqrt(mu_i / mu_inf_i), since ``static_output_lmi`` uses mu_inf."""
+    if mu is not None:
+        sys = sys.replace(H=sys.H * np.sqrt(np.asarray(mu) / sys.mu_inf)[:, None, None])
     lmi = static_output_lmi(sys)
     L_best, rho_best = best_scalar_gain(sys)
     numbers = dict(lmi_feasible=lmi.feasible, lmi_status=lmi.status, sof_stabilisable=rho_best < 1,
@@ -404,7 +412,11 @@ def check_3_18(rng):
 def check_3_19(rng):
     """Thm. 3.19: SOF-stabilisable (grid over scalar L) -> Alg. 3.1 converges to a stabilising,
     unique solution (same limit from X = P = 1e-4 I and from X = P = I)."""
-    sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable", "sparse_T"))
+    return decide_3_19(draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable", "sparse_T")))
+
+
+def decide_3_19(sys):
+    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (two starts)."""
     L_best, rho_best = best_scalar_gain(sys)
     if not rho_best < 1:
         return _outcome("not_applicable", sys, min_rho_over_L=rho_best, best_L=L_best)
