@@ -109,12 +109,21 @@ def initial_modes(rng, mu, n_runs):
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
 
 
+def apply_modes(S, theta, x):
+    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather)."""
+    out = np.empty((len(x), S.shape[1]))
+    for i in range(S.shape[0]):
+        rows = theta == i
+        out[rows] = x[rows] @ S[i].T
+    return out
+
+
 def moment_estimate(samples):
     """Mean and standard error over the first axis (runs)."""
     return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
 
 
-def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=200, tail=1e-4):
+def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=100, tail=1e-4):
     """Monte Carlo of the stationary average cost of a mean-square stable loop.
 
     ``step(state, theta, rng)`` advances all runs, ``stage_cost(state, theta)`` is the cost
