@@ -828,3 +828,23 @@ STATEMENTS = [
 ]
 
 SUMMARIES = {"statement_3_9": _lmi_summary}
+
+# How a counterexample is printed (label, number, format) and which number measures how clearly it
+# fails (the page shows, among the smallest systems, the clearest failure).
+SHOW = {
+    "statement_3_19": [("min over L of rho (premise: < 1)", "min_rho_over_L", ".3f"),
+                       ("Alg. 3.1 converged", "alg_converged", ""), ("Alg. 3.1 gain stabilises", "alg_rho", "<1")],
+    "statement_3_26": [("min eig(bound - X~)", "min_eig_bound_minus_X", ".3f"),
+                       ("min eig(bound - P~)", "min_eig_bound_minus_P", ".3f")],
+    "statement_3_27": [("relative gradient of the exact cost", "relative_gradient", ".1e"),
+                       ("a gradient step lowers the cost by (relative)", "improvement_by_gradient_step", ".1e")],
+    "statement_3_31": [("exact J_0", "exact_cost", ".4f"), ("bound Jbar_0", "bound", ".4f")],
+    "statement_3_32": [("largest relative drop of Jbar_0 below the solution of (3.70)", "largest_relative_drop", ".1e")],
+    "statement_3_33": [("Alg. 3.3 converged", "converged", ""),
+                       ("largest relative increase of Jbar_0", "largest_relative_increase", ".1e")],
+}
+MARGIN = {"statement_3_19": lambda n: 1 - n["min_rho_over_L"],
+          "statement_3_26": lambda n: -min(n["min_eig_bound_minus_X"], n["min_eig_bound_minus_P"]),
+          "statement_3_27": lambda n: n["improvement_by_gradient_step"],
+          "statement_3_31": lambda n: n["relative_excess"],
+          "statement_3_32": lambda n: n["largest_relative_drop"]}

@@ -79,7 +79,8 @@ class StatementResult:
 
     def record(self) -> dict:
         """The recorded value: counts, failing indices, the statement's summary and timing."""
-        return {"instances": self.instances, "holds": self.holds, "fails": self.fails,
+        counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable, "errors": self.errors}
+        return {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds, "fails": self.fails,
                 "not_applicable": self.not_applicable, "errors": self.errors, "failing": self.failing,
                 "errored": sorted(self.error_messages), "summary": self.summary, "seconds": round(self.seconds, 2)}
 
