@@ -827,7 +827,28 @@ STATEMENTS = [
               check_3_33, expensive=True),
 ]
 
-SUMMARIES = {"statement_3_9": _lmi_summary}
+def _bound_summary(outcomes):
+    """Thm. 3.31: failures among the instances with Alg. 3.3's gains and with random gains."""
+    by = {True: [0, 0], False: [0, 0]}
+    for o in outcomes:
+        if o.verdict != "not_applicable":
+            by[bool(o.numbers.get("gains_from_alg_3_3"))][o.verdict == "fails"] += 1
+    return {"alg_3_3_gains": {"instances": sum(by[True]), "fails": by[True][1]},
+            "random_gains": {"instances": sum(by[False]), "fails": by[False][1]}}
+
+
+def _alg31_summary(outcomes):
+    """Thm. 3.19: how the failures fail (no convergence; a non-stabilising limit; another limit from I),
+    and how many have one mode (plain linear systems)."""
+    fails = [o.numbers for o in outcomes if o.verdict == "fails"]
+    return {"not_converged": sum(not n["alg_converged"] for n in fails),
+            "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1 for n in fails),
+            "other_limit_from_identity": sum(n["alg_converged"] and n["alg_rho"] < 1 for n in fails),
+            "one_mode": sum(n["n_modes"] == 1 for n in fails),
+            "smallest_margin": min((1 - n["min_rho_over_L"] for n in fails), default=None)}
+
+
+SUMMARIES = {"statement_3_9": _lmi_summary, "statement_3_19": _alg31_summary, "statement_3_31": _bound_summary}
 
 # How a counterexample is printed (label, number, format) and which number measures how clearly it
 # fails (the page shows, among the smallest systems, the clearest failure).
