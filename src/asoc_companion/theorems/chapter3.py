@@ -845,7 +845,7 @@ def _alg31_summary(outcomes):
             "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1 for n in fails),
             "other_limit_from_identity": sum(n["alg_converged"] and n["alg_rho"] < 1 for n in fails),
             "one_mode": sum(n["n_modes"] == 1 for n in fails),
-            "smallest_margin": min((1 - n["min_rho_over_L"] for n in fails), default=None)}
+            "smallest_margin": min((1 - n["min_rho_over_L"] for n in fails), default=float("nan"))}
 
 
 SUMMARIES = {"statement_3_9": _lmi_summary, "statement_3_19": _alg31_summary, "statement_3_31": _bound_summary}
