@@ -17,13 +17,15 @@ def save_counterexamples(results, seed, folder) -> Path:
     data = {"seed": int(seed),
             "statements": {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
                            for key, res in results.items() if res.failures}}
-    return atomic_write_json(Path(folder) / "values" / COUNTEREXAMPLES, data)
+    # shaped like a notebook's values file, which every reader of figures/values expects
+    return atomic_write_json(Path(folder) / "values" / COUNTEREXAMPLES,
+                             {"notebook": COUNTEREXAMPLES.removesuffix(".json"), "values": data})
 
 
 def load_counterexamples(folder):
     """The saved counterexamples, or None when there is no file."""
     path = Path(folder) / "values" / COUNTEREXAMPLES
-    return json.loads(path.read_text()) if path.exists() else None
+    return json.loads(path.read_text())["values"] if path.exists() else None
 
 
 def margin(key, numbers) -> float:
