@@ -10,16 +10,27 @@ from .chapter3 import MARGIN, SHOW
 from .core import Outcome
 
 COUNTEREXAMPLES = "theorems_counterexamples.json"
+SYSTEMS_KEPT = 20             # system matrices saved for the 20 smallest counterexamples per statement
 
 
 def save_counterexamples(results, seed, folder) -> Path:
     """Every failing instance (statement, index, its deciding numbers and system) as JSON, atomically."""
-    data = {"seed": int(seed),
-            "statements": {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
-                           for key, res in results.items() if res.failures}}
+    statements = {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
+                  for key, res in results.items() if res.failures}
+    data = {"seed": int(seed), "statements": {key: trim_systems(key, entries) for key, entries in statements.items()}}
     # shaped like a notebook's values file, which every reader of figures/values expects
     return atomic_write_json(Path(folder) / "values" / COUNTEREXAMPLES,
                              {"notebook": COUNTEREXAMPLES.removesuffix(".json"), "values": data})
+
+
+def trim_systems(key, entries, keep=SYSTEMS_KEPT):
+    """Keep the system matrices of the ``keep`` smallest counterexamples (the order of
+    :func:`shown_counterexample`); the others keep their numbers and re-run from (seed, key, index)."""
+    order = sorted(entries, key=lambda e: _order(key, e))
+    kept = {e["index"] for e in order[:keep]}
+    return [e if e["index"] in kept else {"index": e["index"],
+                                          "numbers": {k: v for k, v in e["numbers"].items() if k != "system"}}
+            for e in entries]
 
 
 def load_counterexamples(folder):
@@ -38,8 +49,12 @@ def shown_counterexample(key, entries):
     (largest margin: its verdict survives rounding and other BLAS kernels); ties by index."""
     if not entries:
         return None
-    return min(entries, key=lambda e: (e["numbers"].get("n_states", 0), e["numbers"].get("n_modes", 0),
-                                        -margin(key, e["numbers"]), e["index"]))
+    return min(entries, key=lambda e: _order(key, e))
+
+
+def _order(key, entry):
+    n = entry["numbers"]
+    return (n.get("n_states", 0), n.get("n_modes", 0), -margin(key, n), entry["index"])
 
 
 def describe(key, outcome: Outcome) -> str:
