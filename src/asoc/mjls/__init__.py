@@ -24,6 +24,7 @@ from .lmi import LMIResult, static_output_lmi
 from .moments import h2_cost, second_moment_step, second_moments, steady_state_second_moment
 from .observed import ObservedModeResult, observed_mode_state_feedback
 from .optimal_observed import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
+from .random import random_mjls
 from .simulate import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
                        StaticGain, TimeVariantGain, simulate)
 from .stability import closed_loop, ms_operator, ms_spectral_radius
@@ -41,4 +42,4 @@ __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribut
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
            "min_radius_dynamic_output_feedback", "radius_and_gradient", "ExactDynamicOutputFeedbackResult",
-           "ExactFiniteHorizonResult", "MinRadiusResult"]
+           "ExactFiniteHorizonResult", "MinRadiusResult", "random_mjls"]

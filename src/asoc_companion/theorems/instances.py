@@ -1,0 +1,157 @@
+"""Shared pieces of the Chapter 3 checks: drawing instances, deciding premises, Monte Carlo.
+
+Everything here is verification logic: it draws random instances through
+``asoc.mjls.random_mjls``, decides a premise independently of the statement under test
+(static output-feedback stabilisability by a search over the gain), or estimates a moment
+by simulation with its standard error. The algorithms under test come from ``asoc.mjls``.
+"""
+
+import numpy as np
+import scipy.optimize
+
+from asoc.mjls import closed_loop, ms_spectral_radius, random_mjls
+
+FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
+Z_SCORE = 6.0         # Monte Carlo tolerance in standard errors (per compared entry; false alarm ~ 2e-9)
+
+
+def draw_system(rng, *, families=FAMILIES, max_states=3, max_modes=3, siso=False, measurement_noise=0.1):
+    """A random MJLS: family, dimensions (nx <= max_states, M <= max_modes) and matrices from ``rng``."""
+    family = families[rng.integers(len(families))]
+    if family == "thesis_like":
+        nx, nu, ny = 2, 1, 1
+        M = int(rng.integers(1, max_modes + 1))
+    else:
+        nx = int(rng.integers(1, max_states + 1))
+        nu, ny = (1, 1) if siso else (int(rng.integers(1, 3)), int(rng.integers(1, nx + 1)))
+        M = int(rng.integers(1, max_modes + 1))
+    concentration = float(rng.choice([0.3, 1.0, 5.0]))
+    return random_mjls(rng, nx, nu, ny, M, family=family, concentration=concentration,
+                       measurement_noise=measurement_noise)
+
+
+def size(sys):
+    """The numbers that order counterexamples by size (fewest states and modes first)."""
+    return {"n_states": sys.nx, "n_modes": sys.M, "n_inputs": sys.nu, "n_outputs": sys.ny}
+
+
+def system_data(sys):
+    """The system's matrices as nested lists (a counterexample is saved as data)."""
+    data = {name: np.asarray(getattr(sys, name)).tolist() for name in ("A", "B", "C", "H", "Q", "R", "T")}
+    data["J"] = None if sys.J is None else np.asarray(sys.J).tolist()
+    return data
+
+
+def rescaled(sys, factor):
+    """The system with A_i, B_i scaled by ``factor`` (closed loops A + B L C scale with it)."""
+    return sys.replace(A=factor * sys.A, B=factor * sys.B)
+
+
+def radius_to(sys, Acl, target):
+    """Scale factor c with rho(c Acl) = target (rho of Cor. 3.2 is homogeneous of degree 2)."""
+    return float(np.sqrt(target / ms_spectral_radius(Acl, sys.T)))
+
+
+# ---------------------------------------------------------------- SOF stabilisability (premise)
+
+def scalar_gain_radii(sys, gains):
+    """rho of Cor. 3.2 for u = L y with scalar L (SISO), for every L in ``gains`` at once."""
+    M, n = sys.M, sys.nx
+    bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
+    Acl = sys.A[None] + gains[:, None, None, None] * bc[None]           # (G, M, n, n)
+    kron = np.einsum("giab,gicd->giacbd", Acl, Acl).reshape(len(gains), M, n * n, n * n)
+    op = np.einsum("ij,gixy->gjxiy", sys.T, kron).reshape(len(gains), M * n * n, M * n * n)
+    return np.max(np.abs(np.linalg.eigvals(op)), axis=1)
+
+
+def best_scalar_gain(sys, points=2001):
+    """min over scalar L of rho: a grid in L = tan(s), s in (-pi/2, pi/2) (all real gains),
+    refined by a bounded scalar search between the grid neighbours of the best point."""
+    s = np.linspace(-np.pi / 2, np.pi / 2, points + 2)[1:-1]
+    radii = scalar_gain_radii(sys, np.tan(s))
+    best = int(np.argmin(radii))
+    lo, hi = s[max(best - 1, 0)], s[min(best + 1, points - 1)]
+    res = scipy.optimize.minimize_scalar(lambda t: scalar_gain_radii(sys, np.array([np.tan(t)]))[0],
+                                         bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
+    if res.fun < radii[best]:
+        return float(np.tan(res.x)), float(res.fun)
+    return float(np.tan(s[best])), float(radii[best])
+
+
+def best_gain(sys, rng, starts=20):
+    """min over L (nu x ny) of rho: the scalar grid for SISO, else Nelder-Mead from ``starts``
+    starts (L = 0 and standard normal draws). Returns (L, rho)."""
+    if sys.nu == sys.ny == 1:
+        L, rho = best_scalar_gain(sys)
+        return np.array([[L]]), rho
+    shape = (sys.nu, sys.ny)
+    f = lambda v: ms_spectral_radius(closed_loop(sys, v.reshape(shape)), sys.T)
+    best = (np.zeros(shape), f(np.zeros(shape).ravel()))
+    for k in range(starts):
+        x0 = np.zeros(shape).ravel() if k == 0 else rng.standard_normal(shape).ravel()
+        res = scipy.optimize.minimize(f, x0, method="Nelder-Mead", options={"xatol": 1e-8, "fatol": 1e-10,
+                                                                            "maxiter": 2000})
+        if res.fun < best[1]:
+            best = (res.x.reshape(shape), float(res.fun))
+    return best
+
+
+# ---------------------------------------------------------------- Monte Carlo
+
+def next_modes(rng, T, theta):
+    """theta_{k+1} given theta_k for every run (inverse transform of the rows of T)."""
+    cum = np.cumsum(T, axis=1)
+    u = rng.random(len(theta))
+    return np.minimum((u[:, None] > cum[theta]).sum(axis=1), T.shape[0] - 1)
+
+
+def initial_modes(rng, mu, n_runs):
+    return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
+
+
+def apply_modes(S, theta, x):
+    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather)."""
+    out = np.empty((len(x), S.shape[1]))
+    for i in range(S.shape[0]):
+        rows = theta == i
+        out[rows] = x[rows] @ S[i].T
+    return out
+
+
+def moment_estimate(samples):
+    """Mean and standard error over the first axis (runs)."""
+    return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
+
+
+def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=100, tail=1e-4):
+    """Monte Carlo of the stationary average cost of a mean-square stable loop.
+
+    ``step(state, theta, rng)`` advances all runs, ``stage_cost(state, theta)`` is the cost
+    per run. A burn-in of log(tail)/log(rho) steps makes the transient's share below
+    ``tail``; then each run averages ``steps`` stage costs. Returns (mean, standard error)
+    over the runs (independent) and the burn-in.
+    """
+    burn = int(np.ceil(np.log(tail) / np.log(max(rho, 1e-3))))
+    for _ in range(burn):
+        state, theta = step(state, theta, rng), next_modes(rng, T, theta)
+    total = np.zeros(n_runs)
+    for _ in range(steps):
+        total += stage_cost(state, theta)
+        state, theta = step(state, theta, rng), next_modes(rng, T, theta)
+    mean, se = moment_estimate(total / steps)
+    return float(mean), float(se), burn
+
+
+def random_spd(rng, n, scale=1.0):
+    G = rng.standard_normal((n, n))
+    return scale * (G @ G.T / n + 0.1 * np.eye(n))
+
+
+def random_spd_stack(rng, M, n, scale=1.0):
+    return np.stack([random_spd(rng, n, scale) for _ in range(M)])
+
+
+def min_eig(S):
+    """Smallest eigenvalue over a stack of symmetric matrices."""
+    S = np.asarray(S)
+    return float(np.min(np.linalg.eigvalsh(0.5 * (S + np.swapaxes(S, -1, -2)))))

@@ -1,0 +1,81 @@
+"""Counterexamples of the theorems study: saved as data, the one to show chosen, printed rounded."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..io import atomic_write_json
+from .chapter3 import MARGIN, SHOW
+from .core import Outcome
+
+COUNTEREXAMPLES = "theorems_counterexamples.json"
+SYSTEMS_KEPT = 20             # system matrices saved for the 20 smallest counterexamples per statement
+
+
+def save_counterexamples(results, seed, folder) -> Path:
+    """Every failing instance (statement, index, its deciding numbers and system) as JSON, atomically."""
+    statements = {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
+                  for key, res in results.items() if res.failures}
+    data = {"seed": int(seed), "statements": {key: trim_systems(key, entries) for key, entries in statements.items()}}
+    # shaped like a notebook's values file, which every reader of figures/values expects
+    return atomic_write_json(Path(folder) / "values" / COUNTEREXAMPLES,
+                             {"notebook": COUNTEREXAMPLES.removesuffix(".json"), "values": data})
+
+
+def trim_systems(key, entries, keep=SYSTEMS_KEPT):
+    """Keep the system matrices of the ``keep`` smallest counterexamples (the order of
+    :func:`shown_counterexample`); the others keep their numbers and re-run from (seed, key, index)."""
+    order = sorted(entries, key=lambda e: _order(key, e))
+    kept = {e["index"] for e in order[:keep]}
+    return [e if e["index"] in kept else {"index": e["index"],
+                                          "numbers": {k: v for k, v in e["numbers"].items() if k != "system"}}
+            for e in entries]
+
+
+def load_counterexamples(folder):
+    """The saved counterexamples, or None when there is no file."""
+    path = Path(folder) / "values" / COUNTEREXAMPLES
+    return json.loads(path.read_text())["values"] if path.exists() else None
+
+
+def margin(key, numbers) -> float:
+    """How clearly the instance fails (0 when the statement has no measure)."""
+    return float(MARGIN[key](numbers)) if key in MARGIN else 0.0
+
+
+def shown_counterexample(key, entries):
+    """Among the failing instances with the fewest states, then modes, the one that fails most clearly
+    (largest margin: its verdict survives rounding and other BLAS kernels); ties by index."""
+    if not entries:
+        return None
+    return min(entries, key=lambda e: _order(key, e))
+
+
+def _order(key, entry):
+    n = entry["numbers"]
+    return (n.get("n_states", 0), n.get("n_modes", 0), -margin(key, n), entry["index"])
+
+
+def describe(key, outcome: Outcome) -> str:
+    """One line per deciding number, rounded to what is meant (identical text under other BLAS kernels)."""
+    n = outcome.numbers
+    lines = [f"{key}: {outcome.verdict}; {n.get('n_states')} states, {n.get('n_modes')} modes, "
+             f"{n.get('n_inputs')} input(s), {n.get('n_outputs')} output(s)"]
+    for label, name, spec in SHOW.get(key, []):
+        value = n.get(name)
+        if spec == "<1":
+            text = "yes" if value is not None and value < 1 else "no"
+        elif isinstance(value, bool) or value is None:
+            text = {True: "yes", False: "no", None: "-"}[value]
+        else:
+            text = format(value, spec)
+        lines.append(f"  {label}: {text}")
+    return "\n".join(lines)
+
+
+def system_from(numbers):
+    """The MJLS of a saved counterexample."""
+    from asoc.mjls import MJLS
+
+    return MJLS(**{k: np.array(v) for k, v in numbers["system"].items() if v is not None})
