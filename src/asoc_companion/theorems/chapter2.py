@@ -27,6 +27,7 @@ the quadratic form.
 import functools
 import itertools
 import json
+import zlib
 from fractions import Fraction
 
 import numpy as np
@@ -670,11 +671,49 @@ def replay_kernel_counterexample(numbers: dict) -> dict:
                             json.loads(numbers["shape"]), numbers["length_scale"])
 
 
-def rerun(statement_key: str, index: int, seed: int = 20171):
-    """Re-run instance ``index`` of a study with root seed ``seed`` (SeedSequence(seed).spawn(n)[index])."""
+def distance_label(numbers: dict) -> str:
+    """The distance of a kernel instance as summarised: family, Hellinger exponent, L_q order."""
+    label = numbers["distance"]
+    if "exponent" in numbers:
+        label += "_" + numbers["exponent"]
+    if "q" in numbers:
+        label += f"_{numbers['q']}"
+    return label
+
+
+DISTANCE_LABELS = ("mcvmd", "omat", "ospa", "wasserstein_gaussian", "hellinger_printed", "hellinger_usual",
+                   "jensen_shannon", "lq_1", "lq_2", "lq_3")
+
+
+def summarise_kernels(outcomes) -> dict:
+    """Instances and failures per distance and per covariance of the Sec. 2.6.3 check."""
+    by_distance = {label: {"instances": 0, "fails": 0} for label in DISTANCE_LABELS}
+    by_covariance = {name: {"instances": 0, "fails": 0} for name in COVARIANCE_NAMES}
+    for outcome in outcomes:
+        for table, label in ((by_distance, distance_label(outcome.numbers)),
+                             (by_covariance, outcome.numbers["covariance"])):
+            table[label]["instances"] += 1
+            table[label]["fails"] += outcome.verdict == "fails"
+    return {"by_distance": by_distance, "by_covariance": by_covariance}
+
+
+#: Per-statement summaries of the outcomes, recorded next to the counts (like chapter3.SUMMARIES).
+SUMMARIES = {"statement_2_6_3_kernels": summarise_kernels}
+
+
+def instance_seed(key: str, seed: int, index: int) -> np.random.SeedSequence:
+    """Child ``index`` of ``SeedSequence((seed, crc32(key))).spawn(n)``: the theorems engine's seeds."""
+    return np.random.SeedSequence((int(seed), zlib.crc32(key.encode())), spawn_key=(int(index),))
+
+
+def rerun(statement_key: str, index: int, seed: int = 2017) -> Outcome:
+    """Re-run instance ``index`` of statement ``statement_key`` of a study with seed ``seed`` alone.
+
+    The instance's rng is the engine's (:func:`instance_seed`); a recorded counterexample is
+    reproduced exactly (on the same machine; other BLAS kernels may move the last digits).
+    """
     statement = next(s for s in STATEMENTS if s.key == statement_key)
-    child = np.random.SeedSequence(seed, spawn_key=(index,))
-    return statement.check(np.random.default_rng(child))
+    return statement.check(np.random.default_rng(instance_seed(statement_key, seed, index)))
 
 
 STATEMENTS = [
