@@ -27,7 +27,7 @@ def test_every_numbered_statement_of_chapter_2_has_a_row():
 
 @pytest.mark.parametrize("key", CHEAP)
 def test_identity_holds_on_random_instances(key):
-    outcomes = [BY_KEY[key].check(rng) for rng in rngs(15)]
+    outcomes = [BY_KEY[key].check(rng) for rng in rngs(6)]
     assert all(isinstance(o, Outcome) and o.verdict == "holds" for o in outcomes), \
         [o.numbers for o in outcomes if o.verdict != "holds"]
 
@@ -124,8 +124,9 @@ def test_gaussian_kernel_over_wasserstein_2_of_2d_gaussians_is_not_positive_defi
 
 
 @pytest.mark.parametrize("family, fixed", [("mcvmd", {"N": 4, "points": 2}), ("lq", {"N": 4, "bins": 4, "q": 2})])
-def test_search_finds_nothing_for_hilbert_metrics(family, fixed):
+def test_search_finds_nothing_for_hilbert_metrics(family, fixed, monkeypatch):
     """Sanity: mCvMd (an L2 norm of LCDs) and L_2 embed in a Hilbert space, so the SE kernel is PSD."""
+    monkeypatch.setattr(c2, "MAX_EVALUATIONS", 1000)               # a shorter search than the study's
     outcome = c2.search_counterexample(np.random.default_rng(0), family, "se", {}, **fixed)
     assert outcome.verdict == "holds"
     assert outcome.numbers["lambda_min"] > -outcome.numbers["tolerance"]
