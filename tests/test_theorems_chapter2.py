@@ -159,3 +159,12 @@ def test_distance_proxies_agree_with_the_library():
         config = c2._decode(family, rng.normal(size=c2._layout_size(family, layout)), layout)
         assert np.allclose(c2._proxy_distance_matrix(family, config), c2._lib_distance_matrix(family, config),
                            rtol=1e-12, atol=1e-12), family
+
+
+def test_bad_input_names_the_argument():
+    with pytest.raises(ValueError, match="family"):
+        c2.search_counterexample(np.random.default_rng(0), "kl", "se", {})
+    with pytest.raises(ValueError, match="name"):
+        c2.search_counterexample(np.random.default_rng(0), "omat", "cosine", {})
+    with pytest.raises(ValueError, match="statement_key"):
+        c2.rerun("statement_2_2", 0)

@@ -162,6 +162,12 @@ def _symmetric_points(n):
 def check_lemma_2_1(rng: np.random.Generator) -> Outcome:
     """Lemma 2.1 on a random linear-Gaussian model against the information-form Kalman update.
 
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_lemma_2_1(np.random.default_rng(0)).verdict
+    'holds'
+
     The state estimate is a random Dirac mixture (M points, Dirichlet weights), the noise
     samples have exact moments (mean 0, covariance I), so C^{xx}, C^{xy}, C^{yy} are exactly
     the predicted moments of the mixture's mean and covariance, and the lemma's Schur
@@ -545,8 +551,8 @@ def _length_scale(D, log_factor):
     return float(np.exp(log_factor) * median) if median > 0 else 0.0
 
 
-class _Found(Exception):
-    pass
+class _StopSearch(Exception):
+    """A clearly negative eigenvalue was found, or the evaluation budget is spent."""
 
 
 def _search(rng, family, layout, size, name, shape):
@@ -559,15 +565,16 @@ def _search(rng, family, layout, size, name, shape):
         D = _proxy_distance_matrix(family, _decode(family, x[:-1], layout))
         l = _length_scale(D, x[-1])
         if l <= 0 or not np.all(np.isfinite(D)):
-            return 1.0
-        lam = np.linalg.eigvalsh(_kernel(name, shape, D, l))
-        value = float(lam[0] / lam[-1])
+            value = 1.0                                    # all distributions coincide: nothing to learn
+        else:
+            lam = np.linalg.eigvalsh(_kernel(name, shape, D, l))
+            value = float(lam[0] / lam[-1])
         if value < best["value"]:
             best.update(value=value, theta=x.copy())
         if value < STOP:
-            raise _Found
+            raise _StopSearch
         if evaluations[0] >= MAX_EVALUATIONS:
-            raise _Found
+            raise _StopSearch
         return value
 
     bounds = [(None, None)] * size + [(-3.0, 3.0)]
@@ -578,7 +585,7 @@ def _search(rng, family, layout, size, name, shape):
         try:
             minimize(objective, x0, method="L-BFGS-B", bounds=bounds,
                      options={"maxfun": MAX_EVALUATIONS // MAX_RESTARTS, "maxiter": 200})
-        except _Found:
+        except _StopSearch:
             break
     return best["theta"], best["value"], evaluations[0], restarts
 
@@ -599,7 +606,18 @@ def gram_certificate(family, config, name, shape, l, proxy=None):
     N (max |kappa'(D)| delta_D + 16 eps): by Weyl's inequality, errors delta_D of the
     distances (estimated by the difference between the library and the independent proxy)
     cannot move an eigenvalue of the unit-diagonal Gram matrix by more.
+
+    Examples
+    --------
+    Three 1-D Gaussians N(0, 1), N(1, 1), N(2, 1) under the Hellinger expression as printed:
+
+    >>> config = {"items": [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]], "exponent": "printed"}
+    >>> cert = gram_certificate("hellinger", config, "se", {}, 0.03)
+    >>> round(cert["lambda_min"], 3), cert["rayleigh_exact"] < -cert["tolerance"]
+    (-0.272, True)
     """
+    if family not in FAMILIES:
+        raise ValueError(f"family: expected one of {FAMILIES}, found {family!r}")
     D = _lib_distance_matrix(family, config)
     N = len(D)
     K = _kernel(name, shape, D, l)
@@ -643,6 +661,10 @@ def search_counterexample(rng: np.random.Generator, family: str, name: str, shap
     in ``asoc.gp.COVARIANCES``); ``fixed`` overrides entries of the random layout (e.g.
     ``q=2``, ``exponent="usual"``, ``N=5``).
     """
+    if family not in FAMILIES:
+        raise ValueError(f"family: expected one of {FAMILIES}, found {family!r}")
+    if name not in COVARIANCE_NAMES:
+        raise ValueError(f"name: expected one of {COVARIANCE_NAMES}, found {name!r}")
     layout = {**_random_layout(rng, family), **fixed}
     size = _layout_size(family, layout)
     theta, value, evaluations, restarts = _search(rng, family, layout, size, name, shape)
@@ -712,7 +734,10 @@ def rerun(statement_key: str, index: int, seed: int = 2017) -> Outcome:
     The instance's rng is the engine's (:func:`instance_seed`); a recorded counterexample is
     reproduced exactly (on the same machine; other BLAS kernels may move the last digits).
     """
-    statement = next(s for s in STATEMENTS if s.key == statement_key)
+    keys = [s.key for s in STATEMENTS]
+    if statement_key not in keys:
+        raise ValueError(f"statement_key: expected one of {keys}, found {statement_key!r}")
+    statement = STATEMENTS[keys.index(statement_key)]
     return statement.check(np.random.default_rng(instance_seed(statement_key, seed, index)))
 
 
