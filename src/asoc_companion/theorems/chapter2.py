@@ -27,7 +27,6 @@ the quadratic form.
 import functools
 import itertools
 import json
-import zlib
 from fractions import Fraction
 
 import numpy as np
@@ -49,8 +48,8 @@ def _lib_linear_gaussian_model(A, B, H, C, J):
 
 
 def _lib_lemma_2_1(points, weights, u, model, w_points, v_points, beta, gamma):
-    from asoc.belief import DiracMixture, lemma_2_1
-    return lemma_2_1(DiracMixture(points, weights), u, model, w_points, v_points, beta, gamma)
+    from asoc.belief import DiracMixture, next_estimate_covariance
+    return next_estimate_covariance(DiracMixture(points, weights), u, model, w_points, v_points, beta, gamma)
 
 
 def _lib_terminal_value(Q_K, x_target, points, weights):
@@ -67,8 +66,8 @@ def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_re
     Theorem 2.4 and Theorem 2.5 backwards with the steps ``eps``; returns the value at k = 0
     as (s, v, V, S) and the policy (2.17) of every step."""
     from asoc.belief import UKF, AffinePolicy, QuadraticCost, reference_trajectory, sigma_points, terminal_value
-    from asoc.belief import theorem_2_5_value
-    from asoc.belief.trajectory import StageProblem, policy_step
+    from asoc.belief import improved_policy_value
+    from asoc.belief.trajectory import StageProblem, _policy_step
     model = _lib_linear_gaussian_model(A, B, H, C, J)
     cost = QuadraticCost(Q, R, Q_K, x_target, K)
     filt = UKF(model)
@@ -78,8 +77,8 @@ def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_re
     gains, offsets = [None] * K, [None] * K
     for k in range(K - 1, -1, -1):
         expansion = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta).expansion(ref.u_bar[k])
-        gains[k], offsets[k] = policy_step(expansion, ref.u_bar[k], eps[k])
-        value = theorem_2_5_value(expansion, eps[k])
+        gains[k], offsets[k] = _policy_step(expansion, ref.u_bar[k], eps[k])
+        value = improved_policy_value(expansion, eps[k])
     return (value.s, value.v, value.V, value.S), gains, offsets
 
 
@@ -723,11 +722,6 @@ def summarise_kernels(outcomes) -> dict:
 SUMMARIES = {"statement_2_6_3_kernels": summarise_kernels}
 
 
-def instance_seed(key: str, seed: int, index: int) -> np.random.SeedSequence:
-    """Child ``index`` of ``SeedSequence((seed, crc32(key))).spawn(n)``: the theorems engine's seeds."""
-    return np.random.SeedSequence((int(seed), zlib.crc32(key.encode())), spawn_key=(int(index),))
-
-
 def rerun(statement_key: str, index: int, seed: int = 2017) -> Outcome:
     """Re-run instance ``index`` of statement ``statement_key`` of a study with seed ``seed`` alone.
 
@@ -738,6 +732,7 @@ def rerun(statement_key: str, index: int, seed: int = 2017) -> Outcome:
     if statement_key not in keys:
         raise ValueError(f"statement_key: expected one of {keys}, found {statement_key!r}")
     statement = STATEMENTS[keys.index(statement_key)]
+    from .engine import instance_seed
     return statement.check(np.random.default_rng(instance_seed(statement_key, seed, index)))
 
 

@@ -19,8 +19,10 @@ import numpy as np
 from asoc.progress import progress_bar
 
 from . import STATEMENTS
-from .chapter3 import SUMMARIES
+from .chapter2 import SUMMARIES as CHAPTER_2_SUMMARIES
+from .chapter3 import SUMMARIES as CHAPTER_3_SUMMARIES
 
+SUMMARIES = {**CHAPTER_2_SUMMARIES, **CHAPTER_3_SUMMARIES}
 BATCH = 25                                 # instances per task: amortises the executor's overhead
 
 
