@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .moments import second_moment_step, steady_state_second_moment
-from .stability import ms_spectral_radius
+from .moments import steady_state_second_moment
+from .operators import augmented_closed_loop, check_gains, noise_covariances, spectral_radius  # noqa: F401 (public here)
 from .system import predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
@@ -30,63 +30,6 @@ DIVERGED = 1e100          # bounds beyond this are treated as diverging (the ite
 
 def _T(X):
     return np.swapaxes(X, -1, -2)
-
-
-def noise_covariances(sys):
-    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny); J = None means noise-free outputs."""
-    HHt = sys.H @ _T(sys.H)
-    JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
-    return HHt, JJt
-
-
-def check_gains(sys, F, K, L):
-    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays."""
-    F, K, L = (np.atleast_2d(np.asarray(g, dtype=float)) for g in (F, K, L))
-    nc = F.shape[0]
-    for name, g, shape in (("F", F, (nc, nc)), ("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
-        if g.shape != shape:
-            raise ValueError(f"{name}: expected shape {shape}, found {g.shape}")
-        if not np.all(np.isfinite(g)):
-            raise ValueError(f"{name}: found non-finite entries")
-    return F, K, L
-
-
-def augmented_closed_loop(sys, F, K, L):
-    """The augmented closed loop (3.39)-(3.40) and weight of Prop. 3.20 for x~ = [x; x^].
-
-    A~_i = [[A_i, B_i L], [K C_i, F]], H~_i H~_i^T = diag(H_i H_i^T, K J_i J_i^T K^T),
-    Q~_i = diag(Q_i, L^T R_i L).
-
-    Parameters
-    ----------
-    sys : MJLS
-    F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
-        Gains of the controller (3.37).
-
-    Returns
-    -------
-    At, HHt_cl, Qt : numpy.ndarray, each (M, nx + nc, nx + nc)
-
-    Raises
-    ------
-    ValueError
-        If a gain has the wrong shape or non-finite entries.
-    """
-    F, K, L = check_gains(sys, F, K, L)
-    M, nx, nc = sys.M, sys.nx, F.shape[0]
-    HHt, JJt = noise_covariances(sys)
-    At = np.zeros((M, nx + nc, nx + nc))
-    At[:, :nx, :nx] = sys.A
-    At[:, :nx, nx:] = sys.B @ L
-    At[:, nx:, :nx] = K @ sys.C
-    At[:, nx:, nx:] = F
-    HHt_cl = np.zeros_like(At)
-    HHt_cl[:, :nx, :nx] = HHt
-    HHt_cl[:, nx:, nx:] = K @ JJt @ K.T
-    Qt = np.zeros_like(At)
-    Qt[:, :nx, :nx] = sys.Q
-    Qt[:, nx:, nx:] = L.T @ sys.R @ L
-    return At, HHt_cl, Qt
 
 
 def steady_state_cost(sys, F, K, L):
@@ -115,7 +58,7 @@ def steady_state_cost(sys, F, K, L):
         If a gain has the wrong shape or non-finite entries.
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
-    rho = ms_spectral_radius(At, sys.T)
+    rho = spectral_radius(At, sys.T)
     if not rho < 1:
         return np.inf, None, rho
     X = steady_state_second_moment(At, HHt_cl, sys.T, sys.mu_inf)

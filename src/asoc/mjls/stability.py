@@ -2,7 +2,18 @@
 
 import numpy as np
 
+from .operators import closed_loop, spectral_radius  # noqa: F401  (closed_loop: re-exported)
 from .system import check_transition_matrix, _stack
+
+
+def _checked(A_stack, T):
+    """A_stack as an (M, n, n) array and T as a row-stochastic (M, M) matrix."""
+    A_stack = _stack(A_stack, "A_stack")
+    T = check_transition_matrix(T)
+    if T.shape[0] != A_stack.shape[0]:
+        raise ValueError(f"T: expected shape ({A_stack.shape[0]}, {A_stack.shape[0]}) for "
+                         f"{A_stack.shape[0]} modes, found {T.shape}")
+    return A_stack, T
 
 
 def ms_operator(A_stack, T):
@@ -51,33 +62,12 @@ def ms_spectral_radius(A_stack, T) -> float:
     Returns
     -------
     float
-        rho(M) of :func:`ms_operator`.
+        rho(M) of :func:`ms_operator`, computed without forming it above a small size
+        (:func:`asoc.mjls.operators.spectral_radius`).
 
     Raises
     ------
     ValueError
         As :func:`ms_operator`, e.g. for non-finite matrices.
     """
-    return float(np.max(np.abs(np.linalg.eigvals(ms_operator(A_stack, T)))))
-
-
-def closed_loop(sys, L):
-    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L.
-
-    Parameters
-    ----------
-    sys : MJLS
-    L : array_like, shape (nu, ny)
-        Static output-feedback gain u = L y (3.8).
-
-    Returns
-    -------
-    numpy.ndarray, shape (M, nx, nx)
-
-    Raises
-    ------
-    ValueError
-        If ``L`` does not have nu * ny entries.
-    """
-    L = np.asarray(L, dtype=float).reshape(sys.nu, sys.ny)
-    return sys.A + sys.B @ L @ sys.C
+    return spectral_radius(*_checked(A_stack, T))
