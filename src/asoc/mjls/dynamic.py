@@ -26,6 +26,13 @@ from .system import predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
 DIVERGED = 1e100          # bounds beyond this are treated as diverging (the iteration stops)
+#: Relative singular-value threshold of the minimum-norm solution of (3.51) in Alg. 3.2. Its
+#: matrix becomes singular at the fixed point when the controller state does not excite every
+#: direction (Xunder of low numerical rank, e.g. ny << nx): the bound then leaves F undetermined
+#: there. With LAPACK's default threshold (about 1e-13 at nx = 8) those directions receive
+#: rounding noise divided by ~1e-17 and the iteration diverges (Scaling page, n = 8, 16);
+#: a threshold of 1e-10 treats them as the null space they are.
+RANK_RTOL = 1e-10
 
 
 def _T(X):
@@ -135,18 +142,19 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     return H, rho
 
 
-def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"):
+def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcond=None):
     """F, K, L solving (3.51)/(3.71).
 
     ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
     (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
     F and K do not enter the cost); ``"sdp"``: the SDP after Alg. 3.2 (min lambda with
-    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel.
+    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. ``rcond``:
+    relative singular-value threshold of ``"lstsq"`` (None: LAPACK's eps * size).
     """
     n, ny, nu = sys.nx, sys.ny, sys.nu
     H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
     if method == "lstsq":
-        z = np.linalg.lstsq(H, -rho, rcond=None)[0]
+        z = np.linalg.lstsq(H, -rho, rcond=rcond)[0]
     elif method == "sdp":
         z = _gains_sdp(H, rho, n, ny, nu)
     else:
@@ -301,7 +309,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     for it in range(1, int(max_iter) + 1):
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
         try:
-            F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method)
+            F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, RANK_RTOL)
         except np.linalg.LinAlgError:
             break
         new_X = bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt)
