@@ -26,7 +26,8 @@ from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_init
                              check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages)
 from .operators import (DENSE_MAX_RADIUS, augmented_closed_loop, coupled_lyapunov_solver, costate_map,
-                        kronecker_matrix, noise_covariances, second_moment_map, spectral_radius)
+                        kronecker_matrix, noise_covariances, second_moment_map, single_threaded,
+                        spectral_radius)
 from .system import predecessor_sum, successor_average
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
@@ -168,9 +169,10 @@ def _perron_pair(At, T):
         op = scipy.sparse.linalg.LinearOperator(
             (M * n * n,) * 2, dtype=float,
             matvec=lambda x, f=apply: f(At, T, _symmetric(x.real.reshape(M, n, n))).ravel())
-        lam, v = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(M * n * n - 1, 20),
-                                          maxiter=max(1000, M * n * n),
-                                          v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel())
+        with single_threaded():
+            lam, v = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(M * n * n - 1, 20),
+                                              maxiter=max(1000, M * n * n),
+                                              v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel())
         vectors.append(_real_symmetric(v[:, 0].reshape(M, n, n)))
     return float(abs(lam[0])), *vectors
 

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg
+from threadpoolctl import ThreadpoolController
 
 #: Up to this size M n^2 the spectral radius comes from the eigenvalues of the dense Kronecker
 #: matrix, above it from Arnoldi: the measured crossover (2 cores, random systems with rho
@@ -49,6 +50,15 @@ DENSE_MAX_SOLVE = 256
 RHO_TOLERANCE = 1e-9
 #: Relative residual ||X - L(X) - W|| / ||W|| the iterative solver stops at.
 SOLVE_TOLERANCE = 1e-12
+
+_THREADS = ThreadpoolController()
+
+
+def single_threaded():
+    """A context in which BLAS runs on one thread: the iterative methods work on n x n products
+    and vectors of length M n^2, where threads cost more than they gain (10x slower at n = 64,
+    M = 8 on a loaded 2-core machine)."""
+    return _THREADS.limit(limits=1, user_api="blas")
 
 
 def _T(X):
@@ -186,14 +196,17 @@ def spectral_radius(A, T, method="auto"):
     if method == "arnoldi":
         op = _linear_operator(A, T)
         try:
-            lam = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(dim - 1, 20),
-                                           maxiter=max(1000, dim), v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel(),
-                                           return_eigenvectors=False)
+            with single_threaded():
+                lam = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(dim - 1, 20),
+                                               maxiter=max(1000, dim),
+                                               v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel(),
+                                               return_eigenvectors=False)
             return float(np.max(np.abs(lam)))
         except scipy.sparse.linalg.ArpackNoConvergence:
             method = "power"
     if method == "power":
-        return float(_cone_power_bracket(A, T, 1e-10, 100000)[0])
+        with single_threaded():
+            return float(_cone_power_bracket(A, T, 1e-10, 100000)[0])
     raise ValueError(f"method: expected one of 'auto', 'dense', 'arnoldi', 'power', found {method!r}")
 
 
@@ -355,6 +368,10 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=SOLVE_TOLERANCE):
         raise ValueError(f"method: expected 'auto', 'dense' or one of {ITERATIVE}, found {method!r}")
 
     def solve(W, adjoint=False):
+        with single_threaded():
+            return _solve(W, adjoint)
+
+    def _solve(W, adjoint):
         X, it = _iterative_solve(A, T, W, adjoint, method, tol)
         X, used = _sym(X), method
         res = residual(A, T, X, W, adjoint)
