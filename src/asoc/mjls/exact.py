@@ -25,7 +25,8 @@ from .dynamic import DynamicOutputFeedbackResult, dynamic_output_feedback
 from .finite_horizon import (FiniteHorizonResult, _initial_gains, augmented_initial_moment,
                              check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages)
-from .operators import (DENSE_MAX_RADIUS, augmented_closed_loop, coupled_lyapunov_solver, costate_map,
+from . import operators
+from .operators import (augmented_closed_loop, coupled_lyapunov_solver, costate_map,
                         kronecker_matrix, noise_covariances, second_moment_map, single_threaded,
                         spectral_radius)
 from .system import predecessor_sum, successor_average
@@ -158,7 +159,7 @@ def _perron_pair(At, T):
     """rho and the right and left Perron eigenvectors X, V (real symmetric stacks) of the
     second-moment operator: dense eigenvectors for small M n^2, else Arnoldi on L and L*."""
     M, n, _ = At.shape
-    if M * n * n <= DENSE_MAX_RADIUS:
+    if M * n * n <= operators.DENSE_MAX_RADIUS:
         lam, left, right = scipy.linalg.eig(kronecker_matrix(At, T), left=True, right=True)
         rho = float(np.max(np.abs(lam)))
         top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-9))

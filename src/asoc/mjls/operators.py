@@ -29,7 +29,9 @@ Marques 2005, Ch. 3), and the spectral radius of L on all matrices equals that o
 ones. The iterative methods therefore work on symmetrised stacks.
 """
 
+import contextlib
 import enum
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,6 +69,34 @@ def _T(X):
 
 def _sym(X):
     return 0.5 * (X + _T(X))
+
+
+@contextlib.contextmanager
+def switch_points(radius=None, solve=None):
+    """Temporarily set :data:`DENSE_MAX_RADIUS` and :data:`DENSE_MAX_SOLVE` (None: unchanged).
+
+    ``switch_points(radius=10**9, solve=10**9)`` forces the dense Kronecker path, ``(0, 0)`` the
+    matrix-free one, e.g. to time both (the Scaling page).
+
+    Examples
+    --------
+    >>> from asoc.mjls import operators
+    >>> with switch_points(radius=0):
+    ...     operators.DENSE_MAX_RADIUS
+    0
+    >>> operators.DENSE_MAX_RADIUS == 64
+    True
+    """
+    module = sys.modules[__name__]
+    saved = module.DENSE_MAX_RADIUS, module.DENSE_MAX_SOLVE
+    try:
+        if radius is not None:
+            module.DENSE_MAX_RADIUS = radius
+        if solve is not None:
+            module.DENSE_MAX_SOLVE = solve
+        yield
+    finally:
+        module.DENSE_MAX_RADIUS, module.DENSE_MAX_SOLVE = saved
 
 
 def second_moment_map(A, T, X):
