@@ -189,10 +189,11 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
 
     Each step solves the two coupled linear equations X = predecessor_sum(Acl X Acl^T + mu H H^T) and
     P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (:func:`asoc.mjls.operators.coupled_lyapunov_solver`:
-    one LU factorisation of size M nx^2 for both when small, else BiCGSTAB on the operator). Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when
-    an iterate does not stabilise (the moments have no solution then).
+    one LU factorisation of size M nx^2 for both when small, else BiCGSTAB on the operator).
+    Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when an iterate
+    does not stabilise (the moments have no solution then).
     """
-    M, n = sys.M, sys.nx
+    M = sys.M
     rhs_X = predecessor_sum(sys.T, rec.muHHt)
     trace_X, trace_P = [], []
     converged, stabilized = False, True
