@@ -21,104 +21,25 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..result import IterativeResult
-from ..validation import boolean, choice, generator, integer, real_array, real_scalar
-from .moments import second_moment_step, steady_state_second_moment
-from .stability import ms_spectral_radius
+from ..validation import boolean, choice, generator, integer, real_scalar
+from .moments import steady_state_second_moment
+from .operators import augmented_closed_loop, check_gains, noise_covariances, spectral_radius  # noqa: F401 (public here)
 from .system import check_system, predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
 DIVERGED = 1e100          # bounds beyond this are treated as diverging (the iteration stops)
 GAIN_FLOOR = 1e-12        # absolute floor of a gain's norm in its relative change (a zero gain converges)
+#: Relative singular-value threshold of the minimum-norm solution of (3.51) in Alg. 3.2. Its
+#: matrix becomes singular at the fixed point when the controller state does not excite every
+#: direction (Xunder of low numerical rank, e.g. ny << nx): the bound then leaves F undetermined
+#: there. With LAPACK's default threshold (about 1e-13 at nx = 8) those directions receive
+#: rounding noise divided by ~1e-17 and the iteration diverges (Scaling page, n = 8, 16);
+#: a threshold of 1e-10 treats them as the null space they are.
+RANK_RTOL = 1e-10
 
 
 def _T(X):
     return np.swapaxes(X, -1, -2)
-
-
-def noise_covariances(sys):
-    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny) of (3.36); J = None means noise-free outputs.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> HHt, JJt = noise_covariances(sys)
-    >>> HHt.shape, JJt.ravel().round(4)
-    ((2, 2, 2), array([0.01, 0.01]))
-    """
-    check_system(sys)
-    HHt = sys.H @ _T(sys.H)
-    JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
-    return HHt, JJt
-
-
-def check_gains(sys, F, K, L):
-    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
-    Traceback (most recent call last):
-    ...
-    ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys), found shape (1, 3)
-    """
-    check_system(sys)
-    F = np.atleast_2d(real_array(F, "F"))
-    nc = F.shape[0]
-    F = real_array(F, "F", shape=(nc, nc))
-    K, L = np.atleast_2d(real_array(K, "K")), np.atleast_2d(real_array(L, "L"))
-    for name, g, shape in (("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
-        if g.shape != shape:
-            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny = {sys.ny} "
-                             f"from sys), found shape {g.shape}")
-    return F, K, L
-
-
-def augmented_closed_loop(sys, F, K, L):
-    """The augmented closed loop (3.39)-(3.40) and weight of Prop. 3.20 for x~ = [x; x^].
-
-    A~_i = [[A_i, B_i L], [K C_i, F]], H~_i H~_i^T = diag(H_i H_i^T, K J_i J_i^T K^T),
-    Q~_i = diag(Q_i, L^T R_i L).
-
-    Parameters
-    ----------
-    sys : MJLS
-    F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
-        Gains of the controller (3.37).
-
-    Returns
-    -------
-    At, HHt_cl, Qt : numpy.ndarray, each (M, nx + nc, nx + nc)
-
-    Raises
-    ------
-    ValueError
-        If a gain has the wrong shape or non-finite entries.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> At, Wt, Qt = augmented_closed_loop(sys, 0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))
-    >>> At.shape, At[0, 2:, :2].tolist()
-    ((2, 4, 4), [[1.0, 0.0], [1.0, 0.0]])
-    """
-    F, K, L = check_gains(sys, F, K, L)
-    M, nx, nc = sys.M, sys.nx, F.shape[0]
-    HHt, JJt = noise_covariances(sys)
-    At = np.zeros((M, nx + nc, nx + nc))
-    At[:, :nx, :nx] = sys.A
-    At[:, :nx, nx:] = sys.B @ L
-    At[:, nx:, :nx] = K @ sys.C
-    At[:, nx:, nx:] = F
-    HHt_cl = np.zeros_like(At)
-    HHt_cl[:, :nx, :nx] = HHt
-    HHt_cl[:, nx:, nx:] = K @ JJt @ K.T
-    Qt = np.zeros_like(At)
-    Qt[:, :nx, :nx] = sys.Q
-    Qt[:, nx:, nx:] = L.T @ sys.R @ L
-    return At, HHt_cl, Qt
 
 
 def steady_state_cost(sys, F, K, L):
@@ -156,7 +77,7 @@ def steady_state_cost(sys, F, K, L):
     (True, True)
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
-    rho = ms_spectral_radius(At, sys.T)
+    rho = spectral_radius(At, sys.T)
     if not rho < 1:
         return np.inf, None, rho
     X = steady_state_second_moment(At, HHt_cl, sys.T, sys.mu_inf)
@@ -267,14 +188,14 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     return H, rho
 
 
-def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"):
+def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcond=None):
     """F, K, L solving (3.51)/(3.71).
 
     ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
     (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
     F and K do not enter the cost); ``"sdp"``: the SDP after Alg. 3.2 (min lambda with
-    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. An inner-loop
-    helper of Algs. 3.2-3.3: only ``method`` is validated.
+    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. ``rcond``:
+    relative singular-value threshold of ``"lstsq"`` (None: LAPACK's eps * size).
 
     Examples
     --------
@@ -289,7 +210,7 @@ def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"
     n, ny, nu = sys.nx, sys.ny, sys.nu
     H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
     if method == "lstsq":
-        z = np.linalg.lstsq(H, -rho, rcond=None)[0]
+        z = np.linalg.lstsq(H, -rho, rcond=rcond)[0]
     elif method == "sdp":
         z = _gains_sdp(H, rho, n, ny, nu)
     else:
@@ -464,7 +385,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     for it in range(1, int(max_iter) + 1):
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
         try:
-            F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method)
+            F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, RANK_RTOL)
         except np.linalg.LinAlgError:
             status = "linalg_error"
             break

@@ -19,15 +19,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse.linalg
 
 from ..progress import progress_bar
 from ..result import IterativeResult
 from ..validation import boolean, integer, real_scalar
-from .dynamic import augmented_closed_loop, dynamic_output_feedback, noise_covariances
+from .dynamic import dynamic_output_feedback
 from .finite_horizon import (_initial_gains, augmented_initial_moment, check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages,
                              time_variant_controller)
-from .moments import moment_operator
+from . import operators
+from .operators import (augmented_closed_loop, coupled_lyapunov_solver, costate_map,
+                        kronecker_matrix, noise_covariances, second_moment_map, single_threaded,
+                        spectral_radius)
 from .system import check_system, predecessor_sum, successor_average
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
@@ -228,7 +232,10 @@ def average_cost_and_gradient(sys, F, K, L):
 
     Mean-square stability is tested without eigenvalues: the closed loop is stable iff the
     solution Y of Y_j = sum_i p_ij A~_i Y_i A~_i^T + I is positive definite (the coupled
-    Lyapunov test, cf. Thm. 3.9); Y comes from the same LU factorisation as X and P.
+    Lyapunov test, cf. Thm. 3.9); Y, X and P come from one solver
+    (:func:`asoc.mjls.operators.coupled_lyapunov_solver`: one LU factorisation when M n^2 is
+    small, else BiCGSTAB on the operator; a Y whose relative residual exceeds 1e-8 counts
+    as not stable).
 
     Parameters
     ----------
@@ -255,14 +262,13 @@ def average_cost_and_gradient(sys, F, K, L):
     """
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     M, n, _ = At.shape
-    lu = scipy.linalg.lu_factor(np.eye(M * n * n) - moment_operator(At, sys.T), check_finite=False)
-    Y = scipy.linalg.lu_solve(lu, np.broadcast_to(np.eye(n), (M, n, n)).ravel()).reshape(M, n, n)
-    if not (np.all(np.isfinite(Y)) and _positive_definite(0.5 * (Y + np.swapaxes(Y, 1, 2)))):
+    solve = coupled_lyapunov_solver(At, sys.T)
+    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)))
+    if not (np.all(np.isfinite(Y.X)) and Y.residual < 1e-8 and _positive_definite(Y.X)):
         return np.inf, None
     mu = sys.mu_inf
-    X = scipy.linalg.lu_solve(lu, predecessor_sum(sys.T, mu[:, None, None] * Wt).ravel()).reshape(M, n, n)
-    P = scipy.linalg.lu_solve(lu, Qt.ravel(), trans=1).reshape(M, n, n)
-    X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
+    X = solve(predecessor_sum(sys.T, mu[:, None, None] * Wt)).X
+    P = solve(Qt, adjoint=True).X
     cost = float(np.einsum("iab,iba->", Qt, X))
     return cost, gain_gradient(sys, K, L, At, X, successor_average(sys.T, P), noise_covariances(sys)[1], mu)
 
@@ -286,8 +292,7 @@ def closed_loop_radius(sys, F, K, L):
     >>> round(closed_loop_radius(sys, F, K, L), 4)
     1.3449
     """
-    At = augmented_closed_loop(sys, F, K, L)[0]
-    return float(np.max(np.abs(np.linalg.eigvals(moment_operator(At, sys.T)))))
+    return spectral_radius(augmented_closed_loop(sys, F, K, L)[0], sys.T)
 
 
 def radius_and_gradient(sys, F, K, L):
@@ -318,16 +323,38 @@ def radius_and_gradient(sys, F, K, L):
     (1.3449, (2, 2))
     """
     At = augmented_closed_loop(sys, F, K, L)[0]
-    M, n, _ = At.shape
-    lam, left, right = scipy.linalg.eig(moment_operator(At, sys.T), left=True, right=True)
-    rho = float(np.max(np.abs(lam)))
-    top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-9))
-    k = top[np.argmax(lam[top].real)]                                 # the real Perron eigenvalue
-    X, V = (_real_symmetric(v[:, k].reshape(M, n, n)) for v in (right, left))
+    rho, X, V = _perron_pair(At, sys.T)
     inner = float(np.einsum("iab,iab->", V, X))
     if not abs(inner) > 1e-12 * np.linalg.norm(V) * np.linalg.norm(X):
         return rho, _closed_loop_gradient(sys, np.zeros_like(At))
     return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V) @ At @ X / inner)
+
+
+def _perron_pair(At, T):
+    """rho and the right and left Perron eigenvectors X, V (real symmetric stacks) of the
+    second-moment operator: dense eigenvectors for small M n^2, else Arnoldi on L and L*."""
+    M, n, _ = At.shape
+    if M * n * n <= operators.DENSE_MAX_RADIUS:
+        lam, left, right = scipy.linalg.eig(kronecker_matrix(At, T), left=True, right=True)
+        rho = float(np.max(np.abs(lam)))
+        top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-9))
+        k = top[np.argmax(lam[top].real)]                             # the real Perron eigenvalue
+        return rho, *(_real_symmetric(v[:, k].reshape(M, n, n)) for v in (right, left))
+    vectors = []
+    for apply in (second_moment_map, costate_map):
+        op = scipy.sparse.linalg.LinearOperator(
+            (M * n * n,) * 2, dtype=float,
+            matvec=lambda x, f=apply: f(At, T, _symmetric(x.real.reshape(M, n, n))).ravel())
+        with single_threaded():
+            lam, v = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(M * n * n - 1, 20),
+                                              maxiter=max(1000, M * n * n),
+                                              v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel())
+        vectors.append(_real_symmetric(v[:, 0].reshape(M, n, n)))
+    return float(abs(lam[0])), *vectors
+
+
+def _symmetric(Z):
+    return 0.5 * (Z + np.swapaxes(Z, 1, 2))
 
 
 def _real_symmetric(Z):

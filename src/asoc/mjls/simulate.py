@@ -255,6 +255,51 @@ class _ModeStack:
         return self._pick(np.concatenate([x, u, w], axis=1) @ self.ABH, rows)
 
 
+class _ModeGroups:
+    """The same products as :class:`_ModeStack`, computed per mode on the runs in that mode:
+    N n^2 instead of M N n^2 operations per step, for large systems (nx >= GROUPED_MIN_NX)."""
+
+    def __init__(self, sys):
+        T = lambda S: np.ascontiguousarray(np.swapaxes(S, 1, 2))
+        self.M = sys.M
+        self.ABH = T(np.concatenate([sys.A, sys.B, sys.H], axis=2))
+        self.C, self.Q, self.R = T(sys.C), sys.Q, sys.R
+        self.J = T(sys.J) if sys.J is not None else None
+
+    def rows(self, theta):
+        order = np.argsort(theta, kind="stable")
+        bounds = np.searchsorted(theta[order], np.arange(self.M + 1))
+        return [order[bounds[i]:bounds[i + 1]] for i in range(self.M)]
+
+    def _apply(self, x, mats, groups):
+        out = np.empty((x.shape[0], mats.shape[2]))
+        for i, idx in enumerate(groups):
+            if idx.size:
+                out[idx] = x[idx] @ mats[i]
+        return out
+
+    def output(self, x, groups):
+        return self._apply(x, self.C, groups)
+
+    def measurement_noise(self, v, groups):
+        return self._apply(v, self.J, groups)
+
+    def stage_cost(self, x, u, groups):
+        return (np.einsum("na,na->n", self._apply(x, self.Q, groups), x)
+                + np.einsum("na,na->n", self._apply(u, self.R, groups), u))
+
+    def terminal_cost(self, x, groups):
+        return np.einsum("na,na->n", self._apply(x, self.Q, groups), x)
+
+    def transition(self, x, u, w, groups):
+        return self._apply(np.concatenate([x, u, w], axis=1), self.ABH, groups)
+
+
+#: State dimension from which the Monte Carlo multiplies per mode (:class:`_ModeGroups`)
+#: instead of by all modes at once (:class:`_ModeStack`): measured crossover on 2 cores.
+GROUPED_MIN_NX = 12
+
+
 def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0_cov=None,
              trajectories=False, progress=False):
     """Monte Carlo of ``n_runs`` closed-loop runs of ``horizon`` steps, vectorised over runs.
@@ -348,7 +393,7 @@ def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0, mu0, x0_cov, tra
     x = _initial_states(sys, x0, x0_cov, theta, N, rng)
     cumT = np.cumsum(sys.T, axis=1)
     cumT[:, -1] = 1.0
-    step = _ModeStack(sys)
+    step = _ModeGroups(sys) if sys.nx >= GROUPED_MIN_NX else _ModeStack(sys)
     state = controller.start(N)
     cost = np.zeros(N)
     if trajectories:

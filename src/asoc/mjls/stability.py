@@ -3,6 +3,7 @@
 import numpy as np
 
 from ..validation import real_array, stochastic_matrix
+from .operators import spectral_radius
 from .system import _stack, check_system
 
 
@@ -60,7 +61,8 @@ def ms_spectral_radius(A_stack, T) -> float:
     Returns
     -------
     float
-        rho(M) of :func:`ms_operator`.
+        rho(M) of :func:`ms_operator`, computed without forming it above a small size
+        (:func:`asoc.mjls.operators.spectral_radius`).
 
     Raises
     ------
@@ -77,7 +79,11 @@ def ms_spectral_radius(A_stack, T) -> float:
     >>> round(ms_spectral_radius(SEC32_A, SEC32_T), 4)
     1.4198
     """
-    return float(np.max(np.abs(np.linalg.eigvals(ms_operator(A_stack, T)))))
+    A_stack = _stack(A_stack, "A_stack")
+    T = stochastic_matrix(T, "T")
+    if T.shape[0] != A_stack.shape[0]:
+        raise ValueError(f"T: expected shape ({A_stack.shape[0]}, {A_stack.shape[0]}) for {A_stack.shape[0]} modes, found {T.shape}")
+    return spectral_radius(A_stack, T)
 
 
 def closed_loop(sys, L):

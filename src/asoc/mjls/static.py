@@ -5,12 +5,12 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
-from .moments import h2_cost, moment_operator, steady_state_second_moment
-from .stability import closed_loop, ms_spectral_radius
+from .moments import h2_cost, steady_state_second_moment
+from .operators import closed_loop, coupled_lyapunov_solver, spectral_radius
+from .stability import ms_spectral_radius
 from .system import check_system, predecessor_sum, successor_average
 
 GAIN_FLOOR = 1e-12     # absolute floor of the gain's norm in its relative change (a zero gain converges)
@@ -165,11 +165,6 @@ class _Recursion:
 MOMENTS = ("step", "exact")
 
 
-def _ms_radius(Acl, T):
-    """Mean-square spectral radius (Cor. 3.2) of the closed loop Acl (M, n, n)."""
-    return float(np.max(np.abs(np.linalg.eigvals(moment_operator(Acl, T)))))
-
-
 def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
     """The thesis's iteration (3.34)-(3.35) in scaled variables (see static_output_feedback).
 
@@ -213,7 +208,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
         if it > 1 and change < tol:
             status = "converged"
             break
-        if until_stabilizing and _ms_radius(closed_loop(sys, L), sys.T) < 1:
+        if until_stabilizing and spectral_radius(closed_loop(sys, L), sys.T) < 1:
             stabilized = True
             break
     logs = np.array(logs)
@@ -226,12 +221,13 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
 
     Each step solves the two coupled linear equations X = predecessor_sum(Acl X Acl^T + mu H H^T) and
-    P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (one LU factorisation of size M nx^2, used for
-    both). Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when
-    an iterate does not stabilise (the moments have no solution then).
+    P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (:func:`asoc.mjls.operators.coupled_lyapunov_solver`:
+    one LU factorisation of size M nx^2 for both when small, else BiCGSTAB on the operator).
+    Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when an iterate
+    does not stabilise (the moments have no solution then).
     """
-    M, n = sys.M, sys.nx
-    rhs_X = predecessor_sum(sys.T, rec.muHHt).ravel()
+    M = sys.M
+    rhs_X = predecessor_sum(sys.T, rec.muHHt)
     trace_X, trace_P = [], []
     stabilized = True
     status, change = "max_iterations", np.inf
@@ -239,16 +235,13 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     it = 0
     for it in range(1, max_iter + 1):
         Acl = closed_loop(sys, L)
-        op = moment_operator(Acl, sys.T)
-        if not np.max(np.abs(np.linalg.eigvals(op))) < 1:
+        if not spectral_radius(Acl, sys.T) < 1:
             stabilized, status = False, "diverged"
             break
-        lu = scipy.linalg.lu_factor(np.eye(M * n * n) - op)
+        solve = coupled_lyapunov_solver(Acl, sys.T)
         LC = L @ sys.C
-        X = scipy.linalg.lu_solve(lu, rhs_X).reshape(M, n, n)
-        P = scipy.linalg.lu_solve(lu, (sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC).ravel(),
-                                  trans=1).reshape(M, n, n)
-        X, P = 0.5 * (X + np.swapaxes(X, 1, 2)), 0.5 * (P + np.swapaxes(P, 1, 2))
+        X = solve(rhs_X).X
+        P = solve(sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC, adjoint=True).X
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
         try:

@@ -24,7 +24,7 @@ from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_
                                optimality_system)
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 from asoc.mjls.lmi import performance_output
-from asoc.mjls.moments import moment_operator
+from asoc.mjls.operators import kronecker_matrix
 
 from .core import Outcome, Statement
 from .instances import (Z_SCORE, apply_modes, best_gain, best_scalar_gain, draw_system, initial_modes, min_eig,
@@ -81,7 +81,7 @@ def check_3_1(rng):
     sys = draw_system(rng)
     A, T, M, n = sys.A, sys.T, sys.M, sys.nx
     S = random_spd_stack(rng, M, n)
-    op = moment_operator(A, T)
+    op = kronecker_matrix(A, T)
     eye = np.eye(M * n * n)
     try:
         Q_first = np.linalg.solve(eye - op.T, S.ravel()).reshape(M, n, n)     # A_i^T E_i(Q) A_i - Q_i = -S_i
@@ -366,7 +366,7 @@ def _costate(sys, L):
     Acl = closed_loop(sys, L)
     LC = L @ sys.C
     rhs = (sys.Q + _T(LC) @ sys.R @ LC).ravel()
-    P = np.linalg.solve(np.eye(rhs.size) - moment_operator(Acl, sys.T).T, rhs).reshape(sys.Q.shape)
+    P = np.linalg.solve(np.eye(rhs.size) - kronecker_matrix(Acl, sys.T).T, rhs).reshape(sys.Q.shape)
     return 0.5 * (P + _T(P))
 
 
@@ -561,7 +561,7 @@ def check_3_26(rng):
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
     _, Xt, rho = steady_state_cost(sys, F, K, L)
     At, _, Qt = augmented_closed_loop(sys, F, K, L)
-    Pt = np.linalg.solve(np.eye(Qt.size) - moment_operator(At, sys.T).T, Qt.ravel()).reshape(Qt.shape)
+    Pt = np.linalg.solve(np.eye(Qt.size) - kronecker_matrix(At, sys.T).T, Qt.ravel()).reshape(Qt.shape)
     Pt = 0.5 * (Pt + _T(Pt))
     n = sys.nx
 

@@ -1,0 +1,76 @@
+"""Random systems and timings for the scaling study (issue 17; the Scaling page, ``make bench``).
+
+:func:`scaling_system` draws the family the targets are stated on: mode matrices of spectral
+norm 0.95 (so the open loop is mean-square stable: rho <= max_i ||A_i||^2 < 1), Dirichlet
+rows of T. :func:`time_call` and :func:`fitted_exponent` turn timings into the slopes the
+page records.
+"""
+
+import time
+
+import numpy as np
+
+from .system import MJLS
+
+
+def scaling_system(rng, n, M, norm=0.95, inputs=None):
+    """A random MJLS with n states, M modes and ``inputs`` = ny = nu (default max(1, n // 8)).
+
+    A_i = norm * G_i / ||G_i||_2 with G_i standard normal; B_i, C_i standard normal scaled by
+    1 / sqrt(n); H_i = 0.3 I, J_i = 0.2 I, Q_i = I, R_i = I; the rows of T are Dirichlet(1, ..., 1).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    n, M : int
+        States and modes.
+    norm : float
+        Spectral norm of every A_i.
+    inputs : int, optional
+        Number of inputs and of outputs.
+
+    Returns
+    -------
+    MJLS
+
+    Examples
+    --------
+    >>> s = scaling_system(np.random.default_rng(0), 4, 2)
+    >>> s.nx, s.M, s.nu, round(float(np.linalg.norm(s.A[0], 2)), 12)
+    (4, 2, 1, 0.95)
+    """
+    m = max(1, n // 8) if inputs is None else inputs
+    A = rng.standard_normal((M, n, n))
+    A *= norm / np.linalg.norm(A, 2, axis=(1, 2))[:, None, None]
+    B = rng.standard_normal((M, n, m)) / np.sqrt(n)
+    C = rng.standard_normal((M, m, n)) / np.sqrt(n)
+    T = rng.dirichlet(np.ones(M), size=M)
+    eye = lambda k: np.broadcast_to(np.eye(k), (M, k, k))
+    return MJLS(A, B, C, 0.3 * eye(n), eye(n), eye(m), T, J=0.2 * eye(m))
+
+
+def time_call(fn, repeat=1):
+    """The smallest wall time of ``repeat`` calls of ``fn()`` (seconds) and the last result."""
+    best, out = np.inf, None
+    for _ in range(repeat):
+        start = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - start)
+    return best, out
+
+
+def fitted_exponent(sizes, seconds):
+    """Slope of log(seconds) against log(sizes) by least squares: time ~ size^exponent.
+
+    Examples
+    --------
+    >>> round(fitted_exponent([2, 4, 8], [1.0, 8.0, 64.0]), 12)
+    3.0
+    """
+    x, y = np.log(np.asarray(sizes, float)), np.log(np.asarray(seconds, float))
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def dense_bytes(n, M):
+    """Memory of the dense Kronecker matrix of the second-moment operator: 8 (M n^2)^2 bytes."""
+    return 8 * (M * n * n) ** 2

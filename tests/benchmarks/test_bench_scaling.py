@@ -1,0 +1,136 @@
+"""Scaling targets of issue 17: the Chapter 3 algorithms at up to 64 states and 8 modes.
+
+Run: ``PYTHONPATH=$PWD/src .venv/bin/python -m pytest tests/benchmarks/test_bench_scaling.py
+--benchmark-only -p no:cacheprovider``. Each benchmark puts its target in
+``extra_info["target_s"]`` (seconds) or, for a speed-up measured in one process,
+``extra_info["ratio"]`` and ``extra_info["target_ratio"]``. A missed target is reported, not
+asserted: timings depend on the machine and its load. The systems come from
+:func:`asoc.mjls.bench_scaling.scaling_system` (mode matrices of spectral norm 0.95,
+Dirichlet rows of T) with fixed seeds.
+"""
+
+import time
+import tracemalloc
+import warnings
+
+import numpy as np
+import pytest
+
+from asoc.mjls import (StaticGain, dynamic_output_feedback, exact_dynamic_output_feedback,
+                       ms_spectral_radius, simulate, static_output_feedback)
+from asoc.mjls.exact import averaged_lqg
+from asoc.mjls.bench_scaling import fitted_exponent, scaling_system, time_call
+from asoc.mjls.operators import kronecker_matrix, spectral_radius
+
+
+def system(n, M):
+    """The benchmark system with n states and M modes (seed n * 100 + M)."""
+    return scaling_system(np.random.default_rng(n * 100 + M), n, M)
+
+
+def test_ms_spectral_radius_ratio_n16_m4(benchmark):
+    """n = 16, M = 4: matrix-free rho at least 20x faster than the dense operator (one process)."""
+    s = system(16, 4)
+    dense_s, rho_dense = time_call(lambda: float(np.max(np.abs(np.linalg.eigvals(kronecker_matrix(s.A, s.T))))), 3)
+    rho = benchmark.pedantic(lambda: ms_spectral_radius(s.A, s.T), rounds=10, iterations=1)
+    free_s = benchmark.stats.stats.min
+    assert rho == pytest.approx(rho_dense, rel=1e-10)
+    benchmark.extra_info.update(ratio=dense_s / free_s, target_ratio=20.0, dense_s=dense_s)
+
+
+def test_ms_spectral_radius_n64_m8(benchmark):
+    """n = 64, M = 8: rho under 1 s (the dense matrix would need 8.6 GB)."""
+    s = system(64, 8)
+    rho = benchmark.pedantic(lambda: ms_spectral_radius(s.A, s.T), rounds=3, iterations=1)
+    assert 0 < rho < 0.95 ** 2
+    assert rho == pytest.approx(spectral_radius(s.A, s.T, "power"), rel=1e-8)
+    benchmark.extra_info.update(target_s=1.0, rho=rho)
+
+
+def test_alg31_exact_n64_m8(benchmark):
+    """n = 64, M = 8: Alg. 3.1 with moments="exact" under 10 s."""
+    s = system(64, 8)
+    r = benchmark.pedantic(lambda: static_output_feedback(s, moments="exact"), rounds=1, iterations=1)
+    assert r.converged and r.stabilizing
+    benchmark.extra_info.update(target_s=10.0, iterations=r.iterations)
+
+
+def test_alg32_n32_m8(benchmark):
+    """n = 32, M = 8: Alg. 3.2 under 20 s.
+
+    On this family Alg. 3.2 does not converge (it settles into a 2-cycle of stabilising
+    controllers, see the Scaling page), and one iteration solves (3.51), a dense system of
+    n^2 + 2 n ny = 1280 unknowns. It is timed for 20 iterations; the target is the issue's
+    for a whole run, so a time above it means the target is missed.
+    """
+    s = system(32, 8)
+
+    def run():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return dynamic_output_feedback(s, max_iter=20)
+    r = benchmark.pedantic(run, rounds=1, iterations=1)
+    assert r.iterations == 20
+    benchmark.extra_info.update(target_s=20.0, iterations=r.iterations, converged=r.converged)
+
+
+def test_exact_dynamic_output_feedback_n16_m4(benchmark):
+    """n = 16, M = 4: exact_dynamic_output_feedback under 60 s; 32 augmented states, M n^2 = 4096.
+
+    Started from the LQG compensator of the mode-averaged system (the default start, Alg.
+    3.2's controller, does not converge on this family; the zero controller is a stationary
+    point of the cost, where BFGS stops at once)."""
+    s = system(16, 4)
+    start = averaged_lqg(s, 16)
+    r = benchmark.pedantic(lambda: exact_dynamic_output_feedback(s, init=start), rounds=1, iterations=1)
+    assert r.converged and r.stabilizing
+    benchmark.extra_info.update(target_s=60.0, iterations=r.iterations)
+
+
+def test_monte_carlo_n64_m8(benchmark):
+    """n = 64, M = 8: 1e4 runs x 100 steps under 30 s and 4 GB (peak traced by tracemalloc)."""
+    s = system(64, 8)
+    gain = StaticGain(np.zeros((s.nu, s.ny)))
+
+    def run():
+        tracemalloc.start()
+        out = simulate(s, gain, np.zeros(64), 100, 10_000, np.random.default_rng(0))
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        return out, peak
+    r, peak = benchmark.pedantic(run, rounds=1, iterations=1)
+    assert r.cost.shape == (10_000,) and np.all(np.isfinite(r.cost))
+    assert peak < 4e9
+    benchmark.extra_info.update(target_s=30.0, peak_gb=peak / 1e9, target_gb=4.0)
+
+
+def test_exponent_ms_spectral_radius_m8(benchmark):
+    """Fitted exponent of the matrix-free rho's time against n = 8..64 at M = 8 (target <= 3)."""
+    sizes = (8, 16, 32, 64)
+    systems = {n: system(n, 8) for n in sizes}
+
+    def run():
+        return [time_call(lambda s=systems[n]: spectral_radius(s.A, s.T, "arnoldi"), 3)[0] for n in sizes]
+    seconds = benchmark.pedantic(run, rounds=1, iterations=1)
+    benchmark.extra_info.update(exponent=fitted_exponent(sizes, seconds), target_exponent=3.0,
+                                seconds=dict(zip(map(str, sizes), seconds)))
+
+
+def test_exponent_alg31_exact_m4(benchmark):
+    """Fitted exponent of Alg. 3.1 (moments="exact") against n = 16..64 at M = 4 (target <= 3).
+
+    Per iteration: the number of iterations depends on the system, not on the method; from
+    n = 16 on, both phases run matrix-free (at n = 8, M n^2 = 256 is on the dense side)."""
+    sizes = (16, 32, 64)
+    systems = {n: system(n, 4) for n in sizes}
+
+    def run():
+        out = []
+        for n in sizes:
+            start = time.perf_counter()
+            r = static_output_feedback(systems[n], moments="exact")
+            out.append((time.perf_counter() - start) / r.iterations)
+        return out
+    seconds = benchmark.pedantic(run, rounds=1, iterations=1)
+    benchmark.extra_info.update(exponent=fitted_exponent(sizes, seconds), target_exponent=3.0,
+                                seconds=dict(zip(map(str, sizes), seconds)))

@@ -1,0 +1,77 @@
+"""Matrix-free second-moment operators (asoc.mjls.operators) against the dense Kronecker path."""
+
+import numpy as np
+import pytest
+
+from asoc.mjls import ms_operator, ms_spectral_radius
+from asoc.mjls.bench_scaling import fitted_exponent, scaling_system
+from asoc.mjls.operators import (DENSE_MAX_RADIUS, DENSE_MAX_SOLVE, Verdict, costate_map,
+                                 coupled_lyapunov_solver, kronecker_matrix, mean_square_stability,
+                                 second_moment_map, solve_coupled_lyapunov, spectral_radius)
+
+
+def stack(rng, M, n):
+    G = rng.standard_normal((M, n, n))
+    return G @ np.swapaxes(G, 1, 2)
+
+
+@pytest.mark.parametrize("n, M", [(2, 2), (3, 4), (5, 3)])
+def test_maps_match_kronecker_matrix_and_are_adjoint(n, M):
+    s = scaling_system(np.random.default_rng(n + 10 * M), n, M)
+    rng = np.random.default_rng(1)
+    X, P = stack(rng, M, n), stack(rng, M, n)
+    K = kronecker_matrix(s.A, s.T)
+    np.testing.assert_allclose(second_moment_map(s.A, s.T, X).ravel(), K @ X.ravel(), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(costate_map(s.A, s.T, P).ravel(), K.T @ P.ravel(), rtol=1e-12, atol=1e-12)
+    lhs = np.vdot(second_moment_map(s.A, s.T, X), P)
+    assert lhs == pytest.approx(np.vdot(X, costate_map(s.A, s.T, P)), rel=1e-12)
+
+
+@pytest.mark.parametrize("n, M, scale", [(4, 2, 1.0), (6, 4, 1.0), (6, 4, 1.9), (9, 3, 1.3)])
+def test_spectral_radius_methods_agree_with_cor_3_2(n, M, scale):
+    s = scaling_system(np.random.default_rng(7 * n + M), n, M)
+    A = np.sqrt(scale) * s.A
+    dense = float(np.max(np.abs(np.linalg.eigvals(ms_operator(A, s.T)))))
+    assert spectral_radius(A, s.T, "dense") == pytest.approx(dense, rel=1e-12)
+    assert spectral_radius(A, s.T, "arnoldi") == pytest.approx(dense, rel=1e-10)
+    assert spectral_radius(A, s.T, "power") == pytest.approx(dense, rel=1e-8)
+    assert ms_spectral_radius(A, s.T) == pytest.approx(dense, rel=1e-10)
+
+
+def test_auto_switches_at_the_measured_sizes():
+    assert DENSE_MAX_RADIUS < DENSE_MAX_SOLVE
+    s = scaling_system(np.random.default_rng(3), 12, 4)               # M n^2 = 576: matrix-free
+    W = stack(np.random.default_rng(4), 4, 12)
+    sol = coupled_lyapunov_solver(s.A, s.T)(W)
+    assert sol.method.startswith("bicgstab") and sol.residual < 1e-11
+    dense = solve_coupled_lyapunov(s.A, s.T, W, method="dense")
+    np.testing.assert_allclose(sol.X, dense.X, rtol=1e-9, atol=1e-9 * np.abs(dense.X).max())
+
+
+@pytest.mark.parametrize("method", ["dense", "bicgstab", "gmres", "fixed_point"])
+@pytest.mark.parametrize("adjoint", [False, True])
+def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
+    s = scaling_system(np.random.default_rng(5), 5, 3)
+    A = s.A * np.sqrt(0.97 / spectral_radius(s.A, s.T))              # rho = 0.97: slow contraction
+    W = stack(np.random.default_rng(6), 3, 5)
+    sol = solve_coupled_lyapunov(A, s.T, W, adjoint=adjoint, method=method)
+    assert sol.residual < 1e-11
+    apply = costate_map if adjoint else second_moment_map
+    np.testing.assert_allclose(sol.X - apply(A, s.T, sol.X), W, atol=1e-9 * np.abs(W).max())
+    assert np.all(np.linalg.eigvalsh(sol.X) > 0)                      # stable: the solution is > 0
+
+
+def test_verdict_is_undecided_within_rounding_of_one():
+    T = np.array([[0.3, 0.7], [0.6, 0.4]])
+    A = np.stack([np.diag([0.9, 0.2]), np.diag([0.5, 1.1])])
+    rho = spectral_radius(A, T)
+    on_boundary = A / np.sqrt(rho)                                    # rho = 1 up to rounding
+    assert mean_square_stability(on_boundary, T).verdict is Verdict.UNDECIDED
+    assert mean_square_stability(A * np.sqrt(0.99 / rho), T).verdict is Verdict.STABLE
+    assert mean_square_stability(A * np.sqrt(1.01 / rho), T).verdict is Verdict.UNSTABLE
+    near = mean_square_stability(A / np.sqrt(rho) * (1 - 1e-6), T)
+    assert near.stable and near.margin == pytest.approx(2e-6, rel=1e-3)
+
+
+def test_fitted_exponent_recovers_a_power_law():
+    assert fitted_exponent([4, 8, 16, 32], [2.0 * n ** 2.5 for n in (4, 8, 16, 32)]) == pytest.approx(2.5)
