@@ -36,6 +36,8 @@ CALLS = {
     "MJLS": (mjls.MJLS, dict(A=SYS.A, B=SYS.B, C=SYS.C, H=SYS.H, Q=SYS.Q, R=SYS.R, T=SYS.T, J=SYS.J,
                              mu_inf=SYS.mu_inf, dt=0.1)),
     "stationary_distribution": (mjls.stationary_distribution, dict(T=SYS.T)),
+    "random_mjls": (mjls.random_mjls, dict(rng=np.random.default_rng(0), n_states=2, n_inputs=1, n_outputs=1,
+                                          n_modes=2)),
     "ms_spectral_radius": (mjls.ms_spectral_radius, dict(A_stack=SYS.A, T=SYS.T)),
     "ms_operator": (mjls.ms_operator, dict(A_stack=SYS.A, T=SYS.T)),
     "closed_loop": (mjls.closed_loop, dict(sys=SYS, L=[[-0.5]])),

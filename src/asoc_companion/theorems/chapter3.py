@@ -27,7 +27,7 @@ from asoc.mjls.lmi import performance_output
 from asoc.mjls.operators import kronecker_matrix
 
 from .core import Outcome, Statement
-from .instances import (Z_SCORE, apply_modes, best_gain, best_scalar_gain, draw_system, initial_modes, min_eig,
+from .instances import (Z_SCORE, apply_modes, best_scalar_gain, draw_system, initial_modes, min_eig,
                         moment_estimate, next_modes, radius_to, random_spd, random_spd_stack, rescaled, size,
                         scalar_gain_radii, stationary_average, system_data)
 
