@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from asoc.mjls import ms_operator, ms_spectral_radius
-from asoc.mjls.bench_scaling import fitted_exponent, scaling_system
+from asoc_companion.scaling import scaling_system
+from asoc_companion.timing import fitted_exponent
 from asoc.mjls.operators import (DENSE_MAX_RADIUS, DENSE_MAX_SOLVE, Verdict, costate_map,
                                  coupled_lyapunov_solver, kronecker_matrix, mean_square_stability,
                                  second_moment_map, solve_coupled_lyapunov, spectral_radius)

@@ -8,6 +8,8 @@ timed by pytest-benchmark itself.
 import statistics
 import time
 
+import numpy as np
+
 
 def median_seconds(fn, repeat: int = 15) -> float:
     """Median wall time of ``repeat`` calls of ``fn()``.
@@ -63,3 +65,25 @@ def alternating_medians(reference, candidate, repeat: int = 15) -> tuple[float, 
     """
     pairs = [(median_seconds(reference, 1), median_seconds(candidate, 1)) for _ in range(repeat)]
     return float(statistics.median(p[0] for p in pairs)), float(statistics.median(p[1] for p in pairs))
+
+
+def time_call(fn, repeat=1):
+    """The smallest wall time of ``repeat`` calls of ``fn()`` (seconds) and the last result."""
+    best, out = np.inf, None
+    for _ in range(repeat):
+        start = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - start)
+    return best, out
+
+
+def fitted_exponent(sizes, seconds):
+    """Slope of log(seconds) against log(sizes) by least squares: time ~ size^exponent.
+
+    Examples
+    --------
+    >>> round(fitted_exponent([2, 4, 8], [1.0, 8.0, 64.0]), 12)
+    3.0
+    """
+    x, y = np.log(np.asarray(sizes, float)), np.log(np.asarray(seconds, float))
+    return float(np.polyfit(x, y, 1)[0])

@@ -5,7 +5,7 @@ Run: ``PYTHONPATH=$PWD/src .venv/bin/python -m pytest tests/benchmarks/test_benc
 ``extra_info["target_s"]`` (seconds) or, for a speed-up measured in one process,
 ``extra_info["ratio"]`` and ``extra_info["target_ratio"]``. A missed target is reported, not
 asserted: timings depend on the machine and its load. The systems come from
-:func:`asoc.mjls.bench_scaling.scaling_system` (mode matrices of spectral norm 0.95,
+:func:`asoc_companion.scaling.scaling_system` (mode matrices of spectral norm 0.95,
 Dirichlet rows of T) with fixed seeds.
 """
 
@@ -19,7 +19,8 @@ import pytest
 from asoc.mjls import (StaticGain, dynamic_output_feedback, exact_dynamic_output_feedback,
                        ms_spectral_radius, simulate, static_output_feedback)
 from asoc.mjls.exact import averaged_lqg
-from asoc.mjls.bench_scaling import fitted_exponent, scaling_system, time_call
+from asoc_companion.scaling import scaling_system
+from asoc_companion.timing import fitted_exponent, time_call
 from asoc.mjls.operators import kronecker_matrix, spectral_radius
 
 

@@ -1,16 +1,13 @@
-"""Random systems and timings for the scaling study (issue 17; the Scaling page, ``make bench``).
+"""The random family of the scaling study (issue 17; the Scaling page, ``make bench``).
 
 :func:`scaling_system` draws the family the targets are stated on: mode matrices of spectral
 norm 0.95 (so the open loop is mean-square stable: rho <= max_i ||A_i||^2 < 1), Dirichlet
-rows of T. :func:`time_call` and :func:`fitted_exponent` turn timings into the slopes the
-page records.
+rows of T. :func:`dense_bytes` is the memory the dense Kronecker path would need.
 """
-
-import time
 
 import numpy as np
 
-from .system import MJLS
+from asoc.mjls import MJLS
 
 
 def scaling_system(rng, n, M, norm=0.95, inputs=None):
@@ -47,28 +44,6 @@ def scaling_system(rng, n, M, norm=0.95, inputs=None):
     T = rng.dirichlet(np.ones(M), size=M)
     eye = lambda k: np.broadcast_to(np.eye(k), (M, k, k))
     return MJLS(A, B, C, 0.3 * eye(n), eye(n), eye(m), T, J=0.2 * eye(m))
-
-
-def time_call(fn, repeat=1):
-    """The smallest wall time of ``repeat`` calls of ``fn()`` (seconds) and the last result."""
-    best, out = np.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, out
-
-
-def fitted_exponent(sizes, seconds):
-    """Slope of log(seconds) against log(sizes) by least squares: time ~ size^exponent.
-
-    Examples
-    --------
-    >>> round(fitted_exponent([2, 4, 8], [1.0, 8.0, 64.0]), 12)
-    3.0
-    """
-    x, y = np.log(np.asarray(sizes, float)), np.log(np.asarray(seconds, float))
-    return float(np.polyfit(x, y, 1)[0])
 
 
 def dense_bytes(n, M):
