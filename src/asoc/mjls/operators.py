@@ -450,26 +450,9 @@ def _iterative_solve(A, T, W, adjoint, method, tol, max_iter=5000, x0=None):
     return x.reshape(M, n, n), count[0]
 
 
-def closed_loop(sys, L):
-    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L.
-
-    Parameters
-    ----------
-    sys : MJLS
-    L : array_like, shape (nu, ny)
-        Static output-feedback gain u = L y (3.8).
-
-    Returns
-    -------
-    numpy.ndarray, shape (M, nx, nx)
-
-    Raises
-    ------
-    ValueError
-        If ``L`` does not have nu * ny entries.
-    """
-    L = np.asarray(L, dtype=float).reshape(sys.nu, sys.ny)
-    return sys.A + sys.B @ L @ sys.C
+def closed_loop_unchecked(sys, L):
+    """A_i + B_i L C_i of (3.10) for the inner loops of Alg. 3.1 (:func:`asoc.mjls.closed_loop` checks L)."""
+    return sys.A + sys.B @ np.asarray(L, dtype=float).reshape(sys.nu, sys.ny) @ sys.C
 
 
 def noise_covariances(sys):

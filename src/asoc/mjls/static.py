@@ -9,7 +9,7 @@ import numpy as np
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .moments import h2_cost, steady_state_second_moment
-from .operators import closed_loop, coupled_lyapunov_solver, spectral_radius
+from .operators import closed_loop_unchecked, coupled_lyapunov_solver, spectral_radius
 from .stability import ms_spectral_radius
 from .system import check_system, predecessor_sum, successor_average
 
@@ -208,7 +208,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
         if it > 1 and change < tol:
             status = "converged"
             break
-        if until_stabilizing and spectral_radius(closed_loop(sys, L), sys.T) < 1:
+        if until_stabilizing and spectral_radius(closed_loop_unchecked(sys, L), sys.T) < 1:
             stabilized = True
             break
     logs = np.array(logs)
@@ -234,7 +234,7 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     X = P = None
     it = 0
     for it in range(1, max_iter + 1):
-        Acl = closed_loop(sys, L)
+        Acl = closed_loop_unchecked(sys, L)
         if not spectral_radius(Acl, sys.T) < 1:
             stabilized, status = False, "diverged"
             break
@@ -343,7 +343,7 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     seconds = time.perf_counter() - start
     L = run["L"]
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
-    Acl = closed_loop(sys, L)
+    Acl = closed_loop_unchecked(sys, L)
     rho = ms_spectral_radius(Acl, sys.T)
     stabilizing = bool(rho < 1)
     cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf
