@@ -42,7 +42,7 @@ class ObservedModeResult(IterativeResult):
     stabilizing : bool
     converged, status, message
         Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
-        ``"diverged"`` (max |P| > 1e100) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
+        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
     iterations : int
     seconds : float
 
