@@ -286,8 +286,10 @@ class UKF:
 
     def _checked(self, mean, cov, extra=None, size=None, extra_name=None):
         mean, cov = _estimate(mean, cov, "mean", "cov", self.model.n_x, definite_check=False)
-        if extra is None:
+        if extra_name is None:
             return mean, cov
+        if extra is None:
+            raise TypeError(f"{extra_name}: expected a real array of shape (..., {size}), found None")
         extra = check.real_array(extra, extra_name)
         if extra.ndim == 0 or extra.shape[-1] != size:
             raise ValueError(f"{extra_name}: expected shape (..., {size}), found shape {extra.shape}")
