@@ -70,7 +70,7 @@ def _ids(path: Path) -> set:
 
 
 @pytest.mark.book
-@pytest.mark.parametrize("page", ["intro.html", "findings.html", "ledger.html"])
+@pytest.mark.parametrize("page", ["intro.html", "findings.html", "theorems.html", "ledger.html"])
 def test_internal_links_resolve(html, browser, page):
     browser.get((html / page).as_uri())
     hrefs = browser.execute_script(

@@ -1,5 +1,6 @@
 """Counterexamples of the theorems study: saved as data, the one to show chosen, printed rounded."""
 
+import html
 import json
 from pathlib import Path
 
@@ -8,6 +9,7 @@ import numpy as np
 from ..io import atomic_write_json
 from .chapter3 import MARGIN, SHOW
 from .core import Outcome
+from .engine import verdict_text
 
 COUNTEREXAMPLES = "theorems_counterexamples.json"
 SYSTEMS_KEPT = 20             # system matrices saved for the 20 smallest counterexamples per statement
@@ -79,3 +81,34 @@ def system_from(numbers):
     from asoc.mjls import MJLS
 
     return MJLS(**{k: np.array(v) for k, v in numbers["system"].items() if v is not None})
+
+
+# the table's columns and their share of the page's width (fixed layout: it never widens the page)
+COLUMNS = (("Statement", 30), ("What one instance checks", 40), ("Verdict", 16), ("Evidence", 14))
+
+
+def statements_table(statements, results, findings) -> str:
+    """The theorems page's table as HTML: per statement its claim, its check, the verdict and links to
+    the counterexample on the page and to the finding (``findings`` maps a statement key to an anchor
+    of findings.html). HTML, not Markdown: claims contain ``|`` and the links must leave the page."""
+    head = "".join(f"<th>{name}</th>" for name, _ in COLUMNS)
+    widths = "".join(f'<col style="width:{share}%">' for _, share in COLUMNS)
+    rows = "\n".join(_statement_row(st, results, findings) for st in statements)
+    return (f'<table class="table asoc-statements"><colgroup>{widths}</colgroup>'
+            f"<thead><tr>{head}</tr></thead><tbody>\n{rows}\n</tbody></table>")
+
+
+def _statement_row(st, results, findings) -> str:
+    claim = f"<strong>{html.escape(st.label)}.</strong> {html.escape(st.summary)}"
+    if st.check is None:
+        verdict, evidence = f"not checkable: {html.escape(st.not_checkable)}", "-"
+    else:
+        record = results[st.key].record()
+        verdict = html.escape(verdict_text(record))
+        evidence = f"<code>{st.check.__module__.rsplit('.', 1)[-1]}.{st.check.__name__}</code>"
+        if record["fails"]:
+            evidence = f'<a href="#{st.key.replace("_", "-")}">counterexample</a>'
+            if st.key in findings:
+                evidence += f', <a href="findings.html#{findings[st.key]}">finding</a>'
+    cells = (claim, html.escape(st.checked), verdict, evidence)
+    return "<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"
