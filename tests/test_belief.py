@@ -11,7 +11,7 @@ from asoc.belief import (UKF, AffinePolicy, DiracMixture, GaussianNoise, Particl
                          landmark_example, next_estimate_covariance, linear_gaussian_model, reference_trajectory,
                          sigma_points, statistical_taylor_expansion, statistical_taylor_linearization_error,
                          improved_policy_value)
-from asoc.belief.trajectory import StageProblem, terminal_value
+from asoc.belief.trajectory import StageProblem, Value, terminal_value
 
 # a linear-Gaussian model (the LQG case of Sec. 2.3)
 A = np.array([[1.0, 0.1], [0.0, 1.0]])
@@ -406,3 +406,64 @@ def test_simulate_checks_the_controller_against_the_draws():
         MeanAffineController(ex.model, AffinePolicy.zero(3, 1, 2))
     with pytest.raises(TypeError, match="model: expected a NonlinearModel"):
         simulate("model", ex.cost, ex.mean0, ex.cov0, short, noise)
+
+
+def _textbook_next_covariance(model, mean, cov, u, kappa=0.5):
+    """C_{k+1} of the UKF written out: sigma points of each joint Gaussian from the root of its
+    whole block-diagonal covariance (:func:`sigma_points`), Lemma 2.1 with the pseudo-inverse."""
+    def joint_points(m, P, noise):
+        joint_cov = np.block([[P, np.zeros((m.size, noise.dim))], [np.zeros((noise.dim, m.size)), noise.cov]])
+        points, weights = sigma_points(np.concatenate([m, noise.mean]), joint_cov, kappa)
+        return points[:, :m.size], points[:, m.size:], weights
+
+    x, w, weights = joint_points(mean, cov, model.w)
+    x_next = model.a(x, u, w)
+    e = x_next - weights @ x_next
+    x, v, weights = joint_points(weights @ x_next, (weights[:, None] * e).T @ e, model.v)
+    y = model.h(x, v)
+    ex, ey = x - weights @ x, y - weights @ y
+    Cxy = (weights[:, None] * ex).T @ ey
+    return (weights[:, None] * ex).T @ ex - Cxy @ np.linalg.pinv((weights[:, None] * ey).T @ ey) @ Cxy.T
+
+
+def _random_models(rng):
+    n_x = int(rng.integers(1, 4))
+    yield landmark_example().model
+    for n_y in (1, 2):
+        yield linear_gaussian_model(np.eye(n_x) + 0.3 * rng.normal(size=(n_x, n_x)), rng.normal(size=(n_x, 2)),
+                                    rng.normal(size=(n_x, 2)), rng.normal(size=(n_y, n_x)), np.eye(n_y))
+    from asoc.belief import NonlinearModel       # a measurement that says nothing: C^{yy} = 0
+    yield NonlinearModel(a=lambda x, u, w: np.sin(x) + u + w, h=lambda x, v: 0.0 * x[..., :1] + 0.0 * v,
+                         w=GaussianNoise(np.zeros(n_x), np.eye(n_x)), v=GaussianNoise([0.0], [[1.0]]),
+                         n_x=n_x, n_u=n_x)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.booleans())
+def test_unchecked_next_covariance_equals_the_public_and_the_textbook_one(seed, singular):
+    rng = np.random.default_rng(seed)
+    for model in _random_models(rng):
+        M = rng.normal(size=(model.n_x, model.n_x))
+        mean, cov, u = rng.normal(size=model.n_x), 0.5 * M @ M.T, rng.normal(size=model.n_u)
+        if singular:                              # no Cholesky factor: the eigen root
+            cov[-1], cov[:, -1] = 0.0, 0.0
+        ukf = UKF(model)
+        public = ukf.next_covariance((mean, cov), u)
+        fast = ukf._covariance_function((mean, cov))(u)
+        assert np.allclose(fast, public, rtol=1e-13, atol=1e-14)
+        assert np.allclose(fast, _textbook_next_covariance(model, mean, cov, u), rtol=1e-10, atol=1e-12)
+
+
+def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
+    ex = landmark_example(K=2)
+    filt = UKF(ex.model)
+    w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    rng = np.random.default_rng(3)
+    S = rng.normal(size=(2, 2))                   # tr[S C] also for an S that is not symmetric
+    stage = StageProblem(ex.model, ex.cost, filt, (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), S), w, beta)
+    for u in rng.normal(size=(5, 2)):
+        C = filt.next_covariance((ex.mean0, ex.cov0), u)
+        assert stage._covariance_part(u) == stage.covariance_part(list(u))
+        assert stage._covariance_part(u) == pytest.approx(0.5 * np.trace(S @ C), rel=1e-13)
+    with pytest.raises(ValueError, match="u: expected shape"):
+        stage.covariance_part([1.0])

@@ -12,8 +12,10 @@ UKF functions broadcast over leading axes of ``mean`` (batches of Monte Carlo ru
 """
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
+from scipy.linalg import lapack
 
 from .. import validation as check
 from .models import GaussianNoise, NonlinearModel
@@ -126,21 +128,89 @@ def sigma_points(mean, cov, kappa: float = KAPPA):
     return _sigma_points(mean, cov, kappa)
 
 
+def _cholesky(cov):
+    """Lower Cholesky factor of a covariance or a batch; LinAlgError unless positive definite.
+
+    One matrix goes to LAPACK's dpotrf directly: on the small matrices of the filters,
+    numpy.linalg.cholesky's argument handling costs several times the factorisation.
+    """
+    if cov.ndim > 2:
+        return np.linalg.cholesky(cov)
+    L, info = lapack.dpotrf(cov, lower=True, clean=True)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"Matrix is not positive definite (dpotrf info {info})")
+    return L
+
+
 def _sigma_points(mean, cov, kappa):
     n = mean.shape[-1]
-    L = np.sqrt(n + kappa) * _root(cov)
-    L = np.broadcast_to(L, np.broadcast_shapes(mean.shape[:-1], L.shape[:-2]) + (n, n))
-    offsets = np.concatenate([np.zeros(L.shape[:-2] + (1, n)), np.swapaxes(L, -1, -2),
-                              -np.swapaxes(L, -1, -2)], axis=-2)
+    return _points_around(mean, np.sqrt(n + kappa) * _root(cov)), _unscented_weights(n, kappa)
+
+
+def _points_around(mean, L):
+    """mean, mean + L_j and mean - L_j for the columns L_j of L; broadcasts over leading axes."""
+    Lt = L.swapaxes(-1, -2)
+    return mean[..., None, :] + np.concatenate([np.zeros(Lt.shape[:-2] + (1, Lt.shape[-1])), Lt, -Lt], axis=-2)
+
+
+def _unscented_weights(n, kappa):
+    """kappa / (n + kappa) for the mean and 1 / (2 (n + kappa)) for the other 2n sigma points."""
     weights = np.full(2 * n + 1, 1.0 / (2 * (n + kappa)))
     weights[0] = kappa / (n + kappa)
-    return mean[..., None, :] + offsets, weights
+    return weights
+
+
+class _Augmented:
+    """Sigma points of a state estimate augmented by a noise, N([mean, E{w}], [[cov, 0], [0, Cov{w}]]).
+
+    The root of the block-diagonal covariance is the Cholesky factor, whose blocks are those
+    of ``cov`` and Cov{w}: the noise's offsets of the sigma points and the weights are
+    computed once, and each estimate fills in the scaled Cholesky factor of its ``cov``.
+    Where a Cholesky factor does not exist, the root is :func:`_root`'s of the whole
+    matrix, as in :func:`_sigma_points`.
+    """
+
+    def __init__(self, noise, n_x, kappa):
+        n = n_x + noise.dim
+        self.noise, self.n_x, self.n, self.scale = noise, n_x, n, np.sqrt(n + kappa)
+        self.weights = _unscented_weights(n, kappa)
+        try:
+            noise_root = np.linalg.cholesky(noise.cov)
+        except np.linalg.LinAlgError:
+            self.noise_offsets = None
+        else:
+            self.noise_offsets = _points_around(np.zeros(n), self.scale * _block_diag(np.zeros((n_x, n_x)), noise_root))
+
+    def points(self, mean, cov):
+        """State part (..., 2n+1, n_x) and noise part (..., 2n+1, n_w) of the sigma points."""
+        offsets = self._offsets(cov)
+        return mean[..., None, :] + offsets[..., :self.n_x], self.noise.mean + offsets[..., self.n_x:]
+
+    def _offsets(self, cov):
+        """Sigma points of N(0, [[cov, 0], [0, Cov{w}]])."""
+        if self.noise_offsets is not None:
+            try:
+                Lt = (self.scale * _cholesky(cov)).swapaxes(-1, -2)
+            except np.linalg.LinAlgError:
+                pass
+            else:
+                offsets = np.empty(cov.shape[:-2] + self.noise_offsets.shape)
+                offsets[...] = self.noise_offsets
+                offsets[..., 1:1 + self.n_x, :self.n_x] = Lt
+                offsets[..., 1 + self.n:1 + self.n + self.n_x, :self.n_x] = -Lt
+                return offsets
+        return _points_around(np.zeros(self.n), self.scale * _root(_block_diag(cov, self.noise.cov)))
 
 
 def _moments(points, weights):
-    mean = np.einsum("i,...ij->...j", weights, points)
-    e = points - mean[..., None, :]
-    return mean, e
+    """The weighted mean of the points (last axis) and the points centred at it."""
+    mean = weights @ points
+    return mean, points - mean[..., None, :]
+
+
+def _weighted_covariance(e, weights):
+    """sum_i weights_i e_i e_i^T of centred samples e (..., M, n)."""
+    return (weights[:, None] * e).swapaxes(-1, -2) @ e
 
 
 def _block_diag(P, Q):
@@ -153,21 +223,28 @@ def _block_diag(P, Q):
 
 
 def _solve(S, B):
-    """S^{-1} B, with the pseudo-inverse where S is singular (a degenerate measurement)."""
+    """S^{-1} B, with the pseudo-inverse where S is singular (a degenerate measurement).
+
+    A scalar S != 0 divides.
+    """
+    if S.shape[-1] == 1 and S.all():
+        return B / S
     try:
         return np.linalg.solve(S, B)
     except np.linalg.LinAlgError:
         return np.linalg.pinv(S, hermitian=True) @ B
 
 
-def _conditional_covariance(ex, ey, weights):
-    """C^{xx} - C^{xy} (C^{yy})^{-1} (C^{xy})^T and the gain from centred samples (Lemma 2.1)."""
-    Cxx = np.einsum("i,...ij,...ik->...jk", weights, ex, ex)
-    Cxy = np.einsum("i,...ij,...ik->...jk", weights, ex, ey)
-    Cyy = np.einsum("i,...ij,...ik->...jk", weights, ey, ey)
-    gain = np.swapaxes(_solve(Cyy, np.swapaxes(Cxy, -1, -2)), -1, -2)
-    post = Cxx - gain @ np.swapaxes(Cxy, -1, -2)
-    return 0.5 * (post + np.swapaxes(post, -1, -2)), gain
+def _conditional_covariance(e, n, weights):
+    """C^{xx} - C^{xy} (C^{yy})^{-1} C^{yx} and the gain from centred joint samples e = [x, y] (Lemma 2.1).
+
+    ``e`` is (..., M, n + n_y), its first ``n`` columns the state.
+    """
+    C = _weighted_covariance(e, weights)
+    Cxx, Cyx, Cyy = C[..., :n, :n], C[..., n:, :n], C[..., n:, n:]
+    gain = _solve(Cyy, Cyx).swapaxes(-1, -2)
+    post = Cxx - gain @ Cyx
+    return 0.5 * (post + post.swapaxes(-1, -2)), gain
 
 
 def next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta=None, gamma=None):
@@ -228,9 +305,8 @@ def _next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta, gam
     weights = (mixture.weights[:, None, None] * beta[None, :, None] * gamma[None, None, :]).ravel()
     xs = np.broadcast_to(x_im[:, :, None, :], y_imn.shape[:3] + x_im.shape[-1:]).reshape(-1, x_im.shape[-1])
     ys = y_imn.reshape(-1, y_imn.shape[-1])
-    _, ex = _moments(xs, weights)
-    _, ey = _moments(ys, weights)
-    return _conditional_covariance(ex, ey, weights)[0]
+    _, e = _moments(np.concatenate([xs, ys], axis=-1), weights)
+    return _conditional_covariance(e, xs.shape[-1], weights)[0]
 
 
 class UKF:
@@ -263,6 +339,8 @@ class UKF:
         self.model = check.instance(model, NonlinearModel, "model")
         self.kappa = check.real_scalar(kappa, "kappa", low=-(model.n_x + min(model.w.dim, model.v.dim)),
                                        low_open=True)
+        self._process = _Augmented(model.w, model.n_x, self.kappa)
+        self._sensor = _Augmented(model.v, model.n_x, self.kappa)
 
     def initial(self, mean, cov, rng=None):
         """The initial estimate (mean0, cov0) after checking it."""
@@ -300,24 +378,26 @@ class UKF:
         return self._predict(*self._checked(mean, cov, u, self.model.n_u, "u"))
 
     def _predict(self, mean, cov, u):
-        m = self.model
-        n = mean.shape[-1]
-        joint_mean = np.concatenate([mean, np.broadcast_to(m.w.mean, mean.shape[:-1] + m.w.mean.shape)], -1)
-        pts, wts = _sigma_points(joint_mean, _block_diag(cov, m.w.cov), self.kappa)
-        x_next = m.a(pts[..., :n], np.asarray(u)[..., None, :], pts[..., n:])
-        mean_p, e = _moments(x_next, wts)
-        return mean_p, np.einsum("i,...ij,...ik->...jk", wts, e, e)
+        return self._propagate(self._prior(mean, cov), u)
+
+    def _prior(self, mean, cov):
+        """The joint sigma points of state and process noise: (state part, noise part)."""
+        return self._process.points(mean, cov)
+
+    def _propagate(self, prior, u):
+        """Predicted mean and covariance from the prior's joint sigma points (:meth:`_prior`)."""
+        x_points, w_points = prior
+        weights = self._process.weights
+        mean_p, e = _moments(self.model.a(x_points, np.asarray(u)[..., None, :], w_points), weights)
+        return mean_p, _weighted_covariance(e, weights)
 
     def _measurement(self, mean, cov):
-        m = self.model
-        n = mean.shape[-1]
-        joint_mean = np.concatenate([mean, np.broadcast_to(m.v.mean, mean.shape[:-1] + m.v.mean.shape)], -1)
-        pts, wts = _sigma_points(joint_mean, _block_diag(cov, m.v.cov), self.kappa)
-        y = m.h(pts[..., :n], pts[..., n:])
-        _, ex = _moments(pts[..., :n], wts)
-        y_hat, ey = _moments(y, wts)
-        post, gain = _conditional_covariance(ex, ey, wts)
-        return y_hat, gain, post
+        x_points, v_points = self._sensor.points(mean, cov)
+        weights = self._sensor.weights
+        n = x_points.shape[-1]
+        joint_mean, e = _moments(np.concatenate([x_points, self.model.h(x_points, v_points)], axis=-1), weights)
+        post, gain = _conditional_covariance(e, n, weights)
+        return joint_mean[..., n:], gain, post
 
     def update(self, mean, cov, y):
         """Measurement update with y_k = h(x_k, v_k) (eq. 2.2)."""
@@ -343,7 +423,30 @@ class UKF:
         return self._next_covariance((mean, cov), u)
 
     def _next_covariance(self, estimate, u):
-        return self._measurement(*self._predict(*estimate, u))[2]
+        return self._covariance_after(self._prior(*estimate), u)
+
+    def _covariance_after(self, prior, u):
+        """C_{k+1}(u) from the prior's joint sigma points (:meth:`_prior`), unchecked."""
+        return self._measurement(*self._propagate(prior, u))[2]
+
+    def _covariance_function(self, estimate):
+        """u -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once.
+
+        The returned function does not check u (a float array (n_u,)): it is the inner loop
+        of Algorithm 2.2, whose numerical derivatives evaluate it thousands of times for
+        the same estimate; the sigma points of the estimate and the process noise, which do
+        not depend on u, are computed once.
+
+        Examples
+        --------
+        >>> from asoc.belief import landmark_example
+        >>> ex = landmark_example()
+        >>> ukf = UKF(ex.model)
+        >>> C = ukf._covariance_function((ex.mean0, ex.cov0))
+        >>> bool(np.allclose(C(np.array([1.0, 0.0])), ukf.next_covariance((ex.mean0, ex.cov0), [1.0, 0.0])))
+        True
+        """
+        return partial(self._covariance_after, self._prior(*self._checked(*_pair(estimate))))
 
 
 def _pair(estimate):

@@ -286,12 +286,16 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
     def a(x, u, w):
         return np.asarray(x) + np.asarray(u) + noise_gain * np.asarray(w)
 
+    def distance(x):
+        """||x - x^|| (last axis kept): np.linalg.norm's sum of squares without its argument handling."""
+        diff = np.asarray(x) - lm
+        return np.sqrt((diff * diff).sum(axis=-1, keepdims=True))
+
     def h(x, v):
-        d = np.linalg.norm(np.asarray(x) - lm, axis=-1, keepdims=True)
-        return d * (1.0 + range_noise * np.asarray(v))
+        return distance(x) * (1.0 + range_noise * np.asarray(v))
 
     def likelihood(y, x):
-        d = np.linalg.norm(np.asarray(x) - lm, axis=-1)
+        d = distance(x)[..., 0]
         sd = range_noise * d
         return np.exp(-0.5 * ((np.asarray(y)[..., 0] - d) / sd) ** 2) / (np.sqrt(2 * np.pi) * sd)
 

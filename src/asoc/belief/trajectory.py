@@ -7,6 +7,7 @@ and Algorithm 2.2 (the iteration) for the affine policy u_k = L_k E{x_k} + d_k (
 
 import warnings
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -330,13 +331,14 @@ class StageProblem:
             raise ValueError(f"nxt: expected a value of state dimension {model.n_x}, found v of shape {nxt.v.shape}")
         self.w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
         self.beta = check.probability_vector(beta, "beta", self.w_points.shape[0])
-        self.est = estimate
         try:
             self.mixture = filt.mixture(estimate)
         except (TypeError, ValueError, IndexError, AttributeError) as err:
             raise TypeError(f"estimate: expected an estimate of the filter {type(filt).__name__}, found "
                             f"{type(estimate).__name__} ({err})") from None
         check.real_array(self.mixture.points, "estimate", shape=(None, model.n_x))
+        self._next_covariance = _next_covariance_function(self.filt, estimate)
+        self._has_covariance_term = self.covariance_term and bool(np.any(nxt.S))
 
     def particle_part(self, x, u):
         """All of phi_k except the covariance term, for x (..., n_x) and u (..., n_u)."""
@@ -348,9 +350,13 @@ class StageProblem:
 
     def covariance_part(self, u):
         """1/2 tr[S_{k+1} C_{k+1}(u)] (0 without the covariance term)."""
-        if not self.covariance_term or not np.any(self.nxt.S):
+        return self._covariance_part(check.vector(u, "u", self.model.n_u))
+
+    def _covariance_part(self, u):
+        """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner loop."""
+        if not self._has_covariance_term:
             return 0.0
-        return 0.5 * float(np.trace(self.nxt.S @ self.filt.next_covariance(self.est, np.asarray(u, dtype=float))))
+        return 0.5 * float(np.vdot(self.nxt.S.T, self._next_covariance(u)))     # tr[S C]
 
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""
@@ -378,8 +384,8 @@ class StageProblem:
                 f = lambda z: self.particle_part(z[:nx], z[nx:])
                 z = np.concatenate([x, u_bar])
                 G[i], H[i] = nd.Gradient(f)(z), nd.Hessian(f)(z)
-        if self.covariance_term and np.any(self.nxt.S):
-            G[:, nx:] += np.atleast_1d(nd.Gradient(self.covariance_part)(u_bar))
+        if self._has_covariance_term:
+            G[:, nx:] += np.atleast_1d(nd.Gradient(self._covariance_part)(u_bar))
             H[:, nx:, nx:] += self._covariance_hessian(u_bar)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
         if self.covariance_hessian == "shift":
@@ -432,7 +438,7 @@ class StageProblem:
         (:meth:`_shift`), as in Levenberg-Marquardt-regularised DDP.
         """
         import numdifftools as nd
-        Hc = np.atleast_2d(nd.Hessian(self.covariance_part)(u_bar))
+        Hc = np.atleast_2d(nd.Hessian(self._covariance_part)(u_bar))
         Hc = 0.5 * (Hc + Hc.T)
         if self.covariance_hessian in ("exact", "shift"):
             return Hc
@@ -453,6 +459,13 @@ class StageProblem:
         g = gC + np.einsum("m,mij,mi->j", self.beta, J, lam)
         Hs = HC + np.einsum("m,mij,ik,mkl->jl", self.beta, J, nxt.V, J)
         return g, Hs
+
+
+def _next_covariance_function(filt, estimate):
+    """u -> C_{k+1}(u) for the estimate: the UKF's unchecked one, else the filter's ``next_covariance``."""
+    if isinstance(filt, UKF):
+        return filt._covariance_function(estimate)
+    return partial(filt.next_covariance, estimate)
 
 
 def _expansion(exp, name="exp"):
