@@ -19,11 +19,13 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse.linalg
 
 from ..result import IterativeResult
 from ..validation import boolean, choice, generator, integer, real_scalar
 from .moments import steady_state_second_moment
 from .operators import augmented_closed_loop, check_gains, noise_covariances, spectral_radius  # noqa: F401 (public here)
+from .operators import single_threaded
 from .system import check_system, predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")
@@ -36,6 +38,25 @@ GAIN_FLOOR = 1e-12        # absolute floor of a gain's norm in its relative chan
 #: rounding noise divided by ~1e-17 and the iteration diverges (Scaling page, n = 8, 16);
 #: a threshold of 1e-10 treats them as the null space they are.
 RANK_RTOL = 1e-10
+#: From this many unknowns n^2 + n ny + nu n on, ``method="lstsq"`` solves (3.51) matrix-free
+#: by conjugate gradients (:func:`solve_optimality_cg`) instead of np.linalg.lstsq on the dense
+#: matrix. Measured crossover (one solve on the bounds of the 5th iteration of Alg. 3.2 on the
+#: scaling family, n = 2..32, M = 2, 4, 8; medians, single-threaded LAPACK, 2 loaded cores),
+#: dense against CG: 0.2-0.5 ms against 3.5-4.5 ms up to 48 unknowns (n = 6); 3.0-7.3 ms
+#: against 3.7-4.0 ms at 195 (n = 13); 8.9-15 ms against 3.9-6.7 ms at 224 (n = 14);
+#: 30-40 ms against 4-9 ms at 480 (n = 20); 0.44-0.64 s against 7-11 ms at 1280 (n = 32, up to
+#: 13 s per dense solve on the bounds of the dense run). Threaded LAPACK on the loaded machine
+#: took 0.1-1 s from ~100 unknowns on. The thesis's systems and those of the pages (at most
+#: 104 unknowns) stay on the dense path.
+MATRIX_FREE_MIN_UNKNOWNS = 200
+#: Relative residual ||(H + delta I) dz - r|| / ||rho|| at which each conjugate-gradient solve stops.
+CG_TOLERANCE = 1e-12
+#: Iteration cap of conjugate gradients, as a multiple of the number of unknowns.
+CG_MAX_ITER_FACTOR = 10
+#: Steps of iterated Tikhonov regularisation in :func:`solve_optimality_cg`: one step leaves a
+#: relative bias rcond cond(H) (1e-6 in the first iteration of Alg. 3.2 on the Sec. 3.7.3
+#: example), two leave its square.
+TIKHONOV_STEPS = 2
 
 
 def _T(X):
@@ -147,12 +168,69 @@ def _kron_sum(X, Y):
     return np.einsum("iab,icd->acbd", X, Y).reshape(a * c, b * d)
 
 
+def gain_shapes(sys):
+    """Shapes of F, K, L in the unknown z = [vec F; vec K; vec L] of (3.49).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> gain_shapes(sec373_system(1))
+    ((2, 2), (2, 1), (1, 2))
+    """
+    return (sys.nx, sys.nx), (sys.nx, sys.ny), (sys.nu, sys.nx)
+
+
+def stack_gains(F, K, L):
+    """z = [vec F; vec K; vec L] of (3.49), column-stacking vec.
+
+    Examples
+    --------
+    >>> stack_gains(np.array([[1.0, 2.0], [3.0, 4.0]]), np.zeros((2, 1)), np.ones((1, 2)))
+    array([1., 3., 2., 4., 0., 0., 1., 1.])
+    """
+    return np.concatenate([np.reshape(G, -1, order="F") for G in (F, K, L)])
+
+
+def split_gains(z, shapes):
+    """F, K, L from z = [vec F; vec K; vec L] of (3.49); the inverse of :func:`stack_gains`.
+
+    Examples
+    --------
+    >>> F, K, L = split_gains(np.arange(8.0), ((2, 2), (2, 1), (1, 2)))
+    >>> F.tolist(), K.ravel().tolist(), L.tolist()
+    ([[0.0, 2.0], [1.0, 3.0]], [4.0, 5.0], [[6.0, 7.0]])
+    """
+    ends = np.cumsum([0] + [a * b for a, b in shapes])
+    return tuple(z[lo:hi].reshape(shape, order="F") for lo, hi, shape in zip(ends[:-1], ends[1:], shapes))
+
+
+def optimality_vector(sys, Xbar, Xunder, EPbar, EPunder):
+    """The vector rho of (3.49)/(3.70), built from (3.50): the conditions read H z + rho = 0.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> optimality_vector(sys, I, I, I, I).shape
+    (8,)
+    """
+    A, B, C = sys.A, sys.B, sys.C
+    S = Xbar + Xunder
+    EP = EPbar + EPunder
+    return np.concatenate([
+        -(EPunder @ A @ Xunder).sum(axis=0).reshape(-1, order="F"),
+        -(EPunder @ A @ S @ _T(C)).sum(axis=0).reshape(-1, order="F"),
+        (_T(B) @ EP @ A @ Xunder).sum(axis=0).reshape(-1, order="F")])
+
+
 def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     """The matrix and vector of (3.49)/(3.70), built from (3.50).
 
     Unknown z = [vec F; vec K; vec L] (column-stacking vec); the conditions read H z + rho = 0.
     H is (half) the Hessian of the bounded cost (A.7)/(B.5), hence symmetric PSD. An
-    inner-loop helper of Algs. 3.2-3.3: its arguments are not validated.
+    inner-loop helper of Algs. 3.2-3.3: its arguments are not validated. Its size is
+    (n^2 + n ny + nu n)^2; :class:`OptimalityOperator` applies it without forming it.
 
     Examples
     --------
@@ -163,7 +241,7 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     >>> H.shape, rho.shape, np.allclose(H, H.T)
     ((8, 8), (8,), True)
     """
-    A, B, C, R = sys.A, sys.B, sys.C, sys.R
+    B, C, R = sys.B, sys.C, sys.R
     S = Xbar + Xunder
     EP = EPbar + EPunder
     m = mu[:, None, None]
@@ -181,11 +259,249 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     for rows, cols, block in blocks:
         H[rows, cols] = block
         H[cols, rows] = block.T
-    rho = np.concatenate([
-        -(EPunder @ A @ Xunder).sum(axis=0).reshape(-1, order="F"),
-        -(EPunder @ A @ S @ _T(C)).sum(axis=0).reshape(-1, order="F"),
-        (_T(B) @ EP @ A @ Xunder).sum(axis=0).reshape(-1, order="F")])
-    return H, rho
+    return H, optimality_vector(sys, Xbar, Xunder, EPbar, EPunder)
+
+
+class OptimalityOperator:
+    """H of (3.49)/(3.70) applied matrix-free to (F, K, L), in O(M n^3) instead of O(n^4) memory.
+
+    Each block of :func:`optimality_system` is a sum of Kronecker products, and
+    (X (x) Y) vec Z = vec(Y Z X^T). With D_i = F + K C_i - B_i L and
+    E_i = E_i(Punder) D_i Xunder_i the blocks of (3.50) add up to
+
+    - F rows: sum_i E_i,
+    - K rows: sum_i E_i C_i^T + E_i(Punder) K (C_i Xbar_i C_i^T + mu_i J_i J_i^T),
+    - L rows: sum_i (R_i + B_i^T E_i(Pbar) B_i) L Xunder_i - B_i^T E_i,
+
+    which is H z when Xbar, Xunder, EPbar, EPunder and R are symmetric (as the algorithms
+    produce them). Arguments as :func:`optimality_system`, not validated.
+
+    Attributes
+    ----------
+    shapes : tuple
+        Shapes of F, K, L (:func:`gain_shapes`).
+    size : int
+        Number of unknowns n^2 + n ny + nu n.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> JJt = noise_covariances(sys)[1]
+    >>> op = OptimalityOperator(sys, I, 2 * I, I, 3 * I, sys.mu_inf, JJt)
+    >>> H, _ = optimality_system(sys, I, 2 * I, I, 3 * I, sys.mu_inf, JJt)
+    >>> z = np.arange(8.0)
+    >>> bool(np.allclose(op.matvec(z), H @ z))
+    True
+    """
+
+    def __init__(self, sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
+        self.B, self.C, self.Xunder, self.EPunder = sys.B, sys.C, Xunder, EPunder
+        self.output_weight = sys.C @ Xbar @ _T(sys.C) + mu[:, None, None] * JJt     # (M, ny, ny)
+        self.input_weight = sys.R + _T(sys.B) @ EPbar @ sys.B                       # (M, nu, nu)
+        self.shapes = gain_shapes(sys)
+        self.size = sum(a * b for a, b in self.shapes)
+
+    def apply(self, F, K, L):
+        """The F, K and L rows of H [vec F; vec K; vec L] as matrices of the shapes of F, K, L."""
+        D = F + K @ self.C - self.B @ L
+        E = self.EPunder @ D @ self.Xunder
+        return (E.sum(axis=0),
+                (E @ _T(self.C) + self.EPunder @ (K @ self.output_weight)).sum(axis=0),
+                (self.input_weight @ L @ self.Xunder - _T(self.B) @ E).sum(axis=0))
+
+    def matvec(self, z):
+        """H z for z = [vec F; vec K; vec L]."""
+        return stack_gains(*self.apply(*split_gains(z, self.shapes)))
+
+
+def nearest_kronecker(X, Y, steps=50):
+    """X0 (x) Y0 nearest in the Frobenius norm to sum_i X_i (x) Y_i (Van Loan and Pitsianis 1993).
+
+    X0 = sum_i a_i X_i and Y0 = sum_i b_i Y_i, the leading singular pair of
+    sum_i vec(X_i) vec(Y_i)^T, by power iteration on the M x M Gram matrices (for the
+    preconditioner of (3.51); for positive semidefinite X_i, Y_i both are positive
+    semidefinite).
+
+    Examples
+    --------
+    >>> X = np.array([np.eye(2), 2 * np.eye(2)]); Y = np.array([np.eye(3), 2 * np.eye(3)])
+    >>> X0, Y0 = nearest_kronecker(X, Y)
+    >>> bool(np.allclose(np.kron(X0, Y0), np.kron(X[0], Y[0]) + np.kron(X[1], Y[1])))
+    True
+    """
+    Gx, Gy = (np.einsum("iab,jab->ij", Z, Z) for Z in (X, Y))
+    b = np.ones(len(Y))
+    for _ in range(steps):
+        b = Gx @ (Gy @ b)
+        b /= max(np.linalg.norm(b), 1e-300)
+    Y0_norm2 = b @ Gy @ b
+    a = Gy @ b / Y0_norm2 if Y0_norm2 > 0 else np.zeros(len(X))
+    return np.tensordot(a, X, 1), np.tensordot(b, Y, 1)
+
+
+class KroneckerPreconditioner:
+    """Block-diagonal approximate inverse of H + delta I of (3.51), one Kronecker product a block.
+
+    Each diagonal block of :func:`optimality_system` (F, K, L) is replaced by its
+    :func:`nearest_kronecker` X0 (x) Y0; with X0 = U diag(a) U^T, Y0 = W diag(b) W^T,
+    (X0 (x) Y0 + delta I)^-1 vec Z = vec(W [(W^T Z U) / (b a^T + delta)] U^T). The F-K-L
+    coupling and the spread over the modes are left to the conjugate gradients.
+
+    Attributes
+    ----------
+    scale : float
+        max over the blocks of ||X0|| ||Y0||, an estimate of ||H||_2 (the largest diagonal
+        block).
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> P = KroneckerPreconditioner(sys, I, I, I, I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> P.solve(np.ones(8), 0.0).shape, P.scale > 0
+    ((8,), True)
+    """
+
+    def __init__(self, sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
+        B, C = sys.B, sys.C
+        pairs = (nearest_kronecker(Xunder, EPunder),
+                 nearest_kronecker(C @ (Xbar + Xunder) @ _T(C) + mu[:, None, None] * JJt, EPunder),
+                 nearest_kronecker(Xunder, sys.R + _T(B) @ (EPbar + EPunder) @ B))
+        self.factors = [(*np.linalg.eigh(X0), *np.linalg.eigh(Y0)) for X0, Y0 in pairs]
+        self.shapes = gain_shapes(sys)
+        self.scale = max(float(np.abs(a).max() * np.abs(b).max()) for a, _, b, _ in self.factors)
+
+    def solve(self, z, delta):
+        """(P + delta I)^-1 z, P the block-diagonal Kronecker approximation of H."""
+        out = []
+        for (a, U, b, W), Z in zip(self.factors, split_gains(z, self.shapes)):
+            scaled = (_T(W) @ Z @ U) / (np.maximum(np.outer(b, a), 0.0) + delta)
+            out.append(W @ scaled @ _T(U))
+        return stack_gains(*out)
+
+
+@dataclass(frozen=True)
+class GainSolve:
+    """How (3.51) was solved.
+
+    Attributes
+    ----------
+    method : str
+        ``"dense"`` (np.linalg.lstsq), ``"cg"`` (:func:`solve_optimality_cg`) or ``"sdp"``.
+    residual : float
+        ||H z + rho|| / ||rho|| of the returned z (0 when rho = 0).
+    iterations : int
+        Conjugate-gradient iterations (0 otherwise).
+    shift : float
+        delta of the regularised system (H + delta I) z = -rho solved by ``"cg"`` (0 otherwise).
+    """
+
+    method: str
+    residual: float
+    iterations: int = 0
+    shift: float = 0.0
+
+
+def _relative_residual(Hz, rho):
+    """||H z + rho|| / ||rho||, scaled against overflow (0 for rho = 0, nan for non-finite values)."""
+    scale = float(np.max(np.abs(rho), initial=0.0))
+    if scale == 0.0:
+        return 0.0
+    with np.errstate(invalid="ignore", over="ignore"):
+        return float(np.linalg.norm((Hz + rho) / scale) / np.linalg.norm(rho / scale))
+
+
+def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=None):
+    """(3.51) matrix-free: z ~ -H^+ rho by iterated Tikhonov, each step by preconditioned CG.
+
+    The counterpart of the minimum-norm np.linalg.lstsq(H, -rho, rcond) for large systems.
+    H is singular at the fixed point of Alg. 3.2 (see :data:`RANK_RTOL`): lstsq drops the
+    singular values below rcond ||H||, here :data:`TIKHONOV_STEPS` steps of
+    z <- z + (H + delta I)^-1 (-rho - H z) from z = 0, delta = rcond ||H|| (||H|| estimated by
+    ``preconditioner.scale``; rcond None: machine epsilon times the number of unknowns, as
+    LAPACK's), damp them. Each shifted system is positive definite and solved by conjugate
+    gradients preconditioned with :class:`KroneckerPreconditioner`. A direction of H with
+    eigenvalue lambda keeps the fraction 1 - (delta / (lambda + delta))^steps of its
+    least-squares component (lstsq: 1 above delta, 0 below), so the two agree to about
+    (rcond cond(H))^steps when H is well conditioned; when it is not, both are regularised
+    solutions of an ill-posed system and may differ.
+
+    Parameters
+    ----------
+    op : OptimalityOperator
+    rho : numpy.ndarray
+        The vector of (3.49) (:func:`optimality_vector`).
+    preconditioner : KroneckerPreconditioner
+    rcond : float, optional
+    tol : float, optional
+        Each step stops when its shifted residual falls below tol ||rho|| (default
+        :data:`CG_TOLERANCE`).
+    max_iter : int, optional
+        Iteration cap of each step (default :data:`CG_MAX_ITER_FACTOR` times the number of
+        unknowns).
+
+    Returns
+    -------
+    z : numpy.ndarray
+    GainSolve
+        With the residual ||H z + rho|| / ||rho|| of the unshifted system and the total
+        number of CG iterations.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If a step does not reach ``tol`` (10 ``tol`` after rounding) within ``max_iter``
+        iterations; the message gives the residual reached.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> args = (sys, I, 2 * I, I, 3 * I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> H, rho = optimality_system(*args)
+    >>> z, info = solve_optimality_cg(OptimalityOperator(*args), rho, KroneckerPreconditioner(*args))
+    >>> bool(np.allclose(z, np.linalg.lstsq(H, -rho)[0], rtol=1e-12)), info.residual < 1e-12
+    (True, True)
+    """
+    size = len(rho)
+    if not np.any(rho):
+        return np.zeros(size), GainSolve("cg", 0.0)
+    delta = (np.finfo(float).eps * size if rcond is None else rcond) * preconditioner.scale
+    max_iter = max(1, int(CG_MAX_ITER_FACTOR * size)) if max_iter is None else max_iter
+    tol = CG_TOLERANCE if tol is None else tol
+    norm_rho = float(np.linalg.norm(rho))
+    shifted = scipy.sparse.linalg.LinearOperator((size, size), matvec=lambda z: op.matvec(z) + delta * z,
+                                                 dtype=float)
+    inverse = scipy.sparse.linalg.LinearOperator((size, size), matvec=lambda z: preconditioner.solve(z, delta),
+                                                 dtype=float)
+    z, iterations = np.zeros(size), 0
+    with single_threaded():
+        for _ in range(TIKHONOV_STEPS):
+            target = -rho - op.matvec(z)
+            step, count = _conjugate_gradients(shifted, target, inverse, tol * norm_rho, max_iter)
+            iterations += count
+            reached = float(np.linalg.norm(shifted.matvec(step) - target)) / norm_rho
+            if not reached <= 10 * tol:
+                raise np.linalg.LinAlgError(f"conjugate gradients on (3.51) reached the relative residual "
+                                            f"{reached:.2g} > {tol:.2g} in {count} iterations ({size} unknowns)")
+            z = z + step
+        Hz = op.matvec(z)
+    return z, GainSolve("cg", _relative_residual(Hz, rho), iterations, delta)
+
+
+def _conjugate_gradients(A, b, inverse, atol, max_iter):
+    """x with ||A x - b|| <= atol by scipy's preconditioned CG from 0, and the iteration count."""
+    count = [0]
+
+    def callback(_):
+        count[0] += 1
+
+    x, _ = scipy.sparse.linalg.cg(A, b, rtol=0.0, atol=atol, maxiter=max_iter, M=inverse, callback=callback)
+    return x, count[0]
 
 
 def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcond=None):
@@ -193,9 +509,11 @@ def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"
 
     ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
     (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
-    F and K do not enter the cost); ``"sdp"``: the SDP after Alg. 3.2 (min lambda with
-    [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. ``rcond``:
-    relative singular-value threshold of ``"lstsq"`` (None: LAPACK's eps * size).
+    F and K do not enter the cost), by np.linalg.lstsq below
+    :data:`MATRIX_FREE_MIN_UNKNOWNS` unknowns, else by :func:`solve_optimality_cg`;
+    ``"sdp"``: the SDP after Alg. 3.2 (min lambda with [[lambda I, G], [G^T, I]] >= 0,
+    G = [F K L^T]) solved with cvxpy/Clarabel. ``rcond``: relative singular-value threshold of
+    ``"lstsq"`` (None: LAPACK's eps * size).
 
     Examples
     --------
@@ -206,19 +524,37 @@ def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"
     >>> F.shape, K.shape, L.shape
     ((2, 2), (2, 1), (1, 2))
     """
+    return solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, rcond)[:3]
+
+
+def solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcond=None):
+    """F, K, L solving (3.51)/(3.71) and a :class:`GainSolve` saying how; see :func:`gains_from_bounds`.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> I = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> *gains, info = solve_gains(sys, I, I, I, I, sys.mu_inf, noise_covariances(sys)[1])
+    >>> info.method, info.residual < 1e-12
+    ('dense', True)
+    """
     choice(method, "method", METHODS)
-    n, ny, nu = sys.nx, sys.ny, sys.nu
-    H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
+    args = (sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
+    shapes = gain_shapes(sys)
+    if method == "lstsq" and sum(a * b for a, b in shapes) >= MATRIX_FREE_MIN_UNKNOWNS:
+        z, info = solve_optimality_cg(OptimalityOperator(*args), optimality_vector(*args[:5]),
+                                      KroneckerPreconditioner(*args), rcond)
+        return (*split_gains(z, shapes), info)
+    H, rho = optimality_system(*args)
     if method == "lstsq":
         z = np.linalg.lstsq(H, -rho, rcond=rcond)[0]
     elif method == "sdp":
-        z = _gains_sdp(H, rho, n, ny, nu)
+        z = _gains_sdp(H, rho, *shapes[1], shapes[2][0])
     else:
         raise ValueError(f"method must be one of {METHODS}, found {method!r}")
-    F = z[:n * n].reshape(n, n, order="F")
-    K = z[n * n:n * n + n * ny].reshape(n, ny, order="F")
-    L = z[n * n + n * ny:].reshape(nu, n, order="F")
-    return F, K, L
+    return (*split_gains(z, shapes), GainSolve("dense" if method == "lstsq" else method,
+                                               _relative_residual(H @ z, rho)))
 
 
 def _gains_sdp(H, rho, n, ny, nu):
@@ -269,6 +605,12 @@ class DynamicOutputFeedbackResult(IterativeResult):
         Traces of Xbar_i, Xunder_i, Pbar_i, Punder_i per iteration, each (iterations + 1, M).
     seconds : float
         Wall time.
+    solve : GainSolve
+        How (3.51) was solved in the last iteration whose gains are returned (dense
+        np.linalg.lstsq or matrix-free conjugate gradients, :data:`MATRIX_FREE_MIN_UNKNOWNS`),
+        with its relative residual.
+    worst_residual : float
+        Largest relative residual ||H z + rho|| / ||rho|| of (3.51) over the iterations.
 
     Examples
     --------
@@ -293,6 +635,8 @@ class DynamicOutputFeedbackResult(IterativeResult):
     Punder: np.ndarray
     history: dict = field(repr=False)
     seconds: float = 0.0
+    solve: GainSolve = None
+    worst_residual: float = 0.0
 
 
 def _initial_bounds(sys, init, rng):
@@ -338,7 +682,9 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     rng : numpy.random.Generator, optional
         Source of random initial bounds.
     method : {"lstsq", "sdp"}
-        Minimum-norm solution of (3.51), or the SDP after Alg. 3.2.
+        Minimum-norm solution of (3.51) (relative threshold :data:`RANK_RTOL`; matrix-free
+        from :data:`MATRIX_FREE_MIN_UNKNOWNS` unknowns on, see :func:`gains_from_bounds`), or
+        the SDP after Alg. 3.2.
     warn : bool
         Warn (RuntimeWarning) when the iteration does not converge or the controller does
         not stabilise.
@@ -379,16 +725,18 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     mu = sys.mu_inf
     Xbar, Xunder, Pbar, Punder = _initial_bounds(sys, init, rng)
     iterates = [np.stack([Xbar, Xunder, Pbar, Punder])]
-    gains = None
+    gains = solve = None
+    worst_residual, failure = 0.0, ""
     status, change = "max_iterations", np.inf
     it = 0
     for it in range(1, int(max_iter) + 1):
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
         try:
-            F, K, L = gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, RANK_RTOL)
-        except np.linalg.LinAlgError:
-            status = "linalg_error"
+            F, K, L, step_solve = solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, RANK_RTOL)
+        except np.linalg.LinAlgError as error:
+            status, failure = "linalg_error", str(error)
             break
+        worst_residual = max(worst_residual, step_solve.residual) if np.isfinite(step_solve.residual) else np.nan
         new_X = bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt)
         new_P = bound_costate_step(sys, F, K, L, EPbar, EPunder)
         if not all(np.abs(v).max() < DIVERGED for v in (*new_X, *new_P)):
@@ -398,7 +746,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
         if gains is not None:
             changes += [_rel_change(o, n, GAIN_FLOOR) for o, n in zip(gains, (F, K, L))]
         iterates.append(np.stack([*new_X, *new_P]))
-        gains = (F, K, L)
+        gains, solve = (F, K, L), step_solve
         Xbar, Xunder = new_X
         Pbar, Punder = new_P
         change = max(changes)
@@ -408,7 +756,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     seconds = time.perf_counter() - start
     if gains is None:
         raise FloatingPointError(f"Algorithm 3.2: {'(3.51) could not be solved' if status == 'linalg_error' else 'the bounds diverged'} "
-                                 f"in the first iteration")
+                                 f"in the first iteration{': ' + failure if failure else ''}")
     F, K, L = gains
     cost, _, rho = steady_state_cost(sys, F, K, L)
     stabilizing = bool(rho < 1)
@@ -419,7 +767,10 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
                                  f">= tol = {tol:.2g}, rho = {rho:.4f})",
                "diverged": f"stopped at iteration {it}: the bounds diverged beyond {DIVERGED:.0e} "
                            f"(rho = {rho:.4f})",
-               "linalg_error": f"stopped at iteration {it}: solving (3.51) failed (rho = {rho:.4f})"}[status]
+               "linalg_error": f"stopped at iteration {it}: solving (3.51) failed (rho = {rho:.4f}; {failure})"}[status]
+    if solve is not None and solve.method == "cg":
+        message += (f"; (3.51) solved by conjugate gradients, largest relative residual "
+                    f"||H z + rho|| / ||rho|| = {worst_residual:.1e}")
     if warn and status != "converged":
         warnings.warn(f"Algorithm 3.2 {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
@@ -432,4 +783,4 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
                                        message=message, iterations=it, rho=rho,
                                        stabilizing=stabilizing, cost=cost, bound=bound, Xbar=Xbar,
                                        Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history,
-                                       seconds=seconds)
+                                       seconds=seconds, solve=solve, worst_residual=worst_residual)
