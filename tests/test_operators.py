@@ -76,3 +76,20 @@ def test_verdict_is_undecided_within_rounding_of_one():
 
 def test_fitted_exponent_recovers_a_power_law():
     assert fitted_exponent([4, 8, 16, 32], [2.0 * n ** 2.5 for n in (4, 8, 16, 32)]) == pytest.approx(2.5)
+
+
+def test_arnoldi_radius_converges_on_a_dominant_eigenvalue_of_multiplicity_four():
+    """A closed loop of the larger-plant page (tests/reference): 20 Krylov vectors stall on its
+    fourfold dominant eigenvalue, where the cone power method took 70 s; ARNOLDI_SUBSPACES must
+    converge without any fallback."""
+    import json
+    from pathlib import Path
+
+    from asoc.mjls.operators import _arnoldi_radius, kronecker_matrix
+
+    case = json.loads((Path(__file__).parent / "reference" / "arnoldi_multiplicity_four.json").read_text())
+    A, T = np.array(case["A"]), np.array(case["T"])
+    dense = np.sort(np.abs(np.linalg.eigvals(kronecker_matrix(A, T))))
+    assert dense[-1] - dense[-4] < 1e-9 * dense[-1]             # four moduli equal to 1e-9: the difficulty
+    rho = _arnoldi_radius(A, T)
+    assert rho is not None and rho == pytest.approx(dense[-1], rel=1e-10)

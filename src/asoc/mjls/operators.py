@@ -50,6 +50,14 @@ DENSE_MAX_RADIUS = 64
 #: above it by BiCGSTAB (measured crossover: 0.9 ms against 1.5 ms at 256, 1.9 ms against
 #: 1.1 ms at 288).
 DENSE_MAX_SOLVE = 256
+#: Krylov-space sizes ARPACK tries in turn for rho. 20 vectors stall on a dominant eigenvalue of
+#: multiplicity 4 (the larger-plant page's chain, M n^2 = 512: no convergence after 0.9 s,
+#: 40 vectors 0.7 s), 60 converge there in 10 ms; on the Scaling page's systems 60 vectors
+#: cost 4 ms (n = 16, M = 4) to 49 ms (n = 64, M = 8), against 6 to 35 ms with 20.
+ARNOLDI_SUBSPACES = (60, 150)
+#: When ARPACK does not converge: dense eigenvalues up to this M n^2 (measured: 0.2 s at 512,
+#: 0.85 s at 1024), the cone power method above it.
+DENSE_FALLBACK_RADIUS = 1024
 #: rho within this distance of 1 is reported as undecided (rounding of the eigenvalue solver,
 #: about 1e-13 on well-conditioned operators, is far below it).
 RHO_TOLERANCE = 1e-9
@@ -194,6 +202,30 @@ def _cone_power_bracket(A, T, tol, max_iter):
     return 0.5 * (lo + hi) if np.isfinite(hi) else np.nan, lo, hi, it
 
 
+def _arnoldi_radius(A, T):
+    """rho by ARPACK on the matrix-free operator, or None when it does not converge.
+
+    A dominant eigenvalue of multiplicity > 1 (e.g. two complex pairs of equal modulus, as in
+    the chain of masses of the larger-plant page) can stall a small Krylov space: the search
+    space grows through :data:`ARNOLDI_SUBSPACES` before giving up.
+    """
+    M, n, _ = A.shape
+    dim = M * n * n
+    op = _linear_operator(A, T)
+    for ncv in ARNOLDI_SUBSPACES:
+        try:
+            with single_threaded():
+                lam = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(dim - 1, ncv),
+                                               maxiter=max(1000, dim),
+                                               v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel(),
+                                               return_eigenvectors=False)
+            return float(np.max(np.abs(lam)))
+        except scipy.sparse.linalg.ArpackNoConvergence:
+            if ncv >= dim - 1:
+                break
+    return None
+
+
 def spectral_radius(A, T, method="auto"):
     """rho of the second-moment operator (Cor. 3.2): mean-square stable iff rho < 1.
 
@@ -205,8 +237,9 @@ def spectral_radius(A, T, method="auto"):
         Transition matrix.
     method : {"auto", "dense", "arnoldi", "power"}
         ``"dense"``: eigenvalues of :func:`kronecker_matrix`; ``"arnoldi"``: ARPACK on the
-        matrix-free operator (largest modulus, falls back to ``"power"`` when ARPACK does
-        not converge); ``"power"``: the cone power method with Collatz-Wielandt bounds
+        matrix-free operator (largest modulus; Krylov spaces of :data:`ARNOLDI_SUBSPACES`
+        vectors in turn; when none converges, ``"dense"`` up to M n^2 =
+        :data:`DENSE_FALLBACK_RADIUS`, else ``"power"``); ``"power"``: the cone power method with Collatz-Wielandt bounds
         (relative width 1e-10). ``"auto"``: dense up to M n^2 = :data:`DENSE_MAX_RADIUS`,
         else Arnoldi.
 
@@ -227,16 +260,12 @@ def spectral_radius(A, T, method="auto"):
     if method == "dense" or (method == "arnoldi" and dim <= 3):
         return float(np.max(np.abs(np.linalg.eigvals(kronecker_matrix(A, T)))))
     if method == "arnoldi":
-        op = _linear_operator(A, T)
-        try:
-            with single_threaded():
-                lam = scipy.sparse.linalg.eigs(op, k=1, which="LM", tol=1e-14, ncv=min(dim - 1, 20),
-                                               maxiter=max(1000, dim),
-                                               v0=np.broadcast_to(np.eye(n), (M, n, n)).ravel(),
-                                               return_eigenvectors=False)
-            return float(np.max(np.abs(lam)))
-        except scipy.sparse.linalg.ArpackNoConvergence:
-            method = "power"
+        rho = _arnoldi_radius(A, T)
+        if rho is not None:
+            return rho
+        method = "dense" if dim <= DENSE_FALLBACK_RADIUS else "power"
+        if method == "dense":
+            return float(np.max(np.abs(np.linalg.eigvals(kronecker_matrix(A, T)))))
     if method == "power":
         with single_threaded():
             return float(_cone_power_bracket(A, T, 1e-10, 100000)[0])
