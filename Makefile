@@ -1,8 +1,9 @@
 # Two commands for a fresh machine (README.md):
 #   make book   build every figure, table, the ledger and the HTML book at full thesis fidelity
 #   make test   run the tests (unit, doctests, papermill at ci fidelity, nbval, the book in Chromium,
-#               the wheel in a fresh venv, the kill test) on both cores, then the numerical tests
-#               once more on the farthest emulated CPU (test-corner)
+#               the wheel in a fresh venv, the kill test) on both cores, as the farthest emulated
+#               CPU computes (the committed outputs come from the machine's own kernels, so nbval
+#               compares two CPUs)
 # Both create or refresh .venv from environment.txt themselves. `make book` is incremental:
 # a notebook is re-executed only when its cells, its parameters, a module it imports
 # (directly or transitively), environment.txt or the values it quotes changed, or its
@@ -19,7 +20,8 @@ ALWAYS := $(findstring B,$(firstword -$(MAKEFLAGS)))
 JOBS   ?= 2
 # Emulating other x86-64 CPUs (DESIGN.md, "Portability"): OpenBLAS kernels of another core
 # type, and NumPy's own SIMD dispatch with the AVX-512 (X86_V4) or also the AVX2 (X86_V3)
-# groups switched off. test-portable runs every corner; make test runs the farthest one.
+# groups switched off. test-portable runs every corner; make test runs the farthest one, and
+# test-native the machine's own kernels.
 CORETYPES    ?= Sandybridge Prescott Haswell
 FAR_CORETYPE ?= Prescott
 FAR_DISABLED ?= X86_V3 X86_V4
@@ -28,7 +30,7 @@ FAR_DISABLED ?= X86_V3 X86_V4
 PORTABLE_TESTS := -q -p no:cacheprovider -n $(JOBS) --dist loadgroup -m "not book and not packaging" \
                   --ignore=tests/test_crash_safety.py
 
-.PHONY: venv figures ledger book html test test-corner test-portable bench clean chromium
+.PHONY: venv figures ledger book html test test-native test-portable bench clean chromium
 
 venv: $(STAMP)
 
@@ -56,14 +58,15 @@ chromium:
 	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || \
 	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null; }
 
+# The whole suite once, on the farthest corner of the emulation matrix: the oldest OpenBLAS
+# kernels and NumPy without its AVX2 and AVX-512 code paths (as fast as the native kernels on
+# these small matrices). Results must not depend on the last bits of a CPU.
 test: venv chromium
-	$(PY) -m pytest -n $(JOBS) --dist loadgroup
-	$(MAKE) --no-print-directory test-corner
+	OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" $(PY) -m pytest -n $(JOBS) --dist loadgroup
 
-# The farthest corner of the emulation matrix: the oldest OpenBLAS kernels and NumPy without
-# its AVX2 and AVX-512 code paths. Results must not depend on the last bits of a CPU.
-test-corner: venv
-	OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" $(PY) -m pytest $(PORTABLE_TESTS)
+# The same suite with this machine's own kernels.
+test-native: venv chromium
+	$(PY) -m pytest -n $(JOBS) --dist loadgroup
 
 # Every corner: each OpenBLAS core type with NumPy's X86_V4 off, and with X86_V3 and X86_V4 off.
 test-portable: venv
