@@ -37,3 +37,17 @@ def test_thesis_values_are_available_to_prose():
     assert fill("{{thesis_sec9_9.rho:.4f}} vs {{sec9_9.iters[0]}}", values) == "1.2970 vs 13"
     with pytest.raises(KeyError):
         fill("{{thesis_sec9_9.new}}", values)
+
+
+@pytest.mark.parametrize("name", sorted(__import__("asoc_companion.notebooks", fromlist=["notebooks"]).notebooks()))
+def test_prose_cells_hide_their_template(name):
+    """A cell that renders prose from recorded values shows the text, not its template as well."""
+    import json
+
+    from asoc_companion.notebooks import notebooks
+
+    cells = json.loads(notebooks()[name].path.read_text())["cells"]
+    shown = [i for i, c in enumerate(cells) if c["cell_type"] == "code"
+             and "".join(c["source"]).lstrip().startswith("repro.prose(")
+             and "remove-input" not in c["metadata"].get("tags", [])]
+    assert not shown, f"{name}: prose cells {shown} lack the remove-input tag"
