@@ -397,6 +397,11 @@ class GainSolve:
         Conjugate-gradient iterations (0 otherwise).
     shift : float
         delta of the regularised system (H + delta I) z = -rho solved by ``"cg"`` (0 otherwise).
+
+    Examples
+    --------
+    >>> GainSolve("cg", 3e-11, iterations=41, shift=1e-12)
+    GainSolve(method='cg', residual=3e-11, iterations=41, shift=1e-12)
     """
 
     method: str

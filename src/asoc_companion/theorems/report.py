@@ -90,7 +90,16 @@ COLUMNS = (("Statement", 30), ("What one instance checks", 40), ("Verdict", 16),
 def statements_table(statements, results, findings) -> str:
     """The theorems page's table as HTML: per statement its claim, its check, the verdict and links to
     the counterexample on the page and to the finding (``findings`` maps a statement key to an anchor
-    of findings.html). HTML, not Markdown: claims contain ``|`` and the links must leave the page."""
+    of findings.html). HTML, not Markdown: claims contain ``|`` and the links must leave the page.
+
+    Examples
+    --------
+    >>> from asoc_companion.theorems.core import Statement
+    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "|x| >= 0", "nothing", not_checkable="a definition")
+    >>> table = statements_table([lemma], {}, {})
+    >>> table.count("<tr>"), "<strong>Lemma 3.0.</strong> |x| &gt;= 0" in table
+    (2, True)
+    """
     head = "".join(f"<th>{name}</th>" for name, _ in COLUMNS)
     widths = "".join(f'<col style="width:{share}%">' for _, share in COLUMNS)
     rows = "\n".join(_statement_row(st, results, findings) for st in statements)
