@@ -361,11 +361,15 @@ class MeanKernelGP(_LikelihoodGP):
         return float(np.sqrt(np.median(off[off > 0]))) if np.any(off > 0) else 1.0
 
     def _unit_kernel(self, l, grad=False):
-        E = np.exp(-0.5 * self._sq / l**2)                           # (M, L, M, L)
+        # in place in two (M, L, M, L) buffers: the likelihood is evaluated thousands of times
+        E = np.divide(self._neg_half_sq, l**2, out=self._buffers[0])
+        np.exp(E, out=E)
         K = np.einsum("ia,iajb,jb->ij", self.W, E, self.W)
         if not grad:
             return K, None
-        return K, np.einsum("ia,iajb,jb->ij", self.W, E * self._sq / l**2, self.W)
+        dE = np.multiply(E, self._sq, out=self._buffers[1])
+        dE /= l**2
+        return K, np.einsum("ia,iajb,jb->ij", self.W, dE, self.W)
 
     def fit(self, X, y, rng: np.random.Generator, W=None):
         """Estimate the hyperparameters from training mixtures ``X`` (M, L, d)."""
@@ -376,6 +380,8 @@ class MeanKernelGP(_LikelihoodGP):
         if len(y) != len(self.X):
             raise ValueError(f"y: expected {len(self.X)} outputs (one per training input), found {len(y)}")
         self._sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)
+        self._neg_half_sq = -0.5 * self._sq
+        self._buffers = (np.empty_like(self._sq), np.empty_like(self._sq))   # reused by every evaluation
         self._optimise(rng)
         self._factor()
         return self

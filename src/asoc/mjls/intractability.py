@@ -52,15 +52,22 @@ def psi(x_next, x, u, a, b, g, T, pi, Q=1.0, R=1.0):
     """
     a, b, g, T, pi, Q, R = _scalar_model(a, b, g, T, pi, Q, R)
     x_next, x, u = (real_array(v, n) for v, n in ((x_next, "x_next"), (x, "x"), (u, "u")))
-    resid = (x_next[..., None] - a * x[..., None] - b * u[..., None]) / g
-    logw = -0.5 * resid ** 2 + np.log(pi)
-    logw -= logw.max(axis=-1, keepdims=True)
+    return _psi(x_next, x, u, a, b, g, T, pi, Q, R)
+
+
+def _psi(x_next, x, u, a, b, g, T, pi, Q, R):
+    """:func:`psi` on checked arguments. The modes run along a new first axis: reductions over
+    them are then elementwise operations between whole arrays, not over a short last axis."""
+    modes = (slice(None),) + (None,) * np.broadcast(x_next, x, u).ndim
+    resid = (x_next - a[modes] * x - b[modes] * u) / g
+    logw = -0.5 * resid ** 2 + np.log(pi)[modes]
+    logw -= logw.max(axis=0)
     post = np.exp(logw)
-    post /= post.sum(axis=-1, keepdims=True)
-    rho = post @ T                                                # P(theta_{K-1} = j | I_{K-1})
-    e_qa = rho @ (Q + a * Q * a)                                  # E{Q + A^T Q A}
-    e_ab = rho @ (a * Q * b)                                      # E{A^T Q B}
-    e_rb = rho @ (R + b * Q * b)                                  # E{R + B^T Q B}
+    post /= post.sum(axis=0)
+    rho = np.tensordot(T, post, axes=(0, 0))                     # P(theta_{K-1} = j | I_{K-1})
+    e_qa = np.tensordot(Q + a * Q * a, rho, axes=1)               # E{Q + A^T Q A}
+    e_ab = np.tensordot(a * Q * b, rho, axes=1)                   # E{A^T Q B}
+    e_rb = np.tensordot(R + b * Q * b, rho, axes=1)               # E{R + B^T Q B}
     return e_qa - e_ab ** 2 / e_rb
 
 
@@ -119,7 +126,7 @@ def expected_cost_two_steps_before_horizon(x, u, a, b, g, T, pi, Q=1.0, R=1.0, n
     for q in range(len(a)):
         mean = a[q] * x + b[q] * u
         x_next = mean[..., None] + g * nodes                      # (..., n_nodes)
-        val = x_next ** 2 * psi(x_next, x[..., None], u[..., None], a, b, g, T, pi, Q, R)
+        val = x_next ** 2 * _psi(x_next, x[..., None], u[..., None], a, b, g, T, pi, Q, R)
         total = total + pi[q] * (val @ weights)
     return total
 
@@ -155,8 +162,9 @@ def hessian(J, X, U, h=1e-3):
     (array([2.]), array([0.]), array([1.]))
     """
     J, X, U, h = _grid(J, X, U, h)
-    fxx = (J(X + h, U) - 2 * J(X, U) + J(X - h, U)) / h ** 2
-    fuu = (J(X, U + h) - 2 * J(X, U) + J(X, U - h)) / h ** 2
+    centre = J(X, U)
+    fxx = (J(X + h, U) - 2 * centre + J(X - h, U)) / h ** 2
+    fuu = (J(X, U + h) - 2 * centre + J(X, U - h)) / h ** 2
     fxu = (J(X + h, U + h) - J(X + h, U - h) - J(X - h, U + h) + J(X - h, U - h)) / (4 * h * h)
     return fxx, fuu, fxu
 

@@ -112,8 +112,8 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
     X = np.empty((horizon + 1,) + np.shape(X0))
     mu = np.empty((horizon + 1, len(mu0)))
     X[0], mu[0] = X0, mu0
-    for k in range(horizon):
-        X[k + 1] = second_moment_step(Acl, HHt, T, X[k], mu[k])
+    for k in range(horizon):         # (3.29) on the validated arguments (no per-step checks)
+        X[k + 1] = second_moment_map(Acl, T, X[k]) + predecessor_sum(T, mu[k][:, None, None] * HHt)
         mu[k + 1] = mu[k] @ T
     return X, mu
 
