@@ -330,6 +330,25 @@ def test_perturbation_sweep_members_differ_and_psd_is_not_chaotic():
     assert np.ptp(s.costs) <= 10 * 1e-4 * np.mean(s.costs), s.costs
 
 
+def test_perturbation_sweep_in_worker_processes_equals_the_serial_sweep():
+    """n_jobs=2 gives the serial rows bit for bit, and the workers' warnings reach the caller."""
+    from asoc.belief.sweep import perturbation_sweep
+    ex = landmark_example(K=4)
+    noise = draw_noise(ex.model, ex.mean0, ex.cov0, 4, 20, np.random.default_rng(3))
+    runs = {}
+    for n_jobs in (1, 2):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            s = perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(4),
+                                   n_cost_runs=10, max_iterations=2, rtol=1e-12, n_jobs=n_jobs)
+        runs[n_jobs] = (s, [str(w.message) for w in caught])
+    (serial, said), (parallel, said_parallel) = runs[1], runs[2]
+    for field in ("iterations", "converged", "costs", "diverged_iterates"):
+        assert np.array_equal(getattr(serial, field), getattr(parallel, field)), field
+    assert serial.baseline == parallel.baseline
+    assert said == said_parallel and any("did not converge" in m for m in said)
+
+
 def test_perturbation_sweep_rejects_bad_arguments():
     from asoc.belief.sweep import perturbation_sweep
     ex = landmark_example(K=3)
@@ -340,6 +359,8 @@ def test_perturbation_sweep_rejects_bad_arguments():
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(0), scale=0.0)
     with pytest.raises(TypeError, match="rng"):
         perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, 1)
+    with pytest.raises(ValueError, match="n_jobs"):
+        perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(0), n_jobs=0)
 
 
 # --- issue 15: bad input named, results say why they stopped --------------------------

@@ -9,6 +9,7 @@ spread it causes dominates the machine's), each with its own common random numbe
 J, and reports the spread of what a single run would show.
 """
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,7 +66,7 @@ def distribution(samples) -> dict:
     return {"value": median, "median": median, "range": [float(x.min()), float(x.max())], "n": int(x.size)}
 
 
-def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False,
+def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False, n_jobs=1,
                        **options) -> Sweep:
     """Algorithm 2.2 from ``n_members`` perturbed zero policies; costs on the draws ``noise``.
 
@@ -79,6 +80,8 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
         and for the common random numbers of its J.
     scale : standard deviation of the perturbation of d_k (> 0).
     progress : show a progress bar.
+    n_jobs : worker processes for the members (joblib's convention: -1 all cores); 1 runs them
+        in this process. The result does not depend on it.
     options : further arguments of :func:`~asoc.belief.trajectory.optimize_belief_trajectory`.
 
     Returns
@@ -106,19 +109,59 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     n_members = check.integer(n_members, "n_members", minimum=1)
     scale = check.real_scalar(scale, "scale", low=0, low_open=True)
     progress = check.boolean(progress, "progress")
+    n_jobs = check.integer(n_jobs, "n_jobs")
+    if n_jobs == 0 or n_jobs < -1:
+        raise ValueError(f"n_jobs: expected a positive number of processes or -1 (all cores), found {n_jobs}")
     simulate(model, cost, mean0, cov0, MeanAffineController(model, AffinePolicy.zero(cost.K, model.n_u, model.n_x)),
              noise)                                                 # checks mean0, cov0 and noise before the runs
-    K, n_u, n_x = cost.K, model.n_u, model.n_x
 
-    def mean_cost(policy):
-        return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, policy), noise).costs.mean())
+    children = rng.spawn(n_members)
+    if n_jobs == 1:
+        outputs = [_member(model, cost, mean0, cov0, noise, child, scale, options)
+                   for child in progress_bar(children, progress, desc="perturbed Alg. 2.2")]
+    else:
+        outputs = _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs, progress)
+    rows = _reissued(outputs)
+    it, conv, costs, div = (np.array(c) for c in zip(*rows))
+    return Sweep(it, conv.astype(bool), costs, div,
+                 _mean_cost(model, cost, mean0, cov0, noise, AffinePolicy.zero(cost.K, model.n_u, model.n_x)))
 
-    rows = []
-    for child in progress_bar(rng.spawn(n_members), progress, desc="perturbed Alg. 2.2"):
-        zero = AffinePolicy.zero(K, n_u, n_x)
+
+def _mean_cost(model, cost, mean0, cov0, noise, policy) -> float:
+    return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, policy), noise).costs.mean())
+
+
+def _member(model, cost, mean0, cov0, noise, child, scale, options):
+    """One member of the sweep: (iterations, converged, mean cost, share of diverged iterates) and
+    the warnings it raised (recorded, since a worker process's warnings would not reach the caller)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        zero = AffinePolicy.zero(cost.K, model.n_u, model.n_x)
         start = AffinePolicy(zero.L, scale * child.standard_normal(zero.d.shape))
         res = optimize_belief_trajectory(model, cost, mean0, cov0, policy=start, rng=child, **options)
         J = np.asarray(res.costs)
-        rows.append((res.iterations, res.converged, mean_cost(res.policy), float(np.mean(J[1:] > J[0]))))
-    it, conv, costs, div = (np.array(c) for c in zip(*rows))
-    return Sweep(it, conv.astype(bool), costs, div, mean_cost(AffinePolicy.zero(K, n_u, n_x)))
+        row = (res.iterations, res.converged, _mean_cost(model, cost, mean0, cov0, noise, res.policy),
+               float(np.mean(J[1:] > J[0])))
+    return row, [(w.message, w.category) for w in caught]
+
+
+def _reissued(member_outputs):
+    """The members' rows, after re-issuing their warnings here, in member order (the caller's filters apply)."""
+    rows = []
+    for row, caught in member_outputs:
+        for message, category in caught:
+            warnings.warn(message, category, stacklevel=3)
+        rows.append(row)
+    return rows
+
+
+def _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs, progress):
+    """The members on ``n_jobs`` worker processes (joblib/loky, which pickles the model's local
+    functions); each member's generator travels with it, so the rows equal the serial ones."""
+    try:
+        import joblib
+    except ImportError as err:                                   # the optional extra asoc[studies]
+        raise ImportError("n_jobs != 1 needs joblib: pip install 'asoc[studies]'") from err
+    tasks = (joblib.delayed(_member)(model, cost, mean0, cov0, noise, child, scale, options) for child in children)
+    rows = joblib.Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
+    return list(progress_bar(rows, progress, desc="perturbed Alg. 2.2", total=len(children)))
