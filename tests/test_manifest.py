@@ -141,6 +141,10 @@ def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependenci
     assert values["findings"]["start"] >= values["secA_1"]["end"], "findings started before the notebook it quotes"
     assert {v["threads"] for v in values.values()} == {"1"}
     assert set(manifest.load_manifest(project.figures)) == {"secA_1", "secB_1", "findings"}
+    # each entry keeps the run's wall time (the next build starts the longest first), and the
+    # time is no input: the second build below skips all three
+    assert all(seconds >= 2.0 for seconds in manifest.last_seconds(project.figures).values())
+    assert set(manifest.last_seconds(project.figures)) == {"secA_1", "secB_1", "findings"}
     monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
     assert cli.main(["reproduce", "--jobs", "2"]) == 0
     assert capsys.readouterr().out.count("up to date, skipped") == 3

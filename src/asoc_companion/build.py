@@ -37,18 +37,20 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 
 
 def run_one(info, fidelity, output_dir=None, overrides=None, progress_bar=None):
+    """Run ``info``; return the executed notebook's path and the wall time in seconds."""
     start = time.perf_counter()
     print(f"running {info.path.name} ({info.title}) at fidelity={fidelity} ...", flush=True)
     executed = nbs.run(info, fidelity, output_dir=output_dir, overrides=overrides, progress_bar=progress_bar)
-    print(f"  {info.path.name} done in {time.perf_counter() - start:.1f} s -> {rel(executed)}", flush=True)
-    return executed
+    seconds = time.perf_counter() - start
+    print(f"  {info.path.name} done in {seconds:.1f} s -> {rel(executed)}", flush=True)
+    return executed, seconds
 
 
 def run_and_record(info, fidelity, progress_bar=None):
     """Run ``info`` into its default folder, then write its manifest entry (last)."""
-    run_one(info, fidelity, progress_bar=progress_bar)
+    _, seconds = run_one(info, fidelity, progress_bar=progress_bar)
     out = nbs.default_output_dir(fidelity)
-    manifest.update_manifest(info, nbs.harness_parameters(info, fidelity, out), out)
+    manifest.update_manifest(info, nbs.harness_parameters(info, fidelity, out), out, seconds=seconds)
 
 
 def _worker_init(root, single_thread):
@@ -62,8 +64,7 @@ def _worker_init(root, single_thread):
 def _worker_run(name, fidelity):
     """Run one notebook in a worker process (the parent writes the manifest)."""
     info = nbs.by_name(name)
-    run_one(info, fidelity, progress_bar=False)
-    return name
+    return run_one(info, fidelity, progress_bar=False)[1]
 
 
 def _pending(infos, fidelity, force) -> list:
@@ -122,11 +123,26 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
     return 1 if failed else 0
 
 
+def longest_first(names, seconds) -> list:
+    """``names`` by their last run's wall time, longest first, never-timed ones before all
+    (the longest-processing-time rule: on two cores the short notebooks fill the gaps at the end).
+
+    Examples
+    --------
+    >>> longest_first(["sec3_2", "theorems", "new", "sec2_5"], {"sec3_2": 6.0, "theorems": 300.0, "sec2_5": 90.0})
+    ['new', 'theorems', 'sec2_5', 'sec3_2']
+    """
+    return sorted(names, key=lambda name: -seconds.get(name, float("inf")))
+
+
 def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
-    """Submit each notebook when its dependencies are done; write its manifest entry when it finishes."""
+    """Submit each notebook when its dependencies are done, longest first; write its manifest
+    entry when it finishes."""
     running = {}
+    out = nbs.default_output_dir(fidelity)
+    order = longest_first(list(todo), manifest.last_seconds(out))
     while len(done) + len(failed) < len(todo):
-        for name in todo:
+        for name in order:
             if name in running.values() or name in done or name in failed:
                 continue
             if any(d in failed for d in waits[name]):
@@ -140,12 +156,12 @@ def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
         for future in finished:
             name = running.pop(future)
             try:
-                future.result()
+                seconds = future.result()
             except Exception as err:       # noqa: BLE001
                 failed.append(name)
                 print(f"{name}.ipynb: FAILED: {type(err).__name__}: "
                       f"{str(err).splitlines()[0] if str(err) else ''}", flush=True)
                 continue
-            out = nbs.default_output_dir(fidelity)
-            manifest.update_manifest(todo[name], nbs.harness_parameters(todo[name], fidelity, out), out)
+            manifest.update_manifest(todo[name], nbs.harness_parameters(todo[name], fidelity, out), out,
+                                     seconds=seconds)
             done.add(name)

@@ -145,6 +145,12 @@ def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
     return problems
 
 
+def last_seconds(output_dir) -> dict:
+    """``{notebook: wall time of its last recorded run}`` (notebooks without one are left out)."""
+    return {name: e["seconds"] for name, e in load_manifest(output_dir).items()
+            if isinstance(e, dict) and isinstance(e.get("seconds"), (int, float))}
+
+
 def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
     """What changed since ``info`` was last run into ``output_dir``, or what its outputs lack (empty: up to date)."""
     old = load_manifest(output_dir).get(info.name)
@@ -165,9 +171,15 @@ def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
     return changed
 
 
-def update_manifest(info, parameters: dict, output_dir) -> dict:
-    """Record the input hashes of a finished run of ``info`` (atomically); return the entry."""
+def update_manifest(info, parameters: dict, output_dir, seconds=None) -> dict:
+    """Record the input hashes of a finished run of ``info`` (atomically); return the entry.
+
+    ``seconds``, the run's wall time, is kept beside the hashes (not compared by
+    :func:`changed_inputs`): the parallel build starts the longest notebooks first.
+    """
     manifest = load_manifest(output_dir)
     manifest[info.name] = entry(info, parameters, output_dir)
+    if seconds is not None:
+        manifest[info.name]["seconds"] = round(float(seconds), 1)
     atomic_write_json(manifest_path(output_dir), manifest)
     return manifest[info.name]
