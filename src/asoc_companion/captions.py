@@ -11,7 +11,7 @@ import yaml
 
 from . import paths
 from .ledger import badge, ledger_label
-from .reference import load_reference, status
+from .reference import SAFE_LOADER, load_reference, status
 
 CLAIMS_NAME = "figure_claims.yaml"
 
@@ -24,7 +24,7 @@ def claims_path():
 def load_claims(path=None) -> dict:
     """``{figure number: {"where", "claim", "keys"}}`` from the registry, validated."""
     with open(path or claims_path()) as handle:
-        raw = yaml.safe_load(handle) or {}
+        raw = yaml.load(handle, Loader=SAFE_LOADER) or {}
     for number, spec in raw.items():
         missing = {"where", "claim", "keys"} - set(spec)
         if missing:
