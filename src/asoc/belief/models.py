@@ -289,7 +289,7 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
     def distance(x):
         """||x - x^|| (last axis kept): np.linalg.norm's sum of squares without its argument handling."""
         diff = np.asarray(x) - lm
-        return np.sqrt((diff * diff).sum(axis=-1, keepdims=True))
+        return np.sqrt(np.add.reduce(diff * diff, axis=-1, keepdims=True))
 
     def h(x, v):
         return distance(x) * (1.0 + range_noise * np.asarray(v))
