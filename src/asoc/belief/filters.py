@@ -625,6 +625,19 @@ def _jacobians(model, x, u, w, v):
     return _numeric_jacobians(model, x, u, w, v)
 
 
+def _read_only_broadcast(vector, batch):
+    """``vector`` broadcast to ``batch + vector.shape``, read-only (np.broadcast_to's result).
+
+    Without a batch a read-only view: np.broadcast_to's argument handling costs more than
+    the EKF's arithmetic on one small belief (the inner loop of [159]'s linearisation).
+    """
+    if batch:
+        return np.broadcast_to(vector, batch + vector.shape)
+    view = vector.view()
+    view.flags.writeable = False
+    return view
+
+
 def ekf_predict(model, mean, cov, u):
     """EKF time update [10]: linearisation of a at (mean, u, E{w}); (predicted mean, Gamma).
 
@@ -638,8 +651,8 @@ def ekf_predict(model, mean, cov, u):
     >>> mean.tolist(), Gamma.tolist()
     ([1.5], [[2.0]])
     """
-    w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
-    v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
+    w0 = _read_only_broadcast(model.w.mean, mean.shape[:-1])
+    v0 = _read_only_broadcast(model.v.mean, mean.shape[:-1])
     a_x, _, a_w, _, _ = _jacobians(model, mean, u, w0, v0)
     Gamma = a_x @ cov @ np.swapaxes(a_x, -1, -2) + a_w @ model.w.cov @ np.swapaxes(a_w, -1, -2)
     return model.a(mean, u, w0), Gamma
@@ -658,14 +671,14 @@ def ekf_gain(model, mean, cov):
     >>> y_hat.tolist(), K.tolist(), S.tolist(), post.tolist()
     ([1.0], [[0.5]], [[2.0]], [[0.5]])
     """
-    w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
-    v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
+    w0 = _read_only_broadcast(model.w.mean, mean.shape[:-1])
+    v0 = _read_only_broadcast(model.v.mean, mean.shape[:-1])
     u0 = np.zeros(mean.shape[:-1] + (model.n_u,))
     _, _, _, h_x, h_v = _jacobians(model, mean, u0, w0, v0)
     S = h_x @ cov @ np.swapaxes(h_x, -1, -2) + h_v @ model.v.cov @ np.swapaxes(h_v, -1, -2)
-    K = np.swapaxes(_solve(S, h_x @ cov), -1, -2)
+    K = _solve(S, h_x @ cov).swapaxes(-1, -2)
     post = cov - K @ h_x @ cov
-    return model.h(mean, v0), K, S, 0.5 * (post + np.swapaxes(post, -1, -2))
+    return model.h(mean, v0), K, S, 0.5 * (post + post.swapaxes(-1, -2))
 
 
 def ekf_step(model, mean, cov, u, y):
