@@ -176,3 +176,13 @@ def test_bad_input_raises_value_error_naming_the_argument(call, name):
 def test_nan_weights_and_bad_counts_are_named(call, name):
     with pytest.raises((ValueError, TypeError), match=f"^{name}: expected"):
         call()
+
+
+def test_omat_matrix_rows_equal_the_pairwise_assignment_means_bit_for_bit():
+    from scipy.optimize import linear_sum_assignment
+    X, Y = np.random.default_rng(5).normal(size=(2, 12, 7, 2))
+    D = gp.omat_matrix(X, Y, q=3)
+    for i, j in itertools.product(range(len(X)), range(len(Y))):
+        cost = np.sum((X[i][:, None] - Y[j][None]) ** 2, axis=-1) ** 1.5
+        rows, cols = linear_sum_assignment(cost)
+        assert D[i, j] == cost[rows, cols].mean() ** (1 / 3)

@@ -107,3 +107,12 @@ def test_bad_input():
         gp.mean_kernel_dirac(np.zeros((2, 3, 1)), alpha=1.0, Lambda=-1.0)
     with pytest.raises(ValueError, match="sigma_n"):
         gp.DistributionGP().condition(np.array([[0, 1.0], [1.0, 0]]), [0, 1], 1.0, 1.0, 0.0)
+
+
+@pytest.mark.parametrize("l", [0.05, 1.0, 30.0])
+def test_symmetric_exp_equals_the_full_exponential_bit_for_bit(l):
+    from asoc.gp.regression import SYMMETRIC_TILE, _symmetric_exp
+    X = np.random.default_rng(4).normal(size=(SYMMETRIC_TILE // 3 + 7, 3, 2))    # tiles not a divisor
+    A = -0.5 * np.sum((X[:, :, None, None, :] - X[None, None]) ** 2, axis=-1)
+    out = _symmetric_exp(A, l**2, out=np.empty_like(A))
+    assert np.array_equal(out, np.exp(A / l**2))

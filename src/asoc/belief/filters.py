@@ -446,7 +446,68 @@ class UKF:
         >>> bool(np.allclose(C(np.array([1.0, 0.0])), ukf.next_covariance((ex.mean0, ex.cov0), [1.0, 0.0])))
         True
         """
-        return partial(self._covariance_after, self._prior(*self._checked(*_pair(estimate))))
+        mean, cov = self._checked(*_pair(estimate))
+        if mean.ndim == 1 and cov.ndim == 2:
+            return _NextCovariance(self, self._prior(mean, cov))
+        return partial(self._covariance_after, self._prior(mean, cov))
+
+
+class _NextCovariance:
+    """u -> C_{k+1}(u) of :meth:`UKF._covariance_after` for one estimate (mean (n_x,)), unchecked.
+
+    The same floating-point operations on the same operands, with less numpy call
+    overhead on the tiny arrays of the inner loop of Algorithm 2.2: what does not depend
+    on u (the weights as columns, the measurement noise's part of the sensor's sigma
+    points, the zero rows of their state offsets) is prepared once, and a scalar
+    measurement's division is decided without ``ndarray.all``. Where Cov{v} or the
+    predicted covariance has no Cholesky factor, the measurement is :meth:`UKF._measurement`.
+    """
+
+    def __init__(self, ukf, prior):
+        process, sensor = ukf._process, ukf._sensor
+        self._ukf, self._prior, self._n_x, self._sensor_n = ukf, prior, ukf.model.n_x, sensor.n
+        self._process_weights, self._process_column = process.weights, process.weights[:, None]
+        self._sensor_weights, self._sensor_column = sensor.weights, sensor.weights[:, None]
+        self._scale, self._v_points = sensor.scale, None
+        if sensor.noise_offsets is not None:
+            self._state_offsets = sensor.noise_offsets[:, :self._n_x].copy()     # rows of L^T filled per call
+            self._v_points = sensor.noise.mean + sensor.noise_offsets[:, self._n_x:]
+
+    def __call__(self, u):
+        mean, cov = self._predicted(u)
+        if self._v_points is None:
+            return self._ukf._measurement(mean, cov)[2]
+        try:
+            x_points = self._sensor_state_points(mean, cov)
+        except np.linalg.LinAlgError:
+            return self._ukf._measurement(mean, cov)[2]
+        joint = np.concatenate([x_points, self._ukf.model.h(x_points, self._v_points)], axis=-1)
+        e = joint - (self._sensor_weights @ joint)[None, :]
+        return self._posterior((self._sensor_column * e).T @ e)
+
+    def _predicted(self, u):
+        """:meth:`UKF._propagate` of the prior: the predicted mean and covariance."""
+        x_points, w_points = self._prior
+        points = self._ukf.model.a(x_points, u[None, :], w_points)
+        mean = self._process_weights @ points
+        e = points - mean[None, :]
+        return mean, (self._process_column * e).T @ e
+
+    def _sensor_state_points(self, mean, cov):
+        """The state part of the sensor's :meth:`_Augmented.points`; LinAlgError without a Cholesky factor."""
+        Lt = (self._scale * _cholesky(cov)).T
+        offsets, n_x, n = self._state_offsets, self._n_x, self._sensor_n
+        offsets[1:1 + n_x] = Lt
+        offsets[1 + n:1 + n + n_x] = -Lt
+        return mean + offsets
+
+    def _posterior(self, C):
+        """The posterior of :func:`_conditional_covariance` from the joint covariance C."""
+        n_x = self._n_x
+        Cxx, Cyx, Cyy = C[:n_x, :n_x], C[n_x:, :n_x], C[n_x:, n_x:]
+        gain = (Cyx / Cyy if Cyy.shape[0] == 1 and Cyy[0, 0] != 0 else _solve(Cyy, Cyx)).T
+        post = Cxx - gain @ Cyx
+        return 0.5 * (post + post.T)
 
 
 def _pair(estimate):
@@ -564,6 +625,19 @@ def _jacobians(model, x, u, w, v):
     return _numeric_jacobians(model, x, u, w, v)
 
 
+def _read_only_broadcast(vector, batch):
+    """``vector`` broadcast to ``batch + vector.shape``, read-only (np.broadcast_to's result).
+
+    Without a batch a read-only view: np.broadcast_to's argument handling costs more than
+    the EKF's arithmetic on one small belief (the inner loop of [159]'s linearisation).
+    """
+    if batch:
+        return np.broadcast_to(vector, batch + vector.shape)
+    view = vector.view()
+    view.flags.writeable = False
+    return view
+
+
 def ekf_predict(model, mean, cov, u):
     """EKF time update [10]: linearisation of a at (mean, u, E{w}); (predicted mean, Gamma).
 
@@ -577,8 +651,8 @@ def ekf_predict(model, mean, cov, u):
     >>> mean.tolist(), Gamma.tolist()
     ([1.5], [[2.0]])
     """
-    w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
-    v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
+    w0 = _read_only_broadcast(model.w.mean, mean.shape[:-1])
+    v0 = _read_only_broadcast(model.v.mean, mean.shape[:-1])
     a_x, _, a_w, _, _ = _jacobians(model, mean, u, w0, v0)
     Gamma = a_x @ cov @ np.swapaxes(a_x, -1, -2) + a_w @ model.w.cov @ np.swapaxes(a_w, -1, -2)
     return model.a(mean, u, w0), Gamma
@@ -597,14 +671,14 @@ def ekf_gain(model, mean, cov):
     >>> y_hat.tolist(), K.tolist(), S.tolist(), post.tolist()
     ([1.0], [[0.5]], [[2.0]], [[0.5]])
     """
-    w0 = np.broadcast_to(model.w.mean, mean.shape[:-1] + model.w.mean.shape)
-    v0 = np.broadcast_to(model.v.mean, mean.shape[:-1] + model.v.mean.shape)
+    w0 = _read_only_broadcast(model.w.mean, mean.shape[:-1])
+    v0 = _read_only_broadcast(model.v.mean, mean.shape[:-1])
     u0 = np.zeros(mean.shape[:-1] + (model.n_u,))
     _, _, _, h_x, h_v = _jacobians(model, mean, u0, w0, v0)
     S = h_x @ cov @ np.swapaxes(h_x, -1, -2) + h_v @ model.v.cov @ np.swapaxes(h_v, -1, -2)
-    K = np.swapaxes(_solve(S, h_x @ cov), -1, -2)
+    K = _solve(S, h_x @ cov).swapaxes(-1, -2)
     post = cov - K @ h_x @ cov
-    return model.h(mean, v0), K, S, 0.5 * (post + np.swapaxes(post, -1, -2))
+    return model.h(mean, v0), K, S, 0.5 * (post + post.swapaxes(-1, -2))
 
 
 def ekf_step(model, mean, cov, u, y):

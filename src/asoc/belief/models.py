@@ -289,7 +289,7 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
     def distance(x):
         """||x - x^|| (last axis kept): np.linalg.norm's sum of squares without its argument handling."""
         diff = np.asarray(x) - lm
-        return np.sqrt((diff * diff).sum(axis=-1, keepdims=True))
+        return np.sqrt(np.add.reduce(diff * diff, axis=-1, keepdims=True))
 
     def h(x, v):
         return distance(x) * (1.0 + range_noise * np.asarray(v))
@@ -299,15 +299,19 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
         sd = range_noise * d
         return np.exp(-0.5 * ((np.asarray(y)[..., 0] - d) / sd) ** 2) / (np.sqrt(2 * np.pi) * sd)
 
+    identity, gain_identity = np.eye(n), noise_gain * np.eye(n)
+    identity.flags.writeable = gain_identity.flags.writeable = False
+
     def jacobians(x, u, w, v):
         x = np.asarray(x, dtype=float)
         diff = x - lm
-        d = np.linalg.norm(diff, axis=-1, keepdims=True)
+        d = distance(x)
         batch = x.shape[:-1]
-        eye = np.broadcast_to(np.eye(n), batch + (n, n))
+        eye, gain_eye = ((identity, gain_identity) if not batch else
+                         (np.broadcast_to(identity, batch + (n, n)), np.broadcast_to(gain_identity, batch + (n, n))))
         h_x = ((1.0 + range_noise * np.asarray(v)) * diff / d)[..., None, :]
         h_v = (range_noise * d)[..., None]
-        return eye, eye, noise_gain * eye, h_x, h_v
+        return eye, eye, gain_eye, h_x, h_v
 
     model_ = NonlinearModel(a=a, h=h, w=GaussianNoise(np.zeros(n), np.eye(n)),
                             v=GaussianNoise(np.zeros(1), np.eye(1)), n_x=n, n_u=n,

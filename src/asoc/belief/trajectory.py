@@ -339,6 +339,7 @@ class StageProblem:
         check.real_array(self.mixture.points, "estimate", shape=(None, model.n_x))
         self._next_covariance = _next_covariance_function(self.filt, estimate)
         self._has_covariance_term = self.covariance_term and bool(np.any(nxt.S))
+        self._S_transposed = np.ascontiguousarray(nxt.S.T)     # what np.vdot would copy at every call
 
     def particle_part(self, x, u):
         """All of phi_k except the covariance term, for x (..., n_x) and u (..., n_u)."""
@@ -356,7 +357,7 @@ class StageProblem:
         """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner loop."""
         if not self._has_covariance_term:
             return 0.0
-        return 0.5 * float(np.vdot(self.nxt.S.T, self._next_covariance(u)))     # tr[S C]
+        return 0.5 * float(np.vdot(self._S_transposed, self._next_covariance(u)))     # tr[S C]
 
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""

@@ -23,6 +23,7 @@ public re-implementations citing "Section 4.1 of Van Den Berg et al. IJRR 2012")
 
 import warnings
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -38,6 +39,14 @@ def _tril_indices(n):
     return [(i, j) for j in range(n) for i in range(j, n)]
 
 
+@lru_cache
+def _tril_index_arrays(n):
+    """Row and column indices of :func:`_tril_indices` as read-only integer arrays."""
+    rows, cols = np.array(_tril_indices(n)).T
+    rows.flags.writeable = cols.flags.writeable = False
+    return rows, cols
+
+
 def _duplication(n):
     """D with vec(A) = D vech(A) for symmetric A (our vech order: columns of the lower triangle)."""
     idx = _tril_indices(n)
@@ -49,8 +58,8 @@ def _duplication(n):
 
 def _psd_sqrt(M):
     """Principal square root of a batch of symmetric PSD matrices."""
-    lam, vec = np.linalg.eigh(0.5 * (M + np.swapaxes(M, -1, -2)))
-    return (vec * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]) @ np.swapaxes(vec, -1, -2)
+    lam, vec = np.linalg.eigh(0.5 * (M + M.swapaxes(-1, -2)))
+    return (vec * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]) @ vec.swapaxes(-1, -2)
 
 
 def belief_vector(mean, cov):
@@ -82,11 +91,12 @@ def belief_vector(mean, cov):
 def _belief_vector(mean, cov):
     n = np.shape(mean)[-1]
     root = _psd_sqrt(np.asarray(cov, dtype=float))
-    i, j = np.array(_tril_indices(n)).T
+    i, j = _tril_index_arrays(n)
     mean, tril = np.asarray(mean, dtype=float), root[..., i, j]
-    batch = np.broadcast_shapes(mean.shape[:-1], tril.shape[:-1])
-    return np.concatenate([np.broadcast_to(mean, batch + mean.shape[-1:]),
-                           np.broadcast_to(tril, batch + tril.shape[-1:])], axis=-1)
+    if mean.shape[:-1] != tril.shape[:-1]:
+        batch = np.broadcast_shapes(mean.shape[:-1], tril.shape[:-1])
+        mean, tril = np.broadcast_to(mean, batch + mean.shape[-1:]), np.broadcast_to(tril, batch + tril.shape[-1:])
+    return np.concatenate([mean, tril], axis=-1)
 
 
 def belief_mean_and_root(b, n):
@@ -100,7 +110,7 @@ def belief_mean_and_root(b, n):
     """
     b = np.asarray(b, dtype=float)
     root = np.zeros(b.shape[:-1] + (n, n))
-    i, j = np.array(_tril_indices(n)).T
+    i, j = _tril_index_arrays(n)
     root[..., i, j] = b[..., n:]
     root[..., j, i] = b[..., n:]
     return b[..., :n], root

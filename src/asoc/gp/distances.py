@@ -473,11 +473,21 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
     for i in progress_bar(range(len(X)), progress, desc="OMAT", leave=False):
         j0 = i + 1 if symmetric else 0
         costs = np.sum((X[i][None, :, None, :] - Y[j0:, None, :, :]) ** 2, axis=-1) ** (q / 2)
-        for k, cost in enumerate(costs):
-            rows, cols = linear_sum_assignment(cost)
-            out[i, j0 + k] = cost[rows, cols].mean()
+        out[i, j0:] = _mean_assignment_costs(costs)
     out = out ** (1 / q)
     return out + out.T if symmetric else out
+
+
+def _mean_assignment_costs(costs):
+    """The mean cost of the optimal assignment of each square cost matrix of ``costs`` (K, m, m).
+
+    The assignments are gathered and averaged at once: per pair, indexing and
+    ``ndarray.mean`` cost more than the linear assignment of the small matrices of
+    :func:`omat_matrix` (each row's mean is the same sum and division).
+    """
+    K, m = costs.shape[:2]
+    cols = np.array([linear_sum_assignment(cost)[1] for cost in costs], dtype=np.intp).reshape(K, m)
+    return costs[np.arange(K)[:, None], np.arange(m), cols].mean(axis=-1)
 
 
 def ospa(x, y, c: float, p: float = 2) -> float:
