@@ -168,6 +168,7 @@ def test_bad_input_raises_value_error_naming_the_argument(call, name):
     (lambda: gp.standard_normal_dirac_approximation(float("nan")), "L"),
     (lambda: gp.standard_normal_dirac_approximation(2.5), "L"),
     (lambda: gp.standard_normal_dirac_approximation("10"), "L"),
+    (lambda: gp.gaussian_dirac_mixtures([0.0], [1.0], L=10**6), "L"),       # (nodes x L x L) arrays: named, no MemoryError
     (lambda: gp.DistributionGP(n_restarts=float("inf")), "n_restarts"),
     (lambda: gp.DistributionGP(n_restarts=True), "n_restarts"),
     (lambda: gp.training_gaussians(2.5, np.random.default_rng(0)), "n"),

@@ -166,6 +166,11 @@ def _lcd_standard_normal(L: int, b_max: float):
     return x, mcvmd_standard_normal_dirac(x, nodes=nodes), gradient, int(res.nit)
 
 
+#: Largest L of :func:`standard_normal_dirac_approximation`: the mCvMd's gradient holds arrays of
+#: (quadrature nodes) x L x L floats, about 340 MB each at L = 400 with b_max = 100 (264 nodes).
+MAX_DIRAC_COMPONENTS = 400
+
+
 def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MAX) -> DiracApproximation:
     r"""L equally weighted Dirac components approximating N(0, 1) by mCvMd minimisation [82].
 
@@ -177,7 +182,7 @@ def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MA
     Parameters
     ----------
     L : int
-        Number of components, >= 1.
+        Number of components, 1 to ``MAX_DIRAC_COMPONENTS`` (400).
     b_max : float
         Upper limit of the mCvMd kernel widths.
 
@@ -197,7 +202,7 @@ def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MA
     >>> a.converged, a.x.round(3).tolist(), round(a.distance, 4)
     (True, [-1.259, -0.317, 0.317, 1.259], 0.1016)
     """
-    L = check.integer(L, "L", minimum=1)
+    L = check.integer(L, "L", minimum=1, maximum=MAX_DIRAC_COMPONENTS)
     b_max = v.positive(b_max, "b_max")
     x, dist, gradient, nit = _lcd_standard_normal(L, b_max)
     tol = gradient_tolerance(b_max)
