@@ -346,3 +346,14 @@ def test_results_say_why_they_stopped():
     assert dyn.status == "diverged"
     lmi = static_output_lmi(sec354_system(1, "C=[1 0]"))
     assert (lmi.feasible, lmi.status, lmi.solver_status) == (False, "infeasible", "infeasible")
+
+
+def test_table_3_2_designs_subset_equals_the_whole_table_and_names_unknown_rows():
+    from asoc.mjls.comparison import TABLE_3_2_ROWS, table_3_2_designs
+    whole = table_3_2_designs(2, [3.0, 0.0], 20)
+    part = table_3_2_designs(2, [3.0, 0.0], 20, rows=[TABLE_3_2_ROWS[4], TABLE_3_2_ROWS[3]])
+    assert list(part) == [TABLE_3_2_ROWS[3], TABLE_3_2_ROWS[4]]        # in table order
+    assert np.array_equal(part[TABLE_3_2_ROWS[3]].controller.L, whole[TABLE_3_2_ROWS[3]].controller.L)
+    assert np.array_equal(part[TABLE_3_2_ROWS[4]].controller.L, whole[TABLE_3_2_ROWS[4]].controller.L)
+    with pytest.raises(ValueError, match="^rows: expected"):
+        table_3_2_designs(2, [3.0, 0.0], 20, rows=[("state feedback", "LQR")])

@@ -43,39 +43,63 @@ class Design:
     seconds: float
 
 
-def table_3_2_designs(T, x0, horizon, H=None):
-    """The six controllers of Table 3.2 for transition matrix T[``T``] and initial state x0.
+def table_3_2_designs(T, x0, horizon, H=None, rows=TABLE_3_2_ROWS):
+    """The controllers of Table 3.2 (all six, or those in ``rows``) for transition matrix T[``T``]
+    and initial state x0.
 
     State-feedback rows use C_i = I; output-feedback rows C1 = [1 2], C2 = [2 1]. The
     time-variant designs [165], [163] are computed for the scenario's x0, horizon and the
-    stationary initial mode distribution.
+    stationary initial mode distribution. Each design is computed on its own, so a subset
+    gives the same controllers as the whole table.
+
+    Raises
+    ------
+    ValueError
+        If ``rows`` names a row that is not one of ``TABLE_3_2_ROWS``.
 
     Examples
     --------
     >>> designs = table_3_2_designs(1, [3.0, 0.0], 10)
     >>> len(designs), TABLE_3_2_ROWS[3] in designs
     (6, True)
+    >>> list(table_3_2_designs(1, [3.0, 0.0], 10, rows=[TABLE_3_2_ROWS[3]])) == [TABLE_3_2_ROWS[3]]
+    True
     """
+    unknown = [row for row in rows if row not in TABLE_3_2_ROWS]
+    if unknown:
+        raise ValueError(f"rows: expected rows of TABLE_3_2_ROWS, found {unknown}")
     kw = {} if H is None else {"H": H}
-    sf = sec354_system(T, "state", **kw)
-    of = sec354_system(T, "C1=[1 2], C2=[2 1]", **kw)
-    designs = {}
-    r38 = observed_mode_state_feedback(sf)
-    designs[TABLE_3_2_ROWS[0]] = Design(sf, ModeDependentGain(r38.L), r38.seconds)
-    t = time.perf_counter()
-    r52 = do_val_h2_state_feedback(sf)
-    if not r52.feasible:
-        raise RuntimeError(f"[52] LMI infeasible for T[{T}]: {r52.message}")
-    designs[TABLE_3_2_ROWS[1]] = Design(sf, StaticGain(r52.L), time.perf_counter() - t)
-    r165 = time_variant_feedback(sf, horizon, x0)
-    designs[TABLE_3_2_ROWS[2]] = Design(sf, TimeVariantGain(r165.G), r165.seconds)
-    rsf = static_output_feedback(sf)
-    designs[TABLE_3_2_ROWS[3]] = Design(sf, StaticGain(rsf.L), rsf.seconds)
-    r163 = time_variant_feedback(of, horizon, x0)
-    designs[TABLE_3_2_ROWS[4]] = Design(of, TimeVariantGain(r163.G), r163.seconds)
-    rof = static_output_feedback(of)
-    designs[TABLE_3_2_ROWS[5]] = Design(of, StaticGain(rof.L), rof.seconds)
-    return designs
+    systems = {"state feedback": sec354_system(T, "state", **kw),
+               "output feedback": sec354_system(T, "C1=[1 2], C2=[2 1]", **kw)}
+    return {row: _DESIGNERS[row[1]](systems[row[0]], T, x0, horizon) for row in TABLE_3_2_ROWS if row in rows}
+
+
+def _observed_mode_38(sys, T, x0, horizon):
+    r = observed_mode_state_feedback(sys)
+    return Design(sys, ModeDependentGain(r.L), r.seconds)
+
+
+def _h2_lmi_52(sys, T, x0, horizon):
+    start = time.perf_counter()
+    r = do_val_h2_state_feedback(sys)
+    if not r.feasible:
+        raise RuntimeError(f"[52] LMI infeasible for T[{T}]: {r.message}")
+    return Design(sys, StaticGain(r.L), time.perf_counter() - start)
+
+
+def _variational(sys, T, x0, horizon):
+    r = time_variant_feedback(sys, horizon, x0)
+    return Design(sys, TimeVariantGain(r.G), r.seconds)
+
+
+def _proposed(sys, T, x0, horizon):
+    r = static_output_feedback(sys)
+    return Design(sys, StaticGain(r.L), r.seconds)
+
+
+# the designer of each row's method ([165] and [163] are the same variational method)
+_DESIGNERS = {TABLE_3_2_ROWS[0][1]: _observed_mode_38, TABLE_3_2_ROWS[1][1]: _h2_lmi_52,
+              TABLE_3_2_ROWS[2][1]: _variational, TABLE_3_2_ROWS[4][1]: _variational, "proposed": _proposed}
 
 
 def median_costs(designs, x0, horizon, n_runs, seed, normalise=True, mode0=None, level=0.95):
