@@ -100,21 +100,33 @@ def best_gain(sys, rng, starts=20):
 
 def next_modes(rng, T, theta):
     """theta_{k+1} given theta_k for every run (inverse transform of the rows of T)."""
-    cum = np.cumsum(T, axis=1)
+    cum = np.cumsum(T, axis=1).take(theta, axis=0)
     u = rng.random(len(theta))
-    return np.minimum((u[:, None] > cum[theta]).sum(axis=1), T.shape[0] - 1)
+    passed = np.zeros(len(theta), dtype=np.intp)
+    for column in cum.T:                      # one pass per mode: no reduction over the narrow mode axis
+        passed += u > column
+    return np.minimum(passed, T.shape[0] - 1)
 
 
 def initial_modes(rng, mu, n_runs):
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
 
 
-def apply_modes(S, theta, x):
-    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather)."""
+def mode_rows(theta, n_modes):
+    """The runs in each mode, as increasing indices: one grouping shared by the products of a step."""
+    return [np.flatnonzero(theta == i) for i in range(n_modes)]
+
+
+def apply_modes(S, theta, x, rows=None):
+    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather).
+
+    ``rows``: :func:`mode_rows` of ``theta`` when several products share it (computed if omitted).
+    """
+    if rows is None:
+        rows = mode_rows(theta, S.shape[0])
     out = np.empty((len(x), S.shape[1]))
-    for i in range(S.shape[0]):
-        rows = theta == i
-        out[rows] = x[rows] @ S[i].T
+    for i, runs in enumerate(rows):
+        out[runs] = x.take(runs, axis=0) @ S[i].T
     return out
 
 
