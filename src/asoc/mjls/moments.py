@@ -196,6 +196,23 @@ def h2_cost(sys, L, X_inf):
     check_system(sys)
     L = gain_matrix(L, "L", sys.nu, sys.ny)
     X_inf = semidefinite(real_array(X_inf, "X_inf", shape=(sys.M, sys.nx, sys.nx)), "X_inf")
+    return h2_cost_unchecked(sys, L, X_inf)
+
+
+def h2_cost_unchecked(sys, L, X_inf):
+    """sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_inf^i] (Prop. 3.7) on validated arguments.
+
+    For loops over many gains: ``L`` must be a float array of shape (nu, ny) and ``X_inf`` a
+    symmetric (M, nx, nx) stack (e.g. from :func:`asoc.mjls.operators.solve_coupled_lyapunov`);
+    :func:`h2_cost` checks both and then calls this.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> round(h2_cost_unchecked(sys, np.array([[-0.4]]), np.broadcast_to(np.eye(2), (2, 2, 2))), 4)
+    5.6
+    """
     LC = L @ sys.C
     weight = sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
     return float(np.einsum("iab,iba->", weight, X_inf))

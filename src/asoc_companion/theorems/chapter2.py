@@ -404,8 +404,12 @@ def _injections(m, n):
     return np.array(list(itertools.permutations(range(n), m)))
 
 
+@functools.lru_cache(maxsize=None)
 def _pairs(N):
-    return np.triu_indices(N, 1)
+    """Indices of the pairs i < j of N items (cached: the search asks for them at every evaluation)."""
+    rows, cols = np.triu_indices(N, 1)
+    rows.flags.writeable = cols.flags.writeable = False
+    return rows, cols
 
 
 def _decode(family, theta, layout):

@@ -24,11 +24,12 @@ from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_
                                optimality_system)
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 from asoc.mjls.lmi import performance_output
-from asoc.mjls.operators import kronecker_matrix
+from asoc.mjls.moments import h2_cost_unchecked
+from asoc.mjls.operators import closed_loop_unchecked, kronecker_matrix, solve_coupled_lyapunov, spectral_radius
 
 from .core import Outcome, Statement
 from .instances import (Z_SCORE, apply_modes, best_scalar_gain, draw_system, initial_modes, min_eig,
-                        moment_estimate, next_modes, radius_to, random_spd, random_spd_stack, rescaled, size,
+                        mode_rows, moment_estimate, next_modes, radius_to, random_spd, random_spd_stack, rescaled, size,
                         scalar_gain_radii, stationary_average, system_data)
 
 _T = lambda S: np.swapaxes(S, -1, -2)
@@ -151,8 +152,9 @@ def _stationary_check(rng, mode_dependent):
     n_runs = 1000
 
     def step(x, th, r):
+        rows = mode_rows(th, sys.M)
         w = r.standard_normal((len(x), sys.nw))
-        return apply_modes(Acl, th, x) + apply_modes(sys.H, th, w)
+        return apply_modes(Acl, th, x, rows) + apply_modes(sys.H, th, w, rows)
 
     cost = lambda x, th: np.sum(apply_modes(DE, th, x) ** 2, axis=1)
     mc, se, burn = stationary_average(rng, step, cost, np.zeros((n_runs, sys.nx)),
@@ -307,8 +309,9 @@ def check_3_14(rng):
     x, theta = _sample_mixture(rng, mu0, mean0, cov0, n_runs)
     worst = 0.0
     for k in range(1, 4):
-        x = (apply_modes(Acl, theta, x)
-             + apply_modes(sys.H, theta, rng.standard_normal((n_runs, sys.nw))))
+        rows = mode_rows(theta, sys.M)
+        x = (apply_modes(Acl, theta, x, rows)
+             + apply_modes(sys.H, theta, rng.standard_normal((n_runs, sys.nw)), rows))
         theta = next_modes(rng, sys.T, theta)
         worst = max(worst, _z_scores(_indicator_moments(x, theta, sys.M), X[k], mus[k]))
     return _outcome(_verdict(worst < Z_SCORE), sys, max_z=worst, runs=n_runs)
@@ -378,13 +381,16 @@ def check_3_17(rng):
     if not radii.min() < 1:
         return _outcome("not_applicable", sys, min_rho_over_L=float(radii.min()))
     HHt = sys.H @ _T(sys.H)
+    noise = predecessor_sum(sys.T, sys.mu_inf[:, None, None] * HHt)
 
     def cost(t):
+        """The H2 cost of L = tan(t) (inf when not stabilising), on the system validated once: the
+        library's unchecked paths of ms_spectral_radius, steady_state_second_moment and h2_cost."""
         L = np.array([[np.tan(t)]])
-        Acl = closed_loop(sys, L)
-        if not ms_spectral_radius(Acl, sys.T) < 1:
+        Acl = closed_loop_unchecked(sys, L)
+        if not spectral_radius(Acl, sys.T) < 1:
             return np.inf
-        return h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf))
+        return h2_cost_unchecked(sys, L, solve_coupled_lyapunov(Acl, sys.T, noise).X)
 
     costs = np.array([cost(t) if r < 1 else np.inf for t, r in zip(s, radii)])
     best = int(np.argmin(costs))
@@ -477,9 +483,10 @@ def _loop_step(sys, F, K, L, n_runs):
 
     def step(state, th, r):
         x, xh = state[:, :nx], state[:, nx:]
-        y = apply_modes(sys.C, th, x) + apply_modes(J, th, r.standard_normal((len(x), J.shape[2])))
-        x_new = (apply_modes(sys.A, th, x) + apply_modes(sys.B, th, xh @ L.T)
-                 + apply_modes(sys.H, th, r.standard_normal((len(x), sys.nw))))
+        rows = mode_rows(th, sys.M)
+        y = apply_modes(sys.C, th, x, rows) + apply_modes(J, th, r.standard_normal((len(x), J.shape[2])), rows)
+        x_new = (apply_modes(sys.A, th, x, rows) + apply_modes(sys.B, th, xh @ L.T, rows)
+                 + apply_modes(sys.H, th, r.standard_normal((len(x), sys.nw)), rows))
         return np.hstack([x_new, xh @ F.T + y @ K.T])
 
     return step

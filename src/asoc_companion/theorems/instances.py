@@ -6,6 +6,8 @@ Everything here is verification logic: it draws random instances through
 by simulation with its standard error. The algorithms under test come from ``asoc.mjls``.
 """
 
+import itertools
+
 import numpy as np
 import scipy.optimize
 
@@ -54,28 +56,76 @@ def radius_to(sys, Acl, target):
 
 # ---------------------------------------------------------------- SOF stabilisability (premise)
 
+BOUND_MARGIN = 2.0    # grid_minimum skips a gain whose lower bound of rho exceeds this times the best rho found,
+BOUND_FLOOR = 1e-3    # with the best rho taken >= this (near rho = 0 rounding is relatively larger)
+BOUND_SEEDS = 16      # gains of smallest lower bound whose rho gives the first estimate of the minimum
+
+
+def scalar_closed_loops(sys, gains):
+    """A_i + L B_i C_i for u = L y with scalar L (SISO), for every L in ``gains``: shape (G, M, n, n)."""
+    bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
+    return sys.A[None] + gains[:, None, None, None] * bc[None]
+
+
 def scalar_gain_radii(sys, gains):
     """rho of Cor. 3.2 for u = L y with scalar L (SISO), for every L in ``gains`` at once."""
     M, n = sys.M, sys.nx
-    bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
-    Acl = sys.A[None] + gains[:, None, None, None] * bc[None]           # (G, M, n, n)
+    Acl = scalar_closed_loops(sys, gains)
     kron = np.einsum("giab,gicd->giacbd", Acl, Acl).reshape(len(gains), M, n * n, n * n)
     op = np.einsum("ij,gixy->gjxiy", sys.T, kron).reshape(len(gains), M * n * n, M * n * n)
     return np.max(np.abs(np.linalg.eigvals(op)), axis=1)
+
+
+def _power_trace(T, Acl, k):
+    """tr(M^k) of the matrix M of Cor. 3.2 for each stack of ``Acl`` (G, M, n, n): the sum over the
+    closed walks i_0 -> ... -> i_{k-1} -> i_0 of the mode chain of p_{i_0 i_1} ... p_{i_{k-1} i_0}
+    tr(Acl_{i_{k-1}} ... Acl_{i_0})^2 (every term >= 0)."""
+    total = np.zeros(len(Acl))
+    for walk in itertools.product(range(len(T)), repeat=k):
+        weight = np.prod([T[walk[t], walk[(t + 1) % k]] for t in range(k)])
+        if weight > 0:
+            product = Acl[:, walk[0]]
+            for mode in walk[1:]:
+                product = Acl[:, mode] @ product
+            total += weight * np.trace(product, axis1=1, axis2=2) ** 2
+    return total
+
+
+def radius_lower_bounds(sys, gains):
+    """Lower bounds of :func:`scalar_gain_radii` without eigenvalues: |tr(M^k)| <= N rho^k for the
+    N x N matrix M of Cor. 3.2 (N = M nx^2), the largest of (tr(M^k) / N)^(1/k) over k = 1..M (every
+    closed walk of the mode chain is counted once its length is <= M; a bound of 0 skips nothing)."""
+    Acl = scalar_closed_loops(sys, gains)
+    size = sys.M * sys.nx ** 2
+    return np.max([(_power_trace(sys.T, Acl, k) / size) ** (1 / k) for k in range(1, sys.M + 1)], axis=0)
+
+
+def grid_minimum(sys, gains):
+    """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho computed
+    only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m >= the
+    minimum; a gain whose lower bound exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the
+    margin covers the rounding of the bound and of the eigenvalues) and is skipped."""
+    bounds = radius_lower_bounds(sys, gains)
+    seeds = np.argsort(bounds, kind="stable")[:BOUND_SEEDS]
+    estimate = scalar_gain_radii(sys, gains[seeds]).min()
+    candidates = np.flatnonzero(bounds <= BOUND_MARGIN * max(estimate, BOUND_FLOOR))
+    radii = np.full(len(gains), np.inf)
+    radii[candidates] = scalar_gain_radii(sys, gains[candidates])
+    best = int(np.argmin(radii))
+    return best, radii[best]
 
 
 def best_scalar_gain(sys, points=2001):
     """min over scalar L of rho: a grid in L = tan(s), s in (-pi/2, pi/2) (all real gains),
     refined by a bounded scalar search between the grid neighbours of the best point."""
     s = np.linspace(-np.pi / 2, np.pi / 2, points + 2)[1:-1]
-    radii = scalar_gain_radii(sys, np.tan(s))
-    best = int(np.argmin(radii))
+    best, rho = grid_minimum(sys, np.tan(s))
     lo, hi = s[max(best - 1, 0)], s[min(best + 1, points - 1)]
     res = scipy.optimize.minimize_scalar(lambda t: scalar_gain_radii(sys, np.array([np.tan(t)]))[0],
                                          bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
-    if res.fun < radii[best]:
+    if res.fun < rho:
         return float(np.tan(res.x)), float(res.fun)
-    return float(np.tan(s[best])), float(radii[best])
+    return float(np.tan(s[best])), float(rho)
 
 
 def best_gain(sys, rng, starts=20):
@@ -100,21 +150,33 @@ def best_gain(sys, rng, starts=20):
 
 def next_modes(rng, T, theta):
     """theta_{k+1} given theta_k for every run (inverse transform of the rows of T)."""
-    cum = np.cumsum(T, axis=1)
+    cum = np.cumsum(T, axis=1).take(theta, axis=0)
     u = rng.random(len(theta))
-    return np.minimum((u[:, None] > cum[theta]).sum(axis=1), T.shape[0] - 1)
+    passed = np.zeros(len(theta), dtype=np.intp)
+    for column in cum.T:                      # one pass per mode: no reduction over the narrow mode axis
+        passed += u > column
+    return np.minimum(passed, T.shape[0] - 1)
 
 
 def initial_modes(rng, mu, n_runs):
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
 
 
-def apply_modes(S, theta, x):
-    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather)."""
+def mode_rows(theta, n_modes):
+    """The runs in each mode, as increasing indices: one grouping shared by the products of a step."""
+    return [np.flatnonzero(theta == i) for i in range(n_modes)]
+
+
+def apply_modes(S, theta, x, rows=None):
+    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather).
+
+    ``rows``: :func:`mode_rows` of ``theta`` when several products share it (computed if omitted).
+    """
+    if rows is None:
+        rows = mode_rows(theta, S.shape[0])
     out = np.empty((len(x), S.shape[1]))
-    for i in range(S.shape[0]):
-        rows = theta == i
-        out[rows] = x[rows] @ S[i].T
+    for i, runs in enumerate(rows):
+        out[runs] = x.take(runs, axis=0) @ S[i].T
     return out
 
 
