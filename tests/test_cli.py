@@ -124,7 +124,8 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
     assert cli.main(["reproduce", "--fidelity", "ci", "--force", "--jobs", "1"]) == 0
     assert ran == ["secX_1"] * 3
     entry = manifest.load_manifest(out)["secX_1"]
-    assert set(entry) == {"source", "parameters", "modules", "environment", "depends"}
+    assert set(entry) == {"source", "parameters", "modules", "environment", "depends", "seconds"}
+    assert entry["seconds"] >= 0                 # the run's wall time, for the longest-first order
 
 
 def test_dependencies_run_first_and_enter_the_hash(tmp_path):
