@@ -45,10 +45,18 @@ def clone(tmp_path_factory):
     return target
 
 
+def _as_foreground_command():
+    """SIGINT at its default, as for a command started from an interactive shell: a test run
+    started as a background job of a script (``make test &``) inherits SIGINT ignored, and the
+    Ctrl-C this test sends would not arrive."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(clone):
     env = {**os.environ, "PYTHONPATH": str(SRC), paths.ENV_VAR: str(clone)}
     return subprocess.Popen([sys.executable, "-m", "asoc_companion", "figure", "3.2"], cwd=clone, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True,
+                            preexec_fn=_as_foreground_command)
 
 
 def _wait_for(proc, condition, timeout=60.0):
