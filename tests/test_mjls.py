@@ -357,3 +357,5 @@ def test_table_3_2_designs_subset_equals_the_whole_table_and_names_unknown_rows(
     assert np.array_equal(part[TABLE_3_2_ROWS[4]].controller.L, whole[TABLE_3_2_ROWS[4]].controller.L)
     with pytest.raises(ValueError, match="^rows: expected"):
         table_3_2_designs(2, [3.0, 0.0], 20, rows=[("state feedback", "LQR")])
+    with pytest.raises(TypeError, match="^rows: expected a sequence"):
+        table_3_2_designs(2, [3.0, 0.0], 20, rows=None)

@@ -146,7 +146,16 @@ def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
 
 
 def last_seconds(output_dir) -> dict:
-    """``{notebook: wall time of its last recorded run}`` (notebooks without one are left out)."""
+    """``{notebook: wall time of its last recorded run}`` (notebooks without one are left out).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> _ = atomic_write_json(manifest_path(out), {"sec3_2": {"seconds": 4.0}, "sec3_4": {"source": "ab12"}})
+    >>> last_seconds(out)
+    {'sec3_2': 4.0}
+    """
     return {name: e["seconds"] for name, e in load_manifest(output_dir).items()
             if isinstance(e, dict) and isinstance(e.get("seconds"), (int, float))}
 

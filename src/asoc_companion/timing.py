@@ -80,7 +80,15 @@ def time_call(fn, repeat=1, clock=time.perf_counter):
     >>> seconds, result = time_call(lambda: sum(range(1000)), 2, clock=time.process_time)
     >>> seconds >= 0, result
     (True, 499500)
+    >>> time_call(print, clock=1.0)
+    Traceback (most recent call last):
+    ...
+    TypeError: clock: expected a function returning seconds, e.g. time.process_time, found 1.0
     """
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+        raise ValueError(f"repeat: expected a positive integer, found {repeat!r}")
+    if not callable(clock):
+        raise TypeError(f"clock: expected a function returning seconds, e.g. time.process_time, found {clock!r}")
     best, out = np.inf, None
     for _ in range(repeat):
         start = clock()

@@ -54,6 +54,8 @@ def table_3_2_designs(T, x0, horizon, H=None, rows=TABLE_3_2_ROWS):
 
     Raises
     ------
+    TypeError
+        If ``rows`` is not a sequence of rows.
     ValueError
         If ``rows`` names a row that is not one of ``TABLE_3_2_ROWS``.
 
@@ -65,6 +67,8 @@ def table_3_2_designs(T, x0, horizon, H=None, rows=TABLE_3_2_ROWS):
     >>> list(table_3_2_designs(1, [3.0, 0.0], 10, rows=[TABLE_3_2_ROWS[3]])) == [TABLE_3_2_ROWS[3]]
     True
     """
+    if isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+        raise TypeError(f"rows: expected a sequence of rows of TABLE_3_2_ROWS, found {type(rows).__name__}")
     unknown = [row for row in rows if row not in TABLE_3_2_ROWS]
     if unknown:
         raise ValueError(f"rows: expected rows of TABLE_3_2_ROWS, found {unknown}")
