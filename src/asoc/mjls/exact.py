@@ -698,11 +698,6 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
                                             seconds=time.perf_counter() - start)
 
 
-def _stacked(st):
-    """The matrices of all steps stacked over k: A, B, C, Q, R (horizon, M, ., .), T (horizon, M, M)."""
-    return {name: np.stack([getattr(s, name) for s in st.systems]) for name in "ABCQRT"}
-
-
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.
 
@@ -729,8 +724,8 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0))), gL.shape
     (True, (3, 1, 2))
     """
-    m = _stacked(st)
-    HHt, JJt = np.stack(st.HHt), np.stack(st.JJt)
+    m = st.stacked
+    HHt, JJt = m["HHt"], m["JJt"]
     nx, nc, M = st.systems[0].nx, F.shape[1], X0.shape[0]
     n = nx + nc
     horizon = st.horizon

@@ -20,6 +20,7 @@ second moment of (x_0 - x^_0, x^_0) without the cross term, the same bound as la
 import time
 import warnings
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -126,6 +127,21 @@ class Stages:
     @property
     def horizon(self):
         return len(self.systems)
+
+    @cached_property
+    def stacked(self) -> dict:
+        """The matrices of all steps stacked over k, computed once: A, B, C, Q, R (horizon, M, ., .),
+        T (horizon, M, M), HHt and JJt (horizon, M, ., .).
+
+        Examples
+        --------
+        >>> from asoc.mjls.examples import sec373_system
+        >>> st = stages(sec373_system(1), 4)
+        >>> st.stacked["A"].shape, st.stacked["HHt"].shape, st.stacked is st.stacked
+        ((4, 2, 2, 2), (4, 2, 2, 2), True)
+        """
+        stacked = {name: np.stack([getattr(s, name) for s in self.systems]) for name in "ABCQRT"}
+        return {**stacked, "HHt": np.stack(self.HHt), "JJt": np.stack(self.JJt)}
 
 
 def stages(sys, horizon):
