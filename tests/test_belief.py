@@ -488,3 +488,54 @@ def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
         assert stage._covariance_part(u) == pytest.approx(0.5 * np.trace(S @ C), rel=1e-13)
     with pytest.raises(ValueError, match="u: expected shape"):
         stage.covariance_part([1.0])
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.booleans())
+def test_stacked_next_covariance_equals_one_call_per_input(seed, singular):
+    rng = np.random.default_rng(seed)
+    for model in _random_models(rng):
+        M = rng.normal(size=(model.n_x, model.n_x))
+        mean, cov = rng.normal(size=model.n_x), 0.5 * M @ M.T
+        if singular:                              # no Cholesky factor of the prior
+            cov[-1], cov[:, -1] = 0.0, 0.0
+        C = UKF(model)._covariance_function((mean, cov))
+        near = rng.normal(size=model.n_u) + 1e-6 * rng.normal(size=(30, model.n_u))     # numdifftools-like steps
+        inputs = np.vstack([near, 3.0 * rng.normal(size=(30, model.n_u))])
+        assert np.array_equal(C.many(inputs), np.array([C(u) for u in inputs]))     # bit-identical
+
+
+def test_stacked_next_covariance_rows_without_a_cholesky_factor():
+    model = linear_gaussian_model(np.zeros((2, 2)), np.eye(2), np.zeros((2, 2)), np.eye(2), np.eye(2))
+    C = UKF(model)._covariance_function((np.zeros(2), np.eye(2)))    # predicted covariance 0: no factor
+    inputs = np.random.default_rng(0).normal(size=(4, 2))
+    assert np.array_equal(C.many(inputs), np.array([C(u) for u in inputs]))
+
+
+def test_recorded_points_are_those_numdifftools_evaluates():
+    import numdifftools as nd
+    from asoc.belief.trajectory import _numdifftools_points
+    for x in (np.array([0.3, -0.7]), np.array([12.5]), np.array([0.0, 1e-3, -4.0])):
+        seen = []
+        f = lambda z: seen.append(z.copy()) or float(np.sum(np.sin(z)))     # noqa: E731
+        nd.Gradient(f)(x), nd.Hessian(f)(x)
+        assert np.array_equal(_numdifftools_points(x), np.array(seen))
+
+
+def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
+    import numdifftools as nd
+    ex = landmark_example(K=2)
+    filt = UKF(ex.model)
+    w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    rng = np.random.default_rng(4)
+    S = rng.normal(size=(2, 2))
+    stage = StageProblem(ex.model, ex.cost, filt, (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), S), w, beta)
+    for u_bar in rng.normal(size=(3, 2)):
+        prefetched = stage._derivative_covariance_part(u_bar)
+        assert np.array_equal(nd.Gradient(prefetched)(u_bar), nd.Gradient(stage._covariance_part)(u_bar))
+        assert np.array_equal(nd.Hessian(prefetched)(u_bar), nd.Hessian(stage._covariance_part)(u_bar))
+        other = u_bar + 0.1                       # not an evaluation point: evaluated directly
+        assert prefetched(other) == stage._covariance_part(other)
+    pf_stage = StageProblem(ex.model, ex.cost, ParticleFilter(ex.model, 20, np.random.default_rng(1)),
+                            DiracMixture(rng.normal(size=(20, 2))), Value(0.0, np.zeros(2), np.eye(2), S), w, beta)
+    assert pf_stage._derivative_covariance_part(np.zeros(2)) == pf_stage._covariance_part

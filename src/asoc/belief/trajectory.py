@@ -14,7 +14,7 @@ import numpy as np
 from .. import validation as check
 from ..progress import progress_bar
 from ..result import IterativeResult
-from .filters import UKF, DiracMixture, _sigma_points, KAPPA
+from .filters import UKF, DiracMixture, _NextCovariance, _sigma_points, KAPPA
 from .models import NonlinearModel, QuadraticCost, _cost_for
 from .simulate import MeanAffineController, _draw_noise, _simulate
 from .taylor import QuadraticExpansion, statistical_taylor_expansion
@@ -359,6 +359,31 @@ class StageProblem:
             return 0.0
         return 0.5 * float(np.vdot(self._S_transposed, self._next_covariance(u)))     # tr[S C]
 
+    def _derivative_covariance_part(self, u_bar):
+        """:meth:`_covariance_part` for numdifftools' Gradient and Hessian at ``u_bar``, its values
+        at their evaluation points computed in one stacked UKF evaluation beforehand.
+
+        numdifftools chooses its evaluation points from ``u_bar`` alone (its step generator),
+        not from the function's values: a first pass with a recording function collects them,
+        :meth:`_NextCovariance.many` evaluates them at once (bit-identical to one evaluation
+        per point), and the returned function looks each point up by its bytes. A point not
+        recorded is evaluated directly, so the derivatives are the same numbers as
+        numdifftools' on :meth:`_covariance_part` in any case. Without the UKF's stacked
+        evaluation it is :meth:`_covariance_part` itself.
+        """
+        if not isinstance(self._next_covariance, _NextCovariance):
+            return self._covariance_part
+        points = _numdifftools_points(u_bar)
+        C = self._next_covariance.many(points)
+        values = 0.5 * np.vecdot(C.reshape(C.shape[0], -1), self._S_transposed.ravel())   # np.vdot per point
+        table = {point.tobytes(): float(value) for point, value in zip(points, values)}
+
+        def covariance_part(u):
+            value = table.get(u.tobytes()) if u.dtype == np.float64 and u.shape == u_bar.shape else None
+            return self._covariance_part(u) if value is None else value
+
+        return covariance_part
+
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""
         return float(self.mixture.weights @ self.particle_part(self.mixture.points, u)) + self.covariance_part(u)
@@ -386,8 +411,9 @@ class StageProblem:
                 z = np.concatenate([x, u_bar])
                 G[i], H[i] = nd.Gradient(f)(z), nd.Hessian(f)(z)
         if self._has_covariance_term:
-            G[:, nx:] += np.atleast_1d(nd.Gradient(self._covariance_part)(u_bar))
-            H[:, nx:, nx:] += self._covariance_hessian(u_bar)
+            covariance_part = self._derivative_covariance_part(u_bar)
+            G[:, nx:] += np.atleast_1d(nd.Gradient(covariance_part)(u_bar))
+            H[:, nx:, nx:] += self._covariance_hessian(u_bar, covariance_part)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
         if self.covariance_hessian == "shift":
             H[:, nx:, nx:] += self._shift(alpha, H, nx) * np.eye(nu)
@@ -426,9 +452,10 @@ class StageProblem:
             lo, hi = (lo, mid) if ok(mid) else (mid, hi)
         return hi
 
-    def _covariance_hessian(self, u_bar):
-        """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools); the safeguard against
-        its negative curvature depends on ``covariance_hessian``.
+    def _covariance_hessian(self, u_bar, covariance_part):
+        """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools on ``covariance_part``, the
+        term as a function of u); the safeguard against its negative curvature depends on
+        ``covariance_hessian``.
 
         The thesis asserts R~_k > 0 (after Theorem 2.5) from Assumption 2.3, which covers
         C_k but not this term; its curvature can be negative and then R~_k loses
@@ -439,7 +466,7 @@ class StageProblem:
         (:meth:`_shift`), as in Levenberg-Marquardt-regularised DDP.
         """
         import numdifftools as nd
-        Hc = np.atleast_2d(nd.Hessian(self._covariance_part)(u_bar))
+        Hc = np.atleast_2d(nd.Hessian(covariance_part)(u_bar))
         Hc = 0.5 * (Hc + Hc.T)
         if self.covariance_hessian in ("exact", "shift"):
             return Hc
@@ -460,6 +487,26 @@ class StageProblem:
         g = gC + np.einsum("m,mij,mi->j", self.beta, J, lam)
         Hs = HC + np.einsum("m,mij,ik,mkl->jl", self.beta, J, nxt.V, J)
         return g, Hs
+
+
+def _numdifftools_points(x):
+    """The points at which numdifftools' Gradient and Hessian (default settings) evaluate a
+    function of ``x`` (n,), as an array (number of points, n).
+
+    The points depend on ``x`` only (the step generator). A recording function returning
+    zeros collects them from numdifftools' own evaluation sequence (its ``_derivative``,
+    what ``__call__`` runs before the Richardson extrapolation, which needs no points).
+    """
+    import numdifftools as nd
+    points = []
+
+    def record(z):
+        points.append(np.array(z, dtype=float))
+        return 0.0
+
+    for derivative in (nd.Gradient(record), nd.Hessian(record)):
+        derivative._derivative(x, (), {})
+    return np.array(points)
 
 
 def _next_covariance_function(filt, estimate):
