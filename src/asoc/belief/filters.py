@@ -540,13 +540,14 @@ class _NextCovariance:
 
     @staticmethod
     def _roots(cov):
-        """The Cholesky factor of each covariance (dpotrf per matrix, as :func:`_cholesky`) and
-        which have one (the other factors are zero)."""
+        """The Cholesky factor of each covariance (LAPACK's dpotrf per matrix, as :func:`_cholesky`)
+        and which have one (the other factors are zero)."""
         roots, regular = np.zeros(cov.shape), np.ones(cov.shape[0], dtype=bool)
         for row, matrix in enumerate(cov):
-            try:
-                roots[row] = _cholesky(matrix)
-            except np.linalg.LinAlgError:
+            root, info = lapack.dpotrf(matrix, lower=True, clean=True)
+            if info == 0:
+                roots[row] = root
+            else:
                 regular[row] = False
         return roots, regular
 

@@ -340,6 +340,7 @@ class StageProblem:
         self._next_covariance = _next_covariance_function(self.filt, estimate)
         self._has_covariance_term = self.covariance_term and bool(np.any(nxt.S))
         self._S_transposed = np.ascontiguousarray(nxt.S.T)     # what np.vdot would copy at every call
+        self._prefetched = {}            # u.tobytes() -> 1/2 tr[S C(u)]: :meth:`_prefetch_covariance_part`
 
     def particle_part(self, x, u):
         """All of phi_k except the covariance term, for x (..., n_x) and u (..., n_u)."""
@@ -354,35 +355,35 @@ class StageProblem:
         return self._covariance_part(check.vector(u, "u", self.model.n_u))
 
     def _covariance_part(self, u):
-        """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner loop."""
+        """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner loop.
+
+        A value that :meth:`_prefetch_covariance_part` computed for u is looked up by the
+        bytes of u (the same number).
+        """
         if not self._has_covariance_term:
             return 0.0
-        return 0.5 * float(np.vdot(self._S_transposed, self._next_covariance(u)))     # tr[S C]
+        value = self._prefetched.get(u.tobytes()) if u.dtype == np.float64 and u.ndim == 1 else None
+        if value is None:
+            value = 0.5 * float(np.vdot(self._S_transposed, self._next_covariance(u)))     # tr[S C]
+        return value
 
-    def _derivative_covariance_part(self, u_bar):
-        """:meth:`_covariance_part` for numdifftools' Gradient and Hessian at ``u_bar``, its values
-        at their evaluation points computed in one stacked UKF evaluation beforehand.
+    def _prefetch_covariance_part(self, u_bar):
+        """Compute :meth:`_covariance_part` at numdifftools' evaluation points for ``u_bar`` at once.
 
-        numdifftools chooses its evaluation points from ``u_bar`` alone (its step generator),
-        not from the function's values: a first pass with a recording function collects them,
-        :meth:`_NextCovariance.many` evaluates them at once (bit-identical to one evaluation
-        per point), and the returned function looks each point up by its bytes. A point not
-        recorded is evaluated directly, so the derivatives are the same numbers as
-        numdifftools' on :meth:`_covariance_part` in any case. Without the UKF's stacked
-        evaluation it is :meth:`_covariance_part` itself.
+        numdifftools' Gradient and Hessian choose their evaluation points from ``u_bar`` alone
+        (:func:`_numdifftools_points`), not from the function's values; the UKF's
+        :meth:`_NextCovariance.many` evaluates C_{k+1} at all of them in one stacked
+        evaluation, bit-identical to one evaluation per point, and :meth:`_covariance_part`
+        then looks them up: the derivatives are numdifftools' on the same numbers. These
+        values replace those of an earlier call. Without the UKF's stacked evaluation (or the
+        covariance term) nothing is prefetched.
         """
-        if not isinstance(self._next_covariance, _NextCovariance):
-            return self._covariance_part
+        if not (self._has_covariance_term and isinstance(self._next_covariance, _NextCovariance)):
+            return
         points = _numdifftools_points(u_bar)
         C = self._next_covariance.many(points)
         values = 0.5 * np.vecdot(C.reshape(C.shape[0], -1), self._S_transposed.ravel())   # np.vdot per point
-        table = {point.tobytes(): float(value) for point, value in zip(points, values)}
-
-        def covariance_part(u):
-            value = table.get(u.tobytes()) if u.dtype == np.float64 and u.shape == u_bar.shape else None
-            return self._covariance_part(u) if value is None else value
-
-        return covariance_part
+        self._prefetched = {point.tobytes(): float(value) for point, value in zip(points, values)}
 
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""
@@ -411,9 +412,9 @@ class StageProblem:
                 z = np.concatenate([x, u_bar])
                 G[i], H[i] = nd.Gradient(f)(z), nd.Hessian(f)(z)
         if self._has_covariance_term:
-            covariance_part = self._derivative_covariance_part(u_bar)
-            G[:, nx:] += np.atleast_1d(nd.Gradient(covariance_part)(u_bar))
-            H[:, nx:, nx:] += self._covariance_hessian(u_bar, covariance_part)
+            self._prefetch_covariance_part(u_bar)
+            G[:, nx:] += np.atleast_1d(nd.Gradient(self._covariance_part)(u_bar))
+            H[:, nx:, nx:] += self._covariance_hessian(u_bar)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
         if self.covariance_hessian == "shift":
             H[:, nx:, nx:] += self._shift(alpha, H, nx) * np.eye(nu)
@@ -452,10 +453,9 @@ class StageProblem:
             lo, hi = (lo, mid) if ok(mid) else (mid, hi)
         return hi
 
-    def _covariance_hessian(self, u_bar, covariance_part):
-        """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools on ``covariance_part``, the
-        term as a function of u); the safeguard against its negative curvature depends on
-        ``covariance_hessian``.
+    def _covariance_hessian(self, u_bar):
+        """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools); the safeguard against
+        its negative curvature depends on ``covariance_hessian``.
 
         The thesis asserts R~_k > 0 (after Theorem 2.5) from Assumption 2.3, which covers
         C_k but not this term; its curvature can be negative and then R~_k loses
@@ -466,7 +466,7 @@ class StageProblem:
         (:meth:`_shift`), as in Levenberg-Marquardt-regularised DDP.
         """
         import numdifftools as nd
-        Hc = np.atleast_2d(nd.Hessian(covariance_part)(u_bar))
+        Hc = np.atleast_2d(nd.Hessian(self._covariance_part)(u_bar))
         Hc = 0.5 * (Hc + Hc.T)
         if self.covariance_hessian in ("exact", "shift"):
             return Hc
@@ -490,23 +490,30 @@ class StageProblem:
 
 
 def _numdifftools_points(x):
-    """The points at which numdifftools' Gradient and Hessian (default settings) evaluate a
-    function of ``x`` (n,), as an array (number of points, n).
+    """The points at which numdifftools' Gradient and Hessian (default settings: central
+    differences) evaluate a function of ``x`` (n,), as an array (number of points, n).
 
-    The points depend on ``x`` only (the step generator). A recording function returning
-    zeros collects them from numdifftools' own evaluation sequence (its ``_derivative``,
-    what ``__call__`` runs before the Richardson extrapolation, which needs no points).
+    The points depend on ``x`` only: numdifftools' steps h at ``x`` (its step generator),
+    combined as its central-difference rules combine them, with the same floating-point
+    additions: x, x +- h_k e_k (Gradient), x +- 2 h_k e_k and (x +- h_i e_i) +- h_j e_j for
+    i < j (Hessian). Used to prefetch function values only: a point numdifftools asks for
+    that is not here is evaluated directly.
     """
     import numdifftools as nd
-    points = []
+    n = x.size
+    gradient, hessian = (_step_offsets(derivative, x) for derivative in (nd.Gradient(None), nd.Hessian(None)))
+    first, second = (hessian[:, index] for index in np.triu_indices(n, 1))
+    parts = [x[None], x + gradient, x - gradient, x + 2 * hessian, x - 2 * hessian]
+    for shifted in (x + first, x - first):
+        parts += [shifted + second, shifted - second]
+    return np.concatenate([part.reshape(-1, n) for part in parts])
 
-    def record(z):
-        points.append(np.array(z, dtype=float))
-        return 0.0
 
-    for derivative in (nd.Gradient(record), nd.Hessian(record)):
-        derivative._derivative(x, (), {})
-    return np.array(points)
+def _step_offsets(derivative, x):
+    """h_k e_k for each of numdifftools' steps h at ``x``: (number of steps, n, n), row k of
+    each the vector with h_k at k and zeros elsewhere (its rules' increments)."""
+    steps, _ = derivative._get_steps(x)
+    return np.array(steps)[:, None, :] * np.eye(x.size)
 
 
 def _next_covariance_function(filt, estimate):
