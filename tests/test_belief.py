@@ -524,6 +524,7 @@ def test_recorded_points_are_those_numdifftools_evaluates():
 
 def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
     import numdifftools as nd
+    from asoc.belief.trajectory import _numdifftools_points
     ex = landmark_example(K=2)
     filt = UKF(ex.model)
     w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
@@ -537,6 +538,8 @@ def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
     for u_bar in rng.normal(size=(3, 2)):
         prefetched._prefetch_covariance_part(u_bar)
         assert len(prefetched._prefetched) == 181             # every point of numdifftools' Gradient and Hessian
+        for point in _numdifftools_points(u_bar):
+            assert prefetched._prefetched[point.tobytes()] == direct._covariance_part(point)
         assert np.array_equal(nd.Gradient(prefetched._covariance_part)(u_bar), nd.Gradient(direct._covariance_part)(u_bar))
         assert np.array_equal(nd.Hessian(prefetched._covariance_part)(u_bar), nd.Hessian(direct._covariance_part)(u_bar))
         other = u_bar + 0.1                       # not an evaluation point: evaluated directly
@@ -545,3 +548,16 @@ def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
                             DiracMixture(rng.normal(size=(20, 2))), nxt, w, beta)
     pf_stage._prefetch_covariance_part(np.zeros(2))           # no stacked evaluation: nothing prefetched
     assert pf_stage._prefetched == {}
+
+
+def test_nothing_is_prefetched_for_a_model_that_rounds_differently_on_a_stack():
+    from asoc.belief import NonlinearModel
+    ex = landmark_example(K=2)
+    m = ex.model                                  # a(x, u, w) off by 1e-12 when u has a stack axis
+    odd = NonlinearModel(a=lambda x, u, w: m.a(x, u, w) + (1e-12 if np.ndim(u) > 2 else 0.0), h=m.h, w=m.w, v=m.v,
+                         n_x=2, n_u=2, jacobians=m.jacobians, affine=True)
+    w, beta = sigma_points(odd.w.mean, odd.w.cov)
+    stage = StageProblem(odd, ex.cost, UKF(odd), (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), np.eye(2)),
+                         w, beta)
+    stage._prefetch_covariance_part(np.array([0.5, 0.1]))
+    assert stage._prefetched == {}

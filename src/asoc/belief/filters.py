@@ -461,6 +461,7 @@ class _NextCovariance:
     points, the zero rows of their state offsets) is prepared once, and a scalar
     measurement's division is decided without ``ndarray.all``. Where Cov{v} or the
     predicted covariance has no Cholesky factor, the measurement is :meth:`UKF._measurement`.
+    :meth:`many` evaluates a stack of inputs at once (numdifftools' evaluation points).
     """
 
     def __init__(self, ukf, prior):
@@ -514,10 +515,13 @@ class _NextCovariance:
 
         The rows go through the same operations stacked along a leading axis: elementwise
         arithmetic, numpy.matmul (whose loop over the leading axis makes each row's BLAS call
-        of the 2-D product), np.linalg.solve (LAPACK per matrix) and LAPACK's dpotrf per row
-        (:func:`_cholesky`). Rows that leave the common case (no Cholesky factor of the
-        predicted covariance, C^{yy} = 0 or singular) are evaluated one at a time, as is
-        everything when Cov{v} has no Cholesky factor.
+        of the 2-D product), np.linalg.solve (LAPACK per matrix), LAPACK's dpotrf per row
+        (:func:`_cholesky`), and the model's ``a`` and ``h`` on the stack (they broadcast over
+        leading axes; bit-identical for elementwise and matmul models such as
+        :func:`~asoc.belief.landmark_example` and :func:`~asoc.belief.linear_gaussian_model`).
+        Rows that leave the common case (no Cholesky factor of the predicted covariance,
+        C^{yy} = 0 or singular) are evaluated one at a time, as is everything when Cov{v}
+        has no Cholesky factor.
         """
         if self._v_points is None:
             return np.array([self(u) for u in inputs])

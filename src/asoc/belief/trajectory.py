@@ -375,15 +375,19 @@ class StageProblem:
         :meth:`_NextCovariance.many` evaluates C_{k+1} at all of them in one stacked
         evaluation, bit-identical to one evaluation per point, and :meth:`_covariance_part`
         then looks them up: the derivatives are numdifftools' on the same numbers. These
-        values replace those of an earlier call. Without the UKF's stacked evaluation (or the
-        covariance term) nothing is prefetched.
+        values replace those of an earlier call. Nothing is prefetched without the UKF's
+        stacked evaluation or the covariance term, or if the stacked value at ``u_bar``
+        differs from the direct one (a model whose ``a`` or ``h`` rounds differently on a
+        stack of inputs).
         """
+        self._prefetched = {}
         if not (self._has_covariance_term and isinstance(self._next_covariance, _NextCovariance)):
             return
-        points = _numdifftools_points(u_bar)
+        points = _numdifftools_points(u_bar)                  # points[0] is u_bar
         C = self._next_covariance.many(points)
         values = 0.5 * np.vecdot(C.reshape(C.shape[0], -1), self._S_transposed.ravel())   # np.vdot per point
-        self._prefetched = {point.tobytes(): float(value) for point, value in zip(points, values)}
+        if values[0] == self._covariance_part(u_bar):
+            self._prefetched = {point.tobytes(): float(value) for point, value in zip(points, values)}
 
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""
@@ -495,9 +499,10 @@ def _numdifftools_points(x):
 
     The points depend on ``x`` only: numdifftools' steps h at ``x`` (its step generator),
     combined as its central-difference rules combine them, with the same floating-point
-    additions: x, x +- h_k e_k (Gradient), x +- 2 h_k e_k and (x +- h_i e_i) +- h_j e_j for
-    i < j (Hessian). Used to prefetch function values only: a point numdifftools asks for
-    that is not here is evaluated directly.
+    additions: x (first), x +- h_k e_k (Gradient), x +- 2 h_k e_k and (x +- h_i e_i) +- h_j e_j
+    for i < j (Hessian). The steps come from numdifftools' ``_get_steps`` (what its
+    ``__call__`` uses). Used to prefetch function values only: a point numdifftools asks for
+    that is not here is evaluated directly (tests check that there is none).
     """
     import numdifftools as nd
     n = x.size
