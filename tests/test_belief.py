@@ -512,7 +512,7 @@ def test_stacked_next_covariance_rows_without_a_cholesky_factor():
     assert np.array_equal(C.many(inputs), np.array([C(u) for u in inputs]))
 
 
-def test_recorded_points_are_those_numdifftools_evaluates():
+def test_predicted_points_are_those_numdifftools_evaluates():
     import numdifftools as nd
     from asoc.belief.trajectory import _numdifftools_points
     for x in (np.array([0.3, -0.7]), np.array([12.5]), np.array([-0.0, 1e-3, -4.0]), np.array([1e8, -3e-9])):
@@ -540,8 +540,9 @@ def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
         assert len(prefetched._prefetched) == 181             # every point of numdifftools' Gradient and Hessian
         for point in _numdifftools_points(u_bar):
             assert prefetched._prefetched[point.tobytes()] == direct._covariance_part(point)
-        assert np.array_equal(nd.Gradient(prefetched._covariance_part)(u_bar), nd.Gradient(direct._covariance_part)(u_bar))
-        assert np.array_equal(nd.Hessian(prefetched._covariance_part)(u_bar), nd.Hessian(direct._covariance_part)(u_bar))
+        for derivative in (nd.Gradient, nd.Hessian):
+            assert np.array_equal(derivative(prefetched._covariance_part)(u_bar),
+                                  derivative(direct._covariance_part)(u_bar))
         other = u_bar + 0.1                       # not an evaluation point: evaluated directly
         assert prefetched._covariance_part(other) == direct._covariance_part(other)
     pf_stage = StageProblem(ex.model, ex.cost, ParticleFilter(ex.model, 20, np.random.default_rng(1)),
