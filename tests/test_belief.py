@@ -488,3 +488,77 @@ def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
         assert stage._covariance_part(u) == pytest.approx(0.5 * np.trace(S @ C), rel=1e-13)
     with pytest.raises(ValueError, match="u: expected shape"):
         stage.covariance_part([1.0])
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.booleans())
+def test_stacked_next_covariance_equals_one_call_per_input(seed, singular):
+    rng = np.random.default_rng(seed)
+    for model in _random_models(rng):
+        M = rng.normal(size=(model.n_x, model.n_x))
+        mean, cov = rng.normal(size=model.n_x), 0.5 * M @ M.T
+        if singular:                              # no Cholesky factor of the prior
+            cov[-1], cov[:, -1] = 0.0, 0.0
+        C = UKF(model)._covariance_function((mean, cov))
+        near = rng.normal(size=model.n_u) + 1e-6 * rng.normal(size=(30, model.n_u))     # numdifftools-like steps
+        inputs = np.vstack([near, 3.0 * rng.normal(size=(30, model.n_u))])
+        assert np.array_equal(C.many(inputs), np.array([C(u) for u in inputs]))     # bit-identical
+
+
+def test_stacked_next_covariance_rows_without_a_cholesky_factor():
+    model = linear_gaussian_model(np.zeros((2, 2)), np.eye(2), np.zeros((2, 2)), np.eye(2), np.eye(2))
+    C = UKF(model)._covariance_function((np.zeros(2), np.eye(2)))    # predicted covariance 0: no factor
+    inputs = np.random.default_rng(0).normal(size=(4, 2))
+    assert np.array_equal(C.many(inputs), np.array([C(u) for u in inputs]))
+
+
+def test_predicted_points_are_those_numdifftools_evaluates():
+    import numdifftools as nd
+    from asoc.belief.trajectory import _numdifftools_points
+    for x in (np.array([0.3, -0.7]), np.array([12.5]), np.array([-0.0, 1e-3, -4.0]), np.array([1e8, -3e-9])):
+        seen = []
+        f = lambda z: seen.append(z.copy()) or float(np.sum(np.sin(z)))     # noqa: E731
+        nd.Gradient(f)(x), nd.Hessian(f)(x)
+        assert {z.tobytes() for z in _numdifftools_points(x)} == {z.tobytes() for z in seen}     # x appears twice
+
+
+def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
+    import numdifftools as nd
+    from asoc.belief.trajectory import _numdifftools_points
+    ex = landmark_example(K=2)
+    filt = UKF(ex.model)
+    w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    rng = np.random.default_rng(4)
+    nxt = Value(0.0, np.zeros(2), np.eye(2), rng.normal(size=(2, 2)))
+
+    def stage():
+        return StageProblem(ex.model, ex.cost, filt, (ex.mean0, ex.cov0), nxt, w, beta)
+
+    prefetched, direct = stage(), stage()
+    for u_bar in rng.normal(size=(3, 2)):
+        prefetched._prefetch_covariance_part(u_bar)
+        assert len(prefetched._prefetched) == 181             # every point of numdifftools' Gradient and Hessian
+        for point in _numdifftools_points(u_bar):
+            assert prefetched._prefetched[point.tobytes()] == direct._covariance_part(point)
+        for derivative in (nd.Gradient, nd.Hessian):
+            assert np.array_equal(derivative(prefetched._covariance_part)(u_bar),
+                                  derivative(direct._covariance_part)(u_bar))
+        other = u_bar + 0.1                       # not an evaluation point: evaluated directly
+        assert prefetched._covariance_part(other) == direct._covariance_part(other)
+    pf_stage = StageProblem(ex.model, ex.cost, ParticleFilter(ex.model, 20, np.random.default_rng(1)),
+                            DiracMixture(rng.normal(size=(20, 2))), nxt, w, beta)
+    pf_stage._prefetch_covariance_part(np.zeros(2))           # no stacked evaluation: nothing prefetched
+    assert pf_stage._prefetched == {}
+
+
+def test_nothing_is_prefetched_for_a_model_that_rounds_differently_on_a_stack():
+    from asoc.belief import NonlinearModel
+    ex = landmark_example(K=2)
+    m = ex.model                                  # a(x, u, w) off by 1e-12 when u has a stack axis
+    odd = NonlinearModel(a=lambda x, u, w: m.a(x, u, w) + (1e-12 if np.ndim(u) > 2 else 0.0), h=m.h, w=m.w, v=m.v,
+                         n_x=2, n_u=2, jacobians=m.jacobians, affine=True)
+    w, beta = sigma_points(odd.w.mean, odd.w.cov)
+    stage = StageProblem(odd, ex.cost, UKF(odd), (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), np.eye(2)),
+                         w, beta)
+    stage._prefetch_covariance_part(np.array([0.5, 0.1]))
+    assert stage._prefetched == {}

@@ -461,6 +461,7 @@ class _NextCovariance:
     points, the zero rows of their state offsets) is prepared once, and a scalar
     measurement's division is decided without ``ndarray.all``. Where Cov{v} or the
     predicted covariance has no Cholesky factor, the measurement is :meth:`UKF._measurement`.
+    :meth:`many` evaluates a stack of inputs at once (numdifftools' evaluation points).
     """
 
     def __init__(self, ukf, prior):
@@ -508,6 +509,85 @@ class _NextCovariance:
         gain = (Cyx / Cyy if Cyy.shape[0] == 1 and Cyy[0, 0] != 0 else _solve(Cyy, Cyx)).T
         post = Cxx - gain @ Cyx
         return 0.5 * (post + post.T)
+
+    def many(self, inputs):
+        """C_{k+1}(u) for every row u of ``inputs`` (B, n_u), B >= 1: bit-identical to one call per row.
+
+        The rows go through the same operations stacked along a leading axis: elementwise
+        arithmetic, numpy.matmul (whose loop over the leading axis makes each row's BLAS call
+        of the 2-D product), np.linalg.solve (LAPACK per matrix), LAPACK's dpotrf per row
+        (:func:`_cholesky`), and the model's ``a`` and ``h`` on the stack (they broadcast over
+        leading axes; bit-identical for elementwise and matmul models such as
+        :func:`~asoc.belief.landmark_example` and :func:`~asoc.belief.linear_gaussian_model`).
+        Rows that leave the common case (no Cholesky factor of the predicted covariance,
+        C^{yy} = 0 or singular) are evaluated one at a time, as is everything when Cov{v}
+        has no Cholesky factor.
+        """
+        if self._v_points is None:
+            return np.array([self(u) for u in inputs])
+        mean, cov = self._predicted_many(inputs)
+        roots, regular = self._roots(cov)
+        covariances = np.empty(cov.shape)
+        if regular.any():
+            covariances[regular] = self._measurement_many(mean[regular], roots[regular])
+        for row in np.flatnonzero(~regular):
+            covariances[row] = self(inputs[row])
+        return covariances
+
+    def _predicted_many(self, inputs):
+        """:meth:`_predicted` for a stack of inputs (B, n_u)."""
+        x_points, w_points = self._prior
+        points = self._ukf.model.a(x_points, inputs[:, None, :], w_points)
+        mean = self._process_weights @ points
+        e = points - mean[:, None, :]
+        return mean, (self._process_column * e).swapaxes(-1, -2) @ e
+
+    @staticmethod
+    def _roots(cov):
+        """The Cholesky factor of each covariance (LAPACK's dpotrf per matrix, as :func:`_cholesky`)
+        and which have one (the other factors are zero)."""
+        roots, regular = np.zeros(cov.shape), np.ones(cov.shape[0], dtype=bool)
+        for row, matrix in enumerate(cov):
+            root, info = lapack.dpotrf(matrix, lower=True, clean=True)
+            if info == 0:
+                roots[row] = root
+            else:
+                regular[row] = False
+        return roots, regular
+
+    def _measurement_many(self, mean, roots):
+        """The posterior covariance of :meth:`__call__` for stacked predicted means and Cholesky
+        factors; rows whose C^{yy} is singular are recomputed through :func:`_solve`."""
+        n_x, n = self._n_x, self._sensor_n
+        Lt = (self._scale * roots).swapaxes(-1, -2)
+        offsets = np.zeros(mean.shape[:1] + self._state_offsets.shape)
+        offsets[:, 1:1 + n_x] = Lt
+        offsets[:, 1 + n:1 + n + n_x] = -Lt
+        x_points = mean[:, None, :] + offsets
+        joint = np.concatenate([x_points, self._ukf.model.h(x_points, self._v_points)], axis=-1)
+        e = joint - (self._sensor_weights @ joint)[:, None, :]
+        return self._posterior_many((self._sensor_column * e).swapaxes(-1, -2) @ e)
+
+    def _posterior_many(self, C):
+        """:meth:`_posterior` of stacked joint covariances C (B, n, n)."""
+        n_x = self._n_x
+        Cxx, Cyx, Cyy = C[:, :n_x, :n_x], C[:, n_x:, :n_x], C[:, n_x:, n_x:]
+        try:
+            gain = self._gains(Cyx, Cyy)
+        except np.linalg.LinAlgError:                 # a singular C^{yy}: the pseudo-inverse, row by row
+            return np.array([self._posterior(matrix) for matrix in C])
+        post = Cxx - gain @ Cyx
+        return 0.5 * (post + post.swapaxes(-1, -2))
+
+    @staticmethod
+    def _gains(Cyx, Cyy):
+        """The transposed gains (C^{yy})^{-1} C^{yx} of :meth:`_posterior` for stacked blocks;
+        LinAlgError if a C^{yy} is singular."""
+        if Cyy.shape[1] > 1:
+            return np.linalg.solve(Cyy, Cyx).swapaxes(-1, -2)
+        if not Cyy.all():
+            raise np.linalg.LinAlgError("a scalar C^{yy} is zero")
+        return (Cyx / Cyy).swapaxes(-1, -2)
 
 
 def _pair(estimate):

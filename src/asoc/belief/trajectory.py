@@ -14,7 +14,7 @@ import numpy as np
 from .. import validation as check
 from ..progress import progress_bar
 from ..result import IterativeResult
-from .filters import UKF, DiracMixture, _sigma_points, KAPPA
+from .filters import UKF, DiracMixture, _NextCovariance, _sigma_points, KAPPA
 from .models import NonlinearModel, QuadraticCost, _cost_for
 from .simulate import MeanAffineController, _draw_noise, _simulate
 from .taylor import QuadraticExpansion, statistical_taylor_expansion
@@ -340,6 +340,7 @@ class StageProblem:
         self._next_covariance = _next_covariance_function(self.filt, estimate)
         self._has_covariance_term = self.covariance_term and bool(np.any(nxt.S))
         self._S_transposed = np.ascontiguousarray(nxt.S.T)     # what np.vdot would copy at every call
+        self._prefetched = {}            # u.tobytes() -> 1/2 tr[S C(u)]: :meth:`_prefetch_covariance_part`
 
     def particle_part(self, x, u):
         """All of phi_k except the covariance term, for x (..., n_x) and u (..., n_u)."""
@@ -354,10 +355,39 @@ class StageProblem:
         return self._covariance_part(check.vector(u, "u", self.model.n_u))
 
     def _covariance_part(self, u):
-        """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner loop."""
+        """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner loop.
+
+        A value that :meth:`_prefetch_covariance_part` computed for u is looked up by the
+        bytes of u (the same number).
+        """
         if not self._has_covariance_term:
             return 0.0
-        return 0.5 * float(np.vdot(self._S_transposed, self._next_covariance(u)))     # tr[S C]
+        value = self._prefetched.get(u.tobytes()) if u.dtype == np.float64 and u.ndim == 1 else None
+        if value is None:
+            value = 0.5 * float(np.vdot(self._S_transposed, self._next_covariance(u)))     # tr[S C]
+        return value
+
+    def _prefetch_covariance_part(self, u_bar):
+        """Compute :meth:`_covariance_part` at numdifftools' evaluation points for ``u_bar`` at once.
+
+        numdifftools' Gradient and Hessian choose their evaluation points from ``u_bar`` alone
+        (:func:`_numdifftools_points`), not from the function's values; the UKF's
+        :meth:`_NextCovariance.many` evaluates C_{k+1} at all of them in one stacked
+        evaluation, bit-identical to one evaluation per point, and :meth:`_covariance_part`
+        then looks them up: the derivatives are numdifftools' on the same numbers. These
+        values replace those of an earlier call. Nothing is prefetched without the UKF's
+        stacked evaluation or the covariance term, or if the stacked value at ``u_bar``
+        differs from the direct one (a model whose ``a`` or ``h`` rounds differently on a
+        stack of inputs).
+        """
+        self._prefetched = {}
+        if not (self._has_covariance_term and isinstance(self._next_covariance, _NextCovariance)):
+            return
+        points = _numdifftools_points(u_bar)                  # points[0] is u_bar
+        C = self._next_covariance.many(points)
+        values = 0.5 * np.vecdot(C.reshape(C.shape[0], -1), self._S_transposed.ravel())   # np.vdot per point
+        if values[0] == self._covariance_part(u_bar):
+            self._prefetched = {point.tobytes(): float(value) for point, value in zip(points, values)}
 
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""
@@ -386,6 +416,7 @@ class StageProblem:
                 z = np.concatenate([x, u_bar])
                 G[i], H[i] = nd.Gradient(f)(z), nd.Hessian(f)(z)
         if self._has_covariance_term:
+            self._prefetch_covariance_part(u_bar)
             G[:, nx:] += np.atleast_1d(nd.Gradient(self._covariance_part)(u_bar))
             H[:, nx:, nx:] += self._covariance_hessian(u_bar)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
@@ -460,6 +491,34 @@ class StageProblem:
         g = gC + np.einsum("m,mij,mi->j", self.beta, J, lam)
         Hs = HC + np.einsum("m,mij,ik,mkl->jl", self.beta, J, nxt.V, J)
         return g, Hs
+
+
+def _numdifftools_points(x):
+    """The points at which numdifftools' Gradient and Hessian (default settings: central
+    differences) evaluate a function of ``x`` (n,), as an array (number of points, n).
+
+    The points depend on ``x`` only: numdifftools' steps h at ``x`` (its step generator),
+    combined as its central-difference rules combine them, with the same floating-point
+    additions: x (first), x +- h_k e_k (Gradient), x +- 2 h_k e_k and (x +- h_i e_i) +- h_j e_j
+    for i < j (Hessian). The steps come from numdifftools' ``_get_steps`` (what its
+    ``__call__`` uses). Used to prefetch function values only: a point numdifftools asks for
+    that is not here is evaluated directly (tests check that there is none).
+    """
+    import numdifftools as nd
+    n = x.size
+    gradient, hessian = (_step_offsets(derivative, x) for derivative in (nd.Gradient(None), nd.Hessian(None)))
+    first, second = (hessian[:, index] for index in np.triu_indices(n, 1))
+    parts = [x[None], x + gradient, x - gradient, x + 2 * hessian, x - 2 * hessian]
+    for shifted in (x + first, x - first):
+        parts += [shifted + second, shifted - second]
+    return np.concatenate([part.reshape(-1, n) for part in parts])
+
+
+def _step_offsets(derivative, x):
+    """h_k e_k for each of numdifftools' steps h at ``x``: (number of steps, n, n), row k of
+    each the vector with h_k at k and zeros elsewhere (its rules' increments)."""
+    steps, _ = derivative._get_steps(x)
+    return np.array(steps)[:, None, :] * np.eye(x.size)
 
 
 def _next_covariance_function(filt, estimate):
