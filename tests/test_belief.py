@@ -562,3 +562,21 @@ def test_nothing_is_prefetched_for_a_model_that_rounds_differently_on_a_stack():
                          w, beta)
     stage._prefetch_covariance_part(np.array([0.5, 0.1]))
     assert stage._prefetched == {}
+
+
+def test_nothing_is_prefetched_when_numdifftools_has_no_get_steps(monkeypatch):
+    import numdifftools as nd
+    ex = landmark_example(K=2)
+    w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
+    nxt = Value(0.0, np.zeros(2), np.eye(2), np.eye(2))
+    stage = StageProblem(ex.model, ex.cost, UKF(ex.model), (ex.mean0, ex.cov0), nxt, w, beta)
+    u_bar = np.array([0.5, 0.1])
+    with_steps = stage.expansion(u_bar)
+    monkeypatch.delattr(nd.core.Derivative, "_get_steps")       # another numdifftools version
+    stage._prefetch_covariance_part(u_bar)
+    assert stage._prefetched == {}
+    monkeypatch.undo()
+    without_steps = StageProblem(ex.model, ex.cost, UKF(ex.model), (ex.mean0, ex.cov0), nxt, w, beta)
+    monkeypatch.setattr("asoc.belief.trajectory._numdifftools_points", lambda x: None)
+    direct = without_steps.expansion(u_bar)
+    assert all(np.array_equal(getattr(with_steps, name), getattr(direct, name)) for name in ("phi", "p", "r", "Q", "P", "R"))

@@ -383,9 +383,10 @@ class StageProblem:
         self._prefetched = {}
         if not (self._has_covariance_term and isinstance(self._next_covariance, _NextCovariance)):
             return
-        points = _numdifftools_points(u_bar)                  # points[0] is u_bar
-        C = self._next_covariance.many(points)
-        values = 0.5 * np.vecdot(C.reshape(C.shape[0], -1), self._S_transposed.ravel())   # np.vdot per point
+        points = _numdifftools_points(u_bar)                  # points[0] is u_bar; None: not predictable
+        if points is None:
+            return
+        values = [0.5 * float(np.vdot(self._S_transposed, C)) for C in self._next_covariance.many(points)]
         if values[0] == self._covariance_part(u_bar):
             self._prefetched = {point.tobytes(): float(value) for point, value in zip(points, values)}
 
@@ -502,11 +503,16 @@ def _numdifftools_points(x):
     additions: x (first), x +- h_k e_k (Gradient), x +- 2 h_k e_k and (x +- h_i e_i) +- h_j e_j
     for i < j (Hessian). The steps come from numdifftools' ``_get_steps`` (what its
     ``__call__`` uses). Used to prefetch function values only: a point numdifftools asks for
-    that is not here is evaluated directly (tests check that there is none).
+    that is not here is evaluated directly (tests check that there is none). None when this
+    numdifftools has no ``_get_steps`` (a version other than the pinned one): then nothing is
+    prefetched, and the derivatives are the same, only slower.
     """
     import numdifftools as nd
     n = x.size
-    gradient, hessian = (_step_offsets(derivative, x) for derivative in (nd.Gradient(None), nd.Hessian(None)))
+    try:
+        gradient, hessian = (_step_offsets(derivative, x) for derivative in (nd.Gradient(None), nd.Hessian(None)))
+    except AttributeError:
+        return None
     first, second = (hessian[:, index] for index in np.triu_indices(n, 1))
     parts = [x[None], x + gradient, x - gradient, x + 2 * hessian, x - 2 * hessian]
     for shifted in (x + first, x - first):
