@@ -29,8 +29,9 @@ from asoc.mjls.operators import closed_loop_unchecked, kronecker_matrix, solve_c
 
 from .core import Outcome, Statement
 from .instances import (Z_SCORE, ModeChain, ModeOperator, ModeQuadratic, RunModes, best_scalar_gain, draw_system,
-                        initial_modes, min_eig, moment_estimate, radius_to, random_spd, random_spd_stack, rescaled,
-                        row_sums, size, scalar_gain_radii, stationary_average, system_data)
+                        indicator_moment_estimate, initial_modes, min_eig, moment_estimate, radius_to, random_spd,
+                        random_spd_stack, rescaled, row_sums, size, scalar_gain_radii, stationary_average,
+                        system_data)
 
 _T = lambda S: np.swapaxes(S, -1, -2)
 _tr = lambda A, B: float(np.sum(A * np.swapaxes(B, -1, -2)))     # sum of tr[A_i B_i] over a stack
@@ -270,18 +271,12 @@ def _sample_mixture(rng, mu0, mean0, cov0, n_runs):
     return x, theta
 
 
-def _indicator_moments(x, theta, M):
-    """Per-run samples of x x^T 1(theta = i), shape (runs, M, n, n)."""
-    out = np.zeros((len(x), M) + (x.shape[1],) * 2)
-    out[np.arange(len(x)), theta] = np.einsum("ra,rb->rab", x, x)
-    return out
-
-
-def _z_scores(samples, exact, mu, min_hits=100):
-    """Largest |Monte Carlo - exact| / standard error over the entries of the modes with at least
-    ``min_hits`` expected visits (rarer modes have too few samples for a normal standard error)."""
-    mean, se = moment_estimate(samples)
-    seen = mu * len(samples) >= min_hits
+def _z_scores(x, theta, exact, mu, min_hits=100):
+    """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over the
+    runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
+    modes have too few samples for a normal standard error)."""
+    mean, se = indicator_moment_estimate(x, theta, len(mu))
+    seen = mu * len(x) >= min_hits
     if not seen.any():
         return 0.0
     scale = 1e-12 * (1 + np.abs(exact).max())
@@ -313,7 +308,7 @@ def check_3_14(rng):
         modes = RunModes(theta, sys.M)
         x = closed(x, modes) + noise(rng.standard_normal((n_runs, sys.nw)), modes)
         theta = chain.next(rng, theta)
-        worst = max(worst, _z_scores(_indicator_moments(x, theta, sys.M), X[k], mus[k]))
+        worst = max(worst, _z_scores(x, theta, X[k], mus[k]))
     return _outcome(_verdict(worst < Z_SCORE), sys, max_z=worst, runs=n_runs)
 
 
@@ -527,7 +522,7 @@ def check_3_23(rng):
         compact_diff = max(compact_diff, float(np.abs(compact - Xt).max() / np.abs(Xt).max()))
         m = m @ sys.T
         state, theta = step(state, RunModes(theta, sys.M), rng, F, K, L), chain.next(rng, theta)
-        worst = max(worst, _z_scores(_indicator_moments(np.hstack(state), theta, sys.M), Xt, m))
+        worst = max(worst, _z_scores(np.hstack(state), theta, Xt, m))
     return _outcome(_verdict(worst < Z_SCORE), sys, max_z=worst, compact_form_difference=compact_diff,
                     runs=n_runs)
 

@@ -343,6 +343,43 @@ def moment_estimate(samples):
     return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
 
 
+def indicator_moment_estimate(x, theta, n_modes):
+    """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n, n).
+
+    Bit for bit :func:`moment_estimate` of the (runs, M, n, n) array of the samples, in fewer
+    passes over it. numpy sums that array over the runs one run after another for each entry
+    (its rows have more than one entry), so mode i's sum is the sum over its own runs in order
+    (the others add exact zeros); with one entry per mode (n = 1) its rows have M entries, and a
+    mode's own runs alone would be summed pairwise: then the array is built and summed. The
+    squared deviations are then written into an array of the samples' shape, (-mean)^2 where a
+    run is in another mode, and summed as numpy sums the samples' deviations.
+
+    Examples
+    --------
+    >>> x, theta = np.array([[1.0], [2.0], [3.0]]), np.array([0, 1, 0])
+    >>> samples = np.zeros((3, 2, 1, 1))
+    >>> samples[np.arange(3), theta] = (x * x)[:, :, None]
+    >>> mean, se = indicator_moment_estimate(x, theta, 2)
+    >>> all(np.array_equal(a, b) for a, b in zip((mean, se), moment_estimate(samples)))
+    True
+    """
+    runs, n = x.shape
+    products = np.einsum("ra,rb->rab", x, x)
+    table = np.empty((runs, n_modes, n, n))
+    own = table.reshape(runs * n_modes, n, n)                   # row r M + theta_r: run r's own mode
+    rows = np.arange(runs) * n_modes + theta
+    if n > 1 or n_modes == 1:
+        total = np.stack([products.take(np.flatnonzero(theta == i), axis=0).sum(axis=0) for i in range(n_modes)])
+    else:
+        table[...] = 0.0
+        own[rows] = products
+        total = table.sum(axis=0)
+    mean = total / runs
+    table[...] = np.square(mean)
+    own[rows] = np.square(products - mean.take(theta, axis=0))
+    return mean, np.sqrt(table.sum(axis=0) / (runs - 1)) / np.sqrt(runs)
+
+
 def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=100, tail=1e-4):
     """Monte Carlo of the stationary average cost of a mean-square stable loop.
 
