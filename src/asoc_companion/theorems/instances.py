@@ -6,6 +6,7 @@ Everything here is verification logic: it draws random instances through
 by simulation with its standard error. The algorithms under test come from ``asoc.mjls``.
 """
 
+import functools
 import itertools
 
 import numpy as np
@@ -176,14 +177,24 @@ class ModeChain:
     def next(self, rng, theta):
         """theta_{k+1} for every run (one uniform draw per run, ``rng.random(len(theta))``)."""
         u = rng.random(len(theta))
-        passed = np.zeros(len(theta), dtype=np.intp)
-        for column in self.thresholds:        # one pass per mode: no reduction over the narrow mode axis
+        if len(self.thresholds) == 0:
+            return np.zeros(len(theta), dtype=np.intp)
+        passed = (u > self.thresholds[0].take(theta)).astype(np.intp)
+        for column in self.thresholds[1:]:    # one pass per mode: no reduction over the narrow mode axis
             passed += u > column.take(theta)
         return passed
 
 
 def initial_modes(rng, mu, n_runs):
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
+
+
+@functools.lru_cache(maxsize=16)
+def _run_offsets(runs, step):
+    """0, step, 2 step, ... for ``runs`` runs (read-only: shared by the steps of a simulation)."""
+    offsets = np.arange(runs) * step
+    offsets.flags.writeable = False
+    return offsets
 
 
 class RunModes:
@@ -206,14 +217,14 @@ class RunModes:
     def run_major(self):
         """Row r M + theta_r of the (runs M, m) products of every run by every mode: run r's own."""
         if self._run_major is None:
-            self._run_major = np.arange(len(self.theta)) * self.n_modes + self.theta
+            self._run_major = _run_offsets(len(self.theta), self.n_modes) + self.theta
         return self._run_major
 
     @property
     def mode_major(self):
         """Entry theta_r runs + r of the (M, runs) products of every run by every mode: run r's own."""
         if self._mode_major is None:
-            self._mode_major = self.theta * len(self.theta) + np.arange(len(self.theta))
+            self._mode_major = self.theta * len(self.theta) + _run_offsets(len(self.theta), 1)
         return self._mode_major
 
     @property
@@ -222,7 +233,7 @@ class RunModes:
         if self._alone is None:
             counts = np.bincount(self.theta, minlength=self.n_modes)
             self._alone = ([(int(r), int(self.theta[r])) for r in np.flatnonzero(counts.take(self.theta) == 1)]
-                           if (counts == 1).any() else [])
+                           if 1 in counts.tolist() else [])
         return self._alone
 
 
@@ -284,7 +295,9 @@ class ModeOperator:
 
 class ModeQuadratic:
     """x_r^T S_{theta_r} x_r for all runs, bit for bit ``np.einsum("ra,rab,rb->r", x, S[theta], x)``:
-    the terms (x_a S_ab) x_b added one by one to 0 in the order of (a, b), each over all runs at once.
+    the terms (x_a S_ab) x_b added one by one to 0 in the order of (a, b), each over all runs at once
+    (numpy reduces the leading axis of the (n n, runs) terms one row after another; the final + 0
+    turns a sum of -0 into einsum's +0).
 
     Parameters
     ----------
@@ -309,12 +322,11 @@ class ModeQuadratic:
         """The quadratic form of every row of ``x`` (runs, n) with the matrix of its mode ``theta``."""
         n = self.n
         xt = np.ascontiguousarray(x.T)
-        terms = ((xt[:, None, :] * self.entries.take(theta, axis=1).reshape(n, n, -1))
-                 * xt[None, :, :]).reshape(n * n, -1)
-        total = terms[0] + 0.0
-        for term in terms[1:]:
-            total += term
-        return total
+        terms = self.entries.take(theta, axis=1)                                        # (n n, runs)
+        by_entry = terms.reshape(n, n, -1)
+        np.multiply(xt[:, None, :], by_entry, out=by_entry)
+        np.multiply(by_entry, xt[None, :, :], out=by_entry)
+        return np.add.reduce(terms, axis=0) + 0.0
 
 
 def row_sums(P):
