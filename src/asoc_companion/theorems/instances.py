@@ -358,38 +358,40 @@ def moment_estimate(samples):
 def indicator_moment_estimate(x, theta, n_modes):
     """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n, n).
 
-    Bit for bit :func:`moment_estimate` of the (runs, M, n, n) array of the samples, in fewer
-    passes over it. numpy sums that array over the runs one run after another for each entry
-    (its rows have more than one entry), so mode i's sum is the sum over its own runs in order
-    (the others add exact zeros); with one entry per mode (n = 1) its rows have M entries, and a
-    mode's own runs alone would be summed pairwise: then the array is built and summed. The
-    squared deviations are then written into an array of the samples' shape, (-mean)^2 where a
-    run is in another mode, and summed as numpy sums the samples' deviations.
+    Bit for bit :func:`moment_estimate` of the (runs, M, n, n) array of the samples, with about
+    half its work: x_r x_r^T is symmetric, so only the entries a <= b are estimated (then
+    mirrored), on an array of shape (runs, M, n (n + 1) / 2) that numpy sums over the runs as it
+    sums the samples (one run after another for each entry, as both have more than one entry per
+    run, or pairwise when both have one). That array holds the samples, then the squared
+    deviations from the mean, (-mean)^2 where a run is in another mode; the mean's sum is not
+    repeated for the standard deviation.
 
     Examples
     --------
-    >>> x, theta = np.array([[1.0], [2.0], [3.0]]), np.array([0, 1, 0])
-    >>> samples = np.zeros((3, 2, 1, 1))
-    >>> samples[np.arange(3), theta] = (x * x)[:, :, None]
+    >>> x, theta = np.array([[1.0, 0.5], [2.0, -1.0], [3.0, 0.0]]), np.array([0, 1, 0])
+    >>> samples = np.zeros((3, 2, 2, 2))
+    >>> samples[np.arange(3), theta] = np.einsum("ra,rb->rab", x, x)
     >>> mean, se = indicator_moment_estimate(x, theta, 2)
     >>> all(np.array_equal(a, b) for a, b in zip((mean, se), moment_estimate(samples)))
     True
     """
     runs, n = x.shape
-    products = np.einsum("ra,rb->rab", x, x)
-    table = np.empty((runs, n_modes, n, n))
-    own = table.reshape(runs * n_modes, n, n)                   # row r M + theta_r: run r's own mode
-    rows = np.arange(runs) * n_modes + theta
-    if n > 1 or n_modes == 1:
-        total = np.stack([products.take(np.flatnonzero(theta == i), axis=0).sum(axis=0) for i in range(n_modes)])
-    else:
-        table[...] = 0.0
-        own[rows] = products
-        total = table.sum(axis=0)
-    mean = total / runs
+    first, second = np.triu_indices(n)
+    products = np.multiply(x[:, first], x[:, second])
+    products += 0.0                                            # einsum's x_a x_b (added to 0), a <= b
+    table = np.zeros((runs, n_modes, len(first)))
+    own = table.reshape(runs * n_modes, len(first))             # row r M + theta_r: run r's own mode
+    rows = _run_offsets(runs, n_modes) + theta
+    own[rows] = products
+    mean = table.sum(axis=0) / runs
     table[...] = np.square(mean)
-    own[rows] = np.square(products - mean.take(theta, axis=0))
-    return mean, np.sqrt(table.sum(axis=0) / (runs - 1)) / np.sqrt(runs)
+    deviations = mean.take(theta, axis=0)
+    np.subtract(products, deviations, out=deviations)
+    own[rows] = np.square(deviations, out=deviations)
+    se = np.sqrt(table.sum(axis=0) / (runs - 1)) / np.sqrt(runs)
+    mirror = np.zeros((n, n), dtype=np.intp)
+    mirror[first, second] = mirror[second, first] = np.arange(len(first))
+    return mean[:, mirror], se[:, mirror]
 
 
 def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=100, tail=1e-4):
