@@ -44,6 +44,70 @@ def test_grid_minimum_skips_only_gains_that_cannot_be_the_smallest():
         assert best == int(np.argmin(radii)) and rho == radii[best]
 
 
+def _per_mode_products(S, theta, x):
+    """The reference of ModeOperator: one matmul per mode over the rows of its runs."""
+    out = np.empty((len(x), S.shape[1]))
+    for i in range(S.shape[0]):
+        runs = np.flatnonzero(theta == i)
+        out[runs] = x.take(runs, axis=0) @ S[i].T
+    return out
+
+
+def test_mode_operator_is_bit_identical_to_one_matmul_per_mode():
+    from asoc_companion.theorems.instances import ModeOperator, RunModes
+    rng = np.random.default_rng(5)
+    for trial in range(600):
+        M, m, n = (int(v) for v in rng.integers(1, 5, 3))
+        runs = int(rng.choice([1, 2, 5, 40, 1000]))
+        weights = rng.dirichlet(np.full(M, 0.2))                  # skewed: modes with 0 or 1 runs
+        theta = np.minimum((rng.random(runs)[:, None] > np.cumsum(weights)).sum(axis=1), M - 1)
+        wide = rng.standard_normal((runs, 2 * n)) * np.exp(rng.normal(0, 2, (runs, 1)))
+        wide[rng.random(runs) < 0.05] = 0.0
+        x = wide[:, :n] if trial % 2 else np.ascontiguousarray(wide[:, n:])   # a column view or its own array
+        S = rng.standard_normal((M, m, n))
+        fast, reference = ModeOperator(S)(x, RunModes(theta, M)), _per_mode_products(S, theta, x)
+        assert np.array_equal(fast, reference) and np.array_equal(np.signbit(fast), np.signbit(reference)), \
+            (M, m, n, runs)
+
+
+def test_mode_chain_draws_the_inverse_transform_of_the_rows_of_T():
+    from asoc_companion.theorems.instances import ModeChain
+    rng = np.random.default_rng(6)
+    for M in (1, 2, 3, 4):
+        T = rng.dirichlet(np.full(M, 0.3), size=M)
+        theta = rng.integers(0, M, 5000)
+        draws = np.random.default_rng(M).random(5000)
+        expected = np.minimum((draws[:, None] > np.cumsum(T, axis=1)[theta]).sum(axis=1), M - 1)
+        assert np.array_equal(ModeChain(T).next(np.random.default_rng(M), theta), expected)
+
+
+def test_mode_quadratic_and_row_sums_are_bit_identical_to_einsum_and_sum():
+    from asoc_companion.theorems.instances import ModeQuadratic, row_sums
+    rng = np.random.default_rng(7)
+    for n in range(1, 7):
+        M, runs = int(rng.integers(1, 5)), int(rng.choice([3, 1000, 10000]))
+        x = rng.standard_normal((runs, 2 * n))[:, :n] * np.exp(rng.normal(0, 2, (runs, 1)))
+        S = rng.standard_normal((M, n, n))
+        theta = rng.integers(0, M, runs)
+        assert np.array_equal(ModeQuadratic(S)(x, theta), np.einsum("ra,rab,rb->r", x, S[theta], x))
+        for k in range(1, 10):
+            P = rng.standard_normal((runs, k)) * np.exp(rng.normal(0, 3, (runs, k)))
+            assert np.array_equal(row_sums(P), np.sum(P, axis=1))
+
+
+def test_indicator_moment_estimate_is_bit_identical_to_the_estimate_over_the_samples_array():
+    from asoc_companion.theorems.instances import indicator_moment_estimate, moment_estimate
+    rng = np.random.default_rng(8)
+    for M, n in [(1, 1), (3, 1), (1, 3), (2, 2), (3, 4), (4, 6)]:
+        runs = int(rng.choice([2, 50, 10000]))
+        x = rng.standard_normal((runs, n)) * np.exp(rng.normal(0, 2, (runs, 1)))
+        theta = np.minimum((rng.random(runs)[:, None] > np.cumsum(rng.dirichlet(np.full(M, 0.3)))).sum(axis=1), M - 1)
+        samples = np.zeros((runs, M, n, n))
+        samples[np.arange(runs), theta] = np.einsum("ra,rb->rab", x, x)
+        for fast, reference in zip(indicator_moment_estimate(x, theta, M), moment_estimate(samples)):
+            assert np.array_equal(fast, reference), (M, n, runs)
+
+
 # Alg. 3.1 does not converge on this SOF-stabilisable one-mode system (study seed 2017, statement_3_19,
 # instance 79): a grid over L finds rho = 0.642 at L = 0.328; the iteration wanders to rho >> 1.
 

@@ -28,9 +28,10 @@ from asoc.mjls.moments import h2_cost_unchecked
 from asoc.mjls.operators import closed_loop_unchecked, kronecker_matrix, solve_coupled_lyapunov, spectral_radius
 
 from .core import Outcome, Statement
-from .instances import (Z_SCORE, apply_modes, best_scalar_gain, draw_system, initial_modes, min_eig,
-                        mode_rows, moment_estimate, next_modes, radius_to, random_spd, random_spd_stack, rescaled, size,
-                        scalar_gain_radii, stationary_average, system_data)
+from .instances import (Z_SCORE, ModeChain, ModeOperator, ModeQuadratic, RunModes, best_scalar_gain, draw_system,
+                        indicator_moment_estimate, initial_modes, min_eig, moment_estimate, radius_to, random_spd,
+                        random_spd_stack, rescaled, row_sums, size, scalar_gain_radii, stationary_average,
+                        system_data)
 
 _T = lambda S: np.swapaxes(S, -1, -2)
 _tr = lambda A, B: float(np.sum(A * np.swapaxes(B, -1, -2)))     # sum of tr[A_i B_i] over a stack
@@ -150,13 +151,13 @@ def _stationary_check(rng, mode_dependent):
     DE = D + E @ L @ sys.C
     h2 = _tr(DE @ X, _T(DE))
     n_runs = 1000
+    closed, noise, output = ModeOperator(Acl), ModeOperator(sys.H), ModeOperator(DE)
 
-    def step(x, th, r):
-        rows = mode_rows(th, sys.M)
+    def step(x, modes, r):
         w = r.standard_normal((len(x), sys.nw))
-        return apply_modes(Acl, th, x, rows) + apply_modes(sys.H, th, w, rows)
+        return closed(x, modes) + noise(w, modes)
 
-    cost = lambda x, th: np.sum(apply_modes(DE, th, x) ** 2, axis=1)
+    cost = lambda x, modes: row_sums(output(x, modes) ** 2)
     mc, se, burn = stationary_average(rng, step, cost, np.zeros((n_runs, sys.nx)),
                                       initial_modes(rng, sys.mu_inf, n_runs), sys.T, target, n_runs)
     z = abs(mc - h2) / np.hypot(se, 1e-3 * h2)
@@ -265,23 +266,17 @@ def _gaussian_mixture(rng, sys):
 
 def _sample_mixture(rng, mu0, mean0, cov0, n_runs):
     theta = initial_modes(rng, mu0, n_runs)
-    chol = np.linalg.cholesky(cov0)
-    x = mean0[theta] + apply_modes(chol, theta, rng.standard_normal((n_runs, mean0.shape[1])))
+    chol = ModeOperator(np.linalg.cholesky(cov0))
+    x = mean0[theta] + chol(rng.standard_normal((n_runs, mean0.shape[1])), RunModes(theta, len(mu0)))
     return x, theta
 
 
-def _indicator_moments(x, theta, M):
-    """Per-run samples of x x^T 1(theta = i), shape (runs, M, n, n)."""
-    out = np.zeros((len(x), M) + (x.shape[1],) * 2)
-    out[np.arange(len(x)), theta] = np.einsum("ra,rb->rab", x, x)
-    return out
-
-
-def _z_scores(samples, exact, mu, min_hits=100):
-    """Largest |Monte Carlo - exact| / standard error over the entries of the modes with at least
-    ``min_hits`` expected visits (rarer modes have too few samples for a normal standard error)."""
-    mean, se = moment_estimate(samples)
-    seen = mu * len(samples) >= min_hits
+def _z_scores(x, theta, exact, mu, min_hits=100):
+    """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over the
+    runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
+    modes have too few samples for a normal standard error)."""
+    mean, se = indicator_moment_estimate(x, theta, len(mu))
+    seen = mu * len(x) >= min_hits
     if not seen.any():
         return 0.0
     scale = 1e-12 * (1 + np.abs(exact).max())
@@ -308,12 +303,12 @@ def check_3_14(rng):
     n_runs = 10000
     x, theta = _sample_mixture(rng, mu0, mean0, cov0, n_runs)
     worst = 0.0
+    chain, closed, noise = ModeChain(sys.T), ModeOperator(Acl), ModeOperator(sys.H)
     for k in range(1, 4):
-        rows = mode_rows(theta, sys.M)
-        x = (apply_modes(Acl, theta, x, rows)
-             + apply_modes(sys.H, theta, rng.standard_normal((n_runs, sys.nw)), rows))
-        theta = next_modes(rng, sys.T, theta)
-        worst = max(worst, _z_scores(_indicator_moments(x, theta, sys.M), X[k], mus[k]))
+        modes = RunModes(theta, sys.M)
+        x = closed(x, modes) + noise(rng.standard_normal((n_runs, sys.nw)), modes)
+        theta = chain.next(rng, theta)
+        worst = max(worst, _z_scores(x, theta, X[k], mus[k]))
     return _outcome(_verdict(worst < Z_SCORE), sys, max_z=worst, runs=n_runs)
 
 
@@ -476,20 +471,24 @@ def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
     return rescaled(sys, c), c * F, c * K, L, target
 
 
-def _loop_step(sys, F, K, L, n_runs):
-    """One step of plant (3.36) and controller (3.37) for all runs: state = [x, x^]."""
-    nx = sys.nx
+def _loop_step(sys):
+    """One step of plant (3.36) and controller (3.37) for all runs: ``step((x, x^), modes, r, F, K, L)``
+    with x, x^ of shape (runs, nx) and ``modes`` the runs' RunModes; the new (x, x^)."""
     J = np.zeros((sys.M, sys.ny, 1)) if sys.J is None else sys.J
+    C, meas, A, B, H = (ModeOperator(S) for S in (sys.C, J, sys.A, sys.B, sys.H))
 
-    def step(state, th, r):
-        x, xh = state[:, :nx], state[:, nx:]
-        rows = mode_rows(th, sys.M)
-        y = apply_modes(sys.C, th, x, rows) + apply_modes(J, th, r.standard_normal((len(x), J.shape[2])), rows)
-        x_new = (apply_modes(sys.A, th, x, rows) + apply_modes(sys.B, th, xh @ L.T, rows)
-                 + apply_modes(sys.H, th, r.standard_normal((len(x), sys.nw)), rows))
-        return np.hstack([x_new, xh @ F.T + y @ K.T])
+    def step(state, modes, r, F, K, L):
+        x, xh = state
+        y = C(x, modes) + meas(r.standard_normal((len(x), J.shape[2])), modes)
+        x_new = A(x, modes) + B(xh @ L.T, modes) + H(r.standard_normal((len(x), sys.nw)), modes)
+        return x_new, xh @ F.T + y @ K.T
 
     return step
+
+
+def _quadratic_costs(sys):
+    """x^T Q_theta x and u^T R_theta u for all runs: ``(state_cost(x, theta), input_cost(u, theta))``."""
+    return ModeQuadratic(sys.Q), ModeQuadratic(sys.R)
 
 
 def check_3_23(rng):
@@ -505,8 +504,8 @@ def check_3_23(rng):
     n, A, B, C, m = sys.nx, sys.A, sys.B, sys.C, mu0
     n_runs = 10000
     x, theta = _sample_mixture(rng, mu0, mean0, cov0, n_runs)
-    state = np.hstack([x, np.broadcast_to(xhat0, x.shape)])
-    step = _loop_step(sys, F, K, L, n_runs)
+    state = x, np.broadcast_to(xhat0, x.shape).copy()
+    step, chain = _loop_step(sys), ModeChain(sys.T)
     worst, compact_diff = 0.0, 0.0
     for _ in range(3):
         X1, X12, X2 = Xt[:, :n, :n], Xt[:, :n, n:], Xt[:, n:, n:]
@@ -522,8 +521,8 @@ def check_3_23(rng):
         Xt = np.block([[new1, new12], [_T(new12), new2]])
         compact_diff = max(compact_diff, float(np.abs(compact - Xt).max() / np.abs(Xt).max()))
         m = m @ sys.T
-        state, theta = step(state, theta, rng), next_modes(rng, sys.T, theta)
-        worst = max(worst, _z_scores(_indicator_moments(state, theta, sys.M), Xt, m))
+        state, theta = step(state, RunModes(theta, sys.M), rng, F, K, L), chain.next(rng, theta)
+        worst = max(worst, _z_scores(np.hstack(state), theta, Xt, m))
     return _outcome(_verdict(worst < Z_SCORE), sys, max_z=worst, compact_form_difference=compact_diff,
                     runs=n_runs)
 
@@ -534,14 +533,13 @@ def check_3_24(rng):
     sys, F, K, L, target = _stabilised_dynamic(rng, sys)
     exact, _, rho = steady_state_cost(sys, F, K, L)
     n_runs = 1000
-    nx = sys.nx
-
-    def cost(state, th):
-        x, u = state[:, :nx], state[:, nx:] @ L.T
-        return np.einsum("ra,rab,rb->r", x, sys.Q[th], x) + np.einsum("ra,rab,rb->r", u, sys.R[th], u)
-
-    mc, se, burn = stationary_average(rng, _loop_step(sys, F, K, L, n_runs), cost, np.zeros((n_runs, 2 * nx)),
-                                      initial_modes(rng, sys.mu_inf, n_runs), sys.T, rho, n_runs)
+    state_cost, input_cost = _quadratic_costs(sys)
+    cost = lambda state, modes: state_cost(state[0], modes.theta) + input_cost(state[1] @ L.T, modes.theta)
+    loop = _loop_step(sys)
+    step = lambda state, modes, r: loop(state, modes, r, F, K, L)
+    start = np.zeros((n_runs, sys.nx)), np.zeros((n_runs, sys.nx))
+    mc, se, burn = stationary_average(rng, step, cost, start, initial_modes(rng, sys.mu_inf, n_runs), sys.T, rho,
+                                      n_runs)
     z = abs(mc - exact) / np.hypot(se, 1e-3 * exact)
     return _outcome(_verdict(z < Z_SCORE), sys, cost_3_42=exact, monte_carlo=mc, standard_error=se, z=z,
                     rho=rho, burn_in=burn)
@@ -625,14 +623,13 @@ def check_3_28(rng):
     exact = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
     n_runs = 10000
     x, theta = _sample_mixture(rng, mu0, mean0, cov0, n_runs)
-    state = np.hstack([x, np.broadcast_to(xhat0, x.shape)])
-    nx, total = sys.nx, np.zeros(n_runs)
+    state, total = (x, np.broadcast_to(xhat0, x.shape).copy()), np.zeros(n_runs)
+    step, chain = _loop_step(sys), ModeChain(sys.T)
+    state_cost, input_cost = _quadratic_costs(sys)
     for k in range(horizon):
-        x, u = state[:, :nx], state[:, nx:] @ L[k].T
-        total += np.einsum("ra,rab,rb->r", x, sys.Q[theta], x) + np.einsum("ra,rab,rb->r", u, sys.R[theta], u)
-        state, theta = _loop_step(sys, F[k], K[k], L[k], n_runs)(state, theta, rng), next_modes(rng, sys.T, theta)
-    x = state[:, :nx]
-    total += np.einsum("ra,rab,rb->r", x, sys.Q[theta], x)
+        total += state_cost(state[0], theta) + input_cost(state[1] @ L[k].T, theta)
+        state, theta = step(state, RunModes(theta, sys.M), rng, F[k], K[k], L[k]), chain.next(rng, theta)
+    total += state_cost(state[0], theta)
     mc, se = moment_estimate(total)
     z = abs(mc - exact) / max(se, 1e-12 * exact)
     return _outcome(_verdict(z < Z_SCORE), sys, cost_3_57=exact, monte_carlo=float(mc), standard_error=float(se),

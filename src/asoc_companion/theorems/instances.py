@@ -6,6 +6,7 @@ Everything here is verification logic: it draws random instances through
 by simulation with its standard error. The algorithms under test come from ``asoc.mjls``.
 """
 
+import functools
 import itertools
 
 import numpy as np
@@ -148,36 +149,205 @@ def best_gain(sys, rng, starts=20):
 
 # ---------------------------------------------------------------- Monte Carlo
 
-def next_modes(rng, T, theta):
-    """theta_{k+1} given theta_k for every run (inverse transform of the rows of T)."""
-    cum = np.cumsum(T, axis=1).take(theta, axis=0)
-    u = rng.random(len(theta))
-    passed = np.zeros(len(theta), dtype=np.intp)
-    for column in cum.T:                      # one pass per mode: no reduction over the narrow mode axis
-        passed += u > column
-    return np.minimum(passed, T.shape[0] - 1)
+class ModeChain:
+    """The runs' mode chain: theta_{k+1} given theta_k by inverse transform of the rows of T.
+
+    The cumulative sums of T's rows are computed once. The next mode is the number of
+    cumulative sums of the row of theta_k below a uniform draw u, at most M - 1; the sums do
+    not decrease, so the row's last sum (about 1) is below u only when all are: it is not needed.
+
+    Parameters
+    ----------
+    T : ndarray, shape (M, M)
+        Transition matrix (rows sum to 1, entries >= 0: the cumulative sums do not decrease).
+
+    Examples
+    --------
+    >>> chain = ModeChain(np.array([[0.9, 0.1], [0.0, 1.0]]))
+    >>> chain.next(np.random.default_rng(0), np.array([0, 1, 1]))
+    array([0, 1, 1])
+    """
+
+    def __init__(self, T):
+        T = np.asarray(T, dtype=float)
+        if T.ndim != 2 or T.shape[0] != T.shape[1]:
+            raise ValueError(f"T: expected a square transition matrix (M, M), found shape {T.shape}")
+        self.thresholds = np.ascontiguousarray(np.cumsum(T, axis=1)[:, :-1].T)   # row j: sum_{l <= j} p_il
+
+    def next(self, rng, theta):
+        """theta_{k+1} for every run (one uniform draw per run, ``rng.random(len(theta))``)."""
+        u = rng.random(len(theta))
+        if len(self.thresholds) == 0:
+            return np.zeros(len(theta), dtype=np.intp)
+        passed = (u > self.thresholds[0].take(theta)).astype(np.intp)
+        for column in self.thresholds[1:]:    # one pass per mode: no reduction over the narrow mode axis
+            passed += u > column.take(theta)
+        return passed
 
 
 def initial_modes(rng, mu, n_runs):
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
 
 
-def mode_rows(theta, n_modes):
-    """The runs in each mode, as increasing indices: one grouping shared by the products of a step."""
-    return [np.flatnonzero(theta == i) for i in range(n_modes)]
+@functools.lru_cache(maxsize=16)
+def _run_offsets(runs, step):
+    """0, step, 2 step, ... for ``runs`` runs (read-only: shared by the steps of a simulation)."""
+    offsets = np.arange(runs) * step
+    offsets.flags.writeable = False
+    return offsets
 
 
-def apply_modes(S, theta, x, rows=None):
-    """Rows x_r -> S_{theta_r} x_r for all runs (one matrix product per mode, not a gather).
+class RunModes:
+    """The modes theta of all runs at one step, indexed for :class:`ModeOperator`: made once per
+    step and shared by every product of the step (each index is computed when first needed).
 
-    ``rows``: :func:`mode_rows` of ``theta`` when several products share it (computed if omitted).
+    Attributes
+    ----------
+    theta : ndarray of int, shape (runs,)
+        The mode of each run.
+    n_modes : int
+        The number of modes M.
     """
-    if rows is None:
-        rows = mode_rows(theta, S.shape[0])
-    out = np.empty((len(x), S.shape[1]))
-    for i, runs in enumerate(rows):
-        out[runs] = x.take(runs, axis=0) @ S[i].T
-    return out
+
+    def __init__(self, theta, n_modes):
+        self.theta, self.n_modes = theta, n_modes
+        self._run_major = self._mode_major = self._alone = None
+
+    @property
+    def run_major(self):
+        """Row r M + theta_r of the (runs M, m) products of every run by every mode: run r's own."""
+        if self._run_major is None:
+            self._run_major = _run_offsets(len(self.theta), self.n_modes) + self.theta
+        return self._run_major
+
+    @property
+    def mode_major(self):
+        """Entry theta_r runs + r of the (M, runs) products of every run by every mode: run r's own."""
+        if self._mode_major is None:
+            self._mode_major = self.theta * len(self.theta) + _run_offsets(len(self.theta), 1)
+        return self._mode_major
+
+    @property
+    def alone(self):
+        """(run, mode) of the runs alone in their mode (a one-row product takes another BLAS path)."""
+        if self._alone is None:
+            counts = np.bincount(self.theta, minlength=self.n_modes)
+            self._alone = ([(int(r), int(self.theta[r])) for r in np.flatnonzero(counts.take(self.theta) == 1)]
+                           if 1 in counts.tolist() else [])
+        return self._alone
+
+
+class ModeOperator:
+    """Rows x_r -> S_{theta_r} x_r for all runs, bit for bit the per-mode products
+    ``x[runs of mode i] @ S_i^T`` (numpy's matmul), with one call per operator instead of one per mode.
+
+    numpy's matmul of a group of rows by S_i^T is a BLAS gemm, a gemv when S_i has one row or the
+    group one run, a dot when both, and its own loop (the exact products x_r S_i, plus 0) when
+    S_i has one column. gemm and gemv give each row's result independently of the other rows,
+    so every run's product is taken from the products of all runs by every mode: one gemm
+    ``x @ [S_1^T ... S_M^T]``, or one gemv ``x @ s_i`` per mode when S_i has one row; a run alone
+    in its mode is recomputed as the one-row product; one column is an elementwise product.
+
+    Parameters
+    ----------
+    S : ndarray, shape (M, m, n)
+        One matrix per mode.
+
+    Examples
+    --------
+    >>> S = np.array([[[1.0, 2.0]], [[0.0, 3.0]]])
+    >>> x = np.array([[1.0, 1.0], [2.0, 0.0], [1.0, -1.0]])
+    >>> ModeOperator(S)(x, RunModes(np.array([0, 1, 0]), 2))
+    array([[ 3.],
+           [ 0.],
+           [-1.]])
+    """
+
+    def __init__(self, S):
+        S = np.asarray(S, dtype=float)
+        if S.ndim != 3:
+            raise ValueError(f"S: expected one matrix per mode, shape (M, m, n), found shape {S.shape}")
+        self.S = S
+        n_modes, m, n = S.shape
+        if n == 1:
+            self.columns = S[:, :, 0].copy()                                       # (M, m)
+        elif m == 1:
+            self.vectors = S[:, 0, :].copy()                                       # (M, n): one gemv per mode
+        else:
+            self.stacked = np.ascontiguousarray(S.transpose(2, 0, 1).reshape(n, n_modes * m))
+
+    def __call__(self, x, modes):
+        """S_{theta_r} x_r for every row of ``x`` (runs, n); ``modes``: the runs' :class:`RunModes`."""
+        n_modes, m, n = self.S.shape
+        if n == 1:
+            return x * self.columns.take(modes.theta, axis=0) + 0.0
+        if m == 1:
+            products = np.empty((n_modes, len(x)))
+            for mode, vector in enumerate(self.vectors):
+                np.matmul(x, vector, out=products[mode])
+            out = products.reshape(-1).take(modes.mode_major)[:, None]
+        else:
+            out = (x @ self.stacked).reshape(-1, m).take(modes.run_major, axis=0)
+        for run, mode in modes.alone:
+            out[run] = x.take([run], axis=0) @ self.S[mode].T
+        return out
+
+
+class ModeQuadratic:
+    """x_r^T S_{theta_r} x_r for all runs, bit for bit ``np.einsum("ra,rab,rb->r", x, S[theta], x)``:
+    the terms (x_a S_ab) x_b added one by one to 0 in the order of (a, b), each over all runs at once
+    (numpy reduces the leading axis of the (n n, runs) terms one row after another; the final + 0
+    turns a sum of -0 into einsum's +0).
+
+    Parameters
+    ----------
+    S : ndarray, shape (M, n, n)
+        One matrix per mode.
+
+    Examples
+    --------
+    >>> S = np.array([[[1.0, 0.0], [0.0, 2.0]], [[0.0, 1.0], [1.0, 0.0]]])
+    >>> ModeQuadratic(S)(np.array([[1.0, 1.0], [1.0, 2.0]]), np.array([0, 1]))
+    array([3., 4.])
+    """
+
+    def __init__(self, S):
+        S = np.asarray(S, dtype=float)
+        if S.ndim != 3 or S.shape[1] != S.shape[2]:
+            raise ValueError(f"S: expected one square matrix per mode, shape (M, n, n), found shape {S.shape}")
+        self.n = S.shape[1]
+        self.entries = np.ascontiguousarray(S.reshape(len(S), -1).T)                 # (n n, M): S_ab per mode
+
+    def __call__(self, x, theta):
+        """The quadratic form of every row of ``x`` (runs, n) with the matrix of its mode ``theta``."""
+        n = self.n
+        xt = np.ascontiguousarray(x.T)
+        terms = self.entries.take(theta, axis=1)                                        # (n n, runs)
+        by_entry = terms.reshape(n, n, -1)
+        np.multiply(xt[:, None, :], by_entry, out=by_entry)
+        np.multiply(by_entry, xt[None, :, :], out=by_entry)
+        return np.add.reduce(terms, axis=0) + 0.0
+
+
+def row_sums(P):
+    """``np.sum(P, axis=1)`` of P (runs, k) bit for bit, without a reduction over the narrow axis.
+
+    numpy adds fewer than 8 entries of a row one by one to 0 (pairwise summation starts at 8):
+    here each column is added to all runs at once. With 8 or more columns, ``np.sum`` itself.
+
+    Examples
+    --------
+    >>> P = np.array([[1.0, 1e-16, 1e-16], [0.5, 2.0, -1.0]])
+    >>> bool(np.array_equal(row_sums(P), np.sum(P, axis=1)))
+    True
+    """
+    if P.shape[1] >= 8:
+        return np.sum(P, axis=1)
+    columns = np.ascontiguousarray(P.T)
+    total = columns[0] + 0.0
+    for column in columns[1:]:
+        total += column
+    return total
 
 
 def moment_estimate(samples):
@@ -185,21 +355,63 @@ def moment_estimate(samples):
     return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
 
 
+def indicator_moment_estimate(x, theta, n_modes):
+    """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n, n).
+
+    Bit for bit :func:`moment_estimate` of the (runs, M, n, n) array of the samples, with about
+    half its work: x_r x_r^T is symmetric, so only the entries a <= b are estimated (then
+    mirrored), on an array of shape (runs, M, n (n + 1) / 2) that numpy sums over the runs as it
+    sums the samples (one run after another for each entry, as both have more than one entry per
+    run, or pairwise when both have one). That array holds the samples, then the squared
+    deviations from the mean, (-mean)^2 where a run is in another mode; the mean's sum is not
+    repeated for the standard deviation.
+
+    Examples
+    --------
+    >>> x, theta = np.array([[1.0, 0.5], [2.0, -1.0], [3.0, 0.0]]), np.array([0, 1, 0])
+    >>> samples = np.zeros((3, 2, 2, 2))
+    >>> samples[np.arange(3), theta] = np.einsum("ra,rb->rab", x, x)
+    >>> mean, se = indicator_moment_estimate(x, theta, 2)
+    >>> all(np.array_equal(a, b) for a, b in zip((mean, se), moment_estimate(samples)))
+    True
+    """
+    runs, n = x.shape
+    first, second = np.triu_indices(n)
+    products = np.multiply(x[:, first], x[:, second])
+    products += 0.0                                            # einsum's x_a x_b (added to 0), a <= b
+    table = np.zeros((runs, n_modes, len(first)))
+    own = table.reshape(runs * n_modes, len(first))             # row r M + theta_r: run r's own mode
+    rows = _run_offsets(runs, n_modes) + theta
+    own[rows] = products
+    mean = table.sum(axis=0) / runs
+    table[...] = np.square(mean)
+    deviations = mean.take(theta, axis=0)
+    np.subtract(products, deviations, out=deviations)
+    own[rows] = np.square(deviations, out=deviations)
+    se = np.sqrt(table.sum(axis=0) / (runs - 1)) / np.sqrt(runs)
+    mirror = np.zeros((n, n), dtype=np.intp)
+    mirror[first, second] = mirror[second, first] = np.arange(len(first))
+    return mean[:, mirror], se[:, mirror]
+
+
 def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=100, tail=1e-4):
     """Monte Carlo of the stationary average cost of a mean-square stable loop.
 
-    ``step(state, theta, rng)`` advances all runs, ``stage_cost(state, theta)`` is the cost
-    per run. A burn-in of log(tail)/log(rho) steps makes the transient's share below
-    ``tail``; then each run averages ``steps`` stage costs. Returns (mean, standard error)
-    over the runs (independent) and the burn-in.
+    ``step(state, modes, rng)`` advances all runs, ``stage_cost(state, modes)`` is the cost
+    per run, with ``modes`` the :class:`RunModes` of the step (the modes start at ``theta``
+    and follow :class:`ModeChain` of ``T``). A burn-in of log(tail)/log(rho) steps makes the
+    transient's share below ``tail``; then each run averages ``steps`` stage costs. Returns
+    (mean, standard error) over the runs (independent) and the burn-in.
     """
     burn = int(np.ceil(np.log(tail) / np.log(max(rho, 1e-3))))
+    chain, n_modes = ModeChain(T), len(T)
     for _ in range(burn):
-        state, theta = step(state, theta, rng), next_modes(rng, T, theta)
+        state, theta = step(state, RunModes(theta, n_modes), rng), chain.next(rng, theta)
     total = np.zeros(n_runs)
     for _ in range(steps):
-        total += stage_cost(state, theta)
-        state, theta = step(state, theta, rng), next_modes(rng, T, theta)
+        modes = RunModes(theta, n_modes)
+        total += stage_cost(state, modes)
+        state, theta = step(state, modes, rng), chain.next(rng, theta)
     mean, se = moment_estimate(total / steps)
     return float(mean), float(se), burn
 
