@@ -53,7 +53,7 @@ def _per_mode_products(S, theta, x):
     return out
 
 
-def test_mode_operator_is_bit_identical_to_one_matmul_per_mode():
+def test_mode_operator_agrees_with_one_matmul_per_mode_to_rounding():
     from asoc_companion.theorems.instances import ModeOperator, RunModes
     rng = np.random.default_rng(5)
     for trial in range(600):
@@ -66,8 +66,9 @@ def test_mode_operator_is_bit_identical_to_one_matmul_per_mode():
         x = wide[:, :n] if trial % 2 else np.ascontiguousarray(wide[:, n:])   # a column view or its own array
         S = rng.standard_normal((M, m, n))
         fast, reference = ModeOperator(S)(x, RunModes(theta, M)), _per_mode_products(S, theta, x)
-        assert np.array_equal(fast, reference) and np.array_equal(np.signbit(fast), np.signbit(reference)), \
-            (M, m, n, runs)
+        scale = n * np.abs(x).max(initial=0.0) * np.abs(S).max()       # dot products of n terms
+        np.testing.assert_allclose(fast, reference, rtol=0, atol=4 * n * np.finfo(float).eps * scale,
+                                   err_msg=str((M, m, n, runs)))
 
 
 def test_mode_chain_draws_the_inverse_transform_of_the_rows_of_T():

@@ -199,7 +199,7 @@ def _run_offsets(runs, step):
 
 class RunModes:
     """The modes theta of all runs at one step, indexed for :class:`ModeOperator`: made once per
-    step and shared by every product of the step (each index is computed when first needed).
+    step and shared by every product of the step.
 
     Attributes
     ----------
@@ -211,7 +211,7 @@ class RunModes:
 
     def __init__(self, theta, n_modes):
         self.theta, self.n_modes = theta, n_modes
-        self._run_major = self._mode_major = self._alone = None
+        self._run_major = None
 
     @property
     def run_major(self):
@@ -220,33 +220,16 @@ class RunModes:
             self._run_major = _run_offsets(len(self.theta), self.n_modes) + self.theta
         return self._run_major
 
-    @property
-    def mode_major(self):
-        """Entry theta_r runs + r of the (M, runs) products of every run by every mode: run r's own."""
-        if self._mode_major is None:
-            self._mode_major = self.theta * len(self.theta) + _run_offsets(len(self.theta), 1)
-        return self._mode_major
-
-    @property
-    def alone(self):
-        """(run, mode) of the runs alone in their mode (a one-row product takes another BLAS path)."""
-        if self._alone is None:
-            counts = np.bincount(self.theta, minlength=self.n_modes)
-            self._alone = ([(int(r), int(self.theta[r])) for r in np.flatnonzero(counts.take(self.theta) == 1)]
-                           if 1 in counts.tolist() else [])
-        return self._alone
-
 
 class ModeOperator:
-    """Rows x_r -> S_{theta_r} x_r for all runs, bit for bit the per-mode products
-    ``x[runs of mode i] @ S_i^T`` (numpy's matmul), with one call per operator instead of one per mode.
+    """Rows x_r -> S_{theta_r} x_r for all runs, with one matrix product per operator: x times
+    [S_1^T ... S_M^T], then each run's own block of m columns.
 
-    numpy's matmul of a group of rows by S_i^T is a BLAS gemm, a gemv when S_i has one row or the
-    group one run, a dot when both, and its own loop (the exact products x_r S_i, plus 0) when
-    S_i has one column. gemm and gemv give each row's result independently of the other rows,
-    so every run's product is taken from the products of all runs by every mode: one gemm
-    ``x @ [S_1^T ... S_M^T]``, or one gemv ``x @ s_i`` per mode when S_i has one row; a run alone
-    in its mode is recomputed as the one-row product; one column is an elementwise product.
+    This computes M times the products that one matmul per mode over its runs computes, but in
+    one BLAS call instead of M gathers, products and scatters on arrays of a few columns. Each
+    run's entries are the same dot products; whether their last bits equal the per-mode
+    products' depends on the BLAS kernels (on this project's machine they do, on emulated
+    other CPUs not always).
 
     Parameters
     ----------
@@ -267,30 +250,12 @@ class ModeOperator:
         S = np.asarray(S, dtype=float)
         if S.ndim != 3:
             raise ValueError(f"S: expected one matrix per mode, shape (M, m, n), found shape {S.shape}")
-        self.S = S
-        n_modes, m, n = S.shape
-        if n == 1:
-            self.columns = S[:, :, 0].copy()                                       # (M, m)
-        elif m == 1:
-            self.vectors = S[:, 0, :].copy()                                       # (M, n): one gemv per mode
-        else:
-            self.stacked = np.ascontiguousarray(S.transpose(2, 0, 1).reshape(n, n_modes * m))
+        n_modes, self.m, n = S.shape
+        self.stacked = np.ascontiguousarray(S.transpose(2, 0, 1).reshape(n, n_modes * self.m))
 
     def __call__(self, x, modes):
         """S_{theta_r} x_r for every row of ``x`` (runs, n); ``modes``: the runs' :class:`RunModes`."""
-        n_modes, m, n = self.S.shape
-        if n == 1:
-            return x * self.columns.take(modes.theta, axis=0) + 0.0
-        if m == 1:
-            products = np.empty((n_modes, len(x)))
-            for mode, vector in enumerate(self.vectors):
-                np.matmul(x, vector, out=products[mode])
-            out = products.reshape(-1).take(modes.mode_major)[:, None]
-        else:
-            out = (x @ self.stacked).reshape(-1, m).take(modes.run_major, axis=0)
-        for run, mode in modes.alone:
-            out[run] = x.take([run], axis=0) @ self.S[mode].T
-        return out
+        return (x @ self.stacked).reshape(-1, self.m).take(modes.run_major, axis=0)
 
 
 class ModeQuadratic:
