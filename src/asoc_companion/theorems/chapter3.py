@@ -13,6 +13,8 @@ Each check draws one instance from its ``rng`` and decides it:
 The algorithms under test come from ``asoc.mjls``; this module only draws and compares.
 """
 
+import itertools
+
 import numpy as np
 import scipy.optimize
 
@@ -63,16 +65,17 @@ def _moment_growth(A, T, steps=600):
     no noise), over the last half of ``steps``: the mean-square decay without eigenvalues."""
     M, n, _ = A.shape
     X = np.broadcast_to(np.eye(n) / M, (M, n, n)).copy()
-    log_scale, half = 0.0, None
-    for k in range(steps):
-        X = predecessor_sum(T, A @ X @ _T(A))
-        s = np.trace(X, axis1=1, axis2=2).sum()
+    At = _T(A)
+    scales = []
+    for _ in range(steps):
+        X = predecessor_sum(T, A @ X @ At)
+        s = X.trace(axis1=1, axis2=2).sum()
         if not s > 0:
             return 0.0
-        X, log_scale = X / s, log_scale + np.log(s)
-        if k == steps // 2 - 1:
-            half = log_scale
-    return float(np.exp((log_scale - half) / (steps - steps // 2)))
+        X = X / s
+        scales.append(s)
+    log_scales = list(itertools.accumulate(np.log(scales).tolist(), initial=0.0))
+    return float(np.exp((log_scales[steps] - log_scales[steps // 2]) / (steps - steps // 2)))
 
 
 # ------------------------------------------------------------------ Sec. 3.3
