@@ -207,6 +207,11 @@ class _ScaledPair:
         self._units = units
         return math.sqrt(change_X.dot(change_X)), math.sqrt(change_P.dot(change_P))
 
+    def repeat(self, period, times):
+        """Extend the histories by ``times`` repetitions of their last ``period`` iterates."""
+        self._diagonals.extend(self._diagonals[-period:] * times)
+        self._logs.extend(self._logs[-period:] * times)
+
     def unscaled(self):
         """X^i and P^i."""
         return np.exp(self.log_scales) * self.stack
@@ -215,6 +220,30 @@ class _ScaledPair:
         """tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
         traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(axis=3)
         return traces[:, 0], traces[:, 1]
+
+
+class _Cycle:
+    """Detects an exact cycle of the iteration's state (Brent's method: the state is compared
+    with a checkpoint that moves to the current state after 1, 2, 4, ... steps).
+
+    A step of the scaled iteration is a function of the state (L, Xs, Ps, log scales) alone.
+    When the state after step ``it`` equals, bit for bit, the state after an earlier step,
+    the iteration repeats that period forever: it cannot converge (no step of the period
+    did), and ``max_iter`` is reached with the iterates, changes and histories of the
+    period. Non-stabilising gains can make the rounded iterates cycle in this way.
+    """
+
+    def __init__(self):
+        self.state, self.step, self.window = None, 0, 1
+
+    def period(self, it, L, pair):
+        """The period if the state after step ``it`` repeats the checkpoint's, else None."""
+        if self.state is not None and L.flat[0] == self.state[0].flat[0] and all(
+                a.tobytes() == b.tobytes() for a, b in zip((L, pair.stack, pair.log_scales), self.state)):
+            return it - self.step
+        if it - self.step == self.window:
+            self.state, self.step, self.window = (L, pair.stack, pair.log_scales), it, 2 * self.window
+        return None
 
 
 def _unit(S):
@@ -231,20 +260,24 @@ def _finite(L):
 MOMENTS = ("step", "exact")
 
 
-def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
+def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, skip_cycles=True):
     """The thesis's iteration (3.34)-(3.35) in scaled variables (see static_output_feedback).
 
-    With ``until_stabilizing`` it also stops at the first stabilising gain. Returns a dict
+    With ``until_stabilizing`` it also stops at the first stabilising gain. With
+    ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`_Cycle`) is skipped to
+    ``max_iter`` in whole periods: the same result as iterating through them. Returns a dict
     with L, the unscaled X, P, converged, iterations, stabilized and the trace histories.
     """
     M = sys.M
     pair = _ScaledPair(init, M, sys.nx)
+    cycle = _Cycle() if skip_cycles and method == "vec" else None
     stabilized = False
     status, change = "max_iterations", np.inf
     L = np.zeros((sys.nu, sys.ny))
     T = sys.T
     it = 0
-    for it in range(1, max_iter + 1):
+    while it < max_iter:
+        it += 1
         cX, cP = np.exp(-pair.log_scales)
         Xs, Ps = pair.stack
         EP = (T @ Ps.reshape(M, -1)).reshape(Ps.shape)
@@ -270,6 +303,12 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
         if until_stabilizing and spectral_radius(closed_loop_unchecked(sys, L), sys.T) < 1:
             stabilized = True
             break
+        period = cycle.period(it, L, pair) if cycle is not None else None
+        if period is not None:                          # skip whole periods: the same state after them
+            times = (max_iter - it) // period
+            pair.repeat(period, times)
+            it += period * times
+            cycle = None
     X, P = pair.unscaled()
     trace_X, trace_P = pair.traces()
     return dict(L=L, X=X, P=P, status=status, change=change, iterations=it, stabilized=stabilized,
