@@ -104,12 +104,14 @@ def grid_minimum(sys, gains):
     """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho computed
     only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m >= the
     minimum; a gain whose lower bound exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the
-    margin covers the rounding of the bound and of the eigenvalues) and is skipped."""
+    margin covers the rounding of the bound and of the eigenvalues) and is skipped (a seed is not
+    evaluated twice)."""
     bounds = radius_lower_bounds(sys, gains)
     seeds = np.argsort(bounds, kind="stable")[:BOUND_SEEDS]
-    estimate = scalar_gain_radii(sys, gains[seeds]).min()
-    candidates = np.flatnonzero(bounds <= BOUND_MARGIN * max(estimate, BOUND_FLOOR))
     radii = np.full(len(gains), np.inf)
+    radii[seeds] = scalar_gain_radii(sys, gains[seeds])
+    estimate = radii[seeds].min()
+    candidates = np.setdiff1d(np.flatnonzero(bounds <= BOUND_MARGIN * max(estimate, BOUND_FLOOR)), seeds)
     radii[candidates] = scalar_gain_radii(sys, gains[candidates])
     best = int(np.argmin(radii))
     return best, radii[best]
