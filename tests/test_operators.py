@@ -8,7 +8,8 @@ from asoc_companion.scaling import scaling_system
 from asoc_companion.timing import fitted_exponent
 from asoc.mjls.operators import (DENSE_MAX_RADIUS, DENSE_MAX_SOLVE, Verdict, costate_map,
                                  coupled_lyapunov_solver, kronecker_matrix, mean_square_stability,
-                                 radius_and_moments_unchecked, second_moment_map, solve_coupled_lyapunov,
+                                 radii_and_moments_unchecked, radius_and_moments_unchecked,
+                                 second_moment_map, solve_coupled_lyapunov,
                                  spectral_radius, switch_points)
 
 
@@ -93,6 +94,19 @@ def test_radius_and_moments_unchecked_is_the_checked_pair(scale, switch):
             assert np.array_equal(X, solve_coupled_lyapunov(A, s.T, W).X)
         else:
             assert X is None
+
+
+@pytest.mark.parametrize("switch", [None, 0])
+def test_radii_and_moments_unchecked_is_each_loop_alone(switch):
+    """The stacked fast path: each closed loop's rho and X as from the checked functions."""
+    s = scaling_system(np.random.default_rng(12), 3, 3)
+    loops = np.stack([s.A * np.sqrt(scale / spectral_radius(s.A, s.T)) for scale in (0.3, 1.2, 0.9, 2.0)])
+    W = stack(np.random.default_rng(13), 3, 3)
+    with switch_points(radius=switch, solve=switch):
+        rho, X = radii_and_moments_unchecked(loops, s.T, W)
+        for loop, r, x in zip(loops, rho, X):
+            assert r == spectral_radius(loop, s.T)
+            assert (x is None) if r >= 1 else np.array_equal(x, solve_coupled_lyapunov(loop, s.T, W).X)
 
 
 def test_verdict_is_undecided_within_rounding_of_one():

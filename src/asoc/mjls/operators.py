@@ -161,9 +161,14 @@ def kronecker_matrix(A, T):
     Cor. 3.2 (:func:`asoc.mjls.ms_operator`), diag(A_i (x) A_i) (T^T (x) I) (products BC and
     CB). Size (M n^2)^2: use only for small systems.
     """
-    M, n, _ = A.shape
-    kron = np.einsum("iab,icd->iacbd", A, A).reshape(M, n * n, n * n)
-    return np.einsum("ij,ixy->jxiy", T, kron).reshape(M * n * n, M * n * n)
+    return _kronecker_stack(A[None], T)[0]
+
+
+def _kronecker_stack(A, T):
+    """:func:`kronecker_matrix` of each closed loop of a stack A, shape (G, M, n, n) (every entry one product)."""
+    G, M, n, _ = A.shape
+    kron = np.einsum("giab,gicd->giacbd", A, A).reshape(G, M, n * n, n * n)
+    return np.einsum("ij,gixy->gjxiy", T, kron).reshape(G, M * n * n, M * n * n)
 
 
 def _linear_operator(A, T, adjoint=False, shift=False):
@@ -431,7 +436,8 @@ def radius_and_moments_unchecked(A, T, W):
     An internal fast path for loops over many closed loops (a search over a gain): the same
     numbers as ``spectral_radius(A, T)`` and ``solve_coupled_lyapunov(A, T, W).X`` on their dense
     paths, without checks and without the residual. Above :data:`DENSE_MAX_RADIUS` or
-    :data:`DENSE_MAX_SOLVE` it calls those two functions.
+    :data:`DENSE_MAX_SOLVE` it calls those two functions. :func:`radii_and_moments_unchecked`
+    does the same for a stack of closed loops.
 
     Parameters
     ----------
@@ -455,16 +461,32 @@ def radius_and_moments_unchecked(A, T, W):
     >>> round(rho, 6), np.round(X.ravel(), 6)
     (0.445, array([1.801802, 1.801802]))
     """
-    M, n, _ = A.shape
+    rho, X = radii_and_moments_unchecked(A[None], T, W)
+    return float(rho[0]), X[0]
+
+
+def radii_and_moments_unchecked(A, T, W):
+    """:func:`radius_and_moments_unchecked` for a stack of closed loops A, shape (G, M, n, n).
+
+    The Kronecker matrices of all G loops are formed at once and their eigenvalues computed
+    in one call (each matrix as alone). Returns rho, shape (G,), and a list of G solutions
+    (None where rho >= 1).
+
+    Examples
+    --------
+    >>> A = np.array([[[[0.5]], [[0.8]]], [[[1.5]], [[0.8]]]]); T = np.array([[0.5, 0.5], [0.5, 0.5]])
+    >>> rho, X = radii_and_moments_unchecked(A, T, np.ones((2, 1, 1)))
+    >>> rho.round(6), X[1] is None
+    (array([0.445, 1.445]), True)
+    """
+    G, M, n, _ = A.shape
     dim = M * n * n
     if dim > DENSE_MAX_RADIUS or dim > DENSE_MAX_SOLVE:
-        rho = spectral_radius(A, T)
-        return rho, (solve_coupled_lyapunov(A, T, W).X if rho < 1 else None)
-    kron = kronecker_matrix(A, T)
-    rho = float(np.max(np.abs(np.linalg.eigvals(kron))))
-    if not rho < 1:
-        return rho, None
-    return rho, _sym(_Dense(A, T, kron).solve(W))
+        rho = np.array([spectral_radius(loop, T) for loop in A])
+        return rho, [solve_coupled_lyapunov(loop, T, W).X if r < 1 else None for loop, r in zip(A, rho)]
+    kron = _kronecker_stack(A, T)
+    rho = np.max(np.abs(np.linalg.eigvals(kron)), axis=1)
+    return rho, [_sym(_Dense(loop, T, K).solve(W)) if r < 1 else None for loop, K, r in zip(A, kron, rho)]
 
 
 def coupled_lyapunov_solver(A, T, method="auto", tol=SOLVE_TOLERANCE):

@@ -27,7 +27,8 @@ from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 from asoc.mjls.lmi import performance_output
 from asoc.mjls.moments import h2_cost_unchecked
-from asoc.mjls.operators import closed_loop_unchecked, kronecker_matrix, radius_and_moments_unchecked
+from asoc.mjls.operators import (closed_loop_unchecked, kronecker_matrix, radii_and_moments_unchecked,
+                                 radius_and_moments_unchecked)
 
 from .core import Outcome, Statement
 from .instances import (Z_SCORE, apply_modes, best_scalar_gain, draw_system, initial_modes, min_eig,
@@ -393,7 +394,13 @@ def check_3_17(rng):
         _, X = radius_and_moments_unchecked(closed_loop_unchecked(sys, L), sys.T, noise)
         return np.inf if X is None else h2_cost_unchecked(sys, L, X)
 
-    costs = np.array([cost(t) if r < 1 else np.inf for t, r in zip(s, radii)])
+    costs = np.full(len(s), np.inf)                         # cost(t) at the grid points with rho < 1, at once
+    grid = np.flatnonzero(radii < 1)
+    gains = np.tan(s[grid])
+    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop_unchecked of each
+    for index, gain, X in zip(grid, gains, radii_and_moments_unchecked(loops, sys.T, noise)[1]):
+        if X is not None:
+            costs[index] = h2_cost_unchecked(sys, np.array([[gain]]), X)
     best = int(np.argmin(costs))
     res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)]),
                                          method="bounded", options={"xatol": 1e-12})
