@@ -20,6 +20,8 @@ Chapter 3 algorithms need of them, in one place:
 - :func:`solve_coupled_lyapunov`: X = L(X) + W (stationary moments, Prop. 3.7/3.23) or
   P = L*(P) + Q (multipliers, costates), by GMRES on the operator or a dense LU, with the
   residual reported;
+- :func:`radius_and_moments_unchecked`, :func:`radii_and_moments_unchecked`: rho and the
+  moments from one Kronecker matrix per closed loop, without checks, for searches over a gain;
 - :func:`closed_loop`, :func:`augmented_closed_loop`, :func:`noise_covariances`: the
   closed-loop stacks of (3.10) and (3.39)-(3.40).
 

@@ -379,7 +379,9 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
         Stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol
         (``moments="exact"``: the relative change of L).
     max_iter : int
-        Iteration limit; ``converged=False`` and a warning when reached.
+        Iteration limit; ``converged=False`` and a warning when reached. When the rounded
+        iterates repeat exactly (a cycle, seen with non-stabilising gains), the remaining whole
+        periods are skipped with the same result as iterating through them.
     init : float
         Scale of the initial X^i, P^i; the thesis recommends 1e-4 I (Sec. 3.5.3).
     method : {"vec", "sdp"}
