@@ -116,6 +116,34 @@ def test_alg31_gain_is_a_local_minimum_of_the_h2_cost():
         assert cost(res.L + d) > res.cost
 
 
+def _cycling_system():
+    """A one-mode SISO plant on which Alg. 3.1's rounded iterates enter an exact cycle (period 4)
+    that never converges (the theorems study's instance 724 of Thm. 3.19)."""
+    return MJLS(A=[[[-0.4010618596277141, 0.15882195728302725], [-0.04761625360329824, 0.9673182700358467]]],
+                B=[[[0.8873383401418364], [-2.2116975975090343]]], C=[[[0.48262978539405166, -0.1189634013936829]]],
+                H=[[[-0.012479499244516093, 0.02867173577466553], [-0.16041686665335952, -0.06703692602438936]]],
+                Q=[[[3.468697134485018, -1.7170386980821353], [-1.7170386980821353, 2.285042014736245]]],
+                R=[[[1.2638465871897315]]], T=[[1.0]])
+
+
+@pytest.mark.parametrize("max_iter", [1003, 20000])
+def test_alg31_skips_an_exact_cycle_with_the_same_result(monkeypatch, max_iter):
+    from asoc.mjls import static
+
+    sys = _cycling_system()
+    rec = static._Recursion(sys)
+    plain = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False, skip_cycles=False)
+    repeats = []
+    repeat = static._ScaledPair.repeat
+    monkeypatch.setattr(static._ScaledPair, "repeat",
+                        lambda pair, period, times: (repeats.append(period), repeat(pair, period, times)))
+    skipped = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False)
+    assert repeats == [4] and plain["status"] == "max_iterations"
+    assert plain.keys() == skipped.keys()
+    for key, value in plain.items():
+        assert np.array_equal(value, skipped[key]), key
+
+
 def test_alg31_sdp_solve_of_331_agrees_with_vec():
     sys = sec354_system(1, "state")
     a, b = static_output_feedback(sys), static_output_feedback(sys, method="sdp", max_iter=2000)

@@ -8,7 +8,9 @@ from asoc_companion.scaling import scaling_system
 from asoc_companion.timing import fitted_exponent
 from asoc.mjls.operators import (DENSE_MAX_RADIUS, DENSE_MAX_SOLVE, Verdict, costate_map,
                                  coupled_lyapunov_solver, kronecker_matrix, mean_square_stability,
-                                 second_moment_map, solve_coupled_lyapunov, spectral_radius)
+                                 radii_and_moments_unchecked, radius_and_moments_unchecked,
+                                 second_moment_map, solve_coupled_lyapunov,
+                                 spectral_radius, switch_points)
 
 
 def stack(rng, M, n):
@@ -60,6 +62,51 @@ def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
     apply = costate_map if adjoint else second_moment_map
     np.testing.assert_allclose(sol.X - apply(A, s.T, sol.X), W, atol=1e-9 * np.abs(W).max())
     assert np.all(np.linalg.eigvalsh(sol.X) > 0)                      # stable: the solution is > 0
+
+
+@pytest.mark.parametrize("adjoint", [False, True])
+def test_dense_solve_is_scipy_lu_bit_for_bit(adjoint):
+    """The dense path calls LAPACK getrf/getrs directly: the same numbers as scipy.linalg.lu_factor/lu_solve."""
+    import scipy.linalg
+
+    s = scaling_system(np.random.default_rng(8), 3, 3)
+    W = stack(np.random.default_rng(9), 3, 3)
+    lu = scipy.linalg.lu_factor(np.eye(27) - kronecker_matrix(s.A, s.T), check_finite=False)
+    X = scipy.linalg.lu_solve(lu, W.ravel(), trans=1 if adjoint else 0).reshape(W.shape)
+    sol = solve_coupled_lyapunov(s.A, s.T, W, adjoint=adjoint, method="dense")
+    assert np.array_equal(sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)))
+    with pytest.raises(ValueError, match="infs or NaNs"):
+        solve_coupled_lyapunov(s.A, s.T, np.full_like(W, np.nan), method="dense")
+
+
+@pytest.mark.parametrize("scale", [0.5, 0.99, 1.5])
+@pytest.mark.parametrize("switch", [None, 0])
+def test_radius_and_moments_unchecked_is_the_checked_pair(scale, switch):
+    """One Kronecker matrix for rho and X: the same numbers as spectral_radius and solve_coupled_lyapunov
+    (dense sizes; with the switch points at 0, through those functions' matrix-free paths)."""
+    s = scaling_system(np.random.default_rng(10), 3, 2)
+    A = s.A * np.sqrt(scale / spectral_radius(s.A, s.T))
+    W = stack(np.random.default_rng(11), 2, 3)
+    with switch_points(radius=switch, solve=switch):
+        rho, X = radius_and_moments_unchecked(A, s.T, W)
+        assert rho == spectral_radius(A, s.T)
+        if scale < 1:
+            assert np.array_equal(X, solve_coupled_lyapunov(A, s.T, W).X)
+        else:
+            assert X is None
+
+
+@pytest.mark.parametrize("switch", [None, 0])
+def test_radii_and_moments_unchecked_is_each_loop_alone(switch):
+    """The stacked fast path: each closed loop's rho and X as from the checked functions."""
+    s = scaling_system(np.random.default_rng(12), 3, 3)
+    loops = np.stack([s.A * np.sqrt(scale / spectral_radius(s.A, s.T)) for scale in (0.3, 1.2, 0.9, 2.0)])
+    W = stack(np.random.default_rng(13), 3, 3)
+    with switch_points(radius=switch, solve=switch):
+        rho, X = radii_and_moments_unchecked(loops, s.T, W)
+        for loop, r, x in zip(loops, rho, X):
+            assert r == spectral_radius(loop, s.T)
+            assert (x is None) if r >= 1 else np.array_equal(x, solve_coupled_lyapunov(loop, s.T, W).X)
 
 
 def test_verdict_is_undecided_within_rounding_of_one():

@@ -33,13 +33,16 @@ def test_instance_seed_is_the_spawned_child_so_one_instance_reruns_alone():
 
 def test_grid_minimum_skips_only_gains_that_cannot_be_the_smallest():
     from asoc_companion.theorems.instances import (draw_system, grid_minimum, radius_lower_bounds,
-                                                   scalar_gain_radii)
+                                                   scalar_gain_radii, walk_lower_bounds)
     rng = np.random.default_rng(3)
     gains = np.tan(np.linspace(-1.5, 1.5, 301))
     for _ in range(20):
         sys = draw_system(rng, siso=True)
         radii = scalar_gain_radii(sys, gains)
         assert np.all(radius_lower_bounds(sys, gains) <= radii * (1 + 1e-9))
+        assert np.all(walk_lower_bounds(sys, gains) <= radii * (1 + 1e-9))
+        if sys.M == 1:                                                  # one mode: rho = rho(Acl)^2
+            np.testing.assert_allclose(walk_lower_bounds(sys, gains), radii, rtol=1e-9)
         best, rho = grid_minimum(sys, gains)
         assert best == int(np.argmin(radii)) and rho == radii[best]
 

@@ -112,9 +112,14 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
     X = np.empty((horizon + 1,) + np.shape(X0))
     mu = np.empty((horizon + 1, len(mu0)))
     X[0], mu[0] = X0, mu0
-    for k in range(horizon):         # (3.29) on the validated arguments (no per-step checks)
-        X[k + 1] = second_moment_map(Acl, T, X[k]) + predecessor_sum(T, mu[k][:, None, None] * HHt)
+    for k in range(horizon):
         mu[k + 1] = mu[k] @ T
+    noise = np.einsum("ji,kj...->ki...", T, mu[:-1, :, None, None] * HHt)   # predecessor_sum for every k
+    Aclt, Tt, M = np.swapaxes(Acl, 1, 2), T.T, len(T)
+    for k in range(horizon):         # (3.29) on the validated arguments: second_moment_map written out
+        Y = Acl @ X[k] @ Aclt
+        np.matmul(Tt, Y.reshape(M, -1), out=X[k + 1].reshape(M, -1))
+        X[k + 1] += noise[k]
     return X, mu
 
 

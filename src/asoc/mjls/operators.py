@@ -20,6 +20,8 @@ Chapter 3 algorithms need of them, in one place:
 - :func:`solve_coupled_lyapunov`: X = L(X) + W (stationary moments, Prop. 3.7/3.23) or
   P = L*(P) + Q (multipliers, costates), by GMRES on the operator or a dense LU, with the
   residual reported;
+- :func:`radius_and_moments_unchecked`, :func:`radii_and_moments_unchecked`: rho and the
+  moments from one Kronecker matrix per closed loop, without checks, for searches over a gain;
 - :func:`closed_loop`, :func:`augmented_closed_loop`, :func:`noise_covariances`: the
   closed-loop stacks of (3.10) and (3.39)-(3.40).
 
@@ -32,6 +34,7 @@ ones. The iterative methods therefore work on symmetrised stacks.
 import contextlib
 import enum
 import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +68,8 @@ RHO_TOLERANCE = 1e-9
 SOLVE_TOLERANCE = 1e-12
 
 _THREADS = ThreadpoolController()
+#: LAPACK's LU factorisation and solve, as scipy.linalg.lu_factor and lu_solve call them.
+_GETRF, _GETRS = scipy.linalg.get_lapack_funcs(("getrf", "getrs"), dtype=np.float64)
 
 
 def single_threaded():
@@ -158,9 +163,14 @@ def kronecker_matrix(A, T):
     Cor. 3.2 (:func:`asoc.mjls.ms_operator`), diag(A_i (x) A_i) (T^T (x) I) (products BC and
     CB). Size (M n^2)^2: use only for small systems.
     """
-    M, n, _ = A.shape
-    kron = np.einsum("iab,icd->iacbd", A, A).reshape(M, n * n, n * n)
-    return np.einsum("ij,ixy->jxiy", T, kron).reshape(M * n * n, M * n * n)
+    return _kronecker_stack(A[None], T)[0]
+
+
+def _kronecker_stack(A, T):
+    """:func:`kronecker_matrix` of each closed loop of a stack A, shape (G, M, n, n) (every entry one product)."""
+    G, M, n, _ = A.shape
+    kron = np.einsum("giab,gicd->giacbd", A, A).reshape(G, M, n * n, n * n)
+    return np.einsum("ij,gixy->gjxiy", T, kron).reshape(G, M * n * n, M * n * n)
 
 
 def _linear_operator(A, T, adjoint=False, shift=False):
@@ -350,14 +360,27 @@ class LyapunovSolution:
 
 
 class _Dense:
-    """An LU factorisation of I - kronecker_matrix, reused for moments and costates."""
+    """An LU factorisation of I - kronecker_matrix, reused for moments and costates.
 
-    def __init__(self, A, T):
+    LAPACK getrf and getrs called directly, as :func:`scipy.linalg.lu_factor` (unchecked) and
+    :func:`scipy.linalg.lu_solve` (right-hand side checked) call them, without their wrappers'
+    per-call cost; ``kron`` passes a Kronecker matrix already formed.
+    """
+
+    def __init__(self, A, T, kron=None):
         M, n, _ = A.shape
-        self.lu = scipy.linalg.lu_factor(np.eye(M * n * n) - kronecker_matrix(A, T), check_finite=False)
+        kron = kronecker_matrix(A, T) if kron is None else kron
+        self.lu, self.piv, info = _GETRF(np.eye(M * n * n) - kron)
+        if info > 0:
+            warnings.warn(f"Diagonal number {info} is exactly zero. Singular matrix.", scipy.linalg.LinAlgWarning,
+                          stacklevel=3)
 
     def solve(self, W, adjoint=False):
-        return scipy.linalg.lu_solve(self.lu, W.ravel(), trans=1 if adjoint else 0).reshape(W.shape)
+        rhs = W.ravel()
+        if not np.isfinite(rhs).all():
+            raise ValueError("array must not contain infs or NaNs")
+        solution, _ = _GETRS(self.lu, self.piv, rhs, trans=1 if adjoint else 0)
+        return solution.reshape(W.shape)
 
 
 def residual(A, T, X, W, adjoint=False):
@@ -407,6 +430,65 @@ def solve_coupled_lyapunov(A, T, W, adjoint=False, method="auto", tol=SOLVE_TOLE
     (array([1.801802, 1.801802]), True)
     """
     return coupled_lyapunov_solver(A, T, method, tol)(W, adjoint)
+
+
+def radius_and_moments_unchecked(A, T, W):
+    """rho of Cor. 3.2 and, when rho < 1, the solution X of X = L(X) + W, from one Kronecker matrix.
+
+    An internal fast path for loops over many closed loops (a search over a gain): the same
+    numbers as ``spectral_radius(A, T)`` and ``solve_coupled_lyapunov(A, T, W).X`` on their dense
+    paths, without checks and without the residual. Above :data:`DENSE_MAX_RADIUS` or
+    :data:`DENSE_MAX_SOLVE` it calls those two functions. :func:`radii_and_moments_unchecked`
+    does the same for a stack of closed loops.
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (M, n, n)
+        Closed-loop matrices (not validated).
+    T : numpy.ndarray, shape (M, M)
+        Transition matrix (not validated).
+    W : numpy.ndarray, shape (M, n, n)
+        Finite symmetric right-hand side, e.g. sum_i p_ij mu_i H_i H_i^T.
+
+    Returns
+    -------
+    rho : float
+    X : numpy.ndarray, shape (M, n, n), or None
+        The symmetrised solution; None when rho >= 1 (or rho is NaN).
+
+    Examples
+    --------
+    >>> A = np.array([[[0.5]], [[0.8]]]); T = np.array([[0.5, 0.5], [0.5, 0.5]])
+    >>> rho, X = radius_and_moments_unchecked(A, T, np.ones((2, 1, 1)))
+    >>> round(rho, 6), np.round(X.ravel(), 6)
+    (0.445, array([1.801802, 1.801802]))
+    """
+    rho, X = radii_and_moments_unchecked(A[None], T, W)
+    return float(rho[0]), X[0]
+
+
+def radii_and_moments_unchecked(A, T, W):
+    """:func:`radius_and_moments_unchecked` for a stack of closed loops A, shape (G, M, n, n).
+
+    The Kronecker matrices of all G loops are formed at once and their eigenvalues computed
+    in one call (each matrix as alone). Returns rho, shape (G,), and a list of G solutions
+    (None where rho >= 1).
+
+    Examples
+    --------
+    >>> A = np.array([[[[0.5]], [[0.8]]], [[[1.5]], [[0.8]]]]); T = np.array([[0.5, 0.5], [0.5, 0.5]])
+    >>> rho, X = radii_and_moments_unchecked(A, T, np.ones((2, 1, 1)))
+    >>> rho.round(6), X[1] is None
+    (array([0.445, 1.445]), True)
+    """
+    G, M, n, _ = A.shape
+    dim = M * n * n
+    if dim > DENSE_MAX_RADIUS or dim > DENSE_MAX_SOLVE:
+        rho = np.array([spectral_radius(loop, T) for loop in A])
+        return rho, [solve_coupled_lyapunov(loop, T, W).X if r < 1 else None for loop, r in zip(A, rho)]
+    kron = _kronecker_stack(A, T)
+    rho = np.max(np.abs(np.linalg.eigvals(kron)), axis=1)
+    return rho, [_sym(_Dense(loop, T, K).solve(W)) if r < 1 else None for loop, K, r in zip(A, kron, rho)]
 
 
 def coupled_lyapunov_solver(A, T, method="auto", tol=SOLVE_TOLERANCE):

@@ -1,5 +1,6 @@
 """Static output feedback u_k = L y_k without mode observation (Sec. 3.5.3, Alg. 3.1)."""
 
+import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -137,6 +138,7 @@ class _Recursion:
         self.Q, self.R, self.T, self.Tt = sys.Q, sys.R, sys.T, np.ascontiguousarray(sys.T.T)
         self.muHHt = sys.mu_inf[:, None, None] * (sys.H @ swap(sys.H))
         self.nu, self.ny = sys.nu, sys.ny
+        self.scalar_gain = sys.nu == sys.ny == 1
 
     def gain(self, Xs, EP, cP):
         """(3.34) with R scaled by cP = 1 / s_P."""
@@ -145,46 +147,140 @@ class _Recursion:
         XCt = Xs @ self.Ct
         W = self.C @ XCt
         N = (BtEP @ self.A @ XCt).sum(axis=0)
-        if self.nu == self.ny == 1:
+        if self.scalar_gain:
             return -N / (W * S).sum()
         lhs = np.einsum("iab,icd->acbd", W, S).reshape(self.ny * self.nu, -1)
         return -np.linalg.solve(lhs, N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
 
-    def moments(self, L, Xs, Ps, EP, cX, cP):
-        """(3.35): next X (constant term scaled by cX = 1 / s_X) and P (by cP)."""
-        BL = self.B @ L
-        Acl = self.A + BL @ self.C
-        Aclt = np.swapaxes(Acl, 1, 2)
+    def moments(self, L, Xs, EP, cX, cP, out):
+        """(3.35) into out[0] (next X, constant term scaled by cX = 1 / s_X) and out[1] (next P, by cP).
+
+        With one input and one output, the products B L C and C^T L^T R L C contract over
+        dimensions of size 1: each entry is one product, formed by broadcasting (the same
+        numbers as the matrix products, in fewer operations).
+        """
+        if self.scalar_gain:
+            gain = L[0, 0]
+            Acl = self.A + (self.B * gain) * self.C
+            LC = gain * self.C
+            LtRL = (LC.swapaxes(1, 2) * self.R) * LC
+        else:
+            Acl = self.A + (self.B @ L) @ self.C
+            LC = L @ self.C
+            LtRL = LC.swapaxes(1, 2) @ self.R @ LC
+        Aclt = Acl.swapaxes(1, 2)
         Y = Acl @ Xs @ Aclt + cX * self.muHHt
-        X_new = (self.Tt @ Y.reshape(len(Y), -1)).reshape(Y.shape)
-        LC = L @ self.C
-        P_new = Aclt @ EP @ Acl + cP * (self.Q + np.swapaxes(LC, 1, 2) @ self.R @ LC)
-        return X_new, P_new
+        np.matmul(self.Tt, Y.reshape(len(Y), -1), out=out[0].reshape(len(Y), -1))
+        np.add(Aclt @ EP @ Acl, cP * (self.Q + LtRL), out=out[1])
+
+
+class _ScaledPair:
+    """The iterates of Alg. 3.1 in scaled variables, X^i = s_X Xs and P^i = s_P Ps, as one stack
+    [Xs, Ps] of shape (2, M, nx, nx).
+
+    Keeps the log scales, the directions Xs / ||Xs||_F and Ps / ||Ps||_F of Step 4's test and
+    the diagonals of every iterate (the trace histories), so that each new pair is scaled,
+    checked and normalised once; ``next`` receives the unscaled pair of (3.35).
+    """
+
+    def __init__(self, init, M, n):
+        self.stack = np.broadcast_to(init * np.eye(n), (2, M, n, n)).copy()
+        self.log_scales = np.zeros((2, 1, 1, 1))
+        self.next = np.empty_like(self.stack)
+        self._magnitudes = np.empty_like(self.stack)
+        self._units = _unit(self.stack[0]), _unit(self.stack[1])
+        self._diagonals = [self.stack.diagonal(0, 2, 3).copy()]
+        self._logs = [self.log_scales]
+
+    def largest_entries(self):
+        """max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a NaN."""
+        return np.abs(self.next, out=self._magnitudes).max(axis=(1, 2, 3), keepdims=True)
+
+    def accept(self, scales):
+        """Make ``next / scales`` the current pair; return the changes of the directions of X and P."""
+        self.stack = self.next / scales
+        self.log_scales = self.log_scales + np.log(scales)
+        self._diagonals.append(self.stack.diagonal(0, 2, 3).copy())
+        self._logs.append(self.log_scales)
+        units = _unit(self.stack[0]), _unit(self.stack[1])
+        change_X, change_P = units[0] - self._units[0], units[1] - self._units[1]
+        self._units = units
+        return math.sqrt(change_X.dot(change_X)), math.sqrt(change_P.dot(change_P))
+
+    def repeat(self, period, times):
+        """Extend the histories by ``times`` repetitions of their last ``period`` iterates."""
+        self._diagonals.extend(self._diagonals[-period:] * times)
+        self._logs.extend(self._logs[-period:] * times)
+
+    def unscaled(self):
+        """X^i and P^i."""
+        return np.exp(self.log_scales) * self.stack
+
+    def traces(self):
+        """tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
+        traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(axis=3)
+        return traces[:, 0], traces[:, 1]
+
+
+class _Cycle:
+    """Detects an exact cycle of the iteration's state (Brent's method: the state is compared
+    with a checkpoint that moves to the current state after 1, 2, 4, ... steps).
+
+    A step of the scaled iteration is a function of the state (L, Xs, Ps, log scales) alone.
+    When the state after step ``it`` equals, bit for bit, the state after an earlier step,
+    the iteration repeats that period forever: it cannot converge (no step of the period
+    did), and ``max_iter`` is reached with the iterates, changes and histories of the
+    period. Non-stabilising gains can make the rounded iterates cycle in this way.
+    """
+
+    def __init__(self):
+        self.state, self.step, self.window = None, 0, 1
+
+    def period(self, it, L, pair):
+        """The period if the state after step ``it`` repeats the checkpoint's, else None."""
+        if self.state is not None and L.flat[0] == self.state[0].flat[0] and all(
+                a.tobytes() == b.tobytes() for a, b in zip((L, pair.stack, pair.log_scales), self.state)):
+            return it - self.step
+        if it - self.step == self.window:
+            self.state, self.step, self.window = (L, pair.stack, pair.log_scales), it, 2 * self.window
+        return None
+
+
+def _unit(S):
+    """S / ||S||_F as a flat vector."""
+    flat = S.ravel()
+    return flat / math.sqrt(flat.dot(flat))
+
+
+def _finite(L):
+    """Whether every entry of the gain is finite."""
+    return math.isfinite(L[0, 0]) if L.size == 1 else bool(np.isfinite(L).all())
 
 
 MOMENTS = ("step", "exact")
 
 
-def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
+def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, skip_cycles=True):
     """The thesis's iteration (3.34)-(3.35) in scaled variables (see static_output_feedback).
 
-    With ``until_stabilizing`` it also stops at the first stabilising gain. Returns a dict
+    With ``until_stabilizing`` it also stops at the first stabilising gain. With
+    ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`_Cycle`) is skipped to
+    ``max_iter`` in whole periods: the same result as iterating through them. Returns a dict
     with L, the unscaled X, P, converged, iterations, stabilized and the trace histories.
     """
-    M, n = sys.M, sys.nx
-    Xs = np.broadcast_to(init * np.eye(n), (M, n, n)).copy()
-    Ps = Xs.copy()
-    log_sX = log_sP = 0.0
-    diag = np.arange(n)
-    traces_X, traces_P = [Xs[:, diag, diag].sum(1)], [Ps[:, diag, diag].sum(1)]
-    logs = [(0.0, 0.0)]
+    M = sys.M
+    pair = _ScaledPair(init, M, sys.nx)
+    cycle = _Cycle() if skip_cycles and method == "vec" else None
     stabilized = False
     status, change = "max_iterations", np.inf
     L = np.zeros((sys.nu, sys.ny))
+    T = sys.T
     it = 0
-    for it in range(1, max_iter + 1):
-        cX, cP = np.exp(-log_sX), np.exp(-log_sP)
-        EP = (sys.T @ Ps.reshape(M, -1)).reshape(Ps.shape)
+    while it < max_iter:
+        it += 1
+        cX, cP = np.exp(-pair.log_scales)
+        Xs, Ps = pair.stack
+        EP = (T @ Ps.reshape(M, -1)).reshape(Ps.shape)
         try:
             if method == "vec":
                 L_new = rec.gain(Xs, EP, cP)
@@ -193,28 +289,30 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing):
         except np.linalg.LinAlgError:
             status = "linalg_error"
             break
-        X_new, P_new = rec.moments(L_new, Xs, Ps, EP, cX, cP)
-        sX, sP = abs(X_new).max(), abs(P_new).max()
-        if not (np.isfinite(sX) and np.isfinite(sP) and np.all(np.isfinite(L_new))):
+        rec.moments(L_new, Xs, EP, cX, cP, out=pair.next)
+        scales = pair.largest_entries()
+        sX, sP = scales.ravel().tolist()
+        if not (math.isfinite(sX) and math.isfinite(sP) and _finite(L_new)):
             status = "diverged"
             break
-        X_new, P_new = X_new / sX, P_new / sP
-        change = max(_relative_change(L, L_new), _relative_change(Xs, X_new), _relative_change(Ps, P_new))
-        Xs, Ps, L = X_new, P_new, L_new
-        log_sX, log_sP = log_sX + np.log(sX), log_sP + np.log(sP)
-        traces_X.append(Xs[:, diag, diag].sum(1))
-        traces_P.append(Ps[:, diag, diag].sum(1))
-        logs.append((log_sX, log_sP))
+        change = max(_relative_change(L, L_new), *pair.accept(scales))
+        L = L_new
         if it > 1 and change < tol:
             status = "converged"
             break
         if until_stabilizing and spectral_radius(closed_loop_unchecked(sys, L), sys.T) < 1:
             stabilized = True
             break
-    logs = np.array(logs)
-    return dict(L=L, X=np.exp(log_sX) * Xs, P=np.exp(log_sP) * Ps, status=status, change=change,
-                iterations=it, stabilized=stabilized, trace_X=np.exp(logs[:, :1]) * np.array(traces_X),
-                trace_P=np.exp(logs[:, 1:]) * np.array(traces_P))
+        period = cycle.period(it, L, pair) if cycle is not None else None
+        if period is not None:                          # skip whole periods: the same state after them
+            times = (max_iter - it) // period
+            pair.repeat(period, times)
+            it += period * times
+            cycle = None
+    X, P = pair.unscaled()
+    trace_X, trace_P = pair.traces()
+    return dict(L=L, X=X, P=P, status=status, change=change, iterations=it, stabilized=stabilized,
+                trace_X=trace_X, trace_P=trace_P)
 
 
 def _exact_iteration(sys, rec, L, tol, max_iter, method):
@@ -281,7 +379,9 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
         Stop when the relative changes of L, Xs^i and Ps^i (Frobenius) are below tol
         (``moments="exact"``: the relative change of L).
     max_iter : int
-        Iteration limit; ``converged=False`` and a warning when reached.
+        Iteration limit; ``converged=False`` and a warning when reached. When the rounded
+        iterates repeat exactly (a cycle, seen with non-stabilising gains), the remaining whole
+        periods are skipped with the same result as iterating through them.
     init : float
         Scale of the initial X^i, P^i; the thesis recommends 1e-4 I (Sec. 3.5.3).
     method : {"vec", "sdp"}
@@ -371,11 +471,8 @@ def _message(run, tol):
 
 
 def _relative_change(old, new):
-    """||new/||new|| - old/||old|| ||_F over all modes: change of the iterate's direction
-    (for the gain L, whose scale matters, ||new - old|| / max(||new||, GAIN_FLOOR), so that a
-    zero gain converges)."""
+    """||new - old||_F / max(||new||_F, GAIN_FLOOR): the relative change of the gain L (Step 4 of
+    Alg. 3.1; the floor lets a zero gain converge)."""
     a, b = old.ravel(), new.ravel()
-    if old.ndim == 2:
-        return float(np.sqrt((b - a) @ (b - a)) / max(np.sqrt(b @ b), GAIN_FLOOR))
-    d = b / np.sqrt(b @ b) - a / np.sqrt(a @ a)
-    return float(np.sqrt(d @ d))
+    difference = b - a
+    return math.sqrt(difference.dot(difference)) / max(math.sqrt(b.dot(b)), GAIN_FLOOR)

@@ -13,6 +13,8 @@ Each check draws one instance from its ``rng`` and decides it:
 The algorithms under test come from ``asoc.mjls``; this module only draws and compares.
 """
 
+import itertools
+
 import numpy as np
 import scipy.optimize
 
@@ -25,7 +27,8 @@ from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 from asoc.mjls.lmi import performance_output
 from asoc.mjls.moments import h2_cost_unchecked
-from asoc.mjls.operators import closed_loop_unchecked, kronecker_matrix, solve_coupled_lyapunov, spectral_radius
+from asoc.mjls.operators import (closed_loop_unchecked, kronecker_matrix, radii_and_moments_unchecked,
+                                 radius_and_moments_unchecked)
 
 from .core import Outcome, Statement
 from .instances import (Z_SCORE, ModeChain, ModeOperator, ModeQuadratic, RunModes, best_scalar_gain, draw_system,
@@ -64,16 +67,17 @@ def _moment_growth(A, T, steps=600):
     no noise), over the last half of ``steps``: the mean-square decay without eigenvalues."""
     M, n, _ = A.shape
     X = np.broadcast_to(np.eye(n) / M, (M, n, n)).copy()
-    log_scale, half = 0.0, None
-    for k in range(steps):
-        X = predecessor_sum(T, A @ X @ _T(A))
-        s = np.trace(X, axis1=1, axis2=2).sum()
+    At = _T(A)
+    scales = []
+    for _ in range(steps):
+        X = predecessor_sum(T, A @ X @ At)
+        s = X.trace(axis1=1, axis2=2).sum()
         if not s > 0:
             return 0.0
-        X, log_scale = X / s, log_scale + np.log(s)
-        if k == steps // 2 - 1:
-            half = log_scale
-    return float(np.exp((log_scale - half) / (steps - steps // 2)))
+        X = X / s
+        scales.append(s)
+    log_scales = list(itertools.accumulate(np.log(scales).tolist(), initial=0.0))
+    return float(np.exp((log_scales[steps] - log_scales[steps // 2]) / (steps - steps // 2)))
 
 
 # ------------------------------------------------------------------ Sec. 3.3
@@ -380,14 +384,18 @@ def check_3_17(rng):
 
     def cost(t):
         """The H2 cost of L = tan(t) (inf when not stabilising), on the system validated once: the
-        library's unchecked paths of ms_spectral_radius, steady_state_second_moment and h2_cost."""
+        library's unchecked paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost."""
         L = np.array([[np.tan(t)]])
-        Acl = closed_loop_unchecked(sys, L)
-        if not spectral_radius(Acl, sys.T) < 1:
-            return np.inf
-        return h2_cost_unchecked(sys, L, solve_coupled_lyapunov(Acl, sys.T, noise).X)
+        _, X = radius_and_moments_unchecked(closed_loop_unchecked(sys, L), sys.T, noise)
+        return np.inf if X is None else h2_cost_unchecked(sys, L, X)
 
-    costs = np.array([cost(t) if r < 1 else np.inf for t, r in zip(s, radii)])
+    costs = np.full(len(s), np.inf)                         # cost(t) at the grid points with rho < 1, at once
+    grid = np.flatnonzero(radii < 1)
+    gains = np.tan(s[grid])
+    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop_unchecked of each
+    for index, gain, X in zip(grid, gains, radii_and_moments_unchecked(loops, sys.T, noise)[1]):
+        if X is not None:
+            costs[index] = h2_cost_unchecked(sys, np.array([[gain]]), X)
     best = int(np.argmin(costs))
     res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)]),
                                          method="bounded", options={"xatol": 1e-12})

@@ -101,16 +101,38 @@ def radius_lower_bounds(sys, gains):
     return np.max([(_power_trace(sys.T, Acl, k) / size) ** (1 / k) for k in range(1, sys.M + 1)], axis=0)
 
 
+def walk_lower_bounds(sys, gains):
+    """Lower bounds of :func:`scalar_gain_radii` from single closed walks of the mode chain. For a closed
+    walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ... Acl_{i_0},
+    rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive maps, the map
+    X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2. Walks of length 1
+    (i -> i) and 2 (i -> j -> i); exact for one mode (rho = rho(Acl)^2); the largest bound per gain."""
+    Acl = scalar_closed_loops(sys, gains)
+    T, M = sys.T, sys.M
+    walks = ([(i,) for i in range(M) if T[i, i] > 0]
+             + [(i, j) for i in range(M) for j in range(i + 1, M) if T[i, j] * T[j, i] > 0])
+    bounds = np.zeros(len(gains))
+    for walk in walks:
+        product = Acl[:, walk[0]] if len(walk) == 1 else Acl[:, walk[1]] @ Acl[:, walk[0]]
+        probability = np.prod([T[walk[t], walk[(t + 1) % len(walk)]] for t in range(len(walk))])
+        rho = np.max(np.abs(np.linalg.eigvals(product)), axis=1)
+        bounds = np.maximum(bounds, (probability * rho ** 2) ** (1 / len(walk)))
+    return bounds
+
+
 def grid_minimum(sys, gains):
     """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho computed
     only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m >= the
-    minimum; a gain whose lower bound exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the
-    margin covers the rounding of the bound and of the eigenvalues) and is skipped."""
+    minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then :func:`walk_lower_bounds`)
+    exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin covers the rounding of the
+    bounds and of the eigenvalues) and is skipped (a seed is not evaluated twice)."""
     bounds = radius_lower_bounds(sys, gains)
     seeds = np.argsort(bounds, kind="stable")[:BOUND_SEEDS]
-    estimate = scalar_gain_radii(sys, gains[seeds]).min()
-    candidates = np.flatnonzero(bounds <= BOUND_MARGIN * max(estimate, BOUND_FLOOR))
     radii = np.full(len(gains), np.inf)
+    radii[seeds] = scalar_gain_radii(sys, gains[seeds])
+    threshold = BOUND_MARGIN * max(radii[seeds].min(), BOUND_FLOOR)
+    candidates = np.setdiff1d(np.flatnonzero(bounds <= threshold), seeds)
+    candidates = candidates[walk_lower_bounds(sys, gains[candidates]) <= threshold]
     radii[candidates] = scalar_gain_radii(sys, gains[candidates])
     best = int(np.argmin(radii))
     return best, radii[best]
