@@ -116,3 +116,16 @@ def test_symmetric_exp_equals_the_full_exponential_bit_for_bit(l):
     A = -0.5 * np.sum((X[:, :, None, None, :] - X[None, None]) ** 2, axis=-1)
     out = _symmetric_exp(A, l**2, out=np.empty_like(A))
     assert np.array_equal(out, np.exp(A / l**2))
+
+
+@pytest.mark.parametrize("name, shape", [("se", {}), ("matern", {"nu": 0.5}), ("matern", {"nu": 1.5}),
+                                         ("matern", {"nu": 2.5}), ("exponential", {}),
+                                         ("gamma_exponential", {"gamma": 1.3}),
+                                         ("rational_quadratic", {"alpha": 2.2})])
+def test_unchecked_covariances_equal_the_checked_ones_bit_for_bit(name, shape):
+    from asoc.gp.kernels import COVARIANCES_UNCHECKED
+    rng = np.random.default_rng(6)
+    D = np.abs(rng.normal(size=(7, 7))) * 10.0 ** rng.uniform(-4, 3, size=(7, 7))
+    np.fill_diagonal(D, 0.0)
+    for l in (1e-3, 0.7, 40.0):
+        assert np.array_equal(COVARIANCES_UNCHECKED[name](D, l, **shape), gp.COVARIANCES[name](D, l, **shape))
