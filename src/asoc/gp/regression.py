@@ -77,7 +77,7 @@ def _cholesky(Ky):
     scale = np.mean(np.diag(Ky))
     for jitter in (0.0, 1e-12, 1e-10, 1e-8, 1e-6):
         try:
-            return cho_factor(Ky + jitter * scale * np.eye(len(Ky)), lower=True)
+            return cho_factor(Ky if jitter == 0.0 else Ky + jitter * scale * np.eye(len(Ky)), lower=True)
         except LinAlgError:
             continue
     raise LinAlgError("Sigma_y is not positive definite even with jitter 1e-6 * mean(diag)")
@@ -170,7 +170,8 @@ class _LikelihoodGP:
     def _neg_log_ml(self, log_theta, grad=True):
         alpha, l, sn = np.exp(log_theta)
         Ku, dKu = self._kernel(l, grad=grad)
-        Ky = alpha**2 * Ku + sn**2 * np.eye(len(Ku))
+        Ky = alpha**2 * Ku                              # + sn^2 I in place: off the diagonal x + 0 = x (x >= +0)
+        Ky.flat[::len(Ky) + 1] += sn**2
         try:
             cf = _cholesky(Ky)
         except LinAlgError:
@@ -398,11 +399,11 @@ class MeanKernelGP(_LikelihoodGP):
             E = _view(self._buffers[0], (rows.stop - rows.start, L, L, M - rows.start))  # [i, a, b, j >= rows.start]
             np.divide(self._neg_half_sq[rows, :, :, rows.start:], l2, out=E)
             _exp_in_place(E, lowest / l2)
-            _expected_kernel_rows(E, self.W, rows, K, self._equal_weights, self._buffers[1:])
+            _expected_kernel_rows(E, self._weights, rows, K, self._buffers[1:])
             if grad:
                 dE = np.multiply(E, self._sq[rows, :, :, rows.start:], out=E)
                 dE /= l2
-                _expected_kernel_rows(dE, self.W, rows, dK, self._equal_weights, self._buffers[1:])
+                _expected_kernel_rows(dE, self._weights, rows, dK, self._buffers[1:])
         return K, dK
 
     def fit(self, X, y, rng: np.random.Generator, W=None):
@@ -426,7 +427,8 @@ class MeanKernelGP(_LikelihoodGP):
         self._sq = np.ascontiguousarray(sq.transpose(0, 1, 3, 2))
         self._neg_half_sq = -0.5 * self._sq
         self._lowest_exponents = [self._neg_half_sq[rows, :, :, rows.start:].min() for rows in _block_rows(len(self.X))]
-        self._equal_weights = bool(np.all(self.W == self.W[0, 0]))
+        equal = bool(np.all(self.W == self.W[0, 0]))      # then (w v) w with a number: faster, the same
+        self._weights = (self.W, np.ascontiguousarray(self.W.T), float(self.W[0, 0]) if equal else None)
         rows = max(block.stop - block.start for block in _block_rows(len(self.X)))
         self._buffers = tuple(np.empty(rows * self._sq[0].size) for _ in range(3))
         self._reset_kernels()
@@ -486,30 +488,39 @@ def _view(buffer, shape):
     return buffer[:int(np.prod(shape))].reshape(shape)
 
 
-def _expected_kernel_rows(V, W, rows, out, equal_weights, buffers):
+def _expected_kernel_rows(V, weights, rows, out, buffers):
     """Rows ``rows`` of eq. (2.22) from and above the diagonal, and the columns below, into ``out``.
 
     ``V[i, a, b, j]`` (B, L, L, M - rows.start) holds the component kernel of mixture ``i`` of
-    ``rows`` (component a) and mixture ``rows.start + j`` (component b), ``W`` (M, L) the weights.
-    Every entry (i, j) is summed as ``np.einsum("ia,iajb,jb->ij", W, V_full, W)`` sums it over the
+    ``rows`` (component a) and mixture ``rows.start + j`` (component b); ``weights``: W (M, L),
+    its transpose (contiguous) and their common value if all are equal (else None). Every
+    entry (i, j) is summed as ``np.einsum("ia,iajb,jb->ij", W, V_full, W)`` sums it over the
     full symmetric array: summands ``(w_ia v) w_jb``, over the components b of the column's
     mixture in order, then over the components a of the row's in order; below the diagonal
     block the roles swap (summands ``(w_jb v) w_ia``). The same numbers: ``add.reduce`` over
     an axis other than the innermost adds in order. ``buffers``: two flat work arrays.
     """
-    (start, B), (_, L, _, columns) = (rows.start, rows.stop - rows.start), V.shape
-    terms = np.multiply(W[rows, :, None, None], V, out=_view(buffers[0], V.shape))
-    terms *= W[start:].T[None, None]
+    (W, WT, weight), (start, B), (_, L, _, columns) = weights, (rows.start, rows.stop - rows.start), V.shape
+    terms = _weighted(V, weight, W[rows, :, None, None], WT[None, None, :, start:], _view(buffers[0], V.shape))
     partial = np.add.reduce(terms, axis=2, out=_view(buffers[1], (B, L, columns)))
     out[rows, start:] = np.add.reduce(partial, axis=1)
     if columns > B:                                        # mixtures below the block: (w_jb v) w_ia
-        if equal_weights:
-            terms = terms[..., B:]
-        else:
-            terms = np.multiply(W[start + B:].T[None, None], V[..., B:], out=_view(buffers[0], (B, L, L, columns - B)))
-            terms *= W[rows, :, None, None]
+        terms = terms[..., B:] if weight is not None else \
+            _weighted(V[..., B:], None, WT[None, None, :, start + B:], W[rows, :, None, None],
+                      _view(buffers[0], (B, L, L, columns - B)))
         partial = np.add.reduce(terms, axis=1, out=_view(buffers[1], (B, L, columns - B)))
         out[start + B:, rows] = np.add.reduce(partial, axis=1).T
+
+
+def _weighted(V, weight, first, second, out):
+    """``(first V) second`` into ``out``; ``(weight V) weight`` if all weights equal ``weight``."""
+    if weight is not None:
+        np.multiply(V, weight, out=out)
+        out *= weight
+    else:
+        np.multiply(first, V, out=out)
+        out *= second
+    return out
 
 
 def _read_only(K):
