@@ -392,16 +392,15 @@ class MeanKernelGP(_LikelihoodGP):
         # eq. (2.22): np.einsum("ia,iajb,jb->ij", W, exp(-sq / (2 l^2)), W) and the same of the
         # derivative, the same numbers from the exponentials on and above the diagonal (half of
         # them), block row by block row in place in the buffers (thousands of evaluations)
-        (M, L), l2 = self.W.shape, l**2
+        M, l2 = len(self.W), l**2
         K = np.empty((M, M))
         dK = np.empty((M, M)) if grad else None
-        for rows, lowest in zip(_block_rows(M), self._lowest_exponents):
-            E = _view(self._buffers[0], (rows.stop - rows.start, L, L, M - rows.start))  # [i, a, b, j >= rows.start]
-            np.divide(self._neg_half_sq[rows, :, :, rows.start:], l2, out=E)
+        for rows, sq, neg_half_sq, lowest in self._blocks:
+            E = np.divide(neg_half_sq, l2, out=_view(self._buffers[0], sq.shape))
             _exp_in_place(E, lowest / l2)
             _expected_kernel_rows(E, self._weights, rows, K, self._buffers[1:])
             if grad:
-                dE = np.multiply(E, self._sq[rows, :, :, rows.start:], out=E)
+                dE = np.multiply(E, sq, out=E)
                 dE /= l2
                 _expected_kernel_rows(dE, self._weights, rows, dK, self._buffers[1:])
         return K, dK
@@ -420,17 +419,19 @@ class MeanKernelGP(_LikelihoodGP):
         return self
 
     def _prepare_kernel(self):
-        """Squared component distances, weights' structure and work buffers of :meth:`_unit_kernel`."""
-        # [i, a, b, j] = |x_ia - x_jb|^2, exactly symmetric (i, a) <-> (j, b) as (x - y)^2 and
-        # (y - x)^2 round alike, so the kernel needs those on and above the diagonal only
-        sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)
-        self._sq = np.ascontiguousarray(sq.transpose(0, 1, 3, 2))
-        self._neg_half_sq = -0.5 * self._sq
-        self._lowest_exponents = [self._neg_half_sq[rows, :, :, rows.start:].min() for rows in _block_rows(len(self.X))]
+        """Squared component distances per block row, weights and work buffers of :meth:`_unit_kernel`."""
+        # |x_ia - x_jb|^2 is exactly symmetric in (i, a) <-> (j, b), as (x - y)^2 and (y - x)^2
+        # round alike: the kernel needs the block rows from their diagonal block on, each stored
+        # contiguously as [i, a, b, j] with its halved negative and that one's minimum
+        sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)    # [i, a, j, b]
+        self._blocks = []
+        for rows in _block_rows(len(self.X)):
+            block = np.ascontiguousarray(sq[rows, :, rows.start:].transpose(0, 1, 3, 2))
+            neg_half = -0.5 * block
+            self._blocks.append((rows, block, neg_half, neg_half.min()))
         equal = bool(np.all(self.W == self.W[0, 0]))      # then (w v) w with a number: faster, the same
         self._weights = (self.W, np.ascontiguousarray(self.W.T), float(self.W[0, 0]) if equal else None)
-        rows = max(block.stop - block.start for block in _block_rows(len(self.X)))
-        self._buffers = tuple(np.empty(rows * self._sq[0].size) for _ in range(3))
+        self._buffers = tuple(np.empty(max(block[1].size for block in self._blocks)) for _ in range(3))
         self._reset_kernels()
 
     def predict(self, X_star, return_var: bool = False, W_star=None):
