@@ -162,3 +162,14 @@ def test_exp_in_place_skips_only_exponents_whose_exponential_is_zero():
     assert np.all(expected[E < EXP_ZERO_BELOW] == 0)
     _exp_in_place(E, E.min())
     assert np.array_equal(E, expected)
+
+
+def test_distribution_gp_training_kernel_equals_the_checked_covariance():
+    x = np.random.default_rng(8).uniform(-3, 3, 9)
+    D = np.abs(x[:, None] - x[None])
+    for name, shape in (("matern", {"nu": 1.5}), ("rational_quadratic", {"alpha_rq": 2.0}), ("se", {})):
+        model = gp.DistributionGP(name, **shape).condition(D, np.sin(x), 1.0, 0.8, 0.1)
+        K, _ = model._unit_kernel(np.float64(0.7), grad=True)
+        assert np.array_equal(K, model._kappa(D, 0.7))
+        with pytest.raises(ValueError, match="l"):
+            model._unit_kernel(0.0)

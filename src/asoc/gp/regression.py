@@ -34,7 +34,7 @@ from scipy.optimize import minimize
 from .. import validation as check
 from ..result import IterativeResult
 from . import _validate as v
-from .kernels import COVARIANCES, mean_kernel_dirac
+from .kernels import COVARIANCES, COVARIANCES_UNCHECKED, mean_kernel_dirac
 
 PARAMS = ("alpha", "l", "sigma_n")
 #: Convergence of the likelihood maximisation: every component of the projected gradient of
@@ -288,19 +288,21 @@ class DistributionGP(_LikelihoodGP):
         if "gamma" in shape:
             shape["gamma"] = check.real_scalar(shape["gamma"], "gamma", low=0, high=2, low_open=True)
         self._kappa = lambda D, l: fn(D, l, **shape)
+        unchecked = COVARIANCES_UNCHECKED[covariance]     # the training distances are checked by fit
+        self._kappa_training = lambda l: unchecked(self.D, v.positive(l, "l"), **shape)
 
     def _length_scale_guess(self):
         off = self.D[~np.eye(len(self.D), dtype=bool)]
         return float(np.median(off[off > 0])) if np.any(off > 0) else 1.0
 
     def _unit_kernel(self, l, grad=False):
-        K = self._kappa(self.D, l)
+        K = self._kappa_training(l)
         if not grad:
             return K, None
         if self.covariance == "se":
             return K, K * (self.D / l) ** 2
         h = 1e-6                                       # central difference in log l
-        return K, (self._kappa(self.D, l * np.exp(h)) - self._kappa(self.D, l * np.exp(-h))) / (2 * h)
+        return K, (self._kappa_training(l * np.exp(h)) - self._kappa_training(l * np.exp(-h))) / (2 * h)
 
     def fit(self, D, y, rng: np.random.Generator):
         """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs ``y`` (M,)."""
