@@ -222,6 +222,7 @@ class _LikelihoodGP:
     def _factor(self):
         r = self.result
         Ku, _ = self._kernel(r.l)
+        self._kernels = OrderedDict([(float(r.l), self._kernels[float(r.l)])])     # the fit's others: memory
         self._cf = _cholesky(r.alpha**2 * Ku + r.sigma_n**2 * np.eye(len(Ku)))
         self._a = cho_solve(self._cf, self.y - self.m)
 
