@@ -187,3 +187,30 @@ def test_omat_matrix_rows_equal_the_pairwise_assignment_means_bit_for_bit():
         cost = np.sum((X[i][:, None] - Y[j][None]) ** 2, axis=-1) ** 1.5
         rows, cols = linear_sum_assignment(cost)
         assert D[i, j] == cost[rows, cols].mean() ** (1 / 3)
+
+
+@pytest.mark.parametrize("q", [1.5, 2, 3])
+def test_omat_matrix_of_scalar_locations_sorts_as_the_assignments_do_bit_for_bit(q):
+    """d = 1, q > 1: the monotone matching gives the linear assignments' means (distinct, unsorted locations)."""
+    from asoc.gp.distances import _mean_optimal_assignment_costs
+    rng = np.random.default_rng(int(10 * q))
+    X, Y = rng.normal(size=(9, 7, 1)), rng.normal(size=(11, 7, 1)) * 2
+    assert np.array_equal(gp.omat_matrix(X, Y, q=q),
+                          _mean_optimal_assignment_costs(X, Y, q, False, range(len(X))) ** (1 / q))
+    upper = _mean_optimal_assignment_costs(X, X, q, True, range(len(X))) ** (1 / q)
+    assert np.array_equal(gp.omat_matrix(X, q=q), upper + upper.T)
+
+
+def test_mcvmd_matrix_keeps_the_b_max_independent_sums():
+    from asoc.gp import distances
+    rng = np.random.default_rng(6)
+    X, Y = rng.normal(size=(6, 4, 2)), rng.normal(size=(5, 4, 2))
+    fresh = []
+    for b_max in (10.0, 1000.0):
+        distances._MCVMD_SUMS.clear()
+        fresh.append((gp.mcvmd_matrix(X, Y, b_max=b_max), gp.mcvmd_matrix(X, b_max=b_max)))
+    kept = [(gp.mcvmd_matrix(X, Y, b_max=b_max), gp.mcvmd_matrix(X, b_max=b_max)) for b_max in (10.0, 1000.0)]
+    assert all(np.array_equal(a, b) for pair, again in zip(fresh, kept) for a, b in zip(pair, again))
+    assert len(distances._MCVMD_SUMS) == distances.MCVMD_SUMS_KEPT
+    X[0, 0, 0] += 1.0                                        # other inputs: computed anew
+    assert not np.array_equal(gp.mcvmd_matrix(X, Y, b_max=10.0), kept[0][0])

@@ -109,10 +109,67 @@ def test_bad_input():
         gp.DistributionGP().condition(np.array([[0, 1.0], [1.0, 0]]), [0, 1], 1.0, 1.0, 0.0)
 
 
-@pytest.mark.parametrize("l", [0.05, 1.0, 30.0])
-def test_symmetric_exp_equals_the_full_exponential_bit_for_bit(l):
-    from asoc.gp.regression import SYMMETRIC_TILE, _symmetric_exp
-    X = np.random.default_rng(4).normal(size=(SYMMETRIC_TILE // 3 + 7, 3, 2))    # tiles not a divisor
-    A = -0.5 * np.sum((X[:, :, None, None, :] - X[None, None]) ** 2, axis=-1)
-    out = _symmetric_exp(A, l**2, out=np.empty_like(A))
-    assert np.array_equal(out, np.exp(A / l**2))
+@pytest.mark.parametrize("M, L, d, equal", [(23, 3, 2, True), (21, 4, 1, False), (2, 9, 1, True), (12, 10, 3, False)])
+def test_mean_kernel_blocks_equal_the_full_einsum_bit_for_bit(M, L, d, equal):
+    """Block rows (M = 21: a last block of one mixture joins the one before) against eq. (2.22) summed
+    by np.einsum over the full exponential, the previous implementation."""
+    rng = np.random.default_rng(M)
+    X = rng.normal(size=(M, L, d))
+    W = None if equal else rng.dirichlet(np.ones(L), size=M)
+    model = gp.MeanKernelGP()
+    model.X, model.W = X, np.full((M, L), 1.0 / L) if equal else W
+    model._prepare_kernel()
+    sq = np.sum((X[:, :, None, None, :] - X[None, None]) ** 2, axis=-1)
+    for l in (0.05, 1.0, 30.0):
+        E = np.exp(-0.5 * sq / l**2)
+        K, dK = model._unit_kernel(l, grad=True)
+        assert np.array_equal(K, np.einsum("ia,iajb,jb->ij", model.W, E, model.W))
+        assert np.array_equal(dK, np.einsum("ia,iajb,jb->ij", model.W, E * sq / l**2, model.W))
+
+
+def test_likelihood_reuses_the_kernel_of_a_length_scale():
+    rng = np.random.default_rng(5)
+    X = gp.gaussian_dirac_mixtures(rng.uniform(-3, 3, 15), rng.uniform(0.1, 2, 15), 4)
+    model = gp.MeanKernelGP(n_restarts=0).fit(X, rng.normal(size=15), rng)
+    calls = []
+    unit_kernel = model._unit_kernel
+    model._unit_kernel = lambda l, grad=False: calls.append((l, grad)) or unit_kernel(l, grad)
+    first = [model.log_marginal_likelihood(1.0, 0.7, s) for s in (0.1, 0.2)]
+    model._reset_kernels()
+    again = [model.log_marginal_likelihood(1.0, 0.7, s) for s in (0.1, 0.2)]
+    assert first == again and len(calls) == 2                   # one kernel per length scale and training set
+    K, dK = model._kernel(0.7, grad=True)                        # the derivative is added on demand
+    assert dK is not None and not K.flags.writeable and len(calls) == 3
+
+
+@pytest.mark.parametrize("name, shape", [("se", {}), ("matern", {"nu": 0.5}), ("matern", {"nu": 1.5}),
+                                         ("matern", {"nu": 2.5}), ("exponential", {}),
+                                         ("gamma_exponential", {"gamma": 1.3}),
+                                         ("rational_quadratic", {"alpha": 2.2})])
+def test_unchecked_covariances_equal_the_checked_ones_bit_for_bit(name, shape):
+    from asoc.gp.kernels import COVARIANCES_UNCHECKED
+    rng = np.random.default_rng(6)
+    D = np.abs(rng.normal(size=(7, 7))) * 10.0 ** rng.uniform(-4, 3, size=(7, 7))
+    np.fill_diagonal(D, 0.0)
+    for l in (1e-3, 0.7, 40.0):
+        assert np.array_equal(COVARIANCES_UNCHECKED[name](D, l, **shape), gp.COVARIANCES[name](D, l, **shape))
+
+
+def test_exp_in_place_skips_only_exponents_whose_exponential_is_zero():
+    from asoc.gp.regression import EXP_ZERO_BELOW, _exp_in_place
+    E = np.concatenate([np.linspace(-800, -700, 1001), np.linspace(-5, 0, 11)])
+    expected = np.exp(E)
+    assert np.all(expected[E < EXP_ZERO_BELOW] == 0)
+    _exp_in_place(E, E.min())
+    assert np.array_equal(E, expected)
+
+
+def test_distribution_gp_training_kernel_equals_the_checked_covariance():
+    x = np.random.default_rng(8).uniform(-3, 3, 9)
+    D = np.abs(x[:, None] - x[None])
+    for name, shape in (("matern", {"nu": 1.5}), ("rational_quadratic", {"alpha_rq": 2.0}), ("se", {})):
+        model = gp.DistributionGP(name, **shape).condition(D, np.sin(x), 1.0, 0.8, 0.1)
+        K, _ = model._unit_kernel(np.float64(0.7), grad=True)
+        assert np.array_equal(K, model._kappa(D, 0.7))
+        with pytest.raises(ValueError, match="l"):
+            model._unit_kernel(0.0)

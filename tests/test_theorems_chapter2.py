@@ -2,6 +2,7 @@
 are deterministic and re-runnable from an instance's index."""
 
 import json
+import warnings
 import zlib
 
 import numpy as np
@@ -168,3 +169,29 @@ def test_bad_input_names_the_argument():
         c2.search_counterexample(np.random.default_rng(0), "omat", "cosine", {})
     with pytest.raises(ValueError, match="statement_key"):
         c2.rerun("statement_2_2", 0)
+
+
+def test_search_fast_paths_equal_the_general_ones_bit_for_bit():
+    """The search decodes to arrays, sums short axes in a loop, takes medians and eigenvalues without
+    NumPy's wrappers and calls the library's unchecked covariances: the same numbers throughout."""
+    rng = np.random.default_rng(7)
+    for family in c2.FAMILIES * 3:
+        layout = c2._random_layout(rng, family)
+        theta = rng.normal(size=c2._layout_size(family, layout)) * rng.choice([0.3, 3.0])
+        config = c2._decode(family, theta, layout)
+        assert config == json.loads(json.dumps(config))                              # JSON-able
+        D = c2._proxy_distance_matrix(family, config)
+        assert np.array_equal(c2._proxy_distance_matrix(family, c2._decode_arrays(family, theta, layout)), D)
+        name, shape = c2._random_covariance(rng)
+        l = c2._length_scale(D, 0.2)
+        assert l == float(np.exp(0.2) * np.median(D[np.triu_indices(len(D), 1)]))
+        K = c2._search_kernel(name, shape)(D, l)
+        assert np.array_equal(K, c2._kernel(name, shape, D, l))
+        assert np.array_equal(c2._eigenvalues(K), np.linalg.eigvalsh(K))
+    diff = rng.normal(size=(5, 4, 3))
+    assert np.array_equal(c2._squared_norms(diff), np.sum(diff ** 2, axis=-1))
+    for values in (rng.normal(size=6), rng.normal(size=7), np.array([1.0, np.nan, 2.0]), np.array([])):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)                       # median of nothing
+            expected = np.median(values)
+        assert np.array_equal(c2._median(values), expected, equal_nan=True)

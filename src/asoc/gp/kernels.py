@@ -42,7 +42,7 @@ def squared_exponential(delta, l: float):
     [1.0, 0.6065]
     """
     l = v.positive(l, "l")
-    return np.exp(-0.5 * (_delta(delta) / l) ** 2)
+    return _squared_exponential(_delta(delta), l)
 
 
 def matern(delta, l: float, nu: float = 2.5):
@@ -73,10 +73,7 @@ def matern(delta, l: float, nu: float = 2.5):
     [1.0, 0.524]
     """
     l, nu = v.positive(l, "l"), v.positive(nu, "nu")
-    r = np.sqrt(2 * nu) * _delta(delta) / l
-    with np.errstate(invalid="ignore", over="ignore"):
-        out = 2 ** (1 - nu) / gamma_fn(nu) * r**nu * kv(nu, r)
-    return np.where(r == 0, 1.0, np.nan_to_num(out, nan=0.0))
+    return _matern(_delta(delta), l, nu)
 
 
 def exponential(delta, l: float):
@@ -104,7 +101,7 @@ def exponential(delta, l: float):
     [1.0, 0.6065]
     """
     l = v.positive(l, "l")
-    return np.exp(-_delta(delta) / l)
+    return _exponential(_delta(delta), l)
 
 
 def gamma_exponential(delta, l: float, gamma: float = 1.5):
@@ -136,7 +133,7 @@ def gamma_exponential(delta, l: float, gamma: float = 1.5):
     """
     l = v.positive(l, "l")
     gamma = check.real_scalar(gamma, "gamma", low=0, high=2, low_open=True)
-    return np.exp(-(_delta(delta) / l) ** gamma)
+    return _gamma_exponential(_delta(delta), l, gamma)
 
 
 def rational_quadratic(delta, l: float, alpha: float = 1.0):
@@ -166,7 +163,39 @@ def rational_quadratic(delta, l: float, alpha: float = 1.0):
     [1.0, 0.6667]
     """
     l, alpha = v.positive(l, "l"), v.positive(alpha, "alpha")
-    return (1 + _delta(delta) ** 2 / (2 * alpha * l**2)) ** (-alpha)
+    return _rational_quadratic(_delta(delta), l, alpha)
+
+
+# Unchecked fast paths of Table 2.1: ``delta`` a float array of finite non-negative distances,
+# ``l`` and the shape parameter positive Python floats (as the public functions validate them).
+# For callers that evaluate one covariance thousands of times on matrices they built themselves.
+
+def _squared_exponential(delta, l):
+    """:func:`squared_exponential` without input checks (unchecked fast path)."""
+    return np.exp(-0.5 * (delta / l) ** 2)
+
+
+def _matern(delta, l, nu=2.5):
+    """:func:`matern` without input checks (unchecked fast path)."""
+    r = np.sqrt(2 * nu) * delta / l
+    with np.errstate(invalid="ignore", over="ignore"):
+        out = 2 ** (1 - nu) / gamma_fn(nu) * r**nu * kv(nu, r)
+    return np.where(r == 0, 1.0, np.nan_to_num(out, nan=0.0))
+
+
+def _exponential(delta, l):
+    """:func:`exponential` without input checks (unchecked fast path)."""
+    return np.exp(-delta / l)
+
+
+def _gamma_exponential(delta, l, gamma=1.5):
+    """:func:`gamma_exponential` without input checks (unchecked fast path)."""
+    return np.exp(-(delta / l) ** gamma)
+
+
+def _rational_quadratic(delta, l, alpha=1.0):
+    """:func:`rational_quadratic` without input checks (unchecked fast path)."""
+    return (1 + delta ** 2 / (2 * alpha * l**2)) ** (-alpha)
 
 
 #: Table 2.1: name -> (function, LaTeX expression, extra shape parameter or None).
@@ -185,6 +214,10 @@ TABLE_2_1 = {
 #: Short names used by :class:`asoc.gp.DistributionGP`.
 COVARIANCES = {"se": squared_exponential, "matern": matern, "exponential": exponential,
                "gamma_exponential": gamma_exponential, "rational_quadratic": rational_quadratic}
+
+#: The same covariances without input checks (same arguments, same values; see the fast paths above).
+COVARIANCES_UNCHECKED = {"se": _squared_exponential, "matern": _matern, "exponential": _exponential,
+                         "gamma_exponential": _gamma_exponential, "rational_quadratic": _rational_quadratic}
 
 
 def bilinear_product(K_distance, means_i, means_j, Sigma):

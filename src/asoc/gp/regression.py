@@ -23,6 +23,7 @@ The prior mean is the constant :math:`m = \\bar y` (the sample mean of the train
 outputs), a reading: the thesis leaves :math:`m` open.
 """
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 import warnings
 
@@ -33,7 +34,7 @@ from scipy.optimize import minimize
 from .. import validation as check
 from ..result import IterativeResult
 from . import _validate as v
-from .kernels import COVARIANCES, mean_kernel_dirac
+from .kernels import COVARIANCES, COVARIANCES_UNCHECKED, mean_kernel_dirac
 
 PARAMS = ("alpha", "l", "sigma_n")
 #: Convergence of the likelihood maximisation: every component of the projected gradient of
@@ -42,6 +43,9 @@ PARAMS = ("alpha", "l", "sigma_n")
 #: L-BFGS-B's own line search gives up).
 GRADIENT_TOL = 1e-2
 MAX_ITERATIONS = 500
+#: Memory for the unit kernels of recent length scales (the kernel depends on l alone: the
+#: optimiser's steps in alpha and sigma_n and likelihood surfaces over sigma_n reuse it).
+KERNEL_CACHE_BYTES = 64 * 2**20
 
 
 @dataclass(kw_only=True)
@@ -73,7 +77,7 @@ def _cholesky(Ky):
     scale = np.mean(np.diag(Ky))
     for jitter in (0.0, 1e-12, 1e-10, 1e-8, 1e-6):
         try:
-            return cho_factor(Ky + jitter * scale * np.eye(len(Ky)), lower=True)
+            return cho_factor(Ky if jitter == 0.0 else Ky + jitter * scale * np.eye(len(Ky)), lower=True)
         except LinAlgError:
             continue
     raise LinAlgError("Sigma_y is not positive definite even with jitter 1e-6 * mean(diag)")
@@ -108,11 +112,33 @@ class _LikelihoodGP:
         self.n_restarts = check.integer(n_restarts, "n_restarts", minimum=0)
         self.bounds = None if bounds is None else _bounds(bounds)
         self.result = None
+        self._reset_kernels()
 
     # -- subclasses ----------------------------------------------------------------------
     def _unit_kernel(self, l, grad=False):
         """Training kernel with alpha = 1 and, if ``grad``, its derivative w.r.t. log l."""
         raise NotImplementedError
+
+    # -- kernels of recent length scales ---------------------------------------------------
+    def _reset_kernels(self):
+        """Forget the remembered kernels (new training data)."""
+        self._kernels = OrderedDict()
+
+    def _kernel(self, l, grad=False):
+        """:meth:`_unit_kernel` (read-only arrays), remembered for the recent length scales.
+
+        The same arrays for the same value of ``l``: an entry without the derivative serves
+        ``grad=False`` only. The least recently used entries go beyond :data:`KERNEL_CACHE_BYTES`.
+        """
+        key = float(l)
+        entry = self._kernels.get(key)
+        if entry is None or (grad and entry[1] is None):
+            entry = self._kernels[key] = tuple(_read_only(K) for K in self._unit_kernel(l, grad=grad))
+        self._kernels.move_to_end(key)
+        while len(self._kernels) > 1 and sum(K.nbytes for pair in self._kernels.values() for K in pair
+                                             if K is not None) > KERNEL_CACHE_BYTES:
+            self._kernels.popitem(last=False)
+        return entry
 
     def _length_scale_guess(self) -> float:
         raise NotImplementedError
@@ -143,8 +169,9 @@ class _LikelihoodGP:
 
     def _neg_log_ml(self, log_theta, grad=True):
         alpha, l, sn = np.exp(log_theta)
-        Ku, dKu = self._unit_kernel(l, grad=grad)
-        Ky = alpha**2 * Ku + sn**2 * np.eye(len(Ku))
+        Ku, dKu = self._kernel(l, grad=grad)
+        Ky = alpha**2 * Ku                              # + sn^2 I in place: off the diagonal x + 0 = x (x >= +0)
+        Ky.flat[::len(Ky) + 1] += sn**2
         try:
             cf = _cholesky(Ky)
         except LinAlgError:
@@ -194,7 +221,8 @@ class _LikelihoodGP:
 
     def _factor(self):
         r = self.result
-        Ku, _ = self._unit_kernel(r.l)
+        Ku, _ = self._kernel(r.l)
+        self._kernels = OrderedDict([(float(r.l), self._kernels[float(r.l)])])     # the fit's others: memory
         self._cf = _cholesky(r.alpha**2 * Ku + r.sigma_n**2 * np.eye(len(Ku)))
         self._a = cho_solve(self._cf, self.y - self.m)
 
@@ -261,19 +289,21 @@ class DistributionGP(_LikelihoodGP):
         if "gamma" in shape:
             shape["gamma"] = check.real_scalar(shape["gamma"], "gamma", low=0, high=2, low_open=True)
         self._kappa = lambda D, l: fn(D, l, **shape)
+        unchecked = COVARIANCES_UNCHECKED[covariance]     # the training distances are checked by fit
+        self._kappa_training = lambda l: unchecked(self.D, v.positive(l, "l"), **shape)
 
     def _length_scale_guess(self):
         off = self.D[~np.eye(len(self.D), dtype=bool)]
         return float(np.median(off[off > 0])) if np.any(off > 0) else 1.0
 
     def _unit_kernel(self, l, grad=False):
-        K = self._kappa(self.D, l)
+        K = self._kappa_training(l)
         if not grad:
             return K, None
         if self.covariance == "se":
             return K, K * (self.D / l) ** 2
         h = 1e-6                                       # central difference in log l
-        return K, (self._kappa(self.D, l * np.exp(h)) - self._kappa(self.D, l * np.exp(-h))) / (2 * h)
+        return K, (self._kappa_training(l * np.exp(h)) - self._kappa_training(l * np.exp(-h))) / (2 * h)
 
     def fit(self, D, y, rng: np.random.Generator):
         """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs ``y`` (M,)."""
@@ -294,6 +324,7 @@ class DistributionGP(_LikelihoodGP):
         if len(y) != len(D):
             raise ValueError(f"y: expected {len(D)} outputs (one per training input), found {len(y)}")
         self.D = D
+        self._reset_kernels()
 
     def condition(self, D, y, alpha: float, l: float, sigma_n: float):
         """Condition on training data with given hyperparameters (no estimation)."""
@@ -361,14 +392,21 @@ class MeanKernelGP(_LikelihoodGP):
         return float(np.sqrt(np.median(off[off > 0]))) if np.any(off > 0) else 1.0
 
     def _unit_kernel(self, l, grad=False):
-        # in place in two (M, L, M, L) buffers: the likelihood is evaluated thousands of times
-        E = _symmetric_exp(self._neg_half_sq, l**2, out=self._buffers[0])
-        K = np.einsum("ia,iajb,jb->ij", self.W, E, self.W)
-        if not grad:
-            return K, None
-        dE = np.multiply(E, self._sq, out=self._buffers[1])
-        dE /= l**2
-        return K, np.einsum("ia,iajb,jb->ij", self.W, dE, self.W)
+        # eq. (2.22): np.einsum("ia,iajb,jb->ij", W, exp(-sq / (2 l^2)), W) and the same of the
+        # derivative, the same numbers from the exponentials on and above the diagonal (half of
+        # them), block row by block row in place in the buffers (thousands of evaluations)
+        M, l2 = len(self.W), l**2
+        K = np.empty((M, M))
+        dK = np.empty((M, M)) if grad else None
+        for rows, sq, neg_half_sq, lowest in self._blocks:
+            E = np.divide(neg_half_sq, l2, out=_view(self._buffers[0], sq.shape))
+            _exp_in_place(E, lowest / l2)
+            _expected_kernel_rows(E, self._weights, rows, K, self._buffers[1:])
+            if grad:
+                dE = np.multiply(E, sq, out=E)
+                dE /= l2
+                _expected_kernel_rows(dE, self._weights, rows, dK, self._buffers[1:])
+        return K, dK
 
     def fit(self, X, y, rng: np.random.Generator, W=None):
         """Estimate the hyperparameters from training mixtures ``X`` (M, L, d)."""
@@ -378,13 +416,26 @@ class MeanKernelGP(_LikelihoodGP):
         y = self._set_outputs(y)
         if len(y) != len(self.X):
             raise ValueError(f"y: expected {len(self.X)} outputs (one per training input), found {len(y)}")
-        # exactly symmetric, as (x - y)^2 and (y - x)^2 round alike: see _symmetric_exp
-        self._sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)
-        self._neg_half_sq = -0.5 * self._sq
-        self._buffers = (np.empty_like(self._sq), np.empty_like(self._sq))   # reused by every evaluation
+        self._prepare_kernel()
         self._optimise(rng)
         self._factor()
         return self
+
+    def _prepare_kernel(self):
+        """Squared component distances per block row, weights and work buffers of :meth:`_unit_kernel`."""
+        # |x_ia - x_jb|^2 is exactly symmetric in (i, a) <-> (j, b), as (x - y)^2 and (y - x)^2
+        # round alike: the kernel needs the block rows from their diagonal block on, each stored
+        # contiguously as [i, a, b, j] with its halved negative and that one's minimum
+        sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)    # [i, a, j, b]
+        self._blocks = []
+        for rows in _block_rows(len(self.X)):
+            block = np.ascontiguousarray(sq[rows, :, rows.start:].transpose(0, 1, 3, 2))
+            neg_half = -0.5 * block
+            self._blocks.append((rows, block, neg_half, neg_half.min()))
+        equal = bool(np.all(self.W == self.W[0, 0]))      # then (w v) w with a number: faster, the same
+        self._weights = (self.W, np.ascontiguousarray(self.W.T), float(self.W[0, 0]) if equal else None)
+        self._buffers = tuple(np.empty(max(block[1].size for block in self._blocks)) for _ in range(3))
+        self._reset_kernels()
 
     def predict(self, X_star, return_var: bool = False, W_star=None):
         """Predictive mean (and variance) at test mixtures ``X_star`` (N, L', d)."""
@@ -400,27 +451,87 @@ class MeanKernelGP(_LikelihoodGP):
         return self._predict(K_cross, k_self, return_var)
 
 
-#: Side of the square tiles of :func:`_symmetric_exp` (a transposed tile stays in cache).
-SYMMETRIC_TILE = 256
+#: Mixtures per block row of :meth:`MeanKernelGP._unit_kernel` (arrays of a few MB that stay in cache).
+BLOCK_ROWS = 10
 
 
-def _symmetric_exp(A, divisor, out):
-    """exp(A / divisor) into the C-contiguous ``out``, A (M, L, M, L) symmetric as an (M L, M L) matrix.
+def _block_rows(M):
+    """Slices of consecutive mixtures, :data:`BLOCK_ROWS` each, the last one at least 2 long (M >= 2).
 
-    The exponentials of the tiles on and above the diagonal, each off-diagonal one copied
-    transposed below it: the same values as ``np.exp(A / divisor)`` with about half of the
-    exponentials, the bulk of the mean-kernel likelihood.
+    With at least two mixtures from every block's first one on, and as many after a block
+    when there are any, the innermost axis of the reductions of :func:`_expected_kernel_rows`
+    is a mixture axis of length >= 2, never the summed one.
     """
-    n, tile_size = A.shape[0] * A.shape[1], SYMMETRIC_TILE
-    A2, E = A.reshape(n, n), out.reshape(n, n)
-    for row in range(0, n, tile_size):
-        for col in range(row, n, tile_size):
-            tile = E[row:row + tile_size, col:col + tile_size]
-            np.divide(A2[row:row + tile_size, col:col + tile_size], divisor, out=tile)
-            np.exp(tile, out=tile)
-            if col != row:
-                E[col:col + tile_size, row:row + tile_size] = tile.T
+    starts = list(range(0, M, BLOCK_ROWS))
+    if len(starts) > 1 and M - starts[-1] == 1:
+        starts.pop()
+    return [slice(start, end) for start, end in zip(starts, starts[1:] + [M])]
+
+
+#: exp(x) rounds to +0 below this exponent (exp(-745.14) < 2^-1075, half the smallest subnormal).
+EXP_ZERO_BELOW = -746.0
+
+
+def _exp_in_place(E, lowest):
+    """``np.exp(E, out=E)``, the same numbers; exponents below :data:`EXP_ZERO_BELOW` give 0 without exp.
+
+    ``lowest``: the smallest entry of ``E`` (or less). The exponential of those exponents,
+    +0, takes libm's slow underflow path, several times the cost of the others; short length
+    scales make many of them.
+    """
+    if lowest >= EXP_ZERO_BELOW:
+        np.exp(E, out=E)
+        return
+    vanishing = E < EXP_ZERO_BELOW
+    np.exp(E, out=E, where=~vanishing)
+    E[vanishing] = 0.0
+
+
+def _view(buffer, shape):
+    """A C-contiguous array of ``shape`` on the start of the flat ``buffer``."""
+    return buffer[:int(np.prod(shape))].reshape(shape)
+
+
+def _expected_kernel_rows(V, weights, rows, out, buffers):
+    """Rows ``rows`` of eq. (2.22) from and above the diagonal, and the columns below, into ``out``.
+
+    ``V[i, a, b, j]`` (B, L, L, M - rows.start) holds the component kernel of mixture ``i`` of
+    ``rows`` (component a) and mixture ``rows.start + j`` (component b); ``weights``: W (M, L),
+    its transpose (contiguous) and their common value if all are equal (else None). Every
+    entry (i, j) is summed as ``np.einsum("ia,iajb,jb->ij", W, V_full, W)`` sums it over the
+    full symmetric array: summands ``(w_ia v) w_jb``, over the components b of the column's
+    mixture in order, then over the components a of the row's in order; below the diagonal
+    block the roles swap (summands ``(w_jb v) w_ia``). The same numbers: ``add.reduce`` over
+    an axis other than the innermost adds in order. ``buffers``: two flat work arrays.
+    """
+    (W, WT, weight), (start, B), (_, L, _, columns) = weights, (rows.start, rows.stop - rows.start), V.shape
+    terms = _weighted(V, weight, W[rows, :, None, None], WT[None, None, :, start:], _view(buffers[0], V.shape))
+    partial = np.add.reduce(terms, axis=2, out=_view(buffers[1], (B, L, columns)))
+    out[rows, start:] = np.add.reduce(partial, axis=1)
+    if columns > B:                                        # mixtures below the block: (w_jb v) w_ia
+        terms = terms[..., B:] if weight is not None else \
+            _weighted(V[..., B:], None, WT[None, None, :, start + B:], W[rows, :, None, None],
+                      _view(buffers[0], (B, L, L, columns - B)))
+        partial = np.add.reduce(terms, axis=1, out=_view(buffers[1], (B, L, columns - B)))
+        out[start + B:, rows] = np.add.reduce(partial, axis=1).T
+
+
+def _weighted(V, weight, first, second, out):
+    """``(first V) second`` into ``out``; ``(weight V) weight`` if all weights equal ``weight``."""
+    if weight is not None:
+        np.multiply(V, weight, out=out)
+        out *= weight
+    else:
+        np.multiply(first, V, out=out)
+        out *= second
     return out
+
+
+def _read_only(K):
+    """``K`` (an array or None) flagged read-only: remembered kernels are shared."""
+    if K is not None:
+        K.flags.writeable = False
+    return K
 
 
 def _bounds(bounds):

@@ -30,6 +30,7 @@ import json
 from fractions import Fraction
 
 import numpy as np
+from numpy.linalg import _umath_linalg
 from scipy.linalg import eigh as scipy_eigh
 from scipy.optimize import minimize
 
@@ -94,6 +95,12 @@ def _lib_gp_posterior(covariance, shape, D, y, alpha, l, sigma_n, D_star, D_star
 def _lib_covariance(name):
     from asoc.gp import COVARIANCES
     return COVARIANCES[name]
+
+
+def _lib_covariance_unchecked(name):
+    """The library's unchecked fast path of the covariance ``name`` (for the kernel search)."""
+    from asoc.gp.kernels import COVARIANCES_UNCHECKED
+    return COVARIANCES_UNCHECKED[name]
 
 
 def _lib_distance_matrix(family, config):
@@ -412,106 +419,191 @@ def _pairs(N):
     return rows, cols
 
 
-def _decode(family, theta, layout):
-    """Configuration (JSON-able) of the distributions encoded by ``theta``."""
+def _decode_arrays(family, theta, layout):
+    """Configuration of the distributions encoded by ``theta``, with NumPy arrays.
+
+    The search's fast path: :func:`_proxy_distance_matrix` reads it directly, and
+    :func:`_decode` turns it into the JSON-able configuration (the same numbers).
+    """
     N = layout["N"]
     if family in ("mcvmd", "omat"):
-        return {"items": (BOX * np.tanh(theta.reshape(N, layout["points"], 2))).tolist()}
+        return {"items": BOX * np.tanh(theta.reshape(N, layout["points"], 2))}
     if family == "ospa":
         flat, items, k = BOX * np.tanh(theta), [], 0
         for size in layout["sizes"]:
-            items.append(flat[2 * k: 2 * (k + size)].reshape(size, 2).tolist())
+            items.append(flat[2 * k: 2 * (k + size)].reshape(size, 2))
             k += size
         return {"items": items, "c": layout["c"]}
     if family == "wasserstein_gaussian":
-        t = theta.reshape(N, 5)
-        items = []
-        for row in t:
-            L = np.array([[np.exp(1.5 * np.tanh(row[2])), 0.0], [np.tanh(row[3]) * 2, np.exp(1.5 * np.tanh(row[4]))]])
-            items.append([(BOX * np.tanh(row[:2])).tolist(), (L @ L.T).tolist()])
-        return {"items": items}
+        return {"items": _decode_gaussians(theta.reshape(N, 5))}
     if family == "hellinger":
-        t = theta.reshape(N, 2)
-        return {"items": [[float(BOX * np.tanh(a)), float(np.exp(2 * np.tanh(b)))] for a, b in t],
+        t = np.tanh(theta.reshape(N, 2))
+        return {"items": np.column_stack([BOX * t[:, 0], np.exp(2 * t[:, 1])]),
                 "exponent": layout["exponent"]}
-    weights = _softmax(theta.reshape(N, layout["bins"]))
-    config = {"items": weights.tolist()}
+    config = {"items": _softmax(theta.reshape(N, layout["bins"]))}
     if family == "lq":
         config["q"] = layout["q"]
     return config
 
 
+def _decode_gaussians(t):
+    """2-D Gaussians [mean, covariance] from rows (mean, log-scales and shear of a Cholesky factor)."""
+    s = np.tanh(t)
+    L = np.zeros((len(t), 2, 2))
+    L[:, 0, 0], L[:, 1, 0], L[:, 1, 1] = np.exp(1.5 * s[:, 2]), s[:, 3] * 2, np.exp(1.5 * s[:, 4])
+    covs = L @ L.transpose(0, 2, 1)
+    return [[mean, cov] for mean, cov in zip(BOX * s[:, :2], covs)]
+
+
+def _jsonable(value):
+    """``value`` with every array turned into (nested) lists of floats."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {key: _jsonable(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_jsonable(item) for item in value]
+    return value
+
+
+def _decode(family, theta, layout):
+    """Configuration (JSON-able) of the distributions encoded by ``theta``."""
+    return _jsonable(_decode_arrays(family, theta, layout))
+
+
 def _proxy_distance_matrix(family, config):
-    """The same distances, written out independently of the library and vectorised."""
+    """The same distances, written out independently of the library and vectorised.
+
+    ``config`` as :func:`_decode` (lists) or :func:`_decode_arrays` (arrays) returns it.
+    """
+    return _PROXIES[family](config)
+
+
+#: The library's b_max (its default) and the constant c_b of its closed form of the mCvMd.
+_MCVMD_C_B = np.log(4 * 100.0 ** 2) - np.euler_gamma + 1
+
+
+def _proxy_mcvmd(config):
+    """mCvMd between 2-D Dirac mixtures: the closed form with the library's b_max = 100."""
+    X = np.asarray(config["items"], dtype=float)
+    _, L, n = X.shape
+    sq = _squared_norms(X[:, None, :, None] - X[None, :, None, :])                      # (N, N, L, L)
+    positive = sq > 0
+    xlog = np.add.reduce(np.where(positive, sq * np.log(np.where(positive, sq, 1.0)), 0.0), axis=(2, 3)) / (L * L)
+    means = np.add.reduce(X, axis=1) / L
+    Dm = _squared_norms(means[:, None] - means[None])
+    diag = np.diag(xlog)
+    d2 = np.pi ** (n / 2) / 8 * (diag[:, None] - 2 * xlog + diag[None] + 2 * _MCVMD_C_B * Dm)
+    return _zero_diagonal(np.sqrt(np.maximum(d2, 0)))
+
+
+def _squared_norms(diff):
+    """``np.sum(diff ** 2, axis=-1)`` for a last axis of fewer than 8 (here 2) components, faster.
+
+    NumPy adds fewer than 8 terms in order, as the loop here does (the same numbers), but its
+    reduction over a short last axis costs more than the squares themselves.
+    """
+    squares = diff * diff
+    total = squares[..., 0]
+    for k in range(1, squares.shape[-1]):
+        total = total + squares[..., k]
+    return total
+
+
+def _zero_diagonal(D):
+    """``D`` with its diagonal set to zero (in place)."""
+    np.fill_diagonal(D, 0.0)
+    return D
+
+
+def _proxy_omat(config):
+    """OMAT (q = 2) between equally sized 2-D point sets: the best of all permutations."""
+    X = np.asarray(config["items"], dtype=float)
+    m = X.shape[1]
+    cost = _squared_norms(X[:, None, None, :, :] - X[:, _injections(m, m)][None])      # (N, N, perms, m)
+    return _zero_diagonal(np.sqrt(np.minimum.reduce(np.add.reduce(cost, axis=-1) / m, axis=-1)))
+
+
+def _proxy_ospa(config):
+    """OSPA (p = 2, cut-off c) between 2-D point sets of 1-3 points: the best of all injections."""
+    items, c = config["items"], config["c"]
+    sizes = tuple(len(item) for item in items)
+    points = np.concatenate([np.asarray(item, dtype=float) for item in items])
+    dist = np.minimum(np.sqrt(_squared_norms(points[:, None] - points[None])), c) ** 2   # all pairs of points
+    rows, cols, unmatched, larger, cost = _ospa_classes(sizes)
+    best = np.concatenate([np.minimum.reduce(np.add.reduce(dist[small, large], axis=-1), axis=-1)
+                           for small, large in cost])
+    D = np.zeros((len(items), len(items)))
+    D[rows, cols] = D[cols, rows] = np.sqrt((best + c ** 2 * unmatched) / larger)
+    return D
+
+
+@functools.lru_cache(maxsize=None)
+def _ospa_classes(sizes):
+    """Index arrays of the OSPA between the point sets of ``sizes`` (cached: the search asks at every evaluation).
+
+    Returns the pairs i < j (``rows``, ``cols``), per pair the number of unmatched points
+    n - m and the larger size n, and per group of pairs with the same sizes (m <= n) the
+    indices ``(small, large)``, of shape (P, injections, m), into the matrix of all points'
+    distances of the m matched pairs of each injection of the smaller set into the larger.
+    """
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    groups = {}
+    for i, j in zip(*_pairs(len(sizes))):
+        small, large = (i, j) if sizes[i] <= sizes[j] else (j, i)
+        groups.setdefault((sizes[small], sizes[large]), []).append((i, j, small, large))
+    rows, cols, unmatched, larger, cost = [], [], [], [], []
+    for (m, n), pairs in groups.items():
+        i, j, small, large = (np.array(column) for column in zip(*pairs))
+        rows.append(i), cols.append(j), unmatched.append(np.full(len(i), n - m)), larger.append(np.full(len(i), n))
+        cost.append(((starts[small][:, None] + np.arange(m))[:, None, :],
+                     starts[large][:, None, None] + _injections(m, n)[None]))
+    return np.concatenate(rows), np.concatenate(cols), np.concatenate(unmatched), np.concatenate(larger), tuple(cost)
+
+
+def _proxy_wasserstein_gaussian(config):
+    """Wasserstein-2 between 2-D Gaussians (closed form of the 2x2 matrix square root)."""
     items = config["items"]
-    N = len(items)
-    iu = _pairs(N)
-    if family == "mcvmd":
-        X = np.array(items)
-        n = X.shape[2]
-        sq = np.sum((X[:, None, :, None] - X[None, :, None, :]) ** 2, axis=-1)      # (N, N, L, L)
-        xlog = np.where(sq > 0, sq * np.log(np.where(sq > 0, sq, 1.0)), 0.0).mean(axis=(2, 3))
-        means = X.mean(axis=1)
-        c_b = np.log(4 * 100.0 ** 2) - np.euler_gamma + 1        # the library's b_max and constant
-        Dm = np.sum((means[:, None] - means[None]) ** 2, axis=-1)
-        d2 = np.pi ** (n / 2) / 8 * (np.diag(xlog)[:, None] - 2 * xlog + np.diag(xlog)[None] + 2 * c_b * Dm)
-        D = np.sqrt(np.clip(d2, 0, None))
-        np.fill_diagonal(D, 0.0)
-        return D
-    if family == "omat":
-        X = np.array(items)
-        m = X.shape[1]
-        perms = np.array(list(itertools.permutations(range(m))))
-        cost = np.sum((X[:, None, None, :, :] - X[:, perms][None]) ** 2, axis=-1)     # (N, N, perms, m)
-        D = np.sqrt(cost.mean(axis=-1).min(axis=-1))
-        np.fill_diagonal(D, 0.0)
-        return D
-    D = np.zeros((N, N))
-    if family == "ospa":
-        c, sizes = config["c"], [len(it) for it in items]
-        classes = {}
-        for i, j in zip(*iu):
-            small, large = (i, j) if sizes[i] <= sizes[j] else (j, i)
-            classes.setdefault((sizes[small], sizes[large]), []).append((i, j, small, large))
-        for (m, n), pairs in classes.items():
-            x = np.array([items[p[2]] for p in pairs])                     # (P, m, 2)
-            y = np.array([items[p[3]] for p in pairs])                     # (P, n, 2)
-            dist = np.minimum(np.sqrt(np.sum((x[:, :, None] - y[:, None]) ** 2, axis=-1)), c) ** 2
-            best = dist[:, np.arange(m), _injections(m, n)].sum(axis=-1).min(axis=-1)
-            values = np.sqrt((best + c ** 2 * (n - m)) / n)
-            for (i, j, _, _), value in zip(pairs, values):
-                D[i, j] = D[j, i] = value
-        return D
-    if family == "wasserstein_gaussian":
-        mu = np.array([it[0] for it in items])
-        Cs = np.array([it[1] for it in items])
-        det = np.linalg.det(Cs)
-        tr = np.trace(Cs, axis1=1, axis2=2)
-        # 2x2: tr sqrt(X) = sqrt(tr X + 2 sqrt(det X)), X = C1^(1/2) C2 C1^(1/2)
-        cross = np.sqrt(np.einsum("iab,jba->ij", Cs, Cs) + 2 * np.sqrt(det[:, None] * det[None]))
-        d2 = np.sum((mu[:, None] - mu[None]) ** 2, axis=-1) + tr[:, None] + tr[None] - 2 * cross
-        D = np.sqrt(np.clip(d2, 0, None))
-        np.fill_diagonal(D, 0.0)
-        return D
-    if family == "hellinger":
-        mu = np.array([it[0] for it in items])
-        s2 = np.array([it[1] for it in items]) ** 2
-        ssum = s2[:, None] + s2[None]
-        bc = np.sqrt(2 * np.sqrt(s2[:, None] * s2[None]) / ssum) * np.exp(-(mu[:, None] - mu[None]) ** 2 / (4 * ssum))
-        h2 = np.clip(1 - bc, 0, None)
-        D = h2 ** 2 if config["exponent"] == "printed" else np.sqrt(h2)
-        np.fill_diagonal(D, 0.0)
-        return D
-    W = np.array(items)                                  # bin probabilities; density = bins * W on [0, 1]
-    if family == "lq":
-        q = config["q"]
-        B = W.shape[1]
-        return (np.sum(np.abs(W[:, None] - W[None]) ** q, axis=-1) * B ** (q - 1)) ** (1 / q)
+    mu = np.array([it[0] for it in items], dtype=float)
+    Cs = np.array([it[1] for it in items], dtype=float)
+    det = np.linalg.det(Cs)
+    tr = np.trace(Cs, axis1=1, axis2=2)
+    # 2x2: tr sqrt(X) = sqrt(tr X + 2 sqrt(det X)), X = C1^(1/2) C2 C1^(1/2)
+    cross = np.sqrt(np.einsum("iab,jba->ij", Cs, Cs) + 2 * np.sqrt(det[:, None] * det[None]))
+    d2 = _squared_norms(mu[:, None] - mu[None]) + tr[:, None] + tr[None] - 2 * cross
+    return _zero_diagonal(np.sqrt(np.maximum(d2, 0)))
+
+
+def _proxy_hellinger(config):
+    """Hellinger between 1-D Gaussians, as printed ((1 - BC)^2) or usual (sqrt(1 - BC))."""
+    items = np.asarray(config["items"], dtype=float)
+    mu, s2 = items[:, 0], items[:, 1] ** 2
+    ssum = s2[:, None] + s2[None]
+    bc = np.sqrt(2 * np.sqrt(s2[:, None] * s2[None]) / ssum) * np.exp(-(mu[:, None] - mu[None]) ** 2 / (4 * ssum))
+    h2 = np.maximum(1 - bc, 0)
+    return _zero_diagonal(h2 ** 2 if config["exponent"] == "printed" else np.sqrt(h2))
+
+
+def _proxy_lq(config):
+    """L_q between piecewise-constant densities on [0, 1]."""
+    W = np.asarray(config["items"], dtype=float)             # bin probabilities; density = bins * W on [0, 1]
+    q, B = config["q"], W.shape[1]
+    return (np.add.reduce(np.abs(W[:, None] - W[None]) ** q, axis=-1) * B ** (q - 1)) ** (1 / q)
+
+
+def _proxy_jensen_shannon(config):
+    """Jensen-Shannon divergence between piecewise-constant densities on [0, 1]."""
+    W = np.asarray(config["items"], dtype=float)             # bin probabilities; density = bins * W on [0, 1]
     g = 0.5 * (W[:, None] + W[None])
     with np.errstate(divide="ignore", invalid="ignore"):
         t1 = np.where(W[:, None] > 0, W[:, None] * np.log(W[:, None] / g), 0.0)
         t2 = np.where(W[None] > 0, W[None] * np.log(W[None] / g), 0.0)
-    return np.clip(0.5 * np.sum(t1 + t2, axis=-1), 0, None)
+    return np.maximum(0.5 * np.add.reduce(t1 + t2, axis=-1), 0)
+
+
+_PROXIES = {"mcvmd": _proxy_mcvmd, "omat": _proxy_omat, "ospa": _proxy_ospa,
+            "wasserstein_gaussian": _proxy_wasserstein_gaussian, "hellinger": _proxy_hellinger,
+            "jensen_shannon": _proxy_jensen_shannon, "lq": _proxy_lq}
 
 
 FAMILIES = ("mcvmd", "omat", "ospa", "wasserstein_gaussian", "hellinger", "jensen_shannon", "lq")
@@ -548,10 +640,40 @@ def _kernel(name, shape, D, l):
     return fn(D, l, **shape)
 
 
+def _search_kernel(name, shape):
+    """``(D, l) -> Gram matrix`` for the search: ``shape`` checked once by the library's
+    covariance, then its unchecked fast path (the same values; the search's distances are
+    finite and non-negative and its length scales positive floats)."""
+    _kernel(name, shape, np.zeros(1), 1.0)
+    fn = _lib_covariance_unchecked(name)
+    params = {("alpha" if key == "alpha_rq" else key): float(value) for key, value in shape.items()}
+    return lambda D, l: fn(D, l, **params)
+
+
 def _length_scale(D, log_factor):
-    off = D[_pairs(len(D))]
-    median = np.median(off)
+    median = _median(D[_pairs(len(D))])
     return float(np.exp(log_factor) * median) if median > 0 else 0.0
+
+
+def _median(values):
+    """``np.median`` of a 1-D array, the same number without its overhead (NaN if any entry is NaN)."""
+    ordered = np.sort(values)
+    n = len(ordered)
+    if n == 0 or np.isnan(ordered[-1]):
+        return np.nan
+    return ordered[n // 2] if n % 2 else (ordered[n // 2 - 1] + ordered[n // 2]) / 2
+
+
+def _eigenvalues(K):
+    """Ascending eigenvalues of the symmetric float matrix ``K`` (its lower triangle), for the search.
+
+    The LAPACK gufunc of ``np.linalg.eigvalsh`` (the same numbers) without the wrapper's
+    checks, which cost more than the eigenvalues of the search's small matrices. Should LAPACK
+    not converge (NaN eigenvalues), ``np.linalg.eigvalsh`` repeats the call and raises its
+    LinAlgError.
+    """
+    lam = _umath_linalg.eigvalsh_lo(K, signature="d->d")
+    return np.linalg.eigvalsh(K) if np.isnan(lam[0]) else lam
 
 
 class _StopSearch(Exception):
@@ -562,15 +684,16 @@ def _search(rng, family, layout, size, name, shape):
     """Minimise lambda_min / lambda_max of the Gram matrix over configurations and length scale."""
     best = {"value": np.inf, "theta": None}
     evaluations = [0]
+    kernel = _search_kernel(name, shape)
 
     def objective(x):
         evaluations[0] += 1
-        D = _proxy_distance_matrix(family, _decode(family, x[:-1], layout))
+        D = _proxy_distance_matrix(family, _decode_arrays(family, x[:-1], layout))
         l = _length_scale(D, x[-1])
-        if l <= 0 or not np.all(np.isfinite(D)):
+        if l <= 0 or not np.isfinite(D).all():
             value = 1.0                                    # all distributions coincide: nothing to learn
         else:
-            lam = np.linalg.eigvalsh(_kernel(name, shape, D, l))
+            lam = _eigenvalues(kernel(D, l))
             value = float(lam[0] / lam[-1])
         if value < best["value"]:
             best.update(value=value, theta=x.copy())
