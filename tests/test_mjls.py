@@ -138,7 +138,8 @@ def test_alg31_skips_an_exact_cycle_with_the_same_result(monkeypatch, max_iter):
     monkeypatch.setattr(static._ScaledPair, "repeat",
                         lambda pair, period, times: (repeats.append(period), repeat(pair, period, times)))
     skipped = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False)
-    assert repeats == [4] and plain["status"] == "max_iterations"
+    # one cycle found and skipped (period 4 with this machine's kernels, 6 with OPENBLAS_CORETYPE=Prescott)
+    assert len(repeats) == 1 and plain["status"] == "max_iterations"
     assert plain.keys() == skipped.keys()
     for key, value in plain.items():
         assert np.array_equal(value, skipped[key]), key

@@ -511,7 +511,7 @@ class _NextCovariance:
         return 0.5 * (post + post.T)
 
     def many(self, inputs):
-        """C_{k+1}(u) for every row u of ``inputs`` (B, n_u), B >= 1: bit-identical to one call per row.
+        """C_{k+1}(u) for every row u of ``inputs`` (B, n_u), B >= 1: the same operations as one call per row.
 
         The rows go through the same operations stacked along a leading axis: elementwise
         arithmetic, numpy.matmul (whose loop over the leading axis makes each row's BLAS call
@@ -521,7 +521,9 @@ class _NextCovariance:
         :func:`~asoc.belief.landmark_example` and :func:`~asoc.belief.linear_gaussian_model`).
         Rows that leave the common case (no Cholesky factor of the predicted covariance,
         C^{yy} = 0 or singular) are evaluated one at a time, as is everything when Cov{v}
-        has no Cholesky factor.
+        has no Cholesky factor. With this project's numpy and OpenBLAS kernels the result is
+        bit-identical to one call per row; other BLAS kernels (e.g. OPENBLAS_CORETYPE=Prescott)
+        may round the stacked products differently, within rounding.
         """
         if self._v_points is None:
             return np.array([self(u) for u in inputs])

@@ -373,8 +373,9 @@ class StageProblem:
         numdifftools' Gradient and Hessian choose their evaluation points from ``u_bar`` alone
         (:func:`_numdifftools_points`), not from the function's values; the UKF's
         :meth:`_NextCovariance.many` evaluates C_{k+1} at all of them in one stacked
-        evaluation, bit-identical to one evaluation per point, and :meth:`_covariance_part`
-        then looks them up: the derivatives are numdifftools' on the same numbers. These
+        evaluation (bit-identical to one evaluation per point with this project's BLAS
+        kernels, within rounding with others), and :meth:`_covariance_part` then looks them
+        up: the derivatives are numdifftools' on these numbers. These
         values replace those of an earlier call. Nothing is prefetched without the UKF's
         stacked evaluation or the covariance term, or if the stacked value at ``u_bar``
         differs from the direct one (a model whose ``a`` or ``h`` rounds differently on a
