@@ -459,15 +459,23 @@ def _random_models(rng):
                          n_x=n_x, n_u=n_x)
 
 
-@settings(max_examples=25, deadline=None)
-@given(st.integers(0, 10_000), st.booleans())
-def test_unchecked_next_covariance_equals_the_public_and_the_textbook_one(seed, singular):
+def _random_estimates(seed, singular):
+    """(rng, model, mean, cov) for each of :func:`_random_models`; ``singular``: the covariance
+    has no Cholesky factor (its last row and column are zero)."""
     rng = np.random.default_rng(seed)
     for model in _random_models(rng):
         M = rng.normal(size=(model.n_x, model.n_x))
-        mean, cov, u = rng.normal(size=model.n_x), 0.5 * M @ M.T, rng.normal(size=model.n_u)
-        if singular:                              # no Cholesky factor: the eigen root
+        mean, cov = rng.normal(size=model.n_x), 0.5 * M @ M.T
+        if singular:
             cov[-1], cov[:, -1] = 0.0, 0.0
+        yield rng, model, mean, cov
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.booleans())
+def test_unchecked_next_covariance_equals_the_public_and_the_textbook_one(seed, singular):
+    for rng, model, mean, cov in _random_estimates(seed, singular):       # singular: the eigen root
+        u = rng.normal(size=model.n_u)
         ukf = UKF(model)
         public = ukf.next_covariance((mean, cov), u)
         fast = ukf._covariance_function((mean, cov))(u)
@@ -493,12 +501,7 @@ def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
 @settings(max_examples=25, deadline=None)
 @given(st.integers(0, 10_000), st.booleans())
 def test_stacked_next_covariance_equals_one_call_per_input(seed, singular):
-    rng = np.random.default_rng(seed)
-    for model in _random_models(rng):
-        M = rng.normal(size=(model.n_x, model.n_x))
-        mean, cov = rng.normal(size=model.n_x), 0.5 * M @ M.T
-        if singular:                              # no Cholesky factor of the prior
-            cov[-1], cov[:, -1] = 0.0, 0.0
+    for rng, model, mean, cov in _random_estimates(seed, singular):
         C = UKF(model)._covariance_function((mean, cov))
         near = rng.normal(size=model.n_u) + 1e-6 * rng.normal(size=(30, model.n_u))     # numdifftools-like steps
         inputs = np.vstack([near, 3.0 * rng.normal(size=(30, model.n_u))])
