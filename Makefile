@@ -28,7 +28,7 @@ FAR_DISABLED ?= X86_V3 X86_V4
 # what runs on an emulated CPU: every numerical test and every notebook at ci fidelity
 # (not the book build, the wheel or the kill test, which do not depend on the CPU's kernels)
 PORTABLE_TESTS := -q -p no:cacheprovider -n $(JOBS) --dist loadgroup -m "not book and not packaging" \
-                  --ignore=tests/test_crash_safety.py
+                  --ignore=tests/companion/test_crash_safety.py
 
 .PHONY: venv figures ledger book html test test-native test-portable bench clean chromium
 

@@ -18,7 +18,7 @@ from asoc_companion import notebooks as nbs
 from asoc_companion.imports import closure, imported_names
 from asoc_companion.io import atomic_write_json
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 
 MODULES = {
     "asoc/__init__.py": '"""lib"""\n',

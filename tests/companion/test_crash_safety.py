@@ -26,7 +26,7 @@ from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
 from asoc_companion.io import atomic_write_json
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 
 
 def _git(*args, cwd):

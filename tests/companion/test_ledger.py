@@ -22,7 +22,7 @@ def test_full_fidelity_status_is_the_expected_one(key):
 def test_every_recorded_value_is_in_the_reference():
     """Every value of a page that has a reference file (the thesis's sections, the findings and
     the own-system pages) has an entry. The theorems study records verdicts of its own checks,
-    not numbers to compare (tests/test_theorems*.py test them), and has no reference file."""
+    not numbers to compare (tests/companion/test_theorems*.py test them), and has no reference file."""
     from asoc_companion.paths import project
     pages = {p.stem for p in (project().reference).glob("*.yaml")}
     missing = sorted(k for k in set(VALUES) - set(REFERENCE) if k.split(".")[0] in pages)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 LIBRARY = SRC / "asoc"
 TOOLING = ("asoc_companion",)
 BOOK_TOOLS = ("matplotlib", "papermill", "nbformat", "nbclient", "IPython", "sphinx", "yaml", "nbval")

@@ -136,7 +136,7 @@ def test_arnoldi_radius_on_the_larger_plants_hard_closed_loops(case):
 
     from asoc.mjls.operators import _arnoldi_radius
 
-    cases = json.loads((Path(__file__).parent / "reference" / "arnoldi_hard_cases.json").read_text())
+    cases = json.loads((Path(__file__).parents[2] / "reference" / "arnoldi_hard_cases.json").read_text())
     A, T = np.array(cases[case]["A"]), np.array(cases[case]["T"])
     rho = _arnoldi_radius(A, T)
     # rho_dense: the largest modulus of np.linalg.eigvals(kronecker_matrix(A, T)), stored (2048^2 is slow)

@@ -6,7 +6,7 @@ size (spectral radii, gains, errors); nbval re-executes the notebook with paperm
 ci parameters injected and requires those printed outputs to be identical. They print
 numbers rounded to what is meant (the thesis's decimals, or a stated accuracy), never a
 bare repr, so another CPU's BLAS kernels (``make test-portable``) cannot change them.
-The same execution serves the value checks of tests/test_notebooks.py (conftest's
+The same execution serves the value checks of tests/notebooks/test_notebooks.py (conftest's
 ``ci_execution``): each notebook runs once per test session, not twice.
 """
 

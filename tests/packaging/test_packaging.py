@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FORBIDDEN = ("matplotlib", "papermill", "nbformat", "IPython", "sphinx", "asoc_companion", "yaml", "nbclient")
 
 PROBE = textwrap.dedent("""

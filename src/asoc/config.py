@@ -1,0 +1,149 @@
+"""The library's tunables in one place, as python-control's ``config.defaults``.
+
+Every switch point, tolerance and size limit that a function reads at call time lives in
+:data:`defaults`, keyed ``"<subpackage>.<name>"``, with the measurement or reason behind its
+value in :data:`DESCRIPTIONS`. Change one for the rest of the session with
+:func:`set_defaults`, for a block of code with :func:`option_context`, and go back to the
+shipped values with :func:`reset_defaults`. No module keeps a tunable as a global of its own,
+and no caller assigns to a module's attributes.
+
+Examples
+--------
+>>> from asoc import config
+>>> config.defaults["mjls.rank_rtol"]
+1e-10
+>>> with config.option_context(**{"mjls.rank_rtol": 1e-8}):
+...     config.defaults["mjls.rank_rtol"]
+1e-08
+>>> config.defaults["mjls.rank_rtol"]
+1e-10
+"""
+
+import contextlib
+from collections.abc import Iterator
+
+#: Each tunable: (shipped value, why it has that value). Subpackages add their entries here.
+_REGISTRY: dict[str, tuple[object, str]] = {
+    "mjls.rank_rtol": (
+        1e-10,
+        "Relative singular-value threshold of the minimum-norm solution of (3.51) in Alg. 3.2. "
+        "Its matrix becomes singular at the fixed point when the controller state does not "
+        "excite every direction; LAPACK's default threshold (about 1e-13 at n = 8) lets rounding "
+        "noise into those directions and the iteration diverges (Scaling page, n = 8, 16)."),
+    "mjls.matrix_free_min_unknowns": (
+        200,
+        "From this many unknowns n^2 + n ny + nu n on, Alg. 3.2 solves (3.51) by matrix-free "
+        "conjugate gradients instead of a dense least-squares solve (measured crossover between "
+        "195 and 224 unknowns on 2 cores)."),
+    "mjls.cg_tolerance": (
+        1e-12,
+        "Relative residual at which each conjugate-gradient solve of (3.51) stops."),
+    "mjls.cg_max_iter_factor": (
+        10,
+        "Iteration cap of conjugate gradients, as a multiple of the number of unknowns."),
+    "mjls.tikhonov_steps": (
+        2,
+        "Steps of iterated Tikhonov regularisation in the conjugate-gradient solve of (3.51): one "
+        "step leaves a relative bias rcond cond(H), two leave its square."),
+    "mjls.dense_max_radius": (
+        64,
+        "Up to this size M n^2 the spectral radius comes from the eigenvalues of the dense "
+        "Kronecker matrix, above it from Arnoldi (measured crossover on 2 cores)."),
+    "mjls.dense_max_solve": (
+        256,
+        "Up to this size M n^2 the coupled Lyapunov equations are solved by a dense LU "
+        "factorisation, above it iteratively (measured crossover on 2 cores)."),
+    "mjls.dense_fallback_radius": (
+        1024,
+        "When Arnoldi does not converge: dense eigenvalues up to this M n^2 (0.85 s at 1024), "
+        "the cone power method above it."),
+    "mjls.arnoldi_subspaces": (
+        (60, 150),
+        "Krylov-space sizes tried in turn for rho: 20 vectors stall on a dominant eigenvalue of "
+        "multiplicity 4 (the larger-plant page's chain), 60 converge there in 10 ms."),
+    "mjls.rho_tolerance": (
+        1e-9,
+        "A spectral radius within this distance of 1 is reported as undecided."),
+    "mjls.solve_tolerance": (
+        1e-12,
+        "Relative residual ||X - L(X) - W|| / ||W|| at which the iterative coupled-Lyapunov "
+        "solve stops."),
+}
+
+#: The current value of every tunable, keyed ``"<subpackage>.<name>"``.
+defaults: dict[str, object] = {key: value for key, (value, _) in _REGISTRY.items()}
+#: Why each tunable has its shipped value.
+DESCRIPTIONS: dict[str, str] = {key: why for key, (_, why) in _REGISTRY.items()}
+
+
+def _check_keys(names) -> None:
+    unknown = sorted(set(names) - set(_REGISTRY))
+    if unknown:
+        raise KeyError(f"unknown configuration key(s) {unknown}; valid keys: {sorted(_REGISTRY)}")
+
+
+def set_defaults(**values) -> None:
+    """Set tunables for the rest of the session, by their full keys.
+
+    Parameters
+    ----------
+    **values
+        ``"<subpackage>.<name>"`` to its new value; pass dotted keys with ``**{...}``.
+
+    Raises
+    ------
+    KeyError
+        If a key is not a tunable of the library.
+
+    Examples
+    --------
+    >>> from asoc import config
+    >>> config.set_defaults(**{"mjls.dense_max_radius": 0})
+    >>> config.defaults["mjls.dense_max_radius"]
+    0
+    >>> config.reset_defaults()
+    """
+    _check_keys(values)
+    defaults.update(values)
+
+
+def reset_defaults() -> None:
+    """Restore every tunable to its shipped value.
+
+    Examples
+    --------
+    >>> from asoc import config
+    >>> config.set_defaults(**{"mjls.rho_tolerance": 1e-6})
+    >>> config.reset_defaults()
+    >>> config.defaults["mjls.rho_tolerance"]
+    1e-09
+    """
+    defaults.clear()
+    defaults.update({key: value for key, (value, _) in _REGISTRY.items()})
+
+
+@contextlib.contextmanager
+def option_context(**values) -> Iterator[None]:
+    """Set tunables inside a ``with`` block, restoring the previous values on exit (also on error).
+
+    Parameters
+    ----------
+    **values
+        ``"<subpackage>.<name>"`` to its value inside the block.
+
+    Examples
+    --------
+    >>> from asoc import config
+    >>> with config.option_context(**{"mjls.dense_max_solve": 0}):
+    ...     config.defaults["mjls.dense_max_solve"]
+    0
+    >>> config.defaults["mjls.dense_max_solve"]
+    256
+    """
+    _check_keys(values)
+    previous = {key: defaults[key] for key in values}
+    defaults.update(values)
+    try:
+        yield
+    finally:
+        defaults.update(previous)

@@ -1,0 +1,77 @@
+"""Small linear-algebra helpers shared by the subpackages: transposes and symmetric parts of
+stacks, packing of gains into one vector, and the relative change with one floor rule.
+
+Stacks of matrices have shape ``(..., n, m)``; every helper works on the last two axes.
+"""
+
+import numpy as np
+
+#: Absolute floor of a norm in :func:`relative_change`: a zero iterate converges instead of
+#: dividing by zero.
+NORM_FLOOR = 1e-12
+
+
+def transpose(X):
+    """The transpose of every matrix of a stack (the last two axes).
+
+    Examples
+    --------
+    >>> transpose(np.arange(6.0).reshape(1, 2, 3)).shape
+    (1, 3, 2)
+    """
+    return np.swapaxes(X, -1, -2)
+
+
+def sym(X):
+    """The symmetric part (X + X^T) / 2 of every matrix of a stack.
+
+    Examples
+    --------
+    >>> sym(np.array([[0.0, 2.0], [0.0, 0.0]]))
+    array([[0., 1.],
+           [1., 0.]])
+    """
+    return 0.5 * (X + transpose(X))
+
+
+def pack(*matrices):
+    """One vector [vec G_1; vec G_2; ...] of matrices, column-stacking vec (as in (3.49)).
+
+    Examples
+    --------
+    >>> pack(np.array([[1.0, 2.0], [3.0, 4.0]]), np.zeros((2, 1)), np.ones((1, 2)))
+    array([1., 3., 2., 4., 0., 0., 1., 1.])
+    """
+    return np.concatenate([np.reshape(G, -1, order="F") for G in matrices])
+
+
+def unpack(z, shapes):
+    """The matrices of the given shapes from a vector of :func:`pack`; its inverse.
+
+    Examples
+    --------
+    >>> F, K, L = unpack(np.arange(8.0), ((2, 2), (2, 1), (1, 2)))
+    >>> F.tolist(), K.ravel().tolist(), L.tolist()
+    ([[0.0, 2.0], [1.0, 3.0]], [4.0, 5.0], [[6.0, 7.0]])
+    """
+    out, start = [], 0
+    for shape in shapes:
+        size = int(np.prod(shape))
+        out.append(np.reshape(z[start:start + size], shape, order="F"))
+        start += size
+    return out
+
+
+def relative_change(old, new, floor=NORM_FLOOR):
+    """||new - old||_F / max(||new||_F, floor): how much an iterate moved, relative to its size.
+
+    Examples
+    --------
+    >>> relative_change(np.array([1.0, 0.0]), np.array([1.0, 0.1]))
+    0.09950371902099892
+    >>> relative_change(np.zeros(2), np.zeros(2))
+    0.0
+    """
+    d = np.ravel(new) - np.ravel(old)
+    n = np.ravel(new)
+    return float(np.sqrt(np.vdot(d, d)) / max(np.sqrt(np.vdot(n, n)), floor))
