@@ -67,8 +67,8 @@ def relative_change(old, new, floor=NORM_FLOOR):
 
     Examples
     --------
-    >>> relative_change(np.array([1.0, 0.0]), np.array([1.0, 0.1]))
-    0.09950371902099892
+    >>> round(relative_change(np.array([1.0, 0.0]), np.array([1.0, 0.1])), 6)
+    0.099504
     >>> relative_change(np.zeros(2), np.zeros(2))
     0.0
     """
