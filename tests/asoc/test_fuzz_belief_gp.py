@@ -108,6 +108,7 @@ CALLS = {
     "improved_policy_value": (belief.improved_policy_value, dict(exp=EXP, eps=0.5)),
     "affine_policy_value": (belief.affine_policy_value, dict(exp=EXP, L=np.zeros((2, 2)), d=np.zeros(2),
                                                              u_bar=np.zeros(2))),
+    "policy_step": (belief.policy_step, dict(exp=EXP, u_bar=REF.u_bar[0], eps=0.5)),
     "line_search": (belief.line_search, dict(stage=STAGE, exp=EXP, u_bar=REF.u_bar[0], mean_bar=MEAN0,
                                              alpha_min=0.01)),
     "backward_pass": (belief.backward_pass, dict(model=MODEL, cost=COST, filt=UKF, ref=REF, policy=POLICY,
@@ -179,7 +180,7 @@ CALLS = {
     "error_metrics": (gp.error_metrics, dict(prediction=[1.0, 2.0], truth=[1.0, 3.0])),
 }
 
-PUBLIC_RESULTS = {"LandmarkExample", "QuadraticExpansion", "Expansion", "Reference", "LineSearch",
+PUBLIC_RESULTS = {"BeliefFilter", "LandmarkExample", "QuadraticExpansion", "Expansion", "Reference", "LineSearch",
                   "TrajectoryOptimizationResult", "BeliefILQGResult", "ClosedLoop", "Noise", "FitResult",
                   "DiracApproximation", "COVARIANCES", "TABLE_2_1"}
 

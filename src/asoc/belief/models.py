@@ -199,8 +199,15 @@ class QuadraticCost:
         return np.einsum("...i,ij,...j->...", e, self.Q_K, e) + np.einsum("ij,...ji->...", self.Q_K, cov)
 
 
-def _cost_for(cost, model_, name: str = "cost") -> QuadraticCost:
-    """Raise unless ``cost`` is a :class:`QuadraticCost` matching the model's dimensions."""
+def cost_for(cost, model_, name: str = "cost") -> QuadraticCost:
+    """Raise unless ``cost`` is a :class:`QuadraticCost` matching the model's dimensions.
+
+    Examples
+    --------
+    >>> ex = landmark_example()
+    >>> cost_for(ex.cost, ex.model) is ex.cost
+    True
+    """
     check.instance(cost, QuadraticCost, name)
     if cost.Q.shape[0] != model_.n_x or cost.R.shape[0] != model_.n_u:
         raise ValueError(f"{name}: expected Q of shape ({model_.n_x}, {model_.n_x}) and R of shape "

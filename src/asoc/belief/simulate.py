@@ -1,6 +1,7 @@
 """Closed-loop simulation of (2.1)-(2.2) under a controller, vectorised over runs.
 
-The controller keeps its own estimate (UKF or EKF) and maps it to an input. Random
+The controller keeps its own estimate (UKF or EKF) and maps it to an input
+(:class:`~asoc.belief.MeanAffineController`, :class:`~asoc.belief.BeliefAffineController`). Random
 draws come from one seeded Generator; :func:`draw_noise` gives the same draws to
 several controllers (common random numbers), so their costs can be compared run by run.
 """
@@ -10,8 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import validation as check
-from .filters import UKF, KAPPA, ekf_step
-from .models import GaussianNoise, NonlinearModel, _cost_for
+from .models import GaussianNoise, NonlinearModel, cost_for
 
 
 @dataclass(frozen=True)
@@ -77,99 +77,13 @@ def _draw_noise(model, mean0, cov0, K, n_runs, rng):
     return Noise(x0, model.w.sample(rng, (n_runs, K)), model.v.sample(rng, (n_runs, K)))
 
 
-class MeanAffineController:
-    """u_k = L_k E{x_k} + d_k (eq. 2.18) with the UKF estimate (the proposed controller).
-
-    Parameters
-    ----------
-    model : NonlinearModel
-    policy : AffinePolicy
-        Of the model's dimensions.
-    kappa : float, optional
-        The UKF's sample scaling (default 0.5).
-
-    Raises
-    ------
-    ValueError, TypeError
-        If ``model`` or ``policy`` has the wrong type or dimensions.
-
-    Examples
-    --------
-    >>> from asoc.belief import AffinePolicy, landmark_example
-    >>> ex = landmark_example(K=2)
-    >>> ctrl = MeanAffineController(ex.model, AffinePolicy(np.zeros((2, 2, 2)), np.ones((2, 2))))
-    >>> ctrl.control(0, ex.mean0, ex.cov0).tolist()
-    [1.0, 1.0]
-    """
-
-    def __init__(self, model, policy, kappa=None):
-        from .trajectory import AffinePolicy
-        model = check.instance(model, NonlinearModel, "model")
-        check.instance(policy, AffinePolicy, "policy")
-        if policy.L.shape[1:] != (model.n_u, model.n_x):
-            raise ValueError(f"policy: expected gains of shape (K, {model.n_u}, {model.n_x}), found {policy.L.shape}")
-        self.filter = UKF(model, KAPPA if kappa is None else kappa)
-        self.policy, self.horizon = policy, policy.L.shape[0]
-
-    def control(self, k, mean, cov):
-        """The input at time k for the estimate (mean, cov)."""
-        return mean @ self.policy.L[k].T + self.policy.d[k]
-
-    def step(self, mean, cov, u, y):
-        """The UKF's next estimate."""
-        return self.filter._step((mean, cov), u, y)
-
-
-class BeliefAffineController:
-    """u_k = u_bar_k + L_k (b_k - b_bar_k) with the EKF belief b = (mean, vec sqrt cov) [159].
-
-    Parameters
-    ----------
-    model : NonlinearModel
-    result : BeliefILQGResult
-        From :func:`~asoc.belief.belief_ilqg` for the same model.
-
-    Raises
-    ------
-    ValueError, TypeError
-        If ``model`` or ``result`` has the wrong type or dimensions.
-
-    Examples
-    --------
-    >>> from asoc.belief import belief_ilqg, landmark_example
-    >>> ex = landmark_example(K=2)
-    >>> ctrl = BeliefAffineController(ex.model, belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0))
-    >>> ctrl.control(0, ex.mean0, ex.cov0).round(2).tolist()
-    [4.57, -0.01]
-    """
-
-    def __init__(self, model, result):
-        from .vdberg import BeliefILQGResult
-        self.model = check.instance(model, NonlinearModel, "model")
-        self.result = check.instance(result, BeliefILQGResult, "result")
-        if result.u_bar.shape[1] != model.n_u or result.b_bar.shape[1] != model.n_x + model.n_x * (model.n_x + 1) // 2:
-            raise ValueError(f"result: expected a belief iLQG result for n_x = {model.n_x}, n_u = {model.n_u}, "
-                             f"found beliefs {result.b_bar.shape} and inputs {result.u_bar.shape}")
-        self.horizon = result.u_bar.shape[0]
-
-    def control(self, k, mean, cov):
-        """The input at time k for the EKF belief (mean, cov)."""
-        from .vdberg import belief_vector
-        r = self.result
-        return r.u_bar[k] + (belief_vector(mean, cov) - r.b_bar[k]) @ r.L[k].T
-
-    def step(self, mean, cov, u, y):
-        """The EKF's next belief."""
-        return ekf_step(self.model, mean, cov, u, y)
-
-
 @dataclass(frozen=True)
 class ClosedLoop:
     """Simulated runs: true states x (N, K+1, n), estimates (means, covs), inputs u, costs (N,).
 
     Examples
     --------
-    >>> from asoc.belief import AffinePolicy, landmark_example
+    >>> from asoc.belief import AffinePolicy, MeanAffineController, landmark_example
     >>> ex = landmark_example(K=2)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 5, np.random.default_rng(0))
     >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2)), noise)
@@ -213,7 +127,7 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
 
     Examples
     --------
-    >>> from asoc.belief import AffinePolicy, landmark_example
+    >>> from asoc.belief import AffinePolicy, MeanAffineController, landmark_example
     >>> ex = landmark_example(K=3)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 3, 100, np.random.default_rng(0))
     >>> zero = MeanAffineController(ex.model, AffinePolicy.zero(3, 2, 2))
@@ -221,7 +135,7 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
     106.3
     """
     model = check.instance(model, NonlinearModel, "model")
-    cost = _cost_for(cost, model)
+    cost = cost_for(cost, model)
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
     check.instance(noise, Noise, "noise")

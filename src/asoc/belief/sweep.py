@@ -16,9 +16,10 @@ import numpy as np
 
 from .. import validation as check
 from ..progress import progress_bar
-from .models import NonlinearModel, _cost_for
-from .simulate import MeanAffineController, simulate
-from .trajectory import AffinePolicy, optimize_belief_trajectory
+from .models import NonlinearModel, cost_for
+from .policy import AffinePolicy, MeanAffineController
+from .simulate import simulate
+from .trajectory import optimize_belief_trajectory
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,7 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     """
     rng = check.generator(rng)
     model = check.instance(model, NonlinearModel, "model")
-    cost = _cost_for(cost, model)
+    cost = cost_for(cost, model)
     n_members = check.integer(n_members, "n_members", minimum=1)
     scale = check.real_scalar(scale, "scale", low=0, low_open=True)
     progress = check.boolean(progress, "progress")

@@ -30,8 +30,9 @@ import numpy as np
 from .. import validation as check
 from ..progress import progress_bar
 from ..result import IterativeResult
-from .filters import _estimate, ekf_gain, ekf_predict
-from .models import NonlinearModel, _cost_for
+from .ekf import ekf_gain, ekf_predict, ekf_step
+from .filters import checked_estimate
+from .models import NonlinearModel, cost_for
 
 
 def _tril_indices(n):
@@ -84,7 +85,7 @@ def belief_vector(mean, cov):
     >>> belief_vector([1.0, 2.0], [[4.0, 0.0], [0.0, 9.0]]).tolist()
     [1.0, 2.0, 2.0, 0.0, 3.0]
     """
-    mean, cov = _estimate(mean, cov, "mean", "cov")
+    mean, cov = checked_estimate(mean, cov, "mean", "cov")
     return _belief_vector(mean, cov)
 
 
@@ -300,7 +301,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     (True, True)
     """
     model = check.instance(model, NonlinearModel, "model")
-    cost = _cost_for(cost, model)
+    cost = cost_for(cost, model)
     K, n = cost.K, model.n_x
     mean0 = check.vector(mean0, "mean0", n)
     cov0 = check.covariance(cov0, "cov0", n)
@@ -350,6 +351,47 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     L, _, expected, _ = _backward(dyn, bcost, b_bar, u_bar)
     return BeliefILQGResult(b_bar=b_bar, u_bar=u_bar, L=L, costs=costs, expected_cost=float(expected),
                             iterations=it, converged=status == "converged", status=status, message=message)
+
+
+class BeliefAffineController:
+    """u_k = u_bar_k + L_k (b_k - b_bar_k) with the EKF belief b = (mean, vec sqrt cov) [159].
+
+    Parameters
+    ----------
+    model : NonlinearModel
+    result : BeliefILQGResult
+        From :func:`~asoc.belief.belief_ilqg` for the same model.
+
+    Raises
+    ------
+    ValueError, TypeError
+        If ``model`` or ``result`` has the wrong type or dimensions.
+
+    Examples
+    --------
+    >>> from asoc.belief import landmark_example
+    >>> ex = landmark_example(K=2)
+    >>> ctrl = BeliefAffineController(ex.model, belief_ilqg(ex.model, ex.cost, ex.mean0, ex.cov0))
+    >>> ctrl.control(0, ex.mean0, ex.cov0).round(2).tolist()
+    [4.57, -0.01]
+    """
+
+    def __init__(self, model, result):
+        self.model = check.instance(model, NonlinearModel, "model")
+        self.result = check.instance(result, BeliefILQGResult, "result")
+        if result.u_bar.shape[1] != model.n_u or result.b_bar.shape[1] != model.n_x + model.n_x * (model.n_x + 1) // 2:
+            raise ValueError(f"result: expected a belief iLQG result for n_x = {model.n_x}, n_u = {model.n_u}, "
+                             f"found beliefs {result.b_bar.shape} and inputs {result.u_bar.shape}")
+        self.horizon = result.u_bar.shape[0]
+
+    def control(self, k, mean, cov):
+        """The input at time k for the EKF belief (mean, cov)."""
+        r = self.result
+        return r.u_bar[k] + (belief_vector(mean, cov) - r.b_bar[k]) @ r.L[k].T
+
+    def step(self, mean, cov, u, y):
+        """The EKF's next belief."""
+        return ekf_step(self.model, mean, cov, u, y)
 
 
 def _backward(dyn, bcost, b_bar, u_bar):

@@ -11,7 +11,7 @@ from asoc.belief import (UKF, AffinePolicy, DiracMixture, GaussianNoise, Particl
                          landmark_example, next_estimate_covariance, linear_gaussian_model, reference_trajectory,
                          sigma_points, statistical_taylor_expansion, statistical_taylor_linearization_error,
                          improved_policy_value)
-from asoc.belief.trajectory import StageProblem, Value, terminal_value
+from asoc.belief import StageProblem, Value, backward_pass, terminal_value
 
 # a linear-Gaussian model (the LQG case of Sec. 2.3)
 A = np.array([[1.0, 0.1], [0.0, 1.0]])
@@ -223,7 +223,7 @@ def test_indefinite_covariance_hessian_warns_not_crashes():
 
 
 def test_line_search_that_cannot_decrease_stops_with_flag():
-    from asoc.belief.trajectory import Expansion, line_search
+    from asoc.belief import Expansion, line_search
 
     class Flat(StageProblem):
         def __init__(self):
@@ -331,7 +331,8 @@ def test_perturbation_sweep_members_differ_and_psd_is_not_chaotic():
 
 
 def test_perturbation_sweep_in_worker_processes_equals_the_serial_sweep():
-    """n_jobs=2 gives the serial rows bit for bit, and the workers' warnings reach the caller."""
+    """n_jobs=2 gives the serial rows (to rounding: another process may use other BLAS kernels), and the
+    workers' warnings reach the caller."""
     from asoc.belief.sweep import perturbation_sweep
     ex = landmark_example(K=4)
     noise = draw_noise(ex.model, ex.mean0, ex.cov0, 4, 20, np.random.default_rng(3))
@@ -343,9 +344,11 @@ def test_perturbation_sweep_in_worker_processes_equals_the_serial_sweep():
                                    n_cost_runs=10, max_iterations=2, rtol=1e-12, n_jobs=n_jobs)
         runs[n_jobs] = (s, [str(w.message) for w in caught])
     (serial, said), (parallel, said_parallel) = runs[1], runs[2]
-    for field in ("iterations", "converged", "costs", "diverged_iterates"):
+    for field in ("iterations", "converged"):
         assert np.array_equal(getattr(serial, field), getattr(parallel, field)), field
-    assert serial.baseline == parallel.baseline
+    for field in ("costs", "diverged_iterates"):
+        np.testing.assert_allclose(getattr(serial, field), getattr(parallel, field), rtol=1e-10, err_msg=field)
+    assert serial.baseline == pytest.approx(parallel.baseline, rel=1e-12)
     assert said == said_parallel and any("did not converge" in m for m in said)
 
 
@@ -473,14 +476,16 @@ def _random_estimates(seed, singular):
 
 @settings(max_examples=25, deadline=None)
 @given(st.integers(0, 10_000), st.booleans())
-def test_unchecked_next_covariance_equals_the_public_and_the_textbook_one(seed, singular):
+def test_covariance_map_equals_the_public_and_the_textbook_next_covariance(seed, singular):
     for rng, model, mean, cov in _random_estimates(seed, singular):       # singular: the eigen root
         u = rng.normal(size=model.n_u)
         ukf = UKF(model)
         public = ukf.next_covariance((mean, cov), u)
-        fast = ukf._covariance_function((mean, cov))(u)
-        assert np.array_equal(fast, public)           # the same operations: bit-identical
-        assert np.allclose(fast, _textbook_next_covariance(model, mean, cov, u), rtol=1e-10, atol=1e-12)
+        mapped = ukf.covariance_map((mean, cov))(u)
+        scale = max(1.0, np.abs(public).max())
+        np.testing.assert_allclose(mapped, public, rtol=1e-12, atol=1e-12 * scale)
+        np.testing.assert_allclose(mapped, _textbook_next_covariance(model, mean, cov, u), rtol=1e-10,
+                                   atol=1e-12 * scale)
 
 
 def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
@@ -492,96 +497,55 @@ def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
     stage = StageProblem(ex.model, ex.cost, filt, (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), S), w, beta)
     for u in rng.normal(size=(5, 2)):
         C = filt.next_covariance((ex.mean0, ex.cov0), u)
-        assert stage._covariance_part(u) == stage.covariance_part(list(u))
+        assert stage._covariance_part(u) == pytest.approx(stage.covariance_part(list(u)), rel=1e-13)
         assert stage._covariance_part(u) == pytest.approx(0.5 * np.trace(S @ C), rel=1e-13)
     with pytest.raises(ValueError, match="u: expected shape"):
         stage.covariance_part([1.0])
 
 
-@settings(max_examples=25, deadline=None)
-@given(st.integers(0, 10_000), st.booleans())
-def test_stacked_next_covariance_equals_one_call_per_input(seed, singular):
-    for rng, model, mean, cov in _random_estimates(seed, singular):
-        C = UKF(model)._covariance_function((mean, cov))
-        near = rng.normal(size=model.n_u) + 1e-6 * rng.normal(size=(30, model.n_u))     # numdifftools-like steps
-        inputs = np.vstack([near, 3.0 * rng.normal(size=(30, model.n_u))])
-        stacked, single = C.many(inputs), np.array([C(u) for u in inputs])
-        # bit-identical with this machine's kernels; other BLAS kernels may round a stacked product differently
-        np.testing.assert_allclose(stacked, single, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(single).max()))
+class _ProtocolOnly:
+    """A filter that offers Alg. 2.2 nothing but the methods of the BeliefFilter protocol (a UKF inside)."""
+
+    def __init__(self, model):
+        self._inner = UKF(model)
+
+    def initial(self, mean, cov):
+        return self._inner.initial(mean, cov)
+
+    def step(self, estimate, u, y):
+        return self._inner.step(estimate, u, y)
+
+    def mean(self, estimate):
+        return self._inner.mean(estimate)
+
+    def mixture(self, estimate):
+        return self._inner.mixture(estimate)
+
+    def next_covariance(self, estimate, u):
+        return self._inner.next_covariance(estimate, u)
+
+    def covariance_map(self, estimate):
+        return lambda u: self._inner.next_covariance(estimate, u)
 
 
-def test_stacked_next_covariance_rows_without_a_cholesky_factor():
-    model = linear_gaussian_model(np.zeros((2, 2)), np.eye(2), np.zeros((2, 2)), np.eye(2), np.eye(2))
-    C = UKF(model)._covariance_function((np.zeros(2), np.eye(2)))    # predicted covariance 0: no factor
-    inputs = np.random.default_rng(0).normal(size=(4, 2))
-    assert np.array_equal(C.many(inputs), np.array([C(u) for u in inputs]))
-
-
-def test_predicted_points_are_those_numdifftools_evaluates():
-    import numdifftools as nd
-    from asoc.belief.trajectory import _numdifftools_points
-    for x in (np.array([0.3, -0.7]), np.array([12.5]), np.array([-0.0, 1e-3, -4.0]), np.array([1e8, -3e-9])):
-        seen = []
-        f = lambda z: seen.append(z.copy()) or float(np.sum(np.sin(z)))     # noqa: E731
-        nd.Gradient(f)(x), nd.Hessian(f)(x)
-        assert {z.tobytes() for z in _numdifftools_points(x)} == {z.tobytes() for z in seen}     # x appears twice
-
-
-def test_prefetched_covariance_term_gives_numdifftools_derivatives_unchanged():
-    import numdifftools as nd
-    from asoc.belief.trajectory import _numdifftools_points
-    ex = landmark_example(K=2)
-    filt = UKF(ex.model)
+def test_the_trajectory_optimiser_uses_a_filter_through_its_protocol_only():
+    from asoc.belief import BeliefFilter
+    ex = landmark_example(K=3)
+    wrapped = _ProtocolOnly(ex.model)
+    assert isinstance(wrapped, BeliefFilter) and isinstance(UKF(ex.model), BeliefFilter)
+    assert isinstance(ParticleFilter(ex.model, 10, np.random.default_rng(0)), BeliefFilter)
     w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
-    rng = np.random.default_rng(4)
-    nxt = Value(0.0, np.zeros(2), np.eye(2), rng.normal(size=(2, 2)))
-
-    def stage():
-        return StageProblem(ex.model, ex.cost, filt, (ex.mean0, ex.cov0), nxt, w, beta)
-
-    prefetched, direct = stage(), stage()
-    for u_bar in rng.normal(size=(3, 2)):
-        prefetched._prefetch_covariance_part(u_bar)
-        assert len(prefetched._prefetched) == 181             # every point of numdifftools' Gradient and Hessian
-        for point in _numdifftools_points(u_bar):
-            assert prefetched._prefetched[point.tobytes()] == direct._covariance_part(point)
-        for derivative in (nd.Gradient, nd.Hessian):
-            assert np.array_equal(derivative(prefetched._covariance_part)(u_bar),
-                                  derivative(direct._covariance_part)(u_bar))
-        other = u_bar + 0.1                       # not an evaluation point: evaluated directly
-        assert prefetched._covariance_part(other) == direct._covariance_part(other)
-    pf_stage = StageProblem(ex.model, ex.cost, ParticleFilter(ex.model, 20, np.random.default_rng(1)),
-                            DiracMixture(rng.normal(size=(20, 2))), nxt, w, beta)
-    pf_stage._prefetch_covariance_part(np.zeros(2))           # no stacked evaluation: nothing prefetched
-    assert pf_stage._prefetched == {}
-
-
-def test_nothing_is_prefetched_for_a_model_that_rounds_differently_on_a_stack():
-    from asoc.belief import NonlinearModel
-    ex = landmark_example(K=2)
-    m = ex.model                                  # a(x, u, w) off by 1e-12 when u has a stack axis
-    odd = NonlinearModel(a=lambda x, u, w: m.a(x, u, w) + (1e-12 if np.ndim(u) > 2 else 0.0), h=m.h, w=m.w, v=m.v,
-                         n_x=2, n_u=2, jacobians=m.jacobians, affine=True)
-    w, beta = sigma_points(odd.w.mean, odd.w.cov)
-    stage = StageProblem(odd, ex.cost, UKF(odd), (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), np.eye(2)),
-                         w, beta)
-    stage._prefetch_covariance_part(np.array([0.5, 0.1]))
-    assert stage._prefetched == {}
-
-
-def test_nothing_is_prefetched_when_numdifftools_has_no_get_steps(monkeypatch):
-    import numdifftools as nd
-    ex = landmark_example(K=2)
-    w, beta = sigma_points(ex.model.w.mean, ex.model.w.cov)
-    nxt = Value(0.0, np.zeros(2), np.eye(2), np.eye(2))
-    stage = StageProblem(ex.model, ex.cost, UKF(ex.model), (ex.mean0, ex.cov0), nxt, w, beta)
-    u_bar = np.array([0.5, 0.1])
-    with_steps = stage.expansion(u_bar)
-    monkeypatch.delattr(nd.core.Derivative, "_get_steps")       # another numdifftools version
-    stage._prefetch_covariance_part(u_bar)
-    assert stage._prefetched == {}
-    monkeypatch.undo()
-    without_steps = StageProblem(ex.model, ex.cost, UKF(ex.model), (ex.mean0, ex.cov0), nxt, w, beta)
-    monkeypatch.setattr("asoc.belief.trajectory._numdifftools_points", lambda x: None)
-    direct = without_steps.expansion(u_bar)
-    assert all(np.array_equal(getattr(with_steps, name), getattr(direct, name)) for name in ("phi", "p", "r", "Q", "P", "R"))
+    policy = AffinePolicy(np.zeros((3, 2, 2)), np.ones((3, 2)))
+    ref = reference_trajectory(ex.model, wrapped, policy, ex.mean0, ex.cov0)
+    new, value, eps, _ = backward_pass(ex.model, ex.cost, wrapped, ref, policy, w, beta)
+    new_ukf, value_ukf, eps_ukf, _ = backward_pass(ex.model, ex.cost, UKF(ex.model), ref, policy, w, beta)
+    np.testing.assert_allclose(new.L, new_ukf.L, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(new.d, new_ukf.d, rtol=1e-9, atol=1e-9)
+    assert value.s == pytest.approx(value_ukf.s, rel=1e-9) and np.array_equal(eps, eps_ukf)
+    assert np.any(value.S != 0)                   # the covariance term (through covariance_map) took part
+    del _ProtocolOnly.covariance_map
+    try:
+        with pytest.raises(TypeError, match="filt: expected a filter .* without covariance_map"):
+            backward_pass(ex.model, ex.cost, _ProtocolOnly(ex.model), ref, policy, w, beta)
+    finally:
+        _ProtocolOnly.covariance_map = lambda self, estimate: (lambda u: self._inner.next_covariance(estimate, u))
