@@ -67,7 +67,30 @@ _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.solve_tolerance": (
         1e-12,
         "Relative residual ||X - L(X) - W|| / ||W|| at which the iterative coupled-Lyapunov "
-        "solve stops."),
+        "solve stops."),    "gp.gradient_tol": (
+        1e-2,
+        "The likelihood maximisation of the GPs of Sec. 2.6 has converged when every component of "
+        "the projected gradient of log p(y | X) in log-parameters is below this: a 1 % change of "
+        "any hyperparameter then changes log p(y | X) by less than 1e-4 (reachable on the flat "
+        "ridges where L-BFGS-B's own line search gives up)."),
+    "gp.max_iterations": (
+        500,
+        "Iteration cap of L-BFGS-B per start of the GP likelihood maximisation."),
+    "gp.kernel_cache_bytes": (
+        64 * 2**20,
+        "Memory for the unit kernel matrices of recent length scales in a GP fit (the kernel "
+        "depends on l alone: the optimiser's steps in alpha and sigma_n reuse it)."),
+    "gp.mean_kernel_block_rows": (
+        10,
+        "Mixtures per block row of the mean kernel (2.22) in MeanKernelGP's likelihood: blocks of a "
+        "few MB (200 mixtures of 10 components) that stay in cache."),
+    "gp.dirac_max_iterations": (
+        1000,
+        "Iteration cap of BFGS in the mCvMd Dirac approximation of N(0, 1) (it converges in tens)."),
+    "gp.max_dirac_components": (
+        400,
+        "Largest number of components of the mCvMd Dirac approximation: its gradient holds arrays "
+        "of (quadrature nodes) x L x L floats, about 340 MB each at L = 400 with b_max = 100."),
 }
 
 #: The current value of every tunable, keyed ``"<subpackage>.<name>"``.

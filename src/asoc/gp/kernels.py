@@ -10,13 +10,11 @@ import numpy as np
 from scipy.special import gamma as gamma_fn
 from scipy.special import kv
 
-from .. import validation as check
-from . import _validate as v
-
-_delta = v.distances
+from .. import validation
+from . import validate as v
 
 
-def squared_exponential(delta, l: float):
+def squared_exponential(delta, l: float, check: bool = True):
     r"""Squared exponential covariance function, Table 2.1: :math:`\exp(-\tfrac12 \Delta^2 / l^2)`.
 
     Parameters
@@ -25,6 +23,9 @@ def squared_exponential(delta, l: float):
         Distances between distributions (finite, non-negative).
     l : float
         Length scale, > 0.
+    check : bool
+        False skips the checks (float distances >= 0 and positive parameters, e.g. a
+        library loop that evaluates the covariance on its own checked matrix many times).
 
     Returns
     -------
@@ -41,11 +42,12 @@ def squared_exponential(delta, l: float):
     >>> squared_exponential([0.0, 1.0], 1.0).round(4).tolist()
     [1.0, 0.6065]
     """
-    l = v.positive(l, "l")
-    return _squared_exponential(_delta(delta), l)
+    if check:
+        delta, l = v.distances(delta), v.positive(l, "l")
+    return _squared_exponential(delta, l)
 
 
-def matern(delta, l: float, nu: float = 2.5):
+def matern(delta, l: float, nu: float = 2.5, check: bool = True):
     r"""Matern, Table 2.1: :math:`\frac{2^{1-\nu}}{\Gamma(\nu)} (\tfrac{\sqrt{2\nu}}{l}\Delta)^\nu
     K_\nu(\tfrac{\sqrt{2\nu}}{l}\Delta)`, with value 1 at :math:`\Delta = 0`.
 
@@ -57,6 +59,9 @@ def matern(delta, l: float, nu: float = 2.5):
         Length scale, > 0.
     nu : float
         Smoothness, > 0.
+    check : bool
+        False skips the checks (float distances >= 0 and positive parameters, e.g. a
+        library loop that evaluates the covariance on its own checked matrix many times).
 
     Returns
     -------
@@ -72,11 +77,12 @@ def matern(delta, l: float, nu: float = 2.5):
     >>> matern([0.0, 1.0], 1.0, nu=2.5).round(4).tolist()
     [1.0, 0.524]
     """
-    l, nu = v.positive(l, "l"), v.positive(nu, "nu")
-    return _matern(_delta(delta), l, nu)
+    if check:
+        delta, l, nu = v.distances(delta), v.positive(l, "l"), v.positive(nu, "nu")
+    return _matern(delta, l, nu)
 
 
-def exponential(delta, l: float):
+def exponential(delta, l: float, check: bool = True):
     r"""Exponential, Table 2.1: :math:`\exp(-\Delta / l)` (Matern with :math:`\nu = 1/2`).
 
     Parameters
@@ -85,6 +91,9 @@ def exponential(delta, l: float):
         Distances (finite, non-negative).
     l : float
         Length scale, > 0.
+    check : bool
+        False skips the checks (float distances >= 0 and positive parameters, e.g. a
+        library loop that evaluates the covariance on its own checked matrix many times).
 
     Returns
     -------
@@ -100,11 +109,12 @@ def exponential(delta, l: float):
     >>> exponential([0.0, 1.0], 2.0).round(4).tolist()
     [1.0, 0.6065]
     """
-    l = v.positive(l, "l")
-    return _exponential(_delta(delta), l)
+    if check:
+        delta, l = v.distances(delta), v.positive(l, "l")
+    return _exponential(delta, l)
 
 
-def gamma_exponential(delta, l: float, gamma: float = 1.5):
+def gamma_exponential(delta, l: float, gamma: float = 1.5, check: bool = True):
     r""":math:`\gamma`-exponential, Table 2.1: :math:`\exp(-(\Delta / l)^\gamma)`,
     :math:`0 < \gamma \le 2`.
 
@@ -116,6 +126,9 @@ def gamma_exponential(delta, l: float, gamma: float = 1.5):
         Length scale, > 0.
     gamma : float
         Exponent in (0, 2].
+    check : bool
+        False skips the checks (float distances >= 0 and positive parameters, e.g. a
+        library loop that evaluates the covariance on its own checked matrix many times).
 
     Returns
     -------
@@ -131,12 +144,13 @@ def gamma_exponential(delta, l: float, gamma: float = 1.5):
     >>> gamma_exponential([0.0, 1.0], 1.0, gamma=1.5).round(4).tolist()
     [1.0, 0.3679]
     """
-    l = v.positive(l, "l")
-    gamma = check.real_scalar(gamma, "gamma", low=0, high=2, low_open=True)
-    return _gamma_exponential(_delta(delta), l, gamma)
+    if check:
+        delta, l = v.distances(delta), v.positive(l, "l")
+        gamma = validation.real_scalar(gamma, "gamma", low=0, high=2, low_open=True)
+    return _gamma_exponential(delta, l, gamma)
 
 
-def rational_quadratic(delta, l: float, alpha: float = 1.0):
+def rational_quadratic(delta, l: float, alpha: float = 1.0, check: bool = True):
     r"""Rational quadratic, Table 2.1: :math:`(1 + \Delta^2 / (2 \alpha l^2))^{-\alpha}`.
 
     Parameters
@@ -147,6 +161,9 @@ def rational_quadratic(delta, l: float, alpha: float = 1.0):
         Length scale, > 0.
     alpha : float
         Scale mixture parameter, > 0.
+    check : bool
+        False skips the checks (float distances >= 0 and positive parameters, e.g. a
+        library loop that evaluates the covariance on its own checked matrix many times).
 
     Returns
     -------
@@ -162,21 +179,16 @@ def rational_quadratic(delta, l: float, alpha: float = 1.0):
     >>> rational_quadratic([0.0, 1.0], 1.0, alpha=1.0).round(4).tolist()
     [1.0, 0.6667]
     """
-    l, alpha = v.positive(l, "l"), v.positive(alpha, "alpha")
-    return _rational_quadratic(_delta(delta), l, alpha)
+    if check:
+        delta, l, alpha = v.distances(delta), v.positive(l, "l"), v.positive(alpha, "alpha")
+    return _rational_quadratic(delta, l, alpha)
 
-
-# Unchecked fast paths of Table 2.1: ``delta`` a float array of finite non-negative distances,
-# ``l`` and the shape parameter positive Python floats (as the public functions validate them).
-# For callers that evaluate one covariance thousands of times on matrices they built themselves.
 
 def _squared_exponential(delta, l):
-    """:func:`squared_exponential` without input checks (unchecked fast path)."""
     return np.exp(-0.5 * (delta / l) ** 2)
 
 
 def _matern(delta, l, nu=2.5):
-    """:func:`matern` without input checks (unchecked fast path)."""
     r = np.sqrt(2 * nu) * delta / l
     with np.errstate(invalid="ignore", over="ignore"):
         out = 2 ** (1 - nu) / gamma_fn(nu) * r**nu * kv(nu, r)
@@ -184,17 +196,14 @@ def _matern(delta, l, nu=2.5):
 
 
 def _exponential(delta, l):
-    """:func:`exponential` without input checks (unchecked fast path)."""
     return np.exp(-delta / l)
 
 
 def _gamma_exponential(delta, l, gamma=1.5):
-    """:func:`gamma_exponential` without input checks (unchecked fast path)."""
     return np.exp(-(delta / l) ** gamma)
 
 
 def _rational_quadratic(delta, l, alpha=1.0):
-    """:func:`rational_quadratic` without input checks (unchecked fast path)."""
     return (1 + delta ** 2 / (2 * alpha * l**2)) ** (-alpha)
 
 
@@ -214,10 +223,6 @@ TABLE_2_1 = {
 #: Short names used by :class:`asoc.gp.DistributionGP`.
 COVARIANCES = {"se": squared_exponential, "matern": matern, "exponential": exponential,
                "gamma_exponential": gamma_exponential, "rational_quadratic": rational_quadratic}
-
-#: The same covariances without input checks (same arguments, same values; see the fast paths above).
-COVARIANCES_UNCHECKED = {"se": _squared_exponential, "matern": _matern, "exponential": _exponential,
-                         "gamma_exponential": _gamma_exponential, "rational_quadratic": _rational_quadratic}
 
 
 def bilinear_product(K_distance, means_i, means_j, Sigma):
@@ -252,9 +257,9 @@ def bilinear_product(K_distance, means_i, means_j, Sigma):
     [[2.0, 3.0]]
     """
     Sigma = v.covariance(Sigma, "Sigma")
-    mi = check.real_array(means_i, "means_i", shape=(None, Sigma.shape[0]))
-    mj = check.real_array(means_j, "means_j", shape=(None, Sigma.shape[0]))
-    K = check.real_array(K_distance, "K_distance")
+    mi = validation.real_array(means_i, "means_i", shape=(None, Sigma.shape[0]))
+    mj = validation.real_array(means_j, "means_j", shape=(None, Sigma.shape[0]))
+    K = validation.real_array(K_distance, "K_distance")
     if K.shape != (len(mi), len(mj)):
         raise ValueError(f"K_distance: expected shape {(len(mi), len(mj))}, found {K.shape}")
     return (mi @ Sigma @ mj.T) * K
@@ -308,7 +313,7 @@ def mean_kernel_dirac(X, Y=None, WX=None, WY=None, *, alpha: float, Lambda, chun
     v.same_dimension(X, Y, "X, Y")
     Linv = _lambda_inverse(Lambda, X.shape[2])
     alpha = v.positive(alpha, "alpha")
-    chunk = check.integer(chunk, "chunk", minimum=1)
+    chunk = validation.integer(chunk, "chunk", minimum=1)
     out = np.empty((len(X), len(Y)))
     for start in range(0, len(X), chunk):
         sl = slice(start, start + chunk)
@@ -350,11 +355,11 @@ def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lamb
     >>> k.round(4).tolist()     # 1 / sqrt(1 + 2)
     [[0.5774]]
     """
-    mi = check.real_array(means_i, "means_i", ndim=2)
+    mi = validation.real_array(means_i, "means_i", ndim=2)
     d = mi.shape[1]
-    mj = check.real_array(means_j, "means_j", shape=(None, d))
-    Ci = check.semidefinite(check.real_array(covs_i, "covs_i", shape=(len(mi), d, d)), "covs_i")
-    Cj = check.semidefinite(check.real_array(covs_j, "covs_j", shape=(len(mj), d, d)), "covs_j")
+    mj = validation.real_array(means_j, "means_j", shape=(None, d))
+    Ci = validation.semidefinite(validation.real_array(covs_i, "covs_i", shape=(len(mi), d, d)), "covs_i")
+    Cj = validation.semidefinite(validation.real_array(covs_j, "covs_j", shape=(len(mj), d, d)), "covs_j")
     if 0 in mi.shape + mj.shape:
         raise ValueError(f"means_i, means_j: expected non-empty (N, d) arrays, found {mi.shape} and {mj.shape}")
     Lam = np.linalg.inv(_lambda_inverse(Lambda, d))
@@ -367,7 +372,7 @@ def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lamb
 
 
 def _lambda_inverse(Lambda, d):
-    Lam = check.real_array(Lambda, "Lambda")
+    Lam = validation.real_array(Lambda, "Lambda")
     if Lam.ndim == 0:
         return np.eye(d) / v.positive(Lam, "Lambda")
-    return np.linalg.inv(check.covariance(Lam, "Lambda", d, definite=True))
+    return np.linalg.inv(validation.covariance(Lam, "Lambda", d, definite=True))

@@ -31,21 +31,13 @@ import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.optimize import minimize
 
+from .. import config
 from .. import validation as check
 from ..result import IterativeResult
-from . import _validate as v
-from .kernels import COVARIANCES, COVARIANCES_UNCHECKED, mean_kernel_dirac
+from . import validate as v
+from .kernels import COVARIANCES, mean_kernel_dirac
 
 PARAMS = ("alpha", "l", "sigma_n")
-#: Convergence of the likelihood maximisation: every component of the projected gradient of
-#: the log marginal likelihood in log-parameters below this value, i.e. a 1 % change of any
-#: hyperparameter changes log p(y | X) by less than 1e-4 (reachable on the flat ridges where
-#: L-BFGS-B's own line search gives up).
-GRADIENT_TOL = 1e-2
-MAX_ITERATIONS = 500
-#: Memory for the unit kernels of recent length scales (the kernel depends on l alone: the
-#: optimiser's steps in alpha and sigma_n and likelihood surfaces over sigma_n reuse it).
-KERNEL_CACHE_BYTES = 64 * 2**20
 
 
 @dataclass(kw_only=True)
@@ -53,14 +45,15 @@ class FitResult(IterativeResult):
     """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum and why it stopped.
 
     ``converged`` when the projected gradient of the log marginal likelihood in
-    log-parameters is below :data:`GRADIENT_TOL` at the best start (status ``converged``);
+    log-parameters is below ``config.defaults["gp.gradient_tol"]`` at the best start (status ``converged``);
     otherwise ``max_iterations`` or ``no_progress`` (L-BFGS-B stopped earlier).
 
     Examples
     --------
     >>> x = np.linspace(-2, 2, 8)
     >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x), np.random.default_rng(0))
-    >>> gp.result.status, gp.result.gradient_norm < GRADIENT_TOL
+    >>> from asoc import config
+    >>> gp.result.status, gp.result.gradient_norm < config.defaults["gp.gradient_tol"]
     ('converged', True)
     """
     alpha: float            #: signal standard deviation (kernel amplitude alpha^2)
@@ -96,13 +89,13 @@ def _projected_gradient(res, log_b) -> float:
     return float(np.max(np.abs(g)))
 
 
-def _status(gradient, iterations):
-    if gradient <= GRADIENT_TOL:
-        return "converged", f"projected gradient {gradient:.2g} <= {GRADIENT_TOL:g} after {iterations} iterations"
-    if iterations >= MAX_ITERATIONS:
+def _status(gradient, iterations, tolerance, max_iterations):
+    if gradient <= tolerance:
+        return "converged", f"projected gradient {gradient:.2g} <= {tolerance:g} after {iterations} iterations"
+    if iterations >= max_iterations:
         return "max_iterations", f"stopped after {iterations} iterations with projected gradient {gradient:.2g}"
     return "no_progress", (f"L-BFGS-B stopped after {iterations} iterations with projected gradient "
-                           f"{gradient:.2g} > {GRADIENT_TOL:g}")
+                           f"{gradient:.2g} > {tolerance:g}")
 
 
 class _LikelihoodGP:
@@ -128,15 +121,17 @@ class _LikelihoodGP:
         """:meth:`_unit_kernel` (read-only arrays), remembered for the recent length scales.
 
         The same arrays for the same value of ``l``: an entry without the derivative serves
-        ``grad=False`` only. The least recently used entries go beyond :data:`KERNEL_CACHE_BYTES`.
+        ``grad=False`` only. The least recently used entries go beyond
+        ``config.defaults["gp.kernel_cache_bytes"]``.
         """
+        budget = config.defaults["gp.kernel_cache_bytes"]
         key = float(l)
         entry = self._kernels.get(key)
         if entry is None or (grad and entry[1] is None):
             entry = self._kernels[key] = tuple(_read_only(K) for K in self._unit_kernel(l, grad=grad))
         self._kernels.move_to_end(key)
         while len(self._kernels) > 1 and sum(K.nbytes for pair in self._kernels.values() for K in pair
-                                             if K is not None) > KERNEL_CACHE_BYTES:
+                                             if K is not None) > budget:
             self._kernels.popitem(last=False)
         return entry
 
@@ -202,16 +197,17 @@ class _LikelihoodGP:
         guess = np.log(np.clip([sy, self._length_scale_guess(), 1e-2 * sy],
                                [b[0] for b in np.exp(log_b)], [b[1] for b in np.exp(log_b)]))
         starts = [guess] + [rng.uniform(log_b[:, 0], log_b[:, 1]) for _ in range(self.n_restarts)]
+        tolerance, max_iterations = config.defaults["gp.gradient_tol"], config.defaults["gp.max_iterations"]
         runs = []
         for x0 in starts:
             res = minimize(self._neg_log_ml, x0, jac=True, method="L-BFGS-B", bounds=log_b,
-                           options={"maxiter": MAX_ITERATIONS})
+                           options={"maxiter": max_iterations})
             gradient = _projected_gradient(res, log_b)
-            runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= GRADIENT_TOL, int(res.nit),
+            runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= tolerance, int(res.nit),
                          gradient))
         best = max(runs, key=lambda run: run[2])
         alpha, l, sn = best[1]
-        status, message = _status(best[5], best[4])
+        status, message = _status(best[5], best[4], tolerance, max_iterations)
         self.result = FitResult(alpha=float(alpha), l=float(l), sigma_n=float(sn), log_ml=best[2],
                                 iterations=best[4], gradient_norm=best[5], starts=[run[:4] for run in runs],
                                 converged=status == "converged", status=status, message=message)
@@ -289,8 +285,8 @@ class DistributionGP(_LikelihoodGP):
         if "gamma" in shape:
             shape["gamma"] = check.real_scalar(shape["gamma"], "gamma", low=0, high=2, low_open=True)
         self._kappa = lambda D, l: fn(D, l, **shape)
-        unchecked = COVARIANCES_UNCHECKED[covariance]     # the training distances are checked by fit
-        self._kappa_training = lambda l: unchecked(self.D, v.positive(l, "l"), **shape)
+        # the training distances are checked by fit, the optimiser's l = exp(log l) is positive
+        self._kappa_training = lambda l: fn(self.D, float(l), check=False, **shape)
 
     def _length_scale_guess(self):
         off = self.D[~np.eye(len(self.D), dtype=bool)]
@@ -392,20 +388,19 @@ class MeanKernelGP(_LikelihoodGP):
         return float(np.sqrt(np.median(off[off > 0]))) if np.any(off > 0) else 1.0
 
     def _unit_kernel(self, l, grad=False):
-        # eq. (2.22): np.einsum("ia,iajb,jb->ij", W, exp(-sq / (2 l^2)), W) and the same of the
-        # derivative, the same numbers from the exponentials on and above the diagonal (half of
-        # them), block row by block row in place in the buffers (thousands of evaluations)
+        # eq. (2.22) block row by block row, from the diagonal block on (the kernel is symmetric: half the
+        # exponentials), and its derivative in log l, sum_ab w_ia w_jb exp(-sq / (2 l^2)) sq / l^2
         M, l2 = len(self.W), l**2
         K = np.empty((M, M))
         dK = np.empty((M, M)) if grad else None
-        for rows, sq, neg_half_sq, lowest in self._blocks:
-            E = np.divide(neg_half_sq, l2, out=_view(self._buffers[0], sq.shape))
+        for rows, sq, lowest in self._blocks:
+            E = np.divide(sq, -2.0 * l2, out=_view(self._buffer, sq.shape))
             _exp_in_place(E, lowest / l2)
-            _expected_kernel_rows(E, self._weights, rows, K, self._buffers[1:])
+            _expected_kernel_rows(E, self.W, rows, K)
             if grad:
                 dE = np.multiply(E, sq, out=E)
                 dE /= l2
-                _expected_kernel_rows(dE, self._weights, rows, dK, self._buffers[1:])
+                _expected_kernel_rows(dE, self.W, rows, dK)
         return K, dK
 
     def fit(self, X, y, rng: np.random.Generator, W=None):
@@ -422,19 +417,19 @@ class MeanKernelGP(_LikelihoodGP):
         return self
 
     def _prepare_kernel(self):
-        """Squared component distances per block row, weights and work buffers of :meth:`_unit_kernel`."""
-        # |x_ia - x_jb|^2 is exactly symmetric in (i, a) <-> (j, b), as (x - y)^2 and (y - x)^2
-        # round alike: the kernel needs the block rows from their diagonal block on, each stored
-        # contiguously as [i, a, b, j] with its halved negative and that one's minimum
+        """Squared component distances per block row and a work buffer for :meth:`_unit_kernel`.
+
+        Block row ``rows`` holds |x_ia - x_jb|^2 as [i, a, j, b] for the mixtures i of ``rows``
+        and j from ``rows.start`` on, with its smallest exponent -max(sq) / 2.
+        """
         sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)    # [i, a, j, b]
+        rows_per_block = config.defaults["gp.mean_kernel_block_rows"]
         self._blocks = []
-        for rows in _block_rows(len(self.X)):
-            block = np.ascontiguousarray(sq[rows, :, rows.start:].transpose(0, 1, 3, 2))
-            neg_half = -0.5 * block
-            self._blocks.append((rows, block, neg_half, neg_half.min()))
-        equal = bool(np.all(self.W == self.W[0, 0]))      # then (w v) w with a number: faster, the same
-        self._weights = (self.W, np.ascontiguousarray(self.W.T), float(self.W[0, 0]) if equal else None)
-        self._buffers = tuple(np.empty(max(block[1].size for block in self._blocks)) for _ in range(3))
+        for start in range(0, len(self.X), rows_per_block):
+            rows = slice(start, start + rows_per_block)
+            block = np.ascontiguousarray(sq[rows, :, start:])
+            self._blocks.append((rows, block, -0.5 * block.max()))
+        self._buffer = np.empty(max(block.size for _, block, _ in self._blocks))
         self._reset_kernels()
 
     def predict(self, X_star, return_var: bool = False, W_star=None):
@@ -451,29 +446,12 @@ class MeanKernelGP(_LikelihoodGP):
         return self._predict(K_cross, k_self, return_var)
 
 
-#: Mixtures per block row of :meth:`MeanKernelGP._unit_kernel` (arrays of a few MB that stay in cache).
-BLOCK_ROWS = 10
-
-
-def _block_rows(M):
-    """Slices of consecutive mixtures, :data:`BLOCK_ROWS` each, the last one at least 2 long (M >= 2).
-
-    With at least two mixtures from every block's first one on, and as many after a block
-    when there are any, the innermost axis of the reductions of :func:`_expected_kernel_rows`
-    is a mixture axis of length >= 2, never the summed one.
-    """
-    starts = list(range(0, M, BLOCK_ROWS))
-    if len(starts) > 1 and M - starts[-1] == 1:
-        starts.pop()
-    return [slice(start, end) for start, end in zip(starts, starts[1:] + [M])]
-
-
 #: exp(x) rounds to +0 below this exponent (exp(-745.14) < 2^-1075, half the smallest subnormal).
 EXP_ZERO_BELOW = -746.0
 
 
 def _exp_in_place(E, lowest):
-    """``np.exp(E, out=E)``, the same numbers; exponents below :data:`EXP_ZERO_BELOW` give 0 without exp.
+    """``np.exp(E, out=E)``; exponents below :data:`EXP_ZERO_BELOW` give 0 without calling exp.
 
     ``lowest``: the smallest entry of ``E`` (or less). The exponential of those exponents,
     +0, takes libm's slow underflow path, several times the cost of the others; short length
@@ -492,39 +470,16 @@ def _view(buffer, shape):
     return buffer[:int(np.prod(shape))].reshape(shape)
 
 
-def _expected_kernel_rows(V, weights, rows, out, buffers):
-    """Rows ``rows`` of eq. (2.22) from and above the diagonal, and the columns below, into ``out``.
+def _expected_kernel_rows(V, W, rows, out):
+    """Rows ``rows`` of eq. (2.22) from the diagonal block on, and their mirror below it, into ``out``.
 
-    ``V[i, a, b, j]`` (B, L, L, M - rows.start) holds the component kernel of mixture ``i`` of
-    ``rows`` (component a) and mixture ``rows.start + j`` (component b); ``weights``: W (M, L),
-    its transpose (contiguous) and their common value if all are equal (else None). Every
-    entry (i, j) is summed as ``np.einsum("ia,iajb,jb->ij", W, V_full, W)`` sums it over the
-    full symmetric array: summands ``(w_ia v) w_jb``, over the components b of the column's
-    mixture in order, then over the components a of the row's in order; below the diagonal
-    block the roles swap (summands ``(w_jb v) w_ia``). The same numbers: ``add.reduce`` over
-    an axis other than the innermost adds in order. ``buffers``: two flat work arrays.
+    ``V[i, a, j, b]`` (B, L, M - rows.start, L) holds the component kernel of mixture ``i`` of
+    ``rows`` (component a) and mixture ``rows.start + j`` (component b); ``W`` the weights (M, L).
     """
-    (W, WT, weight), (start, B), (_, L, _, columns) = weights, (rows.start, rows.stop - rows.start), V.shape
-    terms = _weighted(V, weight, W[rows, :, None, None], WT[None, None, :, start:], _view(buffers[0], V.shape))
-    partial = np.add.reduce(terms, axis=2, out=_view(buffers[1], (B, L, columns)))
-    out[rows, start:] = np.add.reduce(partial, axis=1)
-    if columns > B:                                        # mixtures below the block: (w_jb v) w_ia
-        terms = terms[..., B:] if weight is not None else \
-            _weighted(V[..., B:], None, WT[None, None, :, start + B:], W[rows, :, None, None],
-                      _view(buffers[0], (B, L, L, columns - B)))
-        partial = np.add.reduce(terms, axis=1, out=_view(buffers[1], (B, L, columns - B)))
-        out[start + B:, rows] = np.add.reduce(partial, axis=1).T
-
-
-def _weighted(V, weight, first, second, out):
-    """``(first V) second`` into ``out``; ``(weight V) weight`` if all weights equal ``weight``."""
-    if weight is not None:
-        np.multiply(V, weight, out=out)
-        out *= weight
-    else:
-        np.multiply(first, V, out=out)
-        out *= second
-    return out
+    start = rows.start
+    block = np.einsum("ia,iajb,jb->ij", W[rows], V, W[start:], optimize=True)
+    out[rows, start:] = block
+    out[start + block.shape[0]:, rows] = block[:, block.shape[0]:].T
 
 
 def _read_only(K):

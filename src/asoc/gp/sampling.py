@@ -20,12 +20,11 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import norm
 
+from .. import config
 from .. import validation as check
 from ..result import IterativeResult
-from . import _validate as v
-from .distances import DEFAULT_B_MAX
-
-MAX_ITERATIONS = 1000
+from . import validate as v
+from .cramer_von_mises import DEFAULT_B_MAX
 
 
 def gradient_tolerance(b_max: float) -> float:
@@ -154,21 +153,17 @@ def _nodes(nodes):
 
 
 @lru_cache(maxsize=16)
-def _lcd_standard_normal(L: int, b_max: float):
+def _lcd_standard_normal(L: int, b_max: float, max_iterations: int):
+    """The minimisation of :func:`standard_normal_dirac_approximation`, remembered per argument."""
     nodes = _b_nodes(b_max)
     x0 = norm.ppf((2 * np.arange(1, L + 1) - 1) / (2 * L))
     res = minimize(_objective_and_gradient, x0, args=(nodes,), jac=True, method="BFGS",
-                   options={"gtol": 1e-9, "maxiter": MAX_ITERATIONS})
+                   options={"gtol": 1e-9, "maxiter": max_iterations})
     x = np.sort(res.x)
     # the gradient norm decides, not BFGS's status: it often ends with "precision loss" at a flat optimum,
     # after a number of iterations that depends on the last bits of the arithmetic
     gradient = float(np.linalg.norm(_objective_and_gradient(res.x, nodes)[1]))
     return x, mcvmd_standard_normal_dirac(x, nodes=nodes), gradient, int(res.nit)
-
-
-#: Largest L of :func:`standard_normal_dirac_approximation`: the mCvMd's gradient holds arrays of
-#: (quadrature nodes) x L x L floats, about 340 MB each at L = 400 with b_max = 100 (264 nodes).
-MAX_DIRAC_COMPONENTS = 400
 
 
 def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MAX) -> DiracApproximation:
@@ -182,7 +177,7 @@ def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MA
     Parameters
     ----------
     L : int
-        Number of components, 1 to ``MAX_DIRAC_COMPONENTS`` (400).
+        Number of components, 1 to ``config.defaults["gp.max_dirac_components"]`` (400).
     b_max : float
         Upper limit of the mCvMd kernel widths.
 
@@ -202,14 +197,15 @@ def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MA
     >>> a.converged, a.x.round(3).tolist(), round(a.distance, 4)
     (True, [-1.259, -0.317, 0.317, 1.259], 0.1016)
     """
-    L = check.integer(L, "L", minimum=1, maximum=MAX_DIRAC_COMPONENTS)
+    L = check.integer(L, "L", minimum=1, maximum=config.defaults["gp.max_dirac_components"])
     b_max = v.positive(b_max, "b_max")
-    x, dist, gradient, nit = _lcd_standard_normal(L, b_max)
+    max_iterations = config.defaults["gp.dirac_max_iterations"]
+    x, dist, gradient, nit = _lcd_standard_normal(L, b_max, max_iterations)
     tol = gradient_tolerance(b_max)
     if gradient <= tol:
         status, message = "converged", f"gradient norm {gradient:.2g} <= {tol:.2g} after {nit} iterations"
     else:
-        status = "max_iterations" if nit >= MAX_ITERATIONS else "no_progress"
+        status = "max_iterations" if nit >= max_iterations else "no_progress"
         message = f"BFGS stopped after {nit} iterations with gradient norm {gradient:.2g} > {tol:.2g}"
         warnings.warn(f"standard_normal_dirac_approximation: minimisation did not converge (L={L}): {message}",
                       RuntimeWarning)

@@ -1,4 +1,4 @@
-"""Correctness of the distances of Sec. 2.6.3 (asoc.gp.distances)."""
+"""Correctness of the distances of Sec. 2.6.3 (asoc.gp.cramer_von_mises, transport, densities)."""
 
 import itertools
 
@@ -34,11 +34,11 @@ def test_mcvmd_symmetric_and_order_invariant(x, data):
     assert abs(d**2 - gp.mcvmd(x[list(perm)], None, y, None) ** 2) <= allowed
 
 
-def mcvmd_term_magnitude(x, y, b_max=gp.distances.DEFAULT_B_MAX):
+def mcvmd_term_magnitude(x, y, b_max=gp.cramer_von_mises.DEFAULT_B_MAX):
     """pi^(d/2) / 8 (|D1| + 2 |D12| + |D2| + 2 c_b Dm) with absolute values inside the sums (equal weights)."""
-    term = lambda a, b: np.abs(gp.distances._xlog_sq(a[:, None], b[None])).mean()
+    term = lambda a, b: np.abs(gp.cramer_von_mises._xlog_sq(a[:, None], b[None])).mean()
     Dm = float(np.sum((x.mean(axis=0) - y.mean(axis=0)) ** 2))
-    total = term(x, x) + 2 * term(x, y) + term(y, y) + 2 * abs(gp.distances.mcvmd_constant(b_max)) * Dm
+    total = term(x, x) + 2 * term(x, y) + term(y, y) + 2 * abs(gp.mcvmd_constant(b_max)) * Dm
     return np.pi ** (x.shape[1] / 2) / 8 * total
 
 
@@ -179,38 +179,78 @@ def test_nan_weights_and_bad_counts_are_named(call, name):
         call()
 
 
-def test_omat_matrix_rows_equal_the_pairwise_assignment_means_bit_for_bit():
+def test_omat_matrix_rows_equal_the_pairwise_assignment_means():
     from scipy.optimize import linear_sum_assignment
     X, Y = np.random.default_rng(5).normal(size=(2, 12, 7, 2))
     D = gp.omat_matrix(X, Y, q=3)
     for i, j in itertools.product(range(len(X)), range(len(Y))):
         cost = np.sum((X[i][:, None] - Y[j][None]) ** 2, axis=-1) ** 1.5
         rows, cols = linear_sum_assignment(cost)
-        assert D[i, j] == cost[rows, cols].mean() ** (1 / 3)
+        assert D[i, j] == pytest.approx(cost[rows, cols].mean() ** (1 / 3), rel=1e-12)
 
 
 @pytest.mark.parametrize("q", [1.5, 2, 3])
-def test_omat_matrix_of_scalar_locations_sorts_as_the_assignments_do_bit_for_bit(q):
+def test_omat_matrix_of_scalar_locations_sorts_as_the_assignments_do(q):
     """d = 1, q > 1: the monotone matching gives the linear assignments' means (distinct, unsorted locations)."""
-    from asoc.gp.distances import _mean_optimal_assignment_costs
     rng = np.random.default_rng(int(10 * q))
     X, Y = rng.normal(size=(9, 7, 1)), rng.normal(size=(11, 7, 1)) * 2
-    assert np.array_equal(gp.omat_matrix(X, Y, q=q),
-                          _mean_optimal_assignment_costs(X, Y, q, False, range(len(X))) ** (1 / q))
-    upper = _mean_optimal_assignment_costs(X, X, q, True, range(len(X))) ** (1 / q)
-    assert np.array_equal(gp.omat_matrix(X, q=q), upper + upper.T)
+    pairwise = np.array([[gp.omat(x, y, q=q) for y in Y] for x in X])
+    np.testing.assert_allclose(gp.omat_matrix(X, Y, q=q), pairwise, rtol=1e-12)
+    within = np.array([[gp.omat(x, y, q=q) for y in X] for x in X])
+    np.testing.assert_allclose(gp.omat_matrix(X, q=q), within, rtol=1e-12, atol=1e-15)
 
 
-def test_mcvmd_matrix_keeps_the_b_max_independent_sums():
-    from asoc.gp import distances
+def test_gaussian_distance_matrices_equal_the_pairwise_distances():
     rng = np.random.default_rng(6)
-    X, Y = rng.normal(size=(6, 4, 2)), rng.normal(size=(5, 4, 2))
-    fresh = []
-    for b_max in (10.0, 1000.0):
-        distances._MCVMD_SUMS.clear()
-        fresh.append((gp.mcvmd_matrix(X, Y, b_max=b_max), gp.mcvmd_matrix(X, b_max=b_max)))
-    kept = [(gp.mcvmd_matrix(X, Y, b_max=b_max), gp.mcvmd_matrix(X, b_max=b_max)) for b_max in (10.0, 1000.0)]
-    assert all(np.array_equal(a, b) for pair, again in zip(fresh, kept) for a, b in zip(pair, again))
-    assert len(distances._MCVMD_SUMS) == distances.MCVMD_SUMS_KEPT
-    X[0, 0, 0] += 1.0                                        # other inputs: computed anew
-    assert not np.array_equal(gp.mcvmd_matrix(X, Y, b_max=10.0), kept[0][0])
+    means, roots = rng.normal(size=(5, 2)), rng.normal(size=(5, 2, 2))
+    covs = roots @ roots.transpose(0, 2, 1) + 0.1 * np.eye(2)
+    for matrix, pairwise in ((gp.wasserstein_gaussian_matrix, gp.wasserstein_gaussian),
+                             (gp.hellinger_gaussian_matrix, gp.hellinger_gaussian)):
+        expected = np.array([[pairwise(m1, C1, m2, C2) for m2, C2 in zip(means[:3], covs[:3])]
+                             for m1, C1 in zip(means, covs)])
+        # atol: a distance 0 comes out as the square root of rounding, ~3e-8
+        np.testing.assert_allclose(matrix(means, covs, means[:3], covs[:3]), expected, rtol=1e-10, atol=1e-7)
+        D = matrix(means, covs)
+        assert np.all(np.diag(D) == 0) and np.array_equal(D, D.T)
+        np.testing.assert_allclose(D[:, :3], expected, rtol=1e-10, atol=1e-7)     # sqrt of rounding at d = 0
+    one_d = gp.hellinger_gaussian_matrix([0.0, 1.0], [1.0, 4.0])                   # 1-D: (N,) means and variances
+    assert one_d[0, 1] == pytest.approx(gp.hellinger_gaussian([0.0], [[1.0]], [1.0], [[4.0]]), rel=1e-12)
+    with pytest.raises(ValueError, match="^covs_i: expected"):
+        gp.hellinger_gaussian_matrix(means, -covs)
+
+
+def test_ospa_matrix_equals_the_pairwise_ospa():
+    rng = np.random.default_rng(7)
+    sets = [rng.normal(size=(k, 2)) for k in (1, 3, 2, 3)]
+    D = gp.ospa_matrix(sets, c=1.5, p=2)
+    expected = np.array([[0.0 if i == j else gp.ospa(x, y, c=1.5) for j, y in enumerate(sets)]
+                         for i, x in enumerate(sets)])
+    np.testing.assert_allclose(D, expected, rtol=1e-12)
+    np.testing.assert_allclose(gp.ospa_matrix(sets, sets[:2], c=1.5), expected[:, :2], rtol=1e-12, atol=1e-15)
+    with pytest.raises(ValueError, match="X\\[0\\], X\\[1\\]: expected mixtures of the same dimension"):
+        gp.ospa_matrix([np.zeros((1, 2)), np.zeros((2, 3))])
+
+
+def test_piecewise_constant_matrices_equal_the_quadrature_of_their_densities():
+    rng = np.random.default_rng(8)
+    edges = np.array([0.0, 0.2, 0.5, 0.6, 1.0])
+    heights = rng.dirichlet(np.ones(4), size=3) / np.diff(edges)           # densities: integral one
+    heights[0, 2] = 0.0
+    heights[0] /= heights[0] @ np.diff(edges)
+
+    def density(h):
+        return lambda x: float(h[min(np.searchsorted(edges, x, side="right") - 1, 3)]) if 0 <= x <= 1 else 0.0
+
+    for q in (1, 2, 3):
+        D = gp.lq_distance_matrix(heights, edges, q=q)
+        assert D[0, 1] == pytest.approx(gp.lq_distance(density(heights[0]), density(heights[1]), q, 0.0, 1.0),
+                                        rel=1e-8)
+    for matrix, quadrature in ((gp.hellinger_matrix, gp.hellinger), (gp.jensen_shannon_matrix, gp.jensen_shannon)):
+        D = matrix(heights, edges)
+        assert np.all(np.diag(D) == 0) and D[0, 2] == pytest.approx(
+            quadrature(density(heights[0]), density(heights[2]), 0.0, 1.0), rel=1e-8)
+        np.testing.assert_allclose(matrix(heights, edges, heights[:1]), D[:, :1], rtol=1e-12, atol=1e-15)
+    with pytest.raises(ValueError, match="^edges: expected at least two increasing"):
+        gp.lq_distance_matrix(heights, edges[::-1])
+    with pytest.raises(ValueError, match="^heights: expected non-empty non-negative"):
+        gp.jensen_shannon_matrix(-heights, edges)

@@ -91,3 +91,32 @@ def limits(lower, upper):
     if not out[0] < out[1]:
         raise ValueError(f"lower, upper: expected lower < upper, found {out[0]} and {out[1]}")
     return out
+
+
+def gaussian_set(means, covs, means_name: str, covs_name: str, definite=False):
+    """Gaussians as means (N, d) and covariances (N, d, d), symmetric PSD (positive definite if ``definite``)."""
+    means = check.real_array(means, means_name)
+    if means.ndim == 1:
+        means = means[:, None]
+    if means.ndim != 2 or 0 in means.shape:
+        raise ValueError(f"{means_name}: expected a non-empty array of shape (N, d), found shape {means.shape}")
+    N, d = means.shape
+    covs = check.real_array(covs, covs_name)
+    if covs.ndim == 1 and d == 1:
+        covs = covs[:, None, None]
+    if covs.shape != (N, d, d):
+        raise ValueError(f"{covs_name}: expected shape ({N}, {d}, {d}) (one covariance per mean), found shape "
+                         f"{covs.shape}")
+    return means, check.semidefinite(covs, covs_name, definite=definite)
+
+
+def piecewise_constant(heights, edges, heights_name: str = "heights"):
+    """Densities constant on the cells of ``edges``: heights (N, B) >= 0 and edges (B + 1,) increasing."""
+    edges = check.real_array(edges, "edges", ndim=1)
+    if edges.size < 2 or not np.all(np.diff(edges) > 0):
+        raise ValueError(f"edges: expected at least two increasing cell edges, found {edges.tolist()}")
+    heights = check.real_array(heights, heights_name, shape=(None, edges.size - 1))
+    if heights.shape[0] == 0 or np.any(heights < 0):
+        raise ValueError(f"{heights_name}: expected non-empty non-negative heights of shape (N, {edges.size - 1}), "
+                         f"found shape {heights.shape} and minimum {heights.min() if heights.size else 'none'}")
+    return heights, np.diff(edges)
