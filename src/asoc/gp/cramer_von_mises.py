@@ -116,7 +116,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     """Pairwise mCvMd between two sets of Dirac mixtures (vectorised :func:`mcvmd`).
 
     Mixtures of ``X`` are handled in chunks: the weighted sums of ``xlog`` of squared
-    distances of a chunk against all of ``Y`` are one vectorised expression.
+    distances of a chunk against all of ``Y`` are one vectorised expression. Those sums do not
+    depend on ``b_max``: a sequence of values gives the matrices of all of them at the cost of one.
 
     Parameters
     ----------
@@ -126,7 +127,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
         Second set; ``None`` means ``X`` (a symmetric matrix with zero diagonal).
     WX, WY : array_like (N, L) / (M, K) or None
         Weights; ``None`` for equal weights.
-    b_max : float
+    b_max : float or sequence of float
+        Upper limit of the kernel widths; a sequence gives one matrix per value.
     chunk : int
         Number of mixtures of ``X`` handled per vectorised block (memory ~ chunk*M*L*K).
     progress : bool
@@ -134,19 +136,21 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
 
     Returns
     -------
-    ndarray, (N, M)
+    ndarray, (N, M), or (len(b_max), N, M) for a sequence ``b_max``
 
     Raises
     ------
     ValueError, TypeError
-        If the sets are empty, non-finite or of different dimensions, or a weight row is
-        invalid.
+        If the sets are empty, non-finite or of different dimensions, a weight row is
+        invalid, or a ``b_max`` is not a positive number.
 
     Examples
     --------
     >>> D = mcvmd_matrix(np.array([[0.0, 1.0], [0.5, 0.5], [2.0, 3.0]]))
     >>> D.round(3).tolist()
     [[0.0, 0.392, 4.014], [0.392, 0.0, 4.073], [4.014, 4.073, 0.0]]
+    >>> mcvmd_matrix(np.array([[0.0, 1.0], [2.0, 3.0]]), b_max=[10.0, 100.0])[:, 0, 1].round(3).tolist()
+    [2.82, 4.014]
     """
     X = v.mixture_set(X, "X")
     WX = v.set_weights(WX, X.shape, "WX")
@@ -154,12 +158,20 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     Y = X if symmetric else v.mixture_set(Y, "Y")
     WY = WX if symmetric else v.set_weights(WY, Y.shape, "WY")
     v.same_dimension(X, Y, "X, Y")
-    cb = mcvmd_constant(b_max)
+    several = np.ndim(b_max) == 1
+    constants = [mcvmd_constant(value) for value in (b_max if several else [b_max])]
     chunk = check.integer(chunk, "chunk", minimum=1)
     progress = check.boolean(progress, "progress")
-    D1, D2, D12, Dm = _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress)
+    sums = _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress)
+    out = [_combined(sums, cb, X.shape[2], symmetric) for cb in constants]
+    return np.stack(out) if several else out[0]
+
+
+def _combined(sums, cb, d, symmetric):
+    """The mCvMd matrix from the b_max-independent sums of :func:`_mcvmd_sums` and the constant c_b."""
+    D1, D2, D12, Dm = sums
     out = D1[:, None] - 2 * D12 + D2[None] + 2 * cb * Dm
-    out *= np.pi ** (X.shape[2] / 2) / 8
+    out *= np.pi ** (d / 2) / 8
     out = np.sqrt(np.clip(out, 0.0, None))
     if symmetric:
         np.fill_diagonal(out, 0.0)

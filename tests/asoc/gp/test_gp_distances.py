@@ -63,6 +63,12 @@ def test_mcvmd_matrix_matches_pairwise_calls():
     S = gp.mcvmd_matrix(X)
     np.testing.assert_allclose(S, S.T)
     assert np.all(np.diag(S) == 0)
+    several = gp.mcvmd_matrix(X, Y, b_max=[10.0, 1000.0])     # one computation of the sums, one matrix per b_max
+    assert several.shape == (2, 4, 5)
+    for D_b, b_max in zip(several, (10.0, 1000.0)):
+        np.testing.assert_allclose(D_b, [[gp.mcvmd(a, None, b, None, b_max) for b in Y] for a in X], rtol=1e-10)
+    with pytest.raises(ValueError, match="^b_max: expected"):
+        gp.mcvmd_matrix(X, b_max=[10.0, -1.0])
 
 
 def test_lcd_gaussian_matches_quadrature_of_definition():
