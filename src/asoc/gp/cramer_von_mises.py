@@ -159,6 +159,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     WY = WX if symmetric else v.set_weights(WY, Y.shape, "WY")
     v.same_dimension(X, Y, "X, Y")
     several = np.ndim(b_max) == 1
+    if several and len(b_max) == 0:
+        raise ValueError("b_max: expected a positive number or a non-empty sequence of them, found an empty sequence")
     constants = [mcvmd_constant(value) for value in (b_max if several else [b_max])]
     chunk = check.integer(chunk, "chunk", minimum=1)
     progress = check.boolean(progress, "progress")
