@@ -47,7 +47,14 @@ class AffinePolicy:
 
 
 def policy_for(policy, K, model, name="policy") -> AffinePolicy:
-    """Raise unless ``policy`` is an AffinePolicy of horizon ``K`` for ``model``."""
+    """Raise unless ``policy`` is an AffinePolicy of horizon ``K`` for ``model``.
+
+    Examples
+    --------
+    >>> from asoc.belief import landmark_example
+    >>> policy_for(AffinePolicy.zero(3, 2, 2), 3, landmark_example().model).L.shape
+    (3, 2, 2)
+    """
     check.instance(policy, AffinePolicy, name)
     if policy.L.shape != (K, model.n_u, model.n_x):
         raise ValueError(f"{name}: expected L of shape {(K, model.n_u, model.n_x)} and d of shape "

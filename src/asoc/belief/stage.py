@@ -164,7 +164,8 @@ class StageProblem:
     Parameters
     ----------
     model, cost : NonlinearModel and QuadraticCost
-    filt : filter
+    filt : BeliefFilter
+        Used through :class:`~asoc.belief.filters.BeliefFilter` only (``mixture``, ``covariance_map``).
     estimate : the filter's estimate p_bar_k (for the UKF a tuple (mean, cov))
     nxt : Value
         V_{k+1} of eq. (2.10).

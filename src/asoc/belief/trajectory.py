@@ -54,8 +54,9 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
     Parameters
     ----------
     model : NonlinearModel
-    filt : filter
-        E.g. :class:`~asoc.belief.UKF` or :class:`~asoc.belief.ParticleFilter`.
+    filt : BeliefFilter
+        E.g. :class:`~asoc.belief.UKF` or :class:`~asoc.belief.ParticleFilter` (any
+        :class:`~asoc.belief.filters.BeliefFilter`).
     policy : AffinePolicy
     mean0, cov0 : array_like
         Initial estimate, (n_x,) and (n_x, n_x) positive semi-definite.
@@ -150,8 +151,8 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     Parameters
     ----------
     model, cost : NonlinearModel and QuadraticCost
-    filt : filter
-        Its Dirac mixture is the expansion point.
+    filt : BeliefFilter
+        Its Dirac mixture is the expansion point (:class:`~asoc.belief.filters.BeliefFilter`).
     ref : Reference
         The reference trajectory (Alg. 2.1).
     policy : AffinePolicy
@@ -251,7 +252,8 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     ----------
     model, cost : NonlinearModel and QuadraticCost (its ``K`` is the horizon).
     mean0, cov0 : the initial estimate p_0^x (Gaussian), (n_x,) and (n_x, n_x) PSD.
-    filt : the filter (default :class:`UKF`); its Dirac mixture is the expansion point.
+    filt : the filter (default :class:`~asoc.belief.UKF`), a :class:`~asoc.belief.filters.BeliefFilter`; its
+        Dirac mixture is the expansion point.
     policy : initial AffinePolicy (default L = 0, d = 0).
     max_iterations : int
         Iteration limit, >= 1.
