@@ -93,7 +93,7 @@ def _record_kernels(outcomes):
             "dmu(t) (t Delta^2 for SE, Gamma mixtures for RQ and Matern, Bernstein's theorem for "
             "exp(-(Delta/l)^gamma)), and exp(-t D^2) is PSD for all t > 0 iff D^2 is conditionally negative "
             "definite, i.e. D is Hilbertian (Schoenberg)."),
-            "The printed Hellinger expression (1 - BC)^2 as D, same covariances and length scales.")}
+            "the printed Hellinger expression (1 - BC)^2 as D, with the same covariances and length scales")}
 
 
 # ------------------------------------------------------------------ Thm. 3.19: Alg. 3.1
@@ -138,7 +138,7 @@ def _record_3_19(outcomes):
             "(3.34), L = -(R + B^T P B)^{-1} B^T P A, so (3.35) for P is the Riccati value iteration, which "
             "converges to the stabilising solution (Kalman; Bertsekas, Vol. 1, Prop. 4.4.1); X then follows "
             "a converging Lyapunov recursion."),
-            "The limit compared with the LQ gain for 2 R instead of R.")}
+            "the limit compared with the LQ gain for 2 R instead of R")}
 
 
 # ------------------------------------------------------------------ Prop. 3.26
@@ -186,8 +186,8 @@ def _record_3_26(outcomes, sign_outcomes):
             "X1 - X12 - X12^T + X2, Xu = X2, Pbar = P1 + P12 + P12^T + P2, Pu = P2. Proof: with e = x - x^, "
             "[x; x^] = [e; 0] + [x^; x^] and (a + b)(a + b)^T <= 2 a a^T + 2 b b^T; for P~, z = [x; x] + [0; -e] "
             "in z^T P~ z <= 2 (.) + 2 (.). (For P the cross terms enter Pbar with +, not - as printed.)"),
-            "Factor 1 instead of 2: the bound as printed."),
-            "costate_sign": {"description": "The P~ bound with factor 2 but Pbar = P1 - P12 - P12^T + P2 as printed.",
+            "factor 1 instead of 2, i.e. the bound as printed"),
+            "costate_sign": {"description": "the P~ bound with factor 2 but Pbar = P1 - P12 - P12^T + P2 as printed",
                              **_counts(sign_outcomes)}}}
 
 
@@ -231,7 +231,7 @@ def _record_3_27(outcomes):
             "gives K = A Xbar C^T (C Xbar C^T + J J^T)^{-1} and (3.45) the filter Riccati equation, the L-row "
             "L = -(R + B^T Pbar B)^{-1} B^T Pbar A and (3.47) the control Riccati equation. Checked: the exact "
             "cost of Alg. 3.2's converged, stabilising controller equals the LQG cost."),
-            "Compared with the LQG controller for 2 R instead of R.")}
+            "the comparison with the LQG controller for 2 R instead of R")}
 
 
 # ------------------------------------------------------------------ Thm. 3.31
@@ -278,7 +278,7 @@ def _record_3_31(outcomes, ratios):
             "x^_{k+1} = K C e + (F + K C) x^ + K J v; (a + b)(a + b)^T <= 2 a a^T + 2 b b^T and monotonicity give "
             "the blocks' bounds by induction, and Prop. 3.26 corrected gives X~_k <= 2 [[Xbar + Xu, Xu], [Xu, Xu]]. "
             "Valid, but loose: the factor 2 compounds over the horizon."),
-            "Factor 1: the printed recursions (3.66)-(3.67) summed forward as a cost."),
+            "factor 1, i.e. the printed recursions (3.66)-(3.67) summed forward as a cost"),
             "bound_over_exact": {q: float(np.quantile(ratios, p)) for q, p in (("median", 0.5), ("max", 1.0))}}}
 
 
@@ -326,7 +326,7 @@ def _record_3_32(outcomes, identity_errors):
             "(B.4) over (F_k, K_k, L_k). Proof: the quadratic part of (B.4) is sum_i tr[E(Pu)(K C + F - B L) Xu "
             "(.)^T + E(Pu) K C Xbar C^T K^T + E(Pbar) B L Xu L^T B^T + L^T R L Xu + mu E(Pu) K J J^T K^T] >= 0, "
             "so (B.4) is convex, and its gradient is twice the residual of (3.70) (B.5)."),
-            "(B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T dropped.")}
+            "(B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T dropped")}
 
 
 # ------------------------------------------------------------------ Thm. 3.33
@@ -394,10 +394,7 @@ def _tally(outcomes, statement, mutant):
 
 def _run(check, seed_sequence, n, mutants):
     """check(rng) for one child per instance; the mutant verdict kept for the first ``mutants``."""
-    results = []
-    for index, child in enumerate(seed_sequence.spawn(n)):
-        out = check(np.random.default_rng(child))
-        results.append(out)
+    results = [check(np.random.default_rng(child)) for child in seed_sequence.spawn(n)]
     pairs = [(r[0], r[1] if i < mutants else None) for i, r in enumerate(results)]
     return pairs, results
 
