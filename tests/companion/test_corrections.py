@@ -42,6 +42,7 @@ def test_thm_3_31_counterexample_bound_depends_on_a_gain_without_effect(gain):
     assert ex["exact"] == 2
     assert ex["bound"] == 2 + 2 * gain + 4 * gain ** 2
     assert (ex["bound"] < ex["exact"]) == (-Fraction(1, 2) < gain < 0)
+    assert ex["costate_gap_offdiagonal"] == -gain * (2 * gain + 1)
 
 
 def test_thm_3_19_counterexample_cycles_although_a_stabilising_gain_exists():

@@ -270,7 +270,7 @@ def _record_3_31(outcomes, ratios):
         "one state, no noise, a = b = c = q = r = 1, x_0 ~ N(0, 1), x^_0 = 0, F = K = 0, u = l x^, horizon 1. "
         f"x^ stays 0, so J_0 = {ex['exact']} for every l, but Jbar_0 = 2 + 2l + 4l^2 = {ex['bound']} at "
         f"l = {ex['gain']}: the bound depends on a gain that has no effect. There P~_0 - bound has a zero "
-        "lower-right block and off-diagonal -l(2l + 1) != 0."),
+        f"lower-right block and off-diagonal -l(2l + 1) = {ex['costate_gap_offdiagonal']}."),
         "corrected": {**_tally(outcomes, (
             "J_0 <= sum_k sum_i 2 tr[Q_i (Xbar_k + Xu_k) + L_k^T R_i L_k Xu_k] (+ the final term), with "
             "(3.66)-(3.67) whose two transported terms are doubled, started at the exact Xbar_0 = E{e_0 e_0^T}, "

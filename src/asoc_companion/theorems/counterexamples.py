@@ -69,14 +69,17 @@ def prop_3_26_example():
 def thm_3_31_example(gain=Fraction(-1, 4)):
     """Thm. 3.31 on one mode, one state, no noise: a = b = c = q = r = 1, x_0 ~ N(0, 1), x^_0 = 0,
     F = K = 0, u = l x^, horizon 1. Returns the exact cost J_0 (Lemma 3.29 / (3.62)) and the bound
-    Jbar_0 (3.65) with (3.68)-(3.69), in fractions.
+    Jbar_0 (3.65) with (3.68)-(3.69), in fractions, and the off-diagonal entry of the bound of (B.2)
+    minus the exact P~_0, -l (2l + 1): the bound's lower-right block equals P~_0's, so a non-zero
+    off-diagonal entry makes the difference indefinite.
 
     x^ stays 0, so J_0 = E{x_0^2} + E{x_1^2} = 2 for every l; Jbar_0 = 2 + 2l + 4l^2.
 
     Examples
     --------
-    >>> thm_3_31_example()
-    {'exact': Fraction(2, 1), 'bound': Fraction(7, 4), 'gain': Fraction(-1, 4)}
+    >>> ex = thm_3_31_example()
+    >>> ex["exact"], ex["bound"], ex["costate_gap_offdiagonal"]
+    (Fraction(2, 1), Fraction(7, 4), Fraction(1, 8))
     """
     a = b = c = q = r = Fraction(1)
     f = k = Fraction(0)
@@ -92,7 +95,9 @@ def thm_3_31_example(gain=Fraction(-1, 4)):
     Punder = l * r * l + (b * l) ** 2 * Pbar_next + (f - b * l) ** 2 * Punder_next       # (3.69)
     xbar0, xunder0 = Fraction(1), Fraction(0)                         # E{(x_0 - x^_0)^2}, x^_0^2
     bound = Pbar * (xbar0 + xunder0) + Punder * xbar0                 # (3.65), no noise: omega = 0
-    return {"exact": exact, "bound": bound, "gain": l}
+    P0 = _add(Qt, _mul(_mul(_transpose(At), Q_final), At))            # P~_0 = Q~_0 + A~^T P~_1 A~ (3.64)
+    costate_gap = -Punder - P0[0][1]                                  # off-diagonal of (B.2)'s bound - P~_0
+    return {"exact": exact, "bound": bound, "gain": l, "costate_gap_offdiagonal": costate_gap}
 
 
 # ------------------------------------------------------------------ Thm. 3.19: a period-2 cycle
