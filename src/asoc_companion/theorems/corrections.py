@@ -226,10 +226,13 @@ def _record_3_27(outcomes):
         "two agree where X12 = X2 and P12 = -P2, as at the one-mode LQG optimum; with M >= 2 the fixed point "
         "of Alg. 3.2 is in general not a stationary point of the exact cost (3.42)."),
         "corrected": _tally(outcomes, (
-            "For M = 1: a solution of (3.45)-(3.49) with invertible Xu and E(Pu) is the LQG controller. Proof: "
+            "For M = 1: a solution of (3.45)-(3.49) with invertible Xu and E(Pu) whose controller stabilises is the "
+            "LQG controller, the optimum of (3.38). Proof: "
             "the F-row of (3.49) reads E(Pu)(F + K C - B L - A) Xu = 0, so F = A + B L - K C; then the K-row "
             "gives K = A Xbar C^T (C Xbar C^T + J J^T)^{-1} and (3.45) the filter Riccati equation, the L-row "
-            "L = -(R + B^T Pbar B)^{-1} B^T Pbar A and (3.47) the control Riccati equation. Checked: the exact "
+            "L = -(R + B^T Pbar B)^{-1} B^T Pbar A and (3.47) the control Riccati equation; the closed loop's "
+            "eigenvalues are those of A + B L and A - K C, so Xbar and Pbar are the stabilising (unique) solutions. "
+            "Checked: the exact "
             "cost of Alg. 3.2's converged, stabilising controller equals the LQG cost."),
             "the comparison with the LQG controller for 2 R instead of R")}
 
