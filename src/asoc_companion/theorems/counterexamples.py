@@ -1,0 +1,165 @@
+"""The smallest counterexamples of the failing statements, in closed form where one exists.
+
+Each function recomputes its counterexample from the printed equations: exactly in
+``fractions.Fraction`` where the data are rational (Prop. 3.26, Thm. 3.31), to rounding
+otherwise (Thm. 3.19, the kernels of Sec. 2.6.3). The notebook re-runs them.
+"""
+
+from fractions import Fraction
+
+import numpy as np
+
+from asoc import gp
+
+# ------------------------------------------------------------------ exact 2 x 2 algebra
+
+
+def _mul(X, Y):
+    return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))] for i in range(len(X))]
+
+
+def _tr(X):
+    return X[0][0] + X[1][1]
+
+
+def _add(*Xs):
+    return [[sum(X[i][j] for X in Xs) for j in range(2)] for i in range(2)]
+
+
+def _transpose(X):
+    return [list(row) for row in zip(*X)]
+
+
+def _congruence(A, X):
+    """A X A^T."""
+    return _mul(_mul(A, X), _transpose(A))
+
+
+def prop_3_26_example():
+    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0, A = 0, C = H = 1).
+
+    The augmented loop A~ = [[0, 0], [1, 0]] is nilpotent, so X~ = A~ X~ A~^T + diag(1, 0) is reached
+    exactly after two steps. Returns the stationary X~, the printed bound and the corrected bound
+    (factor 2), each minus X~, with the determinant of the 2 x 2 gap (a PSD 2 x 2 matrix has
+    non-negative determinant and diagonal).
+
+    Examples
+    --------
+    >>> ex = prop_3_26_example()
+    >>> ex["printed_gap"], ex["printed_gap_determinant"]
+    ([[Fraction(2, 1), Fraction(1, 1)], [Fraction(1, 1), Fraction(0, 1)]], Fraction(-1, 1))
+    >>> ex["corrected_gap_determinant"] > 0
+    True
+    """
+    At = [[Fraction(0), Fraction(0)], [Fraction(1), Fraction(0)]]
+    noise = [[Fraction(1), Fraction(0)], [Fraction(0), Fraction(0)]]
+    X = [[Fraction(0)] * 2 for _ in range(2)]
+    for _ in range(3):                                                # a fixed point after two steps
+        X = _add(_congruence(At, X), noise)
+    assert X == _add(_congruence(At, X), noise)
+    (x1, x12), (_, x2) = X
+    xbar = x1 - 2 * x12 + x2
+    bound = [[xbar + x2, x2], [x2, x2]]
+    gap = lambda factor: [[factor * bound[i][j] - X[i][j] for j in range(2)] for i in range(2)]
+    det = lambda G: G[0][0] * G[1][1] - G[0][1] * G[1][0]
+    return {"X": X, "printed_gap": gap(1), "printed_gap_determinant": det(gap(1)),
+            "corrected_gap": gap(2), "corrected_gap_determinant": det(gap(2))}
+
+
+def thm_3_31_example(gain=Fraction(-1, 4)):
+    """Thm. 3.31 on one mode, one state, no noise: a = b = c = q = r = 1, x_0 ~ N(0, 1), x^_0 = 0,
+    F = K = 0, u = l x^, horizon 1. Returns the exact cost J_0 (Lemma 3.29 / (3.62)) and the bound
+    Jbar_0 (3.65) with (3.68)-(3.69), in fractions, and the off-diagonal entry of the bound of (B.2)
+    minus the exact P~_0, -l (2l + 1): the bound's lower-right block equals P~_0's, so a non-zero
+    off-diagonal entry makes the difference indefinite.
+
+    x^ stays 0, so J_0 = E{x_0^2} + E{x_1^2} = 2 for every l; Jbar_0 = 2 + 2l + 4l^2.
+
+    Examples
+    --------
+    >>> ex = thm_3_31_example()
+    >>> ex["exact"], ex["bound"], ex["costate_gap_offdiagonal"]
+    (Fraction(2, 1), Fraction(7, 4), Fraction(1, 8))
+    """
+    a = b = c = q = r = Fraction(1)
+    f = k = Fraction(0)
+    l = Fraction(gain)
+    At = [[a, b * l], [k * c, f]]
+    X0 = [[Fraction(1), Fraction(0)], [Fraction(0), Fraction(0)]]      # x_0 ~ N(0, 1), x^_0 = 0
+    Qt = [[q, Fraction(0)], [Fraction(0), l * r * l]]
+    Q_final = [[q, Fraction(0)], [Fraction(0), Fraction(0)]]
+    exact = _tr(_mul(Qt, X0)) + _tr(_mul(Q_final, _congruence(At, X0)))
+    Pbar_next, Punder_next = q, Fraction(0)                           # Pbar_K = Q, Punder_K = 0
+    g = a - f + b * l - k * c
+    Pbar = q + l * r * l + (a + b * l) ** 2 * Pbar_next + g ** 2 * Punder_next          # (3.68)
+    Punder = l * r * l + (b * l) ** 2 * Pbar_next + (f - b * l) ** 2 * Punder_next       # (3.69)
+    xbar0, xunder0 = Fraction(1), Fraction(0)                         # E{(x_0 - x^_0)^2}, x^_0^2
+    bound = Pbar * (xbar0 + xunder0) + Punder * xbar0                 # (3.65), no noise: omega = 0
+    P0 = _add(Qt, _mul(_mul(_transpose(At), Q_final), At))            # P~_0 = Q~_0 + A~^T P~_1 A~ (3.64)
+    costate_gap = -Punder - P0[0][1]                                  # off-diagonal of (B.2)'s bound - P~_0
+    return {"exact": exact, "bound": bound, "gain": l, "costate_gap_offdiagonal": costate_gap}
+
+
+# ------------------------------------------------------------------ Thm. 3.19: a period-2 cycle
+
+THM_3_19_SYSTEM = dict(          # one mode, nx = 2: instance 79 of the study, rounded to one decimal
+    A=[[1.3, 0.3], [-0.5, -0.4]], B=[[0.2], [1.1]], C=[[0.0, 1.9]], H=[[-0.1, -0.3], [0.1, 0.0]],
+    Q=[[2.8, -1.2], [-1.2, 1.9]], R=[[1.4]])
+
+
+def alg_3_1_one_mode(A, B, C, H, Q, R, start, iterations=400):
+    """The gains of Alg. 3.1 ((3.34)-(3.35), one mode, column-major vec) from X = P = start I."""
+    A, B, C, H, Q, R = (np.asarray(v, dtype=float) for v in (A, B, C, H, Q, R))
+    X = P = start * np.eye(len(A))
+    gains = []
+    for _ in range(iterations):
+        lhs = np.kron(C @ X @ C.T, R + B.T @ P @ B)
+        L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F")).reshape(B.shape[1], C.shape[0], order="F")
+        Acl = A + B @ L @ C
+        X, P = Acl @ X @ Acl.T + H @ H.T, Acl.T @ P @ Acl + Q + C.T @ L.T @ R @ L @ C
+        gains.append(L)
+    return np.array(gains)
+
+
+def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
+    """Alg. 3.1 on :data:`THM_3_19_SYSTEM` from X = P = s I: the last two gains (a period-2 cycle),
+    the squared spectral radius rho(A + B L C)^2 (Cor. 3.2, one mode) at both, and the smallest
+    rho^2 over a grid of scalar gains in [-5, 5] (a stabilising gain exists).
+
+    Examples
+    --------
+    >>> ex = thm_3_19_example(starts=(1e-4,), grid=2001)
+    >>> ex["cycles"][0]["period_2"], ex["best_rho"] < 1 < min(ex["cycles"][0]["rho"])
+    (True, True)
+    """
+    s = THM_3_19_SYSTEM
+    A, B, C = (np.asarray(s[k]) for k in "ABC")
+    rho = lambda L: float(np.max(np.abs(np.linalg.eigvals(A + B @ np.atleast_2d(L) @ C))) ** 2)
+    cycles = []
+    for start in starts:
+        gains = alg_3_1_one_mode(**s, start=start)[:, 0, 0]
+        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9) and not np.isclose(gains[-1], gains[-2], rtol=1e-3))
+        cycles.append({"start": start, "gains": sorted([float(gains[-1]), float(gains[-2])]),
+                       "rho": sorted([rho(gains[-1]), rho(gains[-2])]), "period_2": period_2})
+    candidates = np.linspace(-5.0, 5.0, grid)
+    radii = [rho(L) for L in candidates]
+    best = int(np.argmin(radii))
+    return {"cycles": cycles, "best_gain": float(candidates[best]), "best_rho": float(radii[best])}
+
+
+# ------------------------------------------------------------------ Sec. 2.6.3: kernels
+
+def kernel_example(length_scale=0.03):
+    """N(0,1), N(1,1), N(2,1) with the printed Hellinger expression (1 - BC)^2 and the SE kernel:
+    the smallest Gram eigenvalue (negative), and with the usual Hellinger sqrt(1 - BC) (not).
+
+    Examples
+    --------
+    >>> ex = kernel_example()
+    >>> round(ex["printed"], 3), ex["usual"] > -1e-12
+    (-0.272, True)
+    """
+    means = [0.0, 1.0, 2.0]
+    usual = np.array([[gp.hellinger_gaussian([a], [[1.0]], [b], [[1.0]]) for b in means] for a in means])
+    lowest = lambda D: float(np.linalg.eigvalsh(gp.squared_exponential(D, length_scale))[0])
+    return {"printed": lowest(usual ** 4), "usual": lowest(usual), "length_scale": length_scale}

@@ -1,0 +1,106 @@
+"""The diagnoses and corrected statements of the failing theorems (issue 23, items 3-4).
+
+Each corrected statement must hold on seeded random instances and its mutant must fail on
+some; the closed-form counterexamples are checked exactly (fractions) or to rounding.
+"""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from asoc.mjls import MJLS, static_output_feedback
+from asoc_companion.theorems import bounds, corrections
+from asoc_companion.theorems.counterexamples import (THM_3_19_SYSTEM, kernel_example, prop_3_26_example,
+                                                     thm_3_19_example, thm_3_31_example)
+
+
+def _verdicts(check, n, seed=3):
+    return [check(np.random.default_rng(child))[:2] for child in np.random.SeedSequence(seed).spawn(n)]
+
+
+@pytest.mark.parametrize("check, n", [(corrections.check_kernels, 40), (corrections.check_3_19, 15),
+                                      (corrections.check_3_26, 30), (corrections.check_3_27, 8),
+                                      (corrections.check_3_31, 40), (corrections.check_3_32, 15)])
+def test_corrected_statement_holds_and_its_mutant_is_caught(check, n):
+    verdicts = [v for v in _verdicts(check, n) if v[0] != "not_applicable"]
+    assert verdicts, "no applicable instance"
+    assert all(corrected == "holds" for corrected, _ in verdicts)
+    assert any(mutant == "fails" for _, mutant in verdicts)
+
+
+def test_prop_3_26_counterexample_is_exact():
+    ex = prop_3_26_example()
+    assert ex["X"] == [[1, 0], [0, 1]]
+    assert ex["printed_gap_determinant"] == -1                       # not PSD: bound - X~ indefinite
+    assert ex["corrected_gap_determinant"] > 0 and ex["corrected_gap"][0][0] > 0
+
+
+@pytest.mark.parametrize("gain", [Fraction(-1, 4), Fraction(0), Fraction(1, 3), Fraction(-2)])
+def test_thm_3_31_counterexample_bound_depends_on_a_gain_without_effect(gain):
+    ex = thm_3_31_example(gain)
+    assert ex["exact"] == 2
+    assert ex["bound"] == 2 + 2 * gain + 4 * gain ** 2
+    assert (ex["bound"] < ex["exact"]) == (-Fraction(1, 2) < gain < 0)
+    assert ex["costate_gap_offdiagonal"] == -gain * (2 * gain + 1)
+
+
+def test_thm_3_19_counterexample_cycles_although_a_stabilising_gain_exists():
+    ex = thm_3_19_example(grid=4001)
+    assert all(c["period_2"] and min(c["rho"]) > 1 for c in ex["cycles"])
+    assert ex["best_rho"] < 1
+    sys = MJLS(T=np.eye(1), J=None, **{k: np.array(v)[None] for k, v in THM_3_19_SYSTEM.items()})
+    run = static_output_feedback(sys, warn=False)                   # the library's Alg. 3.1 agrees
+    assert not (run.converged and run.stabilizing)
+
+
+def test_kernel_counterexample():
+    ex = kernel_example()
+    assert ex["printed"] == pytest.approx(-0.272, abs=1e-3)
+    assert ex["usual"] > -1e-12
+
+
+def test_difference_of_3_65_and_b4_is_the_stated_trace():
+    errors = [corrections.check_3_32(np.random.default_rng(c))[2] for c in np.random.SeedSequence(8).spawn(10)]
+    assert max(errors) < 1e-10
+
+
+def test_costate_solves_the_multiplier_equation():
+    rng = np.random.default_rng(0)
+    At = 0.4 * rng.standard_normal((2, 3, 3))
+    Qt = np.stack([np.eye(3), 2 * np.eye(3)])
+    T = np.array([[0.7, 0.3], [0.4, 0.6]])
+    P = bounds.costate(At, Qt, T)
+    EP = np.einsum("ij,jab->iab", T, P)
+    assert np.allclose(P, Qt + np.swapaxes(At, 1, 2) @ EP @ At)
+
+
+def test_a_planted_false_bound_is_caught(monkeypatch):
+    """The 3.26 check is not true by construction: with the factor replaced by 1.5 it fails."""
+    original = bounds.moment_bound
+    monkeypatch.setattr(bounds, "moment_bound", lambda X, factor=2.0: original(X, 0.75 * factor))
+    verdicts = _verdicts(corrections.check_3_26, 20)
+    assert any(corrected == "fails" for corrected, _ in verdicts)
+
+
+def test_records_have_the_interface_the_study_merges():
+    records = corrections.correction_records(np.random.SeedSequence(5), n_instances=3, mutant_instances=2)
+    assert sorted(records) == sorted(corrections.STATEMENT_IDS)
+    for key, record in records.items():
+        assert isinstance(record["diagnosis"], str) and record["diagnosis"]
+        assert ("corrected" in record) != ("no_correction" in record), key
+        if "corrected" in record:
+            c = record["corrected"]
+            assert c["holds"] + c["fails"] == c["instances"]
+            assert set(c["mutant"]) >= {"description", "fails", "instances"}
+            assert c["mutant"]["instances"] <= 2
+
+
+@pytest.mark.parametrize("kwargs, error", [(dict(seed_sequence=2017), TypeError),
+                                           (dict(seed_sequence=np.random.SeedSequence(1), n_instances=0), ValueError),
+                                           (dict(seed_sequence=np.random.SeedSequence(1), mutant_instances=1.5),
+                                            ValueError)])
+def test_bad_arguments_are_named(kwargs, error):
+    with pytest.raises(error, match=next(k for k in ("mutant_instances", "n_instances", "seed_sequence")
+                                         if k in kwargs and (k != "seed_sequence" or error is TypeError))):
+        corrections.correction_records(**kwargs)
