@@ -62,7 +62,7 @@ def ci_execution():
     (output folder, nbval's completed process).
 
     One execution serves both notebook tests: nbval re-executes the committed notebook with
-    papermill's ci parameters injected and compares the cells marked ``# NBVAL_CHECK_OUTPUT``
+    papermill's ci parameters injected and compares the cells tagged ``nbval-check-output``
     with their stored outputs (tests/notebooks/test_nbval.py), and the same execution records the values,
     figures and tables that tests/notebooks/test_notebooks.py checks against the reference.
     """

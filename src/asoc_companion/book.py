@@ -1,11 +1,25 @@
-"""Prepare the book for an offline build: serve MathJax 3 from the book's own _static.
+"""The book's Sphinx extension: a light offline site and a layout that stays current.
 
-The stock Sphinx configuration loads MathJax from a CDN, which a machine without
-network cannot reach; the HTML would then show raw TeX. The package
-``django-static-mathjax`` ships MathJax 3's ``es5`` build, which is copied to
-``book/_static/mathjax`` (ignored by git) and referenced in ``book/_config.yml``.
+Jupyter Book injects every ``.js`` file under ``book/_static`` into every page, and its
+theme adds a few scripts that this book does not use. This extension (listed under
+``sphinx: extra_extensions`` in ``book/_config.yml``) keeps each page to what it uses:
+
+- MathJax 3 is served from the book itself, as one bundle (:data:`MATHJAX_BUNDLE`, from the
+  ``django-static-mathjax`` package) and its web fonts, copied into ``_static/mathjax``
+  when the HTML build finishes; Sphinx loads it only on pages with math, once;
+- scripts a page does not use are left out (:func:`unused_script`): the Thebe launcher
+  (the book has no launch buttons), sphinx-design's tabs and the toggle button where the
+  page has none, and any script listed twice;
+- the architecture page's picture of the layout (:func:`layout_tree`) is generated from
+  ``src/`` when the page is read, so it follows the modules as they are split.
+
+``python -m asoc_companion.book`` prepares a checkout for a build: it removes the MathJax
+folder that earlier versions copied into ``book/_static`` (Jupyter Book would inject its
+70 scripts into every page) and checks that MathJax is installed.
 """
 
+import ast
+import re
 import shutil
 import sys
 from importlib.util import find_spec
@@ -13,19 +27,179 @@ from pathlib import Path
 
 from . import paths
 
+MATHJAX_BUNDLE = "tex-chtml-full.js"
+"""The MathJax 3 combined component served: TeX input with every extension (nothing is
+loaded on demand, e.g. ``\\boldsymbol``), CommonHTML output, the menu."""
+MATHJAX_FONTS = Path("output") / "chtml" / "fonts" / "woff-v2"
+"""The web fonts of the CommonHTML output, relative to MathJax's folder (not scripts)."""
+LAYOUT_MARKER = "<!-- layout: generated from src/ by asoc_companion.book -->"
+"""Where the architecture page receives :func:`layout_tree` (replaced when the page is read)."""
 
-def install_mathjax(book=None) -> Path:
-    """Copy MathJax's es5 folder into ``book/_static/mathjax``; return the target."""
+
+def mathjax_source() -> Path:
+    """The folder of MathJax 3's ``es5`` build installed by ``django-static-mathjax``.
+
+    Raises
+    ------
+    RuntimeError
+        If the package is not installed.
+    """
     spec = find_spec("mathjax")
     if spec is None or not spec.submodule_search_locations:
-        raise RuntimeError("MathJax not installed: pip install -r environment.txt")
-    source = Path(list(spec.submodule_search_locations)[0]) / "static" / "mathjax" / "es5"
-    target = Path(book or paths.project().book) / "_static" / "mathjax"
-    if not (target / "tex-chtml.js").exists():
-        shutil.copytree(source, target, dirs_exist_ok=True)
+        raise RuntimeError("MathJax not installed: pip install 'asoc[companion]' (django-static-mathjax)")
+    return Path(list(spec.submodule_search_locations)[0]) / "static" / "mathjax" / "es5"
+
+
+def install_mathjax(static) -> Path:
+    """Copy :data:`MATHJAX_BUNDLE` and its fonts into ``static/mathjax``; return that folder."""
+    source, target = mathjax_source(), Path(static) / "mathjax"
+    (target / MATHJAX_FONTS).mkdir(parents=True, exist_ok=True)
+    shutil.copy2(source / MATHJAX_BUNDLE, target / MATHJAX_BUNDLE)
+    shutil.copytree(source / MATHJAX_FONTS, target / MATHJAX_FONTS, dirs_exist_ok=True)
     return target
 
 
+def unused_script(script, body: str, seen: set) -> bool:
+    """Whether a page with HTML ``body`` can do without ``script`` (a Sphinx ``_JavaScript``).
+
+    ``seen`` collects the scripts already kept on the page; a repeated one is unused.
+
+    Examples
+    --------
+    >>> from sphinx.builders.html._assets import _JavaScript
+    >>> seen = set()
+    >>> unused_script(_JavaScript("_static/doctools.js"), "<p>text</p>", seen)
+    False
+    >>> unused_script(_JavaScript("_static/doctools.js"), "<p>text</p>", seen)
+    True
+    >>> unused_script(_JavaScript("_static/design-tabs.js"), "<p>text</p>", set())
+    True
+    >>> unused_script(_JavaScript("_static/mathjax/a11y/sre.js"), "", set())
+    True
+    """
+    name = str(script.filename)
+    key = (name, script.attributes.get("body", ""))
+    if key in seen:
+        return True
+    seen.add(key)
+    if name.startswith("_static/mathjax/"):
+        return name != f"_static/mathjax/{MATHJAX_BUNDLE}"
+    if "thebe" in name or "THEBE" in script.attributes.get("body", "") or "kernelName" in key[1]:
+        return True
+    if name.endswith("design-tabs.js"):
+        return "sd-tab-set" not in body
+    if name.endswith("togglebutton.js") or "togglebutton" in key[1] or "toggleHint" in key[1] \
+            or "toggleOpenOnPrint" in key[1]:
+        return "toggle" not in body and "dropdown" not in body
+    return False
+
+
+def _prune_page_assets(app, pagename, templatename, context, doctree):
+    if app.builder.format != "html" or "script_files" not in context:
+        return
+    seen, body = set(), context.get("body", "")
+    context["script_files"][:] = [s for s in context["script_files"] if not unused_script(s, body, seen)]
+    css_seen = set()
+    context["css_files"][:] = [c for c in context["css_files"]
+                               if not (c.filename in css_seen or css_seen.add(c.filename))]
+
+
+THEBE_BODY = re.compile(r"\s*<script type=\"text/x-thebe-config\">.*?</script>\s*<script>kernelName = [^<]*</script>",
+                        re.DOTALL)
+"""What sphinx-thebe (loaded by Jupyter Book on every book) appends to each page's body."""
+
+
+def _drop_thebe_config(app, pagename, templatename, context, doctree):
+    if "body" in context:
+        context["body"] = THEBE_BODY.sub("", context["body"])
+
+
+def _configure(app, config):
+    config.mathjax_path = f"mathjax/{MATHJAX_BUNDLE}"
+    # Jupyter Book listed every .js under _static (a MathJax folder left there by an old
+    # build would add 70 scripts): keep the book's own scripts only
+    config.html_js_files = [js for js in config.html_js_files
+                            if not str(js[0] if isinstance(js, tuple) else js).startswith("mathjax/")]
+
+
+def _copy_mathjax(app, exception):
+    if exception is None and app.builder.format == "html":
+        install_mathjax(Path(app.outdir) / "_static")
+
+
+def module_summary(path: Path) -> str:
+    """The first line of a module's docstring ("" if it has none).
+
+    Examples
+    --------
+    >>> import asoc_companion.book as me
+    >>> module_summary(Path(me.__file__))
+    "The book's Sphinx extension: a light offline site and a layout that stays current."
+    """
+    doc = ast.get_docstring(ast.parse(path.read_text()))
+    return doc.strip().splitlines()[0].strip() if doc else ""
+
+
+def layout_tree(src) -> str:
+    """A tree of the packages under ``src``, one line per module with its docstring's first line.
+
+    Examples
+    --------
+    >>> tree = layout_tree(paths.project().src)
+    >>> tree.splitlines()[0]
+    'src/'
+    >>> any(line.lstrip(' |`-').startswith('book.py') for line in tree.splitlines())
+    True
+    """
+    src = Path(src)
+    lines = ["src/"]
+
+    def walk(folder: Path, indent: str):
+        entries = sorted(p for p in folder.iterdir()
+                         if (p.suffix == ".py") or (p.is_dir() and (p / "__init__.py").exists()))
+        for i, entry in enumerate(entries):
+            last = i == len(entries) - 1
+            branch, deeper = ("`-- ", "    ") if last else ("|-- ", "|   ")
+            if entry.is_dir():
+                summary = module_summary(entry / "__init__.py")
+                lines.append(f"{indent}{branch}{entry.name}/" + (f"  {summary}" if summary else ""))
+                walk(entry, indent + deeper)
+            elif entry.name != "__init__.py":
+                summary = module_summary(entry)
+                lines.append(f"{indent}{branch}{entry.name}" + (f"  {summary}" if summary else ""))
+
+    walk(src, "")
+    return "\n".join(lines)
+
+
+def _insert_layout(app, docname, source):
+    if LAYOUT_MARKER in source[0]:
+        tree = layout_tree(Path(app.srcdir).parent / "src")
+        source[0] = source[0].replace(LAYOUT_MARKER, f"```text\n{tree}\n```")
+
+
+def setup(app):
+    """Sphinx entry point."""
+    app.connect("config-inited", _configure, priority=900)
+    app.connect("source-read", _insert_layout)
+    app.connect("html-page-context", _prune_page_assets, priority=900)
+    app.connect("html-page-context", _drop_thebe_config, priority=901)
+    app.connect("build-finished", _copy_mathjax)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
+
+
+def prepare(book=None) -> Path:
+    """Ready ``book`` (default the checkout's) for a build; return its folder.
+
+    Removes ``book/_static/mathjax`` left by earlier versions and checks that MathJax is
+    installed (:func:`mathjax_source`).
+    """
+    book = Path(book or paths.project().book)
+    shutil.rmtree(book / "_static" / "mathjax", ignore_errors=True)
+    mathjax_source()
+    return book
+
+
 if __name__ == "__main__":
-    print(f"MathJax ready in {install_mathjax()}")
+    print(f"{prepare()} is ready to build (MathJax: {mathjax_source() / MATHJAX_BUNDLE})")
     sys.exit(0)
