@@ -111,7 +111,8 @@ def html(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def browser():
-    """Headless Chromium in a 1280 x 900 window."""
+    """Headless Chromium in a 1280 x 900 window, keeping its console ("browser") and network
+    ("performance") logs for tests/notebooks/test_book.py."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
@@ -124,6 +125,7 @@ def browser():
                  "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
         opts.add_argument(flag)
     opts.add_argument("--window-size=1280,900")
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
     driver = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
     driver.set_window_size(1280, 900)
     yield driver
