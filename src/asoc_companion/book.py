@@ -11,7 +11,9 @@ theme adds a few scripts that this book does not use. This extension (listed und
   (the book has no launch buttons), sphinx-design's tabs and the toggle button where the
   page has none, and any script listed twice;
 - the architecture page's picture of the layout (:func:`layout_tree`) is generated from
-  ``src/`` when the page is read, so it follows the modules as they are split.
+  ``src/`` when the page is read, so it follows the modules as they are split;
+- the API pages' ``<!-- api MODULE ... -->`` blocks become an autosummary table of the
+  module's public names and their entries grouped by task (:func:`api_markdown`).
 
 ``python -m asoc_companion.book`` prepares a checkout for a build: it removes the MathJax
 folder that earlier versions copied into ``book/_static`` (Jupyter Book would inject its
@@ -19,6 +21,8 @@ folder that earlier versions copied into ``book/_static`` (Jupyter Book would in
 """
 
 import ast
+import importlib
+import inspect
 import re
 import shutil
 import sys
@@ -32,6 +36,8 @@ MATHJAX_BUNDLE = "tex-chtml-full.js"
 loaded on demand, e.g. ``\\boldsymbol``), CommonHTML output, the menu."""
 MATHJAX_FONTS = Path("output") / "chtml" / "fonts" / "woff-v2"
 """The web fonts of the CommonHTML output, relative to MathJax's folder (not scripts)."""
+API_BLOCK = re.compile(r"<!-- api (?P<module>[\w.]+)(?P<groups>.*?)-->", re.DOTALL)
+"""An API block of a page: ``<!-- api MODULE`` then lines ``Title: name name ...`` then ``-->``."""
 LAYOUT_MARKER = "<!-- layout: generated from src/ by asoc_companion.book -->"
 """Where the architecture page receives :func:`layout_tree` (replaced when the page is read)."""
 
@@ -172,16 +178,117 @@ def layout_tree(src) -> str:
     return "\n".join(lines)
 
 
-def _insert_layout(app, docname, source):
-    if LAYOUT_MARKER in source[0]:
-        tree = layout_tree(Path(app.srcdir).parent / "src")
-        source[0] = source[0].replace(LAYOUT_MARKER, f"```text\n{tree}\n```")
+def public_names(module) -> list:
+    """``module.__all__``, else the public names the module defines: its functions and classes,
+    and its data that is not imported (lower-case objects of its own, e.g. a ``defaults`` dict).
+
+    Examples
+    --------
+    >>> import asoc.config
+    >>> "option_context" in public_names(asoc.config) and "Iterator" not in public_names(asoc.config)
+    True
+    """
+    if hasattr(module, "__all__"):
+        return list(module.__all__)
+    source = inspect.getsource(module)
+
+    def defined_here(name, obj):
+        if inspect.ismodule(obj) or name.startswith("_"):
+            return False
+        if getattr(obj, "__module__", None) == module.__name__:
+            return True
+        return not (inspect.isclass(obj) or callable(obj)) and re.search(rf"^{name}\b.*=", source, re.M)
+
+    return [name for name, obj in vars(module).items() if defined_here(name, obj)]
+
+
+def attribute_docs(module) -> dict:
+    """``{name: docstring}`` of the module's data documented in its source (``#:`` comments or
+    a string right after the assignment); data without one would show its type's docstring."""
+    from sphinx.pycode import ModuleAnalyzer
+
+    try:
+        docs = ModuleAnalyzer.for_module(module.__name__).find_attr_docs()
+    except Exception:          # no source to read (a compiled or generated module)
+        return {}
+    return {name: lines for (scope, name), lines in docs.items() if scope == ""}
+
+
+def documented(module, names) -> list:
+    """``names`` without the module's data that has no documentation of its own."""
+    docs = attribute_docs(module)
+    return [n for n in names if inspect.isclass(getattr(module, n)) or callable(getattr(module, n)) or n in docs]
+
+
+def _directive(module, name) -> str:
+    obj = getattr(module, name)
+    if inspect.isclass(obj):
+        return f".. autoclass:: {module.__name__}.{name}\n   :members:\n"
+    if callable(obj):
+        return f".. autofunction:: {module.__name__}.{name}\n"
+    return f".. autodata:: {module.__name__}.{name}\n   :annotation:\n"
+
+
+def api_markdown(module_name: str, groups: str) -> str:
+    """The MyST text of an API block: an autosummary table of every public name of the module,
+    then each group under a heading (``Title: name name ...``, one group a line) and the
+    names no group lists under "More".
+
+    Names a group lists that the module does not have are left out, so a renamed function
+    moves to "More" instead of breaking the build. Without groups, the entries follow the
+    table with no headings.
+
+    Examples
+    --------
+    >>> text = api_markdown("asoc.config", "")
+    >>> ".. autosummary::" in text and ".. autofunction:: asoc.config.option_context" in text
+    True
+    >>> "## Tunables" in api_markdown("asoc.config", "Tunables: defaults")
+    True
+    """
+    module = importlib.import_module(module_name)
+    names = documented(module, public_names(module))
+    sections, listed = [], set()
+    for line in groups.strip().splitlines():
+        if ":" not in line:
+            continue
+        title, members = line.split(":", 1)
+        members = [n for n in members.split() if n in names and n not in listed]
+        listed.update(members)
+        if members:
+            sections.append((title.strip(), members))
+    rest = [n for n in names if n not in listed]
+    if rest:
+        sections.append(("More" if sections else "", rest))
+    order = [n for _, members in sections for n in members]
+    table = "\n".join(f"   {n}" for n in order)
+    parts = [f"```{{eval-rst}}\n.. currentmodule:: {module_name}\n\n.. autosummary::\n   :nosignatures:\n\n{table}\n```"]
+    for title, members in sections:
+        body = "\n".join(_directive(module, n) for n in members)
+        parts.append((f"## {title}\n\n" if title else "") + f"```{{eval-rst}}\n{body}```")
+    return "\n\n".join(parts)
+
+
+def _expand_blocks(app, docname, source):
+    text = source[0]
+    if LAYOUT_MARKER in text:
+        text = text.replace(LAYOUT_MARKER, f"```text\n{layout_tree(Path(app.srcdir).parent / 'src')}\n```")
+    source[0] = API_BLOCK.sub(lambda m: api_markdown(m["module"], m["groups"]), text)
+
+
+def _generated_pages(app, env, added, changed, removed):
+    """Pages with generated blocks are read again on every build: the modules they list change
+    without the page's own text changing."""
+    return [doc for doc in env.found_docs
+            if (Path(app.srcdir) / f"{doc}.md").exists()
+            and re.search(r"<!-- (api |layout:)", (Path(app.srcdir) / f"{doc}.md").read_text())]
 
 
 def setup(app):
     """Sphinx entry point."""
     app.connect("config-inited", _configure, priority=900)
-    app.connect("source-read", _insert_layout)
+    app.connect("source-read", _expand_blocks)
+    app.connect("env-get-outdated", _generated_pages)
     app.connect("html-page-context", _prune_page_assets, priority=900)
     app.connect("html-page-context", _drop_thebe_config, priority=901)
     app.connect("build-finished", _copy_mathjax)

@@ -209,3 +209,19 @@ def test_no_warning_text_or_stray_output(html, page):
     stray = re.findall(r'<div class="output text_plain[^"]*"><div class="highlight"><pre><span></span>'
                        r"([^<]{0,60})", text)
     assert not stray, f"{page}: stray outputs {stray}"
+
+
+# ---- one set of totals (item 4) ------------------------------------------------------------------
+
+def test_landing_page_and_ledger_give_the_same_totals():
+    """Both pages carry the same paragraph saying what is counted, and the landing page opens
+    with the verdict formatted from the same statuses; no page cites an issue number."""
+    from asoc_companion.ledger import totals_markdown, verdict_markdown
+
+    intro, ledger = (BOOK / "intro.md").read_text(), (BOOK / "ledger.md").read_text()
+    totals = totals_markdown()
+    assert totals in intro and totals in ledger
+    assert intro.index(verdict_markdown()) < intro.index("## What reproduces")
+    cited = [(p.name, m) for p in [*BOOK.glob("*.md"), *BOOK.glob("*.ipynb")]
+             for m in re.findall(r"\bissues? \d+\b", p.read_text())]
+    assert not cited, f"references to issue numbers a reader cannot follow: {cited}"
