@@ -26,6 +26,7 @@ import inspect
 import re
 import shutil
 import sys
+from importlib.metadata import version
 from importlib.util import find_spec
 from pathlib import Path
 
@@ -120,8 +121,49 @@ def _drop_thebe_config(app, pagename, templatename, context, doctree):
         context["body"] = THEBE_BODY.sub("", context["body"])
 
 
+THESIS = ("Maxim Dolgov, \\emph{Approximate Stochastic Optimal Control of Smooth Nonlinear Systems "
+          "and Piecewise Linear Systems}, PhD thesis, Karlsruhe Institute of Technology, 2017")
+"""The thesis, as the PDF's title page names it (LaTeX)."""
+
+
+LATEX_ELEMENTS = {
+    "papersize": "a4paper",
+    # math keeps TeX's own fonts: fontspec's default moves \mathbf onto the text font, where
+    # \mathbf\Sigma has no glyph (a missing character in the PDF)
+    "fontenc": r"\usepackage[no-math]{fontspec}",
+}
+"""Sphinx's LaTeX settings for the PDF, besides the title page."""
+
+
+def title_page(title: str, version: str) -> str:
+    """The PDF's title page (LaTeX): the book's title, the thesis, the licences, the version.
+
+    Examples
+    --------
+    >>> page = title_page("A companion", "0.1.0")
+    >>> "A companion" in page and "CC BY-NC 4.0" in page and "version 0.1.0" in page
+    True
+    """
+    return rf"""\begin{{titlepage}}
+\centering\vspace*{{3cm}}
+{{\Huge\bfseries {title}\par}}
+\vspace{{1.5cm}}
+{{\large The reproducible companion to\par\vspace{{0.5em}}{THESIS}\par}}
+\vspace{{1.5cm}}
+{{\large \texttt{{asoc}} version {version}\par}}
+\vfill
+{{\small The thesis text is licensed CC BY-NC 4.0; its equations, parameters and numbers are
+cited by their numbers in the thesis. The software \texttt{{asoc}} and this book's code are
+licensed MIT.\par}}
+\end{{titlepage}}"""
+
+
 def _configure(app, config):
     config.mathjax_path = f"mathjax/{MATHJAX_BUNDLE}"
+    config.release = config.version = version("asoc")
+    config.latex_elements = {**config.latex_elements, **LATEX_ELEMENTS,
+                             "maketitle": title_page(config.html_title or config.project, config.release)}
+    config.latex_use_xindy = False          # makeindex comes with TeX Live; xindy is a package more
     # Jupyter Book listed every .js under _static (a MathJax folder left there by an old
     # build would add 70 scripts): keep the book's own scripts only
     config.html_js_files = [js for js in config.html_js_files
