@@ -37,10 +37,12 @@ SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")     # module-sc
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``--dist loadgroup``), tests that share an expensive fixture run on one
-    worker: the book build, one notebook's ci run, a module's clone or wheel."""
+    worker: the book build, the PDF build, one notebook's ci run, a module's clone or wheel."""
     for item in items:
         fixtures = getattr(item, "fixturenames", ())
-        if item.get_closest_marker("book") or "html" in fixtures:
+        if "pdf" in fixtures:
+            group = "pdf"
+        elif item.get_closest_marker("book") or "html" in fixtures:
             group = "book"
         elif ("ci_run" in fixtures or "ci_execution" in fixtures) and hasattr(item, "callspec"):
             group = f"ci-{item.callspec.params.get('name')}"
