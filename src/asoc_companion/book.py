@@ -175,17 +175,23 @@ def _copy_mathjax(app, exception):
         install_mathjax(Path(app.outdir) / "_static")
 
 
-def module_summary(path: Path) -> str:
-    """The first line of a module's docstring ("" if it has none).
+SUMMARY_WIDTH = 50
+"""Characters of a module's summary in the layout tree (the page's code block stays narrow)."""
+
+
+def module_summary(path: Path, width: int = SUMMARY_WIDTH) -> str:
+    """The first line of a module's docstring, without reST markup, cut at ``width`` characters.
 
     Examples
     --------
     >>> import asoc_companion.book as me
     >>> module_summary(Path(me.__file__))
-    "The book's Sphinx extension: a light offline site and a layout that stays current."
+    "The book's Sphinx extension: a light offline site…"
     """
     doc = ast.get_docstring(ast.parse(path.read_text()))
-    return doc.strip().splitlines()[0].strip() if doc else ""
+    line = doc.strip().splitlines()[0].strip() if doc else ""
+    line = re.sub(r":\w+:`~?([^`]+)`|``([^`]+)``", lambda m: m[1] or m[2], line).rstrip(".")
+    return line if len(line) <= width else line[:width].rsplit(" ", 1)[0] + "…"
 
 
 def layout_tree(src) -> str:
@@ -196,27 +202,24 @@ def layout_tree(src) -> str:
     >>> tree = layout_tree(paths.project().src)
     >>> tree.splitlines()[0]
     'src/'
-    >>> any(line.lstrip(' |`-').startswith('book.py') for line in tree.splitlines())
+    >>> any(line.lstrip(' │├└─').startswith('book.py') for line in tree.splitlines())
     True
     """
-    src = Path(src)
     lines = ["src/"]
 
     def walk(folder: Path, indent: str):
-        entries = sorted(p for p in folder.iterdir()
-                         if (p.suffix == ".py") or (p.is_dir() and (p / "__init__.py").exists()))
-        for i, entry in enumerate(entries):
+        entries = sorted(p for p in folder.iterdir() if p.name != "__init__.py"
+                         and (p.suffix == ".py" or (p.is_dir() and (p / "__init__.py").exists())))
+        names = [e.name + "/" * e.is_dir() for e in entries]
+        width = max(map(len, names), default=0)
+        for i, (entry, name) in enumerate(zip(entries, names)):
             last = i == len(entries) - 1
-            branch, deeper = ("`-- ", "    ") if last else ("|-- ", "|   ")
+            summary = module_summary(entry / "__init__.py" if entry.is_dir() else entry)
+            lines.append(f"{indent}{'└── ' if last else '├── '}{name:<{width}}  {summary}".rstrip())
             if entry.is_dir():
-                summary = module_summary(entry / "__init__.py")
-                lines.append(f"{indent}{branch}{entry.name}/" + (f"  {summary}" if summary else ""))
-                walk(entry, indent + deeper)
-            elif entry.name != "__init__.py":
-                summary = module_summary(entry)
-                lines.append(f"{indent}{branch}{entry.name}" + (f"  {summary}" if summary else ""))
+                walk(entry, indent + ("    " if last else "│   "))
 
-    walk(src, "")
+    walk(Path(src), "")
     return "\n".join(lines)
 
 
