@@ -1,9 +1,10 @@
 """nbval (lax mode) on every committed notebook, re-executed at ci fidelity.
 
 The committed notebooks in ``book/`` hold the outputs of the full-fidelity run. Cells
-tagged ``nbval-check-output`` (nbval's cell tag for its ``# NBVAL_CHECK_OUTPUT`` marker) print numbers that do not depend on the Monte Carlo
-size (spectral radii, gains, errors); nbval re-executes the notebook with papermill's
-ci parameters injected and requires those printed outputs to be identical. They print
+tagged ``nbval-check-output`` (nbval's cell tag for its ``# NBVAL_CHECK_OUTPUT`` marker)
+print numbers that do not depend on the Monte Carlo size (spectral radii, gains, errors);
+nbval re-executes the notebook with papermill's ci parameters injected and requires those
+printed outputs to be identical. They print
 numbers rounded to what is meant (the thesis's decimals, or a stated accuracy), never a
 bare repr, so another CPU's BLAS kernels (``make test-portable``) cannot change them.
 The same execution serves the value checks of tests/notebooks/test_notebooks.py (conftest's
