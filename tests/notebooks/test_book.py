@@ -144,9 +144,10 @@ def _load_and_log(browser, path):
 
 
 def javascript_bytes(requests) -> int:
-    """Bytes of the distinct script files among ``requests`` (file: URLs, read from disk)."""
+    """Bytes of the distinct script files among ``requests`` (file: URLs, read from disk; a
+    missing file is a console error, counted there)."""
     files = {Path(unquote(urlparse(url).path)) for url, kind in requests if kind == "Script"}
-    return sum(f.stat().st_size for f in files)
+    return sum(f.stat().st_size for f in files if f.is_file())
 
 
 @pytest.mark.book
