@@ -175,7 +175,7 @@ def _copy_mathjax(app, exception):
         install_mathjax(Path(app.outdir) / "_static")
 
 
-SUMMARY_WIDTH = 50
+SUMMARY_WIDTH = 42
 """Characters of a module's summary in the layout tree (the page's code block stays narrow)."""
 
 
@@ -186,7 +186,7 @@ def module_summary(path: Path, width: int = SUMMARY_WIDTH) -> str:
     --------
     >>> import asoc_companion.book as me
     >>> module_summary(Path(me.__file__))
-    "The book's Sphinx extension: a light offline site…"
+    "The book's Sphinx extension: a light…"
     """
     doc = ast.get_docstring(ast.parse(path.read_text()))
     line = doc.strip().splitlines()[0].strip() if doc else ""
