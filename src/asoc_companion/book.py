@@ -6,7 +6,8 @@ theme adds a few scripts that this book does not use. This extension (listed und
 
 - MathJax 3 is served from the book itself, as one bundle (:data:`MATHJAX_BUNDLE`, from the
   ``django-static-mathjax`` package) and its web fonts, copied into ``_static/mathjax``
-  when the HTML build finishes; Sphinx loads it only on pages with math, once;
+  when the HTML build finishes; it is loaded once, on pages with math only (Sphinx also
+  asks for it on the landing page, whose table of contents leads to math);
 - scripts a page does not use are left out (:func:`unused_script`): the Thebe launcher
   (the book has no launch buttons), sphinx-design's tabs and the toggle button where the
   page has none, and any script listed twice;
@@ -83,6 +84,8 @@ def unused_script(script, body: str, seen: set) -> bool:
     True
     >>> unused_script(_JavaScript("_static/mathjax/a11y/sre.js"), "", set())
     True
+    >>> unused_script(_JavaScript(f"_static/mathjax/{MATHJAX_BUNDLE}"), '<span class="math">x</span>', set())
+    False
     """
     name = str(script.filename)
     key = (name, script.attributes.get("body", ""))
@@ -90,7 +93,9 @@ def unused_script(script, body: str, seen: set) -> bool:
         return True
     seen.add(key)
     if name.startswith("_static/mathjax/"):
-        return name != f"_static/mathjax/{MATHJAX_BUNDLE}"
+        # the bundle, where the page has math (Sphinx asks for it on the landing page too: its
+        # table of contents leads to pages with math)
+        return name != f"_static/mathjax/{MATHJAX_BUNDLE}" or 'class="math' not in body
     if "thebe" in name or "THEBE" in script.attributes.get("body", "") or "kernelName" in key[1]:
         return True
     if name.endswith("design-tabs.js"):
