@@ -52,8 +52,9 @@ def pytest_collection_modifyitems(config, items):
             continue
         item.add_marker(pytest.mark.xdist_group(group))
 
-# Property tests draw the same examples on every run and machine (no example database), so
-# a test run is reproducible like everything else (DESIGN.md, "Determinism").
+# Property tests draw the same examples on every run and machine (no example database), so a
+# test run is reproducible like everything else (book/architecture.md, "Portability and
+# tolerances").
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.load_profile("deterministic")
 
