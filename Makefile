@@ -1,5 +1,6 @@
 # Two commands for a fresh machine (README.md):
 #   make book   build every figure, table, the ledger and the HTML book at full thesis fidelity
+#   make pdf    the whole book as one PDF (book/_build/latex/asoc-companion.pdf)
 #   make test   run the tests (unit, doctests, papermill at ci fidelity, nbval, the book in Chromium,
 #               the wheel in a fresh venv, the kill test) on both cores, as the farthest emulated
 #               CPU computes (the committed outputs come from the machine's own kernels, so nbval
@@ -18,7 +19,7 @@ STAMP  := $(VENV)/.installed
 ALWAYS := $(findstring B,$(firstword -$(MAKEFLAGS)))
 # pytest workers (pytest-xdist); tests of one notebook share a worker (--dist loadgroup)
 JOBS   ?= 2
-# Emulating other x86-64 CPUs (DESIGN.md, "Portability"): OpenBLAS kernels of another core
+# Emulating other x86-64 CPUs (book/architecture.md, "Portability and tolerances"): OpenBLAS kernels of another core
 # type, and NumPy's own SIMD dispatch with the AVX-512 (X86_V4) or also the AVX2 (X86_V3)
 # groups switched off. test-portable runs every corner; make test runs the farthest one, and
 # test-native the machine's own kernels.
@@ -30,7 +31,12 @@ FAR_DISABLED ?= X86_V3 X86_V4
 PORTABLE_TESTS := -q -p no:cacheprovider -n $(JOBS) --dist loadgroup -m "not book and not packaging" \
                   --ignore=tests/companion/test_crash_safety.py
 
-.PHONY: venv figures ledger book html test test-native test-portable bench clean chromium
+# Debian's TeX Live for the PDF: XeLaTeX, the LaTeX packages Sphinx's writer loads, latexmk,
+# the FreeFont family it typesets with, and poppler-utils (the PDF test reads the result)
+TEX_PACKAGES := texlive-xetex texlive-latex-extra texlive-science texlive-fonts-recommended latexmk \
+                fonts-freefont-otf poppler-utils
+
+.PHONY: venv figures ledger book html pdf test test-native test-portable bench clean chromium tex
 
 venv: $(STAMP)
 
@@ -54,18 +60,30 @@ html: venv
 book: figures html
 	@echo "The book is at book/_build/html/index.html"
 
+# The PDF from the committed notebooks (nothing is re-executed), like `make html`
+pdf: venv tex
+	$(PY) -m asoc_companion.book
+	$(VENV)/bin/jupyter-book build book --builder pdflatex --quiet $(if $(ALWAYS),--all)
+	@echo "The PDF is at book/_build/latex/asoc-companion.pdf"
+
 chromium:
 	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || \
 	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null; }
 
+tex:
+	@command -v xelatex >/dev/null && command -v latexmk >/dev/null && command -v pdftotext >/dev/null && \
+	  fc-list | grep -q FreeSerif || \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+	    $(TEX_PACKAGES) >/dev/null; }
+
 # The whole suite once, on the farthest corner of the emulation matrix: the oldest OpenBLAS
 # kernels and NumPy without its AVX2 and AVX-512 code paths (as fast as the native kernels on
 # these small matrices). Results must not depend on the last bits of a CPU.
-test: venv chromium
+test: venv chromium tex
 	OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" $(PY) -m pytest -n $(JOBS) --dist loadgroup
 
 # The same suite with this machine's own kernels.
-test-native: venv chromium
+test-native: venv chromium tex
 	$(PY) -m pytest -n $(JOBS) --dist loadgroup
 
 # Every corner: each OpenBLAS core type with NumPy's X86_V4 off, and with X86_V3 and X86_V4 off.

@@ -37,10 +37,12 @@ SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")     # module-sc
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``--dist loadgroup``), tests that share an expensive fixture run on one
-    worker: the book build, one notebook's ci run, a module's clone or wheel."""
+    worker: the book build, the PDF build, one notebook's ci run, a module's clone or wheel."""
     for item in items:
         fixtures = getattr(item, "fixturenames", ())
-        if item.get_closest_marker("book") or "html" in fixtures:
+        if "pdf" in fixtures:
+            group = "pdf"
+        elif item.get_closest_marker("book") or "html" in fixtures:
             group = "book"
         elif ("ci_run" in fixtures or "ci_execution" in fixtures) and hasattr(item, "callspec"):
             group = f"ci-{item.callspec.params.get('name')}"
@@ -50,8 +52,9 @@ def pytest_collection_modifyitems(config, items):
             continue
         item.add_marker(pytest.mark.xdist_group(group))
 
-# Property tests draw the same examples on every run and machine (no example database), so
-# a test run is reproducible like everything else (DESIGN.md, "Determinism").
+# Property tests draw the same examples on every run and machine (no example database), so a
+# test run is reproducible like everything else (book/architecture.md, "Portability and
+# tolerances").
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.load_profile("deterministic")
 
@@ -62,7 +65,7 @@ def ci_execution():
     (output folder, nbval's completed process).
 
     One execution serves both notebook tests: nbval re-executes the committed notebook with
-    papermill's ci parameters injected and compares the cells marked ``# NBVAL_CHECK_OUTPUT``
+    papermill's ci parameters injected and compares the cells tagged ``nbval-check-output``
     with their stored outputs (tests/notebooks/test_nbval.py), and the same execution records the values,
     figures and tables that tests/notebooks/test_notebooks.py checks against the reference.
     """
@@ -111,7 +114,8 @@ def html(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def browser():
-    """Headless Chromium in a 1280 x 900 window."""
+    """Headless Chromium in a 1280 x 900 window, keeping its console ("browser") and network
+    ("performance") logs for tests/notebooks/test_book.py."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
@@ -124,6 +128,7 @@ def browser():
                  "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
         opts.add_argument(flag)
     opts.add_argument("--window-size=1280,900")
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
     driver = webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=opts)
     driver.set_window_size(1280, 900)
     yield driver

@@ -15,13 +15,24 @@ The project (book, figures, reference data) is found by :mod:`asoc_companion.pat
 
 from asoc.stats import bootstrap_ci, bootstrap_median_ci, settling_iteration
 
-from .captions import figure_caption
-from .figures import STYLE, apply_style, markdown_table
-from .ledger import ledger_markdown, write_ledger
-from .prose import fill, prose
-from .reference import Entry, load_reference, status
-from .session import Recorder, active, record, save_figure, save_table, setup
-from .values import CorruptValuesError, load_all_values, load_values
+from .requirements import INSTALL_HINT, missing_requirements
+
+if missing_requirements():
+    # a library-only install (`pip install asoc`): the command line says what to install in one
+    # line (asoc_companion.__main__), and so does every use of the package
+    def __getattr__(name):
+        if name not in __all__:
+            raise AttributeError(f"module 'asoc_companion' has no attribute {name!r}")
+        raise ModuleNotFoundError(f"asoc_companion.{name} needs {', '.join(missing_requirements())}: "
+                                  f"{INSTALL_HINT}")
+else:
+    from .captions import figure_caption
+    from .figures import STYLE, apply_style, markdown_table
+    from .ledger import ledger_markdown, write_ledger
+    from .prose import fill, prose
+    from .reference import Entry, load_reference, status
+    from .session import Recorder, active, record, save_figure, save_table, setup
+    from .values import CorruptValuesError, load_all_values, load_values
 
 __all__ = ["figure_caption", "STYLE", "apply_style", "markdown_table", "save_figure", "save_table",
            "ledger_markdown", "write_ledger", "fill", "prose", "Entry", "load_reference", "status",

@@ -17,12 +17,11 @@ import os
 import signal
 import sys
 
-from . import build, paths
-from . import notebooks as nbs
-from .build import rel as _rel
-from .io import atomic_write_text
-from .ledger import intro_markdown, ledger_markdown, ledger_rows
-from .values import load_all_values, load_values
+from . import paths
+from .requirements import INSTALL_HINT, missing_requirements
+
+FIDELITY_HELP = ("full: the thesis's settings, updates figures/ and book/; "
+                 "ci: small Monte Carlo sizes, writes to book/_build/ci/ only (default: full)")
 
 def _short(value) -> str:
     """A recorded value in a few characters (Monte Carlo record -> its estimate, claim -> verdict)."""
@@ -40,18 +39,51 @@ def _short(value) -> str:
     return str(value)[:40]
 
 
-def compare_with_committed(name, output_dir) -> str:
-    """Table of ``name``'s values in ``output_dir`` next to the committed ones (key, committed, this run)."""
+def compare_with_committed(name, output_dir, fidelity="ci") -> str:
+    """Table of ``name``'s values in ``output_dir`` next to the committed ones (key, committed, this run).
+
+    The committed values come from the full-fidelity run; the column headers say so, and
+    give this run's ``fidelity``.
+    """
+    from .values import load_values
+
     ours, committed = load_values(name, output_dir), load_values(name)
     rows = [(key, _short(committed[key]) if key in committed else "-", _short(value))
             for key, value in ours.items()]
-    width = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(("key", "committed", "this run"))]
-    lines = [f"{'key':{width[0]}}  {'committed':{width[1]}}  this run"]
+    head = ("key", "committed (full)", f"this run ({fidelity})")
+    width = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(head)]
+    lines = [f"{head[0]:{width[0]}}  {head[1]:{width[1]}}  {head[2]}"]
     lines += [f"{k:{width[0]}}  {c:{width[1]}}  {t}" for k, c, t in rows]
     return "\n".join(lines)
 
 
+def unused_parameters(info, kind, number, overrides) -> str:
+    """A note naming the changed parameters that cannot change ``kind`` ``number`` ("" if none).
+
+    Examples
+    --------
+    >>> from asoc_companion import notebooks as nbs
+    >>> print(unused_parameters(nbs.find("figure", "3.4"), "figure", "3.4", {"seed": 7}))
+    note: seed does not reach the cells that make Fig. 3.4; the figure is the same without it.
+    >>> unused_parameters(nbs.find("figure", "3.2"), "figure", "3.2", {"seed": 7})
+    ''
+    """
+    from .notebooks import parameters_reaching
+
+    unused = sorted(set(overrides) - parameters_reaching(info, kind, number))
+    if not unused:
+        return ""
+    what = f"Fig. {number}" if kind == "figure" else f"Table {number}"
+    verb = "does" if len(unused) == 1 else "do"
+    thing = "figure" if kind == "figure" else "table"
+    return (f"note: {', '.join(unused)} {verb} not reach the cells that make {what}; "
+            f"the {thing} is the same without {'it' if len(unused) == 1 else 'them'}.")
+
+
 def _ledger(fidelity):
+    from .ledger import intro_markdown, ledger_markdown, ledger_rows
+    from .values import load_all_values
+
     project = paths.project()
     path, values = (project.book / "ledger.md", load_all_values()) if fidelity == "full" \
         else (project.ci_output / "ledger.md", load_all_values(project.ci_output))
@@ -63,6 +95,9 @@ def _ledger(fidelity):
 
 
 def _write_if_changed(path, text, remark=""):
+    from .build import rel as _rel
+    from .io import atomic_write_text
+
     if path.exists() and path.read_text() == text:
         print(f"{_rel(path)}: up to date")
         return
@@ -78,18 +113,21 @@ def _parser():
     for name, help_ in [("list", "list notebooks, figures and tables"),
                         ("reproduce", "run every notebook whose inputs changed, then write the ledger"),
                         ("ledger", "write the ledger page from the recorded values")]:
-        p = sub.add_parser(name, help=help_)
-        p.add_argument("--fidelity", choices=("full", "ci"), default="full")
+        p = sub.add_parser(name, help=help_, description=help_)
+        p.add_argument("--fidelity", choices=("full", "ci"), default="full", help=FIDELITY_HELP)
         if name == "reproduce":
             p.add_argument("--force", action="store_true", help="re-execute every notebook")
             p.add_argument("--jobs", "-j", type=int, default=None,
                            help="notebooks run at the same time (default: the number of cores)")
-    for name, what, help_ in [("figure", "number", "regenerate one figure by its number, e.g. 3.4 or own.1"),
-                              ("table", "number", "regenerate one table by its number, e.g. 3.2"),
-                              ("run", "name", "run one notebook by its name, e.g. sec3_5 or findings")]:
-        p = sub.add_parser(name, help=help_)
-        p.add_argument(what)
-        p.add_argument("--fidelity", choices=("full", "ci"), default="full")
+    for name, what, help_, what_help in [
+            ("figure", "number", "regenerate one figure by its number, e.g. 3.4 or own.1",
+             "the figure's number in the thesis (e.g. 3.4), or own.N for the companion's own figures"),
+            ("table", "number", "regenerate one table by its number, e.g. 3.2", "the table's number in the thesis"),
+            ("run", "name", "run one notebook by its name, e.g. sec3_5 or findings",
+             "the notebook's file name without .ipynb (`list` shows them)")]:
+        p = sub.add_parser(name, help=help_, description=help_)
+        p.add_argument(what, help=what_help)
+        p.add_argument("--fidelity", choices=("full", "ci"), default="full", help=FIDELITY_HELP)
         p.add_argument("-p", "--parameter", nargs=2, action="append", metavar=("NAME", "VALUE"),
                        help="override a parameter of the notebook (papermill's -p); "
                             "the run goes to book/_build/runs/, tracked files stay unchanged")
@@ -97,6 +135,12 @@ def _parser():
 
 
 def main(argv=None) -> int:
+    missing = missing_requirements()
+    if missing:                      # installed without the companion extra
+        print(f"asoc-companion needs {', '.join(missing)}: {INSTALL_HINT}", file=sys.stderr)
+        return 1
+    from . import build
+
     args = _parser().parse_args(argv)
     if args.root:
         os.environ[paths.ENV_VAR] = os.path.abspath(args.root)     # notebook kernels inherit it
@@ -116,6 +160,10 @@ def main(argv=None) -> int:
 
 
 def _command(args) -> int:
+    from . import build
+    from . import notebooks as nbs
+    from .build import rel as _rel
+
     paths.project()              # fail early, with the message, outside a checkout
     if args.command == "list":
         for info in nbs.notebooks().values():
@@ -137,7 +185,11 @@ def _command(args) -> int:
         out = nbs.run_folder(info, args.fidelity, overrides)
         build.run_one(info, args.fidelity, output_dir=out, overrides=overrides)
         print(f"this run (figures, values, executed notebook): {_rel(out)}/")
-        print(compare_with_committed(info.name, out))
+        if args.command != "run":
+            note = unused_parameters(info, args.command, args.number, overrides)
+            if note:
+                print(note)
+        print(compare_with_committed(info.name, out, args.fidelity))
         return 0
     status = 0
     if args.command == "reproduce":

@@ -9,11 +9,12 @@ renders the executed file) and its results in ``figures/``; ``ci`` fidelity writ
 ``book/_build/ci/``; a run with parameter overrides writes to
 ``book/_build/runs/<notebook>-<hash>/``. Only the first changes tracked files.
 
-Crash safety (DESIGN.md): every run executes into a fresh staging folder
-``book/_build/staging/<notebook>-<random>/``; only when papermill finishes without error
-are its figures, tables, values and executed notebook moved into place (``os.replace``,
-signals held off meanwhile); the caller writes the manifest entry last. An interrupted or
-failed run leaves every tracked file as it was, and its staging folder is removed.
+Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes
+into a fresh staging folder ``book/_build/staging/<notebook>-<random>/``; only when
+papermill finishes without error are its figures, tables, values and executed notebook
+moved into place (``os.replace``, signals held off meanwhile); the caller writes the
+manifest entry last. An interrupted or failed run leaves every tracked file as it was, and
+its staging folder is removed.
 
 Executed notebooks are normalised (no timestamps, durations or machine paths; the
 injected parameters name the final folder, not the staging one), so an unchanged
@@ -41,6 +42,10 @@ from .manifest import dependencies, incomplete_notebook
 from .values import FIDELITIES
 
 HARNESS_PARAMETERS = ("fidelity", "output_dir")   # set by the harness, not by -p
+KERNEL_ARGUMENTS = ["--IPKernelApp.log_level=ERROR"]
+"""The kernel's own log shows errors only: its start-up warning that the local kernel talks
+over TCP without encryption is noise on the command line (a notebook's warnings are cell
+outputs, not this log)."""
 
 
 @dataclass(frozen=True)
@@ -250,7 +255,8 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
         papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
                                    parameters=staged_parameters,
                                    progress_bar=sys.stderr.isatty() if progress_bar is None else progress_bar,
-                                   log_output=log_output, kernel_name="python3")
+                                   log_output=log_output, kernel_name="python3",
+                                   extra_arguments=KERNEL_ARGUMENTS)
         normalise(staged, shown_parameters=shown, output_path=target,
                   replace={str(stage): shown["output_dir"], staged_parameters["output_dir"]: shown["output_dir"]})
         problems = incomplete_notebook(staged)
@@ -364,3 +370,53 @@ def _merged_streams(outputs, root, replace=None) -> list:
                 continue
         merged.append(out)
     return merged
+
+
+def _names(tree) -> tuple:
+    """(names a cell reads or binds, names it imports)."""
+    imported = {(a.asname or a.name).split(".")[0] for node in ast.walk(tree)
+                if isinstance(node, (ast.Import, ast.ImportFrom)) for a in node.names}
+    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+    names |= {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    return names - imported, imported
+
+
+def _saves(tree, kind: str, number: str) -> bool:
+    call = "save_figure" if kind == "figure" else "save_table"
+    return any(isinstance(n, ast.Call) and getattr(n.func, "attr", getattr(n.func, "id", None)) == call
+               and any(isinstance(a, ast.Constant) and a.value == number for a in n.args)
+               for n in ast.walk(tree))
+
+
+def parameters_reaching(info: NotebookInfo, kind: str, number: str) -> set:
+    """The parameters that can change figure or table ``number`` (``kind``: "figure" or "table").
+
+    A parameter reaches every name a cell reads or binds once the cell reads it or a name it
+    reached before (a conservative data flow over the code cells in order: a call or a
+    mutation in that cell may carry it anywhere the cell touches; imported modules carry
+    nothing). The figure depends on what reaches the cells that save it. If no cell saves it
+    by its literal number, every parameter is returned.
+    """
+    import nbformat
+
+    params = set(default_parameters(info))
+    nb = nbformat.read(info.path, as_version=4)
+    carries, imported, found, saved = {p: {p} for p in params}, set(), set(), False
+    for cell in nb.cells:
+        if cell.cell_type != "code" or {"parameters", "injected-parameters"} & set(cell.metadata.get("tags", [])):
+            continue
+        try:
+            tree = ast.parse("\n".join("pass" if line.lstrip().startswith(("%", "!")) else line
+                                       for line in cell.source.splitlines()))
+        except SyntaxError:
+            return params
+        names, new_imports = _names(tree)
+        imported |= new_imports
+        names -= imported
+        reached = set().union(*(carries.get(n, set()) for n in names))
+        for n in names:
+            carries[n] = carries.get(n, set()) | reached
+        if _saves(tree, kind, number):
+            found |= reached
+            saved = True
+    return found if saved else params

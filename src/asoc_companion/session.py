@@ -1,4 +1,4 @@
-"""The recorder of one notebook run (DESIGN.md, "The flow of one number").
+"""The recorder of one notebook run (book/architecture.md, "The flow of one number").
 
 A notebook calls :func:`setup` once, right after its ``parameters`` cell; it creates a
 :class:`Recorder` and makes it the *active* one (:func:`active`), which :func:`record`, :func:`save_figure`,

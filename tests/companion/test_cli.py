@@ -1,9 +1,11 @@
 """The command line and the notebook runner: parameter overrides (-p), the build manifest,
 incremental reproduce, dependency order, reproducible executed notebooks."""
 
+import argparse
 import json
 import shutil
 import subprocess
+import sys
 
 import nbformat
 import pytest
@@ -43,7 +45,7 @@ def test_unknown_parameter_fails_with_the_valid_names(capsys):
 
 
 @pytest.mark.notebook
-def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capsys):
+def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capfd):
     if shutil.which("git") is None or not (ROOT / ".git").exists():
         pytest.fail("this test needs the project's git checkout (git status of tracked files)")
     status = ["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"]
@@ -52,7 +54,10 @@ def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capsys)
     out = nbs.run_folder(info, "ci", {"seed": 7})
     shutil.rmtree(out, ignore_errors=True)
     assert cli.main(["figure", "3.2", "-p", "seed", "7", "--fidelity", "ci"]) == 0
-    printed = capsys.readouterr().out
+    printed, errors = capfd.readouterr()          # capfd: the kernel process writes to the same stderr
+    assert "without encryption" not in errors, "the kernel's TCP warning reached the terminal"
+    assert "committed (full)" in printed and "this run (ci)" in printed
+    assert "does not reach" not in printed, "Fig. 3.2 depends on the seed"
     after = subprocess.run(status, capture_output=True, text=True, check=True).stdout
     assert after == before, f"tracked files changed:\n{after}"
     assert out.parent == ROOT / "book" / "_build" / "runs" and out.name.startswith("sec3_2-")
@@ -209,7 +214,7 @@ def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_p
         with pytest.raises(CorruptValuesError, match=r"sec3_5\.json: corrupt values file .*"
                                                      r"`python -m asoc_companion run sec3_5`"):
             load()
-    monkeypatch.setattr(cli, "load_all_values", lambda: load_all_values(tmp_path))
+    monkeypatch.setattr("asoc_companion.values.load_all_values", lambda: load_all_values(tmp_path))
     assert cli.main(["ledger"]) == 2
     err = capsys.readouterr().err
     assert "sec3_5.json: corrupt values file" in err and "python -m asoc_companion run sec3_5" in err
@@ -223,3 +228,44 @@ def test_outside_a_checkout_the_command_says_how_to_find_one(tmp_path, monkeypat
     assert "no checkout of the companion found" in capsys.readouterr().err
     assert cli.main(["--root", str(tmp_path), "list"]) == 2
     assert "is not a checkout of the companion" in capsys.readouterr().err
+
+
+def _actions(parser):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from ((f"{name} {a}", h) for a, h in _actions(sub))
+        elif not isinstance(action, argparse._HelpAction):
+            yield "/".join(action.option_strings) or action.dest, action.help
+
+
+def test_every_argument_has_help_text():
+    bare = [name for name, text in _actions(cli._parser()) if not text]
+    assert not bare, f"arguments without help text: {bare}"
+
+
+def test_the_cli_says_when_a_parameter_cannot_change_the_figure():
+    """Fig. 3.4 is computed without the seed (Sec. 3.5's Monte Carlo runs make Table 3.2), Fig. 3.2 with it."""
+    note = cli.unused_parameters(nbs.find("figure", "3.4"), "figure", "3.4", {"seed": 7, "horizon": 20})
+    assert note.startswith("note: seed does not reach") and "horizon" not in note
+    assert cli.unused_parameters(nbs.find("figure", "3.2"), "figure", "3.2", {"seed": 7}) == ""
+    assert nbs.parameters_reaching(nbs.find("table", "3.2"), "table", "3.2") >= {"seed", "n_runs_full"}
+
+
+def test_committed_column_names_its_fidelity():
+    table = cli.compare_with_committed("sec3_2", ROOT / "figures", "ci")
+    assert table.splitlines()[0].split() == ["key", "committed", "(full)", "this", "run", "(ci)"]
+
+
+def test_without_the_companion_extra_the_command_prints_one_line():
+    """A library-only install (`pip install asoc`) has no yaml: one line says what to install."""
+    code = ("import sys; sys.modules['yaml'] = None\n"
+            "from asoc_companion.__main__ import main\n"
+            "sys.exit(main(['list']))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert proc.stderr.strip().splitlines() == [
+        "asoc-companion needs yaml: install the companion's dependencies: pip install 'asoc[companion]'"]
+    use = subprocess.run([sys.executable, "-c", "import sys; sys.modules['yaml'] = None\n"
+                          "import asoc_companion; asoc_companion.record"], capture_output=True, text=True)
+    assert "pip install 'asoc[companion]'" in use.stderr.splitlines()[-1]

@@ -114,3 +114,115 @@ def test_every_rendered_figure_caption_states_the_claim(html, browser, name):
         "return Array.from(document.querySelectorAll('.asoc-caption')).map(e => e.textContent)")
     assert len(captions) == rendered, f"{name}: {len(captions)} captions shown, {rendered} caption cells executed"
     assert all("the thesis" in c and "Ours:" in c for c in captions)
+
+
+# ---- a light site with a clean console (issue 25, item 1) -------------------------------------
+
+JS_BUDGET = 3_000_000          # bytes of JavaScript a page may load (3 MB)
+
+
+def _all_pages(html):
+    return sorted(p.name for p in html.glob("*.html"))
+
+
+def _load_and_log(browser, path):
+    """Open ``path``; return (requests [(url, type)], console errors) of this page load alone."""
+    import time
+
+    browser.get_log("performance"), browser.get_log("browser")      # drop what earlier pages left
+    browser.get(path.as_uri())
+    time.sleep(0.5)                                                # async and deferred scripts
+    if browser.execute_script("return !!(window.MathJax && MathJax.startup && MathJax.startup.promise)"):
+        _wait_for_math(browser)
+    requests = []
+    for entry in browser.get_log("performance"):
+        message = json.loads(entry["message"])["message"]
+        if message["method"] == "Network.requestWillBeSent":
+            requests.append((message["params"]["request"]["url"], message["params"].get("type")))
+    errors = [e["message"] for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    return requests, errors
+
+
+def javascript_bytes(requests) -> int:
+    """Bytes of the distinct script files among ``requests`` (file: URLs, read from disk; a
+    missing file is a console error, counted there)."""
+    files = {Path(unquote(urlparse(url).path)) for url, kind in requests if kind == "Script"}
+    return sum(f.stat().st_size for f in files if f.is_file())
+
+
+@pytest.mark.book
+def test_every_page_is_light_offline_and_has_a_clean_console(html, browser):
+    """Every page: at most 3 MB of JavaScript, no console error, no request to a non-file: URL
+    (the site works offline, no CDN), and no horizontal scroll at 400 px."""
+    faults = []
+    for name in _all_pages(html):
+        browser.set_window_size(1280, 900)
+        requests, errors = _load_and_log(browser, html / name)
+        n_js = javascript_bytes(requests)
+        remote = [url for url, _ in requests if not url.startswith(("file:", "data:", "blob:"))]
+        if n_js > JS_BUDGET:
+            faults.append(f"{name}: {n_js / 1e6:.2f} MB of JavaScript")
+        if errors:
+            faults.append(f"{name}: console errors {errors[:3]}")
+        if remote:
+            faults.append(f"{name}: requests outside the book {remote[:3]}")
+        browser.set_window_size(400, 900)
+        width, client = browser.execute_script(
+            "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+        if width > client:
+            faults.append(f"{name}: scrolls sideways at 400 px ({width} > {client} px)")
+    browser.set_window_size(1280, 900)
+    assert not faults, "\n".join(faults)
+
+
+@pytest.mark.book
+def test_mathjax_is_one_script_loaded_once(html, browser):
+    requests, _ = _load_and_log(browser, html / "sec3_6.html")
+    mathjax = [url for url, kind in requests if kind == "Script" and "/mathjax/" in url]
+    assert len(mathjax) == 1, f"MathJax scripts loaded: {mathjax}"
+
+
+# ---- pages that show the computation (item 2) ----------------------------------------------------
+
+WARNING_TEXT = re.compile(r"\b\w*(Warning|Error):|warnings\.warn\(|Traceback \(most recent call last\)")
+
+
+def warning_blocks(page_html: str) -> list:
+    """The stderr outputs, tracebacks and ``...Warning:`` lines of a built page (text, shortened).
+
+    >>> warning_blocks('<div class="output stderr"><pre>x.py:3: RuntimeWarning: bad</pre></div>')
+    ['<div class="output stderr">', 'RuntimeWarning:']
+    >>> warning_blocks('<p>The fit did not converge.</p>')
+    []
+    """
+    blocks = re.findall(r'<div class="output (?:stderr|traceback)[^"]*">', page_html)
+    text = re.sub(r"<[^>]+>", "", page_html)
+    return blocks + [m.group(0) for m in WARNING_TEXT.finditer(text)]
+
+
+@pytest.mark.book
+@pytest.mark.parametrize("page", NOTEBOOK_PAGES)
+def test_no_warning_text_or_stray_output(html, page):
+    text = (html / page).read_text()
+    assert not warning_blocks(text), f"{page}: {warning_blocks(text)[:5]}"
+    # a cell's displayed value is a bare repr (Scaling's `256`, `PosixPath('../figures')`): the book
+    # prints numbers rounded, in sentences or tables, and hides the bookkeeping
+    stray = re.findall(r'<div class="output text_plain[^"]*"><div class="highlight"><pre><span></span>'
+                       r"([^<]{0,60})", text)
+    assert not stray, f"{page}: stray outputs {stray}"
+
+
+# ---- one set of totals (item 4) ------------------------------------------------------------------
+
+def test_landing_page_and_ledger_give_the_same_totals():
+    """Both pages carry the same paragraph saying what is counted, and the landing page opens
+    with the verdict formatted from the same statuses; no page cites an issue number."""
+    from asoc_companion.ledger import totals_markdown, verdict_markdown
+
+    intro, ledger = (BOOK / "intro.md").read_text(), (BOOK / "ledger.md").read_text()
+    totals = totals_markdown()
+    assert totals in intro and totals in ledger
+    assert intro.index(verdict_markdown()) < intro.index("## What reproduces")
+    cited = [(p.name, m) for p in [*BOOK.glob("*.md"), *BOOK.glob("*.ipynb")]
+             for m in re.findall(r"\bissues? \d+\b", p.read_text())]
+    assert not cited, f"references to issue numbers a reader cannot follow: {cited}"

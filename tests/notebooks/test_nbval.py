@@ -1,9 +1,10 @@
 """nbval (lax mode) on every committed notebook, re-executed at ci fidelity.
 
 The committed notebooks in ``book/`` hold the outputs of the full-fidelity run. Cells
-marked ``# NBVAL_CHECK_OUTPUT`` print numbers that do not depend on the Monte Carlo
-size (spectral radii, gains, errors); nbval re-executes the notebook with papermill's
-ci parameters injected and requires those printed outputs to be identical. They print
+tagged ``nbval-check-output`` (nbval's cell tag for its ``# NBVAL_CHECK_OUTPUT`` marker)
+print numbers that do not depend on the Monte Carlo size (spectral radii, gains, errors);
+nbval re-executes the notebook with papermill's ci parameters injected and requires those
+printed outputs to be identical. They print
 numbers rounded to what is meant (the thesis's decimals, or a stated accuracy), never a
 bare repr, so another CPU's BLAS kernels (``make test-portable``) cannot change them.
 The same execution serves the value checks of tests/notebooks/test_notebooks.py (conftest's
@@ -17,15 +18,23 @@ import pytest
 
 from conftest import NOTEBOOKS
 
+CHECK_TAG = "nbval-check-output"
+
+
+def _checked_cells(nb):
+    """The cells nbval compares in lax mode: tagged ``nbval-check-output`` (the tag replaces the
+    ``# NBVAL_CHECK_OUTPUT`` comment, which readers of the book saw in the code)."""
+    return [c for c in nb.cells if c.cell_type == "code" and CHECK_TAG in c.metadata.get("tags", [])]
+
 
 @pytest.mark.notebook
 @pytest.mark.parametrize("name", sorted(NOTEBOOKS))
 def test_nbval_checked_cells(name, ci_execution):
     nb = nbformat.read(NOTEBOOKS[name].path, as_version=4)
-    checked = [c for c in nb.cells if c.cell_type == "code" and "NBVAL_CHECK_OUTPUT" in c.source]
+    checked = _checked_cells(nb)
     info = NOTEBOOKS[name]
     # every numerical section checks its key numbers; other pages are at least re-executed
-    assert checked or not (info.figures or info.tables), f"{name}: no cell is marked # NBVAL_CHECK_OUTPUT"
+    assert checked or not (info.figures or info.tables), f"{name}: no cell is tagged {CHECK_TAG}"
     assert all(c.get("outputs") for c in checked), f"{name}: a checked cell has no stored output"
     _, proc = ci_execution(name)          # nbval on the committed notebook with ci parameters injected
     assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-2000:]
@@ -50,7 +59,7 @@ def _ends_in_displayed_expression(source: str) -> bool:
 def test_checked_cells_show_no_bare_repr(name):
     """A checked cell's last expression must not be displayed: its repr has every digit."""
     nb = nbformat.read(NOTEBOOKS[name].path, as_version=4)
-    checked = [c for c in nb.cells if c.cell_type == "code" and "NBVAL_CHECK_OUTPUT" in c.source]
+    checked = _checked_cells(nb)
     shown = [c.id for c in checked if _ends_in_displayed_expression(c.source)
              or any(o.output_type == "execute_result" for o in c.get("outputs", []))]
     assert not shown, (f"{name}: checked cells {shown} end in a displayed expression; assign it "

@@ -1,0 +1,107 @@
+"""The whole book as one PDF (`make pdf`): built once per session from the committed notebooks
+with XeLaTeX, then read with poppler-utils. It has a title page naming the thesis, the
+licences and the software's version; a bookmark for every page and every finding; every
+figure as an image and every thesis table; and no glyph missing from its fonts."""
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from importlib.metadata import version
+from pathlib import Path
+
+import pytest
+
+from asoc_companion.notebooks import notebooks
+from asoc_companion.paths import BOOK
+
+TOOLS = ("xelatex", "latexmk", "pdfinfo", "pdftotext", "pdfimages", "pdftohtml")
+
+
+@pytest.fixture(scope="session")
+def pdf(tmp_path_factory):
+    """The PDF built once per session; its path (the LaTeX log lies beside it)."""
+    missing = [t for t in TOOLS if shutil.which(t) is None]
+    if missing:
+        pytest.fail(f"{', '.join(missing)} missing: `make tex` installs Debian's TeX Live and poppler-utils")
+    out = tmp_path_factory.mktemp("pdf")
+    subprocess.run([sys.executable, "-m", "asoc_companion.book"], check=True, capture_output=True)
+    jb = Path(sys.executable).parent / "jupyter-book"
+    proc = subprocess.run([str(jb), "build", str(BOOK), "--builder", "pdflatex", "--path-output", str(out)],
+                          capture_output=True, text=True, timeout=900)
+    path = out / "_build" / "latex" / "asoc-companion.pdf"
+    assert proc.returncode == 0 and path.exists(), proc.stdout[-4000:] + proc.stderr[-2000:]
+    return path
+
+
+def _text(pdf_path, *pages) -> str:
+    first_last = ["-f", str(pages[0]), "-l", str(pages[-1])] if pages else []
+    return subprocess.run(["pdftotext", "-layout", *first_last, str(pdf_path), "-"],
+                          capture_output=True, text=True, check=True).stdout
+
+
+def bookmarks(pdf_path) -> list:
+    """The titles of the PDF's outline (bookmarks), read by pdftohtml's XML output."""
+    xml = subprocess.run(["pdftohtml", "-xml", "-i", "-stdout", "-q", str(pdf_path)],
+                         capture_output=True, text=True, check=True).stdout
+    outline = xml[xml.find("<outline>"):]
+    return [re.sub(r"<[^>]+>", "", t).strip() for t in re.findall(r"<item[^>]*>(.*?)</item>", outline, re.S)]
+
+
+def _words(text: str) -> str:
+    """Letters and digits only, lower case: headings compared across Markdown, TeX and PDF."""
+    return re.sub(r"[^a-z0-9]+", "", text.lower())
+
+
+def _headings(path: Path, level: str) -> list:
+    cells = json.loads(path.read_text())["cells"]
+    return [line[len(level) + 1:] for c in cells if c["cell_type"] == "markdown"
+            for line in "".join(c["source"]).splitlines() if line.startswith(level + " ")]
+
+
+@pytest.mark.book
+def test_title_page_names_the_thesis_licences_and_version(pdf):
+    first = " ".join(_text(pdf, 1).split())
+    title = re.search(r'^title: "(.+)"', (BOOK / "_config.yml").read_text(), re.M)[1]
+    assert title in first, f"the title page lacks the book's title {title!r}: {first[:200]!r}"
+    assert "Approximate Stochastic Optimal Control of Smooth Nonlinear Systems and Piecewise Linear Systems" in first
+    assert "Maxim Dolgov" in first and "CC BY-NC 4.0" in first and "MIT" in first
+    assert f"asoc version {version('asoc')}" in first
+
+
+@pytest.mark.book
+def test_bookmarks_for_every_page_and_finding(pdf):
+    marks = {_words(b) for b in bookmarks(pdf)}
+    titles = [_headings(info.path, "#")[0] for info in notebooks().values()]
+    titles += [re.search(r"^# (.+)$", (BOOK / f"{page}.md").read_text(), re.M)[1]
+               for page in ("ledger", "architecture", "api", "api_mjls")]
+    markdown = "\n".join("".join(c["source"]) for c in json.loads((BOOK / "findings.ipynb").read_text())["cells"]
+                         if c["cell_type"] == "markdown")
+    findings = re.findall(r"\(finding-[\w-]+\)=\s*\n##\s+(.+)", markdown)
+    assert len(findings) >= 11
+    # a bookmark drops TeX and formatting: compare the first words of each heading
+    missing = [t for t in titles + findings if not any(m.startswith(_words(t)[:24]) for m in marks)]
+    assert not missing, f"no bookmark for {missing}"
+
+
+@pytest.mark.book
+def test_every_figure_and_table_is_in_the_pdf(pdf):
+    n_figures = sum(len(info.figures) for info in notebooks().values())
+    images = subprocess.run(["pdfimages", "-list", str(pdf)], capture_output=True, text=True, check=True).stdout
+    n_images = len(images.splitlines()) - 2                         # two header lines
+    assert n_images >= n_figures, f"{n_images} images for {n_figures} figures"
+    text = _text(pdf)
+    tables = [t for info in notebooks().values() for t in info.tables]
+    missing = [t for t in tables if f"Table {t}" not in text]
+    assert tables and not missing, f"tables not in the PDF: {missing}"
+    pages = int(re.search(r"Pages:\s+(\d+)", subprocess.run(["pdfinfo", str(pdf)], capture_output=True,
+                                                             text=True, check=True).stdout)[1])
+    assert pages > 100, f"only {pages} pages"
+
+
+@pytest.mark.book
+def test_no_missing_glyphs(pdf):
+    log = pdf.with_suffix(".log").read_text(errors="replace")
+    missing = sorted(set(re.findall(r"Missing character: There is no (.+?) in font", log)))
+    assert not missing, f"characters the PDF's fonts lack: {missing}"
