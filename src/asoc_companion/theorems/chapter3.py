@@ -91,8 +91,8 @@ STATEMENTS = [
               r"Problem (3.11) equals (3.30): the average cost is "
               r"$\sum_i\mathrm{tr}[(\mathbf Q_i+\mathbf L^\top\mathbf R_i\mathbf L)\mathbf X_\infty^i]$ (as printed).",
               "The printed objective (defined when n_y = n_x) against the average cost, the mean stage cost of the "
-              "moment recursion over steps 500-1000 from a random x_0 (transient < 1e-11), within 1e-8; the reading "
-              "with C_i^T L^T R_i L C_i is checked beside it.",
+              "moment recursion from a random x_0 and theta_0 ~ mu_inf over steps h..2h-1 with rho^h <= 1e-13, "
+              "within 1e-8; the reading with C_i^T L^T R_i L C_i is checked beside it.",
               check_3_15, "the corrected reading with X_inf solved without the noise term",
               summarise=summarise_3_15),
     Statement("statement_3_16", "Proposition 3.16",
