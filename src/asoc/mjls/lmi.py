@@ -15,7 +15,7 @@ message says which.
 """
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cvxpy as cp
 import numpy as np
@@ -62,6 +62,9 @@ class LMIResult(IterativeResult):
         certificate; nan when the solver returned no matrices).
     equality_residual : float
         Largest |M C_i - C_i G| relative to the entries' size (nan without matrices).
+    variables : dict
+        The solver's matrices by name (e.g. "F", "G", "M", "W", "Y", each a list over gains or
+        modes), empty when it returned none: the certificate, to re-check or to reuse.
 
     Examples
     --------
@@ -79,6 +82,7 @@ class LMIResult(IterativeResult):
     stabilizing: bool = False
     margin: float = np.nan
     equality_residual: float = np.nan
+    variables: dict = field(default_factory=dict)
 
 
 def certificate(constraints):
@@ -106,7 +110,7 @@ def certificate(constraints):
 
 
 def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, equality_residual=np.nan,
-               eps=EPS):
+               eps=EPS, variables=None):
     """The LMIResult of a solve: feasible iff the matrices satisfy the constraints (``margin >= -eps/2``,
     ``equality_residual <= config.defaults["mjls.lmi_equality_rtol"]``); rho reported on its own.
     Without a margin (nan), the solver's status "optimal" stands for the certificate.
@@ -118,7 +122,8 @@ def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, e
     >>> lmi_result("infeasible_inaccurate").status
     'inaccurate'
     """
-    common = dict(solver_status=solver_status, rho=rho, margin=margin, equality_residual=equality_residual)
+    common = dict(solver_status=solver_status, rho=rho, margin=margin, equality_residual=equality_residual,
+                  variables=variables or {})
     verified = (L is not None and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
                 and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
     if not verified:
@@ -246,8 +251,9 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
     margin, residual = certificate(cons)
     gains = np.stack([F[g].value @ np.linalg.inv(Mv[g].value) for g in range(n_gains)])
     closed = sys.A + sys.B @ (gains if mode_observed else gains[0]) @ sys.C
+    variables = {name: [v.value for v in group] for name, group in (("F", F), ("G", G), ("M", Mv), ("W", W), ("Y", Y))}
     return lmi_result(status, gains if mode_observed else gains[0], float(prob.value),
-                      ms_spectral_radius(closed, sys.T), margin, residual, eps)
+                      ms_spectral_radius(closed, sys.T), margin, residual, eps, variables)
 
 
 def solve_quietly(prob, solver):

@@ -128,7 +128,22 @@ def decide_3_9(sys, mu=None, mutant=False):
         return outcome("not_applicable", sys, **numbers)
     gain = -lmi.L if mutant else lmi.L
     rho = moment_map_radius(closed_loop(sys, gain), sys.T)
+    if not rho < 1:
+        numbers["failure_kind"] = failure_kind(sys, lmi, gain)
     return outcome(verdict(rho < 1), sys, lmi_L=np.ravel(gain), rho_of_lmi_gain=rho, **numbers)
+
+
+def failure_kind(sys, lmi, gain):
+    """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the recovered gain with
+    the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not stabilise),
+    "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G)."""
+    G, Y = lmi.variables["G"], np.stack(lmi.variables["Y"])
+    G = np.stack(G) if len(G) == sys.M else np.broadcast_to(G[0], Y.shape)
+    Acl = sys.A + sys.B @ gain @ sys.C
+    P = np.einsum("ji,jab->iab", sys.T, Y)
+    HHt = sys.H @ transpose(sys.H)
+    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G), G + transpose(G) - P]])
+    return "counterexample" if min_eig(blocks) > 0 else "numerical failure"
 
 
 def check_3_12(rng, mutant=False):
@@ -140,7 +155,8 @@ def check_3_12(rng, mutant=False):
         return outcome("not_applicable", sys, lmi_feasible=False, lmi_status=lmi.status, lmi_margin=lmi.margin)
     gains = -lmi.L if mutant else lmi.L
     rho = moment_map_radius(sys.A + sys.B @ gains @ sys.C, sys.T)
-    return outcome(verdict(rho < 1), sys, lmi_feasible=True, lmi_margin=lmi.margin, rho_of_lmi_gains=rho)
+    kind = {} if rho < 1 else {"failure_kind": failure_kind(sys, lmi, gains)}
+    return outcome(verdict(rho < 1), sys, lmi_feasible=True, lmi_margin=lmi.margin, rho_of_lmi_gains=rho, **kind)
 
 
 def summarise_lmi(outcomes):
