@@ -121,6 +121,9 @@ def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, e
     'the LMIs hold (margin 1.0e-03 >= -5.0e-07), but the '
     >>> lmi_result("infeasible_inaccurate").status
     'inaccurate'
+    >>> miss = lmi_result("optimal_inaccurate", np.array([[1.0]]), 2.0, rho=0.5, margin=-1e-3, equality_residual=0.0)
+    >>> miss.feasible, miss.status, miss.L is None
+    (False, 'inaccurate', True)
     """
     common = dict(solver_status=solver_status, rho=rho, margin=margin, equality_residual=equality_residual,
                   variables=variables or {})
