@@ -64,6 +64,12 @@ _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.rho_tolerance": (
         1e-9,
         "A spectral radius within this distance of 1 is reported as undecided."),
+    "mjls.lmi_equality_rtol": (
+        1e-6,
+        "Largest residual of an LMI problem's equality constraints (e.g. M C_i = C_i G of Thm. 3.9), "
+        "relative to max(1, largest entry), at which the returned matrices still count as a "
+        "certificate: Clarabel's feasibility tolerance is 1e-8, and the gain F M^{-1} stays within "
+        "rounding of the exact one far below 1e-6."),
     "mjls.solve_tolerance": (
         1e-12,
         "Relative residual ||X - L(X) - W|| / ||W|| at which the iterative coupled-Lyapunov "

@@ -15,6 +15,7 @@ STATUS_CODES = {
     "diverged": "an iterate or the cost became non-finite or grew without bound",
     "linalg_error": "a linear-algebra step failed (singular or indefinite matrix)",
     "infeasible": "the problem has no solution (e.g. infeasible LMIs)",
+    "inaccurate": "the solver stopped short of its accuracy and its answer could not be verified",
     "no_progress": "the iteration stopped making progress before the stopping criterion",
 }
 

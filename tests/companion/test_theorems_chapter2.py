@@ -8,7 +8,8 @@ import zlib
 import numpy as np
 import pytest
 
-from asoc_companion.theorems import Outcome, chapter2 as c2
+from asoc_companion.theorems import Outcome, chapter2 as c2, kernels
+from asoc_companion.theorems.engine import run_instance
 
 CHEAP = ["statement_2_1", "statement_2_4", "statement_2_5", "statement_2_7"]
 BY_KEY = {s.key: s for s in c2.STATEMENTS}
@@ -40,7 +41,11 @@ def test_identity_checks_are_deterministic(key):
 
 
 # The identity checks can fail: each compares against an independent computation, so a wrong
-# library result (here: a deliberately broken one) is caught.
+# library result (here: a deliberately broken one) is caught, as is each check's own mutant.
+
+@pytest.mark.parametrize("key", CHEAP)
+def test_identity_check_catches_its_mutant_on_every_instance(key):
+    assert all(BY_KEY[key].check(rng, mutant=True).verdict == "fails" for rng in rngs(4))
 
 def test_lemma_2_1_check_catches_a_missing_schur_complement(monkeypatch):
     def without_measurement(points, weights, u, model, w_points, v_points, beta, gamma):
@@ -109,9 +114,9 @@ def test_theorem_2_5_exact_cost_agrees_with_monte_carlo():
 def test_gaussian_kernel_over_printed_hellinger_is_not_positive_definite():
     """Hand-made: N(0, 1), N(1, 1), N(2, 1), D = (1 - BC)^2 as printed, SE with l = 0.03."""
     config = {"items": [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]], "exponent": "printed"}
-    cert = c2.gram_certificate("hellinger", config, "se", {}, 0.03)
+    cert = kernels.gram_certificate("hellinger", config, "se", {}, 0.03)
     assert cert["lambda_min"] < -0.2 and cert["rayleigh_exact"] < -0.2 < 0 < cert["tolerance"] < 1e-12
-    usual = c2.gram_certificate("hellinger", {**config, "exponent": "usual"}, "se", {}, 0.03)
+    usual = kernels.gram_certificate("hellinger", {**config, "exponent": "usual"}, "se", {}, 0.03)
     assert usual["lambda_min"] > -usual["tolerance"]             # sqrt(1 - BC) is a Hilbert metric
 
 
@@ -119,22 +124,36 @@ def test_gaussian_kernel_over_wasserstein_2_of_2d_gaussians_is_not_positive_defi
     """Hand-made (rounded from a search): four 2-D Gaussians, SE with l = 30.87."""
     items = [[[1.74, -3.8], [[7.34, -0.95], [-0.95, 0.18]]], [[-3.01, -3.38], [[0.46, -1.12], [-1.12, 4.27]]],
              [[-3.57, 0.6], [[0.14, 0.67], [0.67, 12.79]]], [[4.92, 2.75], [[11.29, 4.91], [4.91, 2.29]]]]
-    cert = c2.gram_certificate("wasserstein_gaussian", {"items": items}, "se", {}, 30.87)
+    cert = kernels.gram_certificate("wasserstein_gaussian", {"items": items}, "se", {}, 30.87)
     assert cert["lambda_min"] < -1e-4 < 0 < 1e3 * cert["tolerance"] < 1e-4
     assert cert["rayleigh_exact"] < -1e-4 and cert["lambda_min_scipy_evr"] < -1e-4
 
 
+def test_quadrature_distances_carry_their_error_into_the_tolerance():
+    config = {"items": [[0.1, 0.2, 0.3, 0.4], [0.4, 0.3, 0.2, 0.1], [0.25, 0.25, 0.25, 0.25]], "q": 1}
+    cert = kernels.gram_certificate("lq", config, "se", {}, 0.5)
+    D = kernels.distance_matrix("lq", config)
+    np.testing.assert_allclose(D[0, 1], 0.8, rtol=1e-8)      # L_1 of the step densities: sum |w - w'|
+    assert 64 * kernels.EPS * D.max() <= cert["delta_D"] < 1e-6
+
+
 @pytest.mark.parametrize("family, fixed", [("mcvmd", {"N": 4, "points": 2}), ("lq", {"N": 4, "bins": 4, "q": 2})])
-def test_search_finds_nothing_for_hilbert_metrics(family, fixed, monkeypatch):
+def test_search_finds_nothing_for_hilbert_metrics(family, fixed):
     """Sanity: mCvMd (an L2 norm of LCDs) and L_2 embed in a Hilbert space, so the SE kernel is PSD."""
-    monkeypatch.setattr(c2, "MAX_EVALUATIONS", 1000)               # a shorter search than the study's
-    outcome = c2.search_counterexample(np.random.default_rng(0), family, "se", {}, **fixed)
+    outcome = kernels.search_counterexample(np.random.default_rng(0), family, "se", {}, **fixed)
     assert outcome.verdict == "holds"
     assert outcome.numbers["lambda_min"] > -outcome.numbers["tolerance"]
 
 
 def test_search_finds_a_counterexample_for_one_dimensional_hellinger_as_printed():
-    outcome = c2.search_counterexample(np.random.default_rng(0), "hellinger", "se", {}, N=4, exponent="printed")
+    outcome = kernels.search_counterexample(np.random.default_rng(0), "hellinger", "se", {}, N=4, exponent="printed")
+    assert outcome.verdict == "fails"
+
+
+def test_search_catches_the_mutant_covariance_over_a_hilbert_metric():
+    """exp(-(d/l)^4) is not positive definite even on the real line: the search must find it over mCvMd."""
+    outcome = kernels.search_counterexample(np.random.default_rng(1), "mcvmd", kernels.MUTANT_COVARIANCE, {},
+                                            N=4, points=2)
     assert outcome.verdict == "fails"
 
 
@@ -142,56 +161,23 @@ def test_kernel_check_is_deterministic_and_rerunnable():
     key = "statement_2_6_3_kernels"
     children = np.random.SeedSequence((2017, zlib.crc32(key.encode()))).spawn(40)      # the engine's seeds
     index = next(i for i, child in enumerate(children)
-                 if c2.FAMILIES[int(np.random.default_rng(child).integers(len(c2.FAMILIES)))] == "hellinger")
-    outcome = BY_KEY[key].check(np.random.default_rng(children[index]))
-    again = c2.rerun(key, index, seed=2017)
+                 if kernels.FAMILIES[int(np.random.default_rng(child).integers(len(kernels.FAMILIES)))] == "hellinger")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        outcome = BY_KEY[key].check(np.random.default_rng(children[index]))
+    again = run_instance(key, 2017, index)
     assert outcome == again
-    summary = c2.summarise_kernels([outcome, again])
-    assert summary["by_distance"][c2.distance_label(outcome.numbers)]["instances"] == 2
-    replay = c2.replay_kernel_counterexample(outcome.numbers)
-    assert replay["lambda_min"] == outcome.numbers["lambda_min"]
+    summary = kernels.summarise_kernels([outcome, again])
+    assert summary["by_distance"][kernels.distance_label(outcome.numbers)]["instances"] == 2
+    replay = kernels.replay_kernel_counterexample(outcome.numbers)
+    np.testing.assert_allclose(replay["lambda_min"], outcome.numbers["lambda_min"], rtol=1e-9, atol=1e-15)
     assert json.loads(outcome.numbers["configuration"])["items"]
-
-
-def test_distance_proxies_agree_with_the_library():
-    rng = np.random.default_rng(5)
-    for family in c2.FAMILIES:
-        layout = c2._random_layout(rng, family)
-        config = c2._decode(family, rng.normal(size=c2._layout_size(family, layout)), layout)
-        assert np.allclose(c2._proxy_distance_matrix(family, config), c2._lib_distance_matrix(family, config),
-                           rtol=1e-12, atol=1e-12), family
 
 
 def test_bad_input_names_the_argument():
     with pytest.raises(ValueError, match="family"):
-        c2.search_counterexample(np.random.default_rng(0), "kl", "se", {})
+        kernels.search_counterexample(np.random.default_rng(0), "kl", "se", {})
     with pytest.raises(ValueError, match="name"):
-        c2.search_counterexample(np.random.default_rng(0), "omat", "cosine", {})
-    with pytest.raises(ValueError, match="statement_key"):
-        c2.rerun("statement_2_2", 0)
-
-
-def test_search_fast_paths_equal_the_general_ones_bit_for_bit():
-    """The search decodes to arrays, sums short axes in a loop, takes medians and eigenvalues without
-    NumPy's wrappers and calls the library's unchecked covariances: the same numbers throughout."""
-    rng = np.random.default_rng(7)
-    for family in c2.FAMILIES * 3:
-        layout = c2._random_layout(rng, family)
-        theta = rng.normal(size=c2._layout_size(family, layout)) * rng.choice([0.3, 3.0])
-        config = c2._decode(family, theta, layout)
-        assert config == json.loads(json.dumps(config))                              # JSON-able
-        D = c2._proxy_distance_matrix(family, config)
-        assert np.array_equal(c2._proxy_distance_matrix(family, c2._decode_arrays(family, theta, layout)), D)
-        name, shape = c2._random_covariance(rng)
-        l = c2._length_scale(D, 0.2)
-        assert l == float(np.exp(0.2) * np.median(D[np.triu_indices(len(D), 1)]))
-        K = c2._search_kernel(name, shape)(D, l)
-        assert np.array_equal(K, c2._kernel(name, shape, D, l))
-        assert np.array_equal(c2._eigenvalues(K), np.linalg.eigvalsh(K))
-    diff = rng.normal(size=(5, 4, 3))
-    assert np.array_equal(c2._squared_norms(diff), np.sum(diff ** 2, axis=-1))
-    for values in (rng.normal(size=6), rng.normal(size=7), np.array([1.0, np.nan, 2.0]), np.array([])):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)                       # median of nothing
-            expected = np.median(values)
-        assert np.array_equal(c2._median(values), expected, equal_nan=True)
+        kernels.search_counterexample(np.random.default_rng(0), "omat", "cosine", {})
+    with pytest.raises(ValueError, match="family"):
+        kernels.gram_certificate("kl", {"items": []}, "se", {}, 1.0)

@@ -3,19 +3,35 @@
 Strict inequalities ``> 0`` are imposed as ``>= eps * I`` with ``eps = 1e-6`` (relative to
 the problem's unit scale): a solver can only certify non-strict inequalities, and the
 margin keeps the recovered G, M invertible. Solved with cvxpy and Clarabel.
+
+Feasibility is decided by the certificate, not by the solver's status string: the returned
+matrices are substituted into every constraint, and the LMIs count as satisfied when the
+smallest eigenvalue of each (imposed minus its floor) is at least ``-eps / 2``, i.e. each
+strict inequality holds with a margin of at least ``eps / 2``, and the equalities hold to
+``config.defaults["mjls.lmi_equality_rtol"]``. Whether the recovered gain stabilises is
+reported on its own (``rho``, ``stabilizing``): the theorems promise it, so a feasible
+certificate with ``rho >= 1`` is either a counterexample or a numerical failure, and the
+message says which.
 """
 
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 
 import cvxpy as cp
 import numpy as np
 
+from .. import config
+from ..linalg import sym
 from ..result import IterativeResult
 from ..validation import boolean, real_scalar
 from .stability import ms_spectral_radius
 from .system import check_system
 
 EPS = 1e-6
+
+#: cvxpy's statuses whose matrices are checked as a certificate (an inaccurate solve may still
+#: return matrices that satisfy the LMIs).
+_CHECKED = (cp.OPTIMAL, cp.OPTIMAL_INACCURATE)
 
 
 @dataclass(kw_only=True)
@@ -25,27 +41,37 @@ class LMIResult(IterativeResult):
     Attributes
     ----------
     feasible : bool
-        Whether the solver found a solution of the LMIs (status optimal) AND the recovered
-        gain mean-square stabilises the MJLS (rho < 1, Cor. 3.2, checked here: the theorems
-        guarantee it, so a failure means the solution is numerically unreliable).
+        Whether the returned matrices satisfy the LMIs (the certificate, checked by
+        eigenvalues; see the module's docstring), whatever the solver's status string.
     converged, status, message
-        ``"converged"`` when feasible, else ``"infeasible"``; the message says which test
-        failed (:class:`asoc.result.IterativeResult`).
+        ``"converged"`` when feasible, ``"infeasible"`` when the solver certifies
+        infeasibility, ``"inaccurate"`` when the solver stopped short of its accuracy and no
+        certificate was verified (:class:`asoc.result.IterativeResult`).
     L : numpy.ndarray or None
-        The gain F M^{-1} (nu, ny), or the mode-dependent gains (M, nu, ny); None if infeasible.
+        The gain F M^{-1} (nu, ny), or the mode-dependent gains (M, nu, ny); None if not feasible.
     bound : float
-        sum_i tr W_i, an upper bound of the H2 cost (3.23); inf if infeasible.
+        sum_i tr W_i, an upper bound of the H2 cost (3.23); inf if not feasible.
     solver_status : str
         The solver's own status string (e.g. "optimal", "infeasible").
     rho : float
         Mean-square spectral radius of the closed loop with L (nan without a gain).
+    stabilizing : bool
+        rho < 1 (False without a gain).
+    margin : float
+        Smallest eigenvalue over the constraints, each minus its imposed floor (>= -eps/2 for a
+        certificate; nan when the solver returned no matrices).
+    equality_residual : float
+        Largest |M C_i - C_i G| relative to the entries' size (nan without matrices).
+    variables : dict
+        The solver's matrices by name (e.g. "F", "G", "M", "W", "Y", each a list over gains or
+        modes), empty when it returned none: the certificate, to re-check or to reuse.
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec354_system
     >>> res = static_output_lmi(sec354_system(1, "state"))
-    >>> res.feasible, res.status, res.solver_status, bool(res.rho < 1)
-    (True, 'converged', 'optimal', True)
+    >>> res.feasible, res.status, res.solver_status, res.stabilizing, bool(res.margin > -5e-7)
+    (True, 'converged', 'optimal', True, True)
     """
 
     feasible: bool
@@ -53,28 +79,81 @@ class LMIResult(IterativeResult):
     bound: float
     solver_status: str
     rho: float = np.nan
+    stabilizing: bool = False
+    margin: float = np.nan
+    equality_residual: float = np.nan
+    variables: dict = field(default_factory=dict)
 
 
-def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan):
-    """The LMIResult of a solve: feasible iff the solver's status is optimal and rho < 1.
+def certificate(constraints):
+    """(margin, equality_residual) of solved cvxpy ``constraints``: the smallest eigenvalue of every
+    semidefinite constraint's expression (left minus right side), and the largest equality residual
+    relative to max(1, largest entry of its two sides).
 
     Examples
     --------
-    >>> lmi_result("optimal", np.array([[1.0]]), 2.0, rho=1.2).message[:40]
-    "the solver reports 'optimal', but the re"
+    >>> X = cp.Variable((2, 2), symmetric=True)
+    >>> cons = [X >> np.eye(2), cp.trace(X) == 3]
+    >>> _ = cp.Problem(cp.Minimize(0), cons).solve(solver="CLARABEL")
+    >>> margin, residual = certificate(cons)
+    >>> bool(margin > -1e-7), bool(residual < 1e-7)
+    (True, True)
     """
-    if L is None:
-        return LMIResult(feasible=False, L=None, bound=np.inf, solver_status=solver_status, rho=rho,
-                         converged=False, status="infeasible",
-                         message=f"the solver found no solution (status {solver_status!r})")
-    if not rho < 1:
-        return LMIResult(feasible=False, L=None, bound=np.inf, solver_status=solver_status, rho=rho,
-                         converged=False, status="infeasible",
-                         message=f"the solver reports {solver_status!r}, but the recovered gain does not "
-                                 f"stabilise the MJLS (rho = {rho:.4f} >= 1): numerically unreliable")
-    return LMIResult(feasible=True, L=L, bound=bound, solver_status=solver_status, rho=rho,
-                     converged=True, status="converged",
-                     message=f"feasible (solver status {solver_status!r}); the gain gives rho = {rho:.4f}")
+    margins, residuals = [np.inf], [0.0]
+    for con in constraints:
+        if isinstance(con, cp.constraints.PSD):
+            margins.append(float(np.linalg.eigvalsh(sym(np.atleast_2d(con.expr.value)))[0]))
+        elif isinstance(con, cp.constraints.Equality):
+            scale = max(1.0, *(float(np.max(np.abs(arg.value))) for arg in con.args))
+            residuals.append(float(np.max(np.abs(con.expr.value))) / scale)
+    return min(margins), max(residuals)
+
+
+def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, equality_residual=np.nan,
+               eps=EPS, variables=None):
+    """The LMIResult of a solve: feasible iff the matrices satisfy the constraints (``margin >= -eps/2``,
+    ``equality_residual <= config.defaults["mjls.lmi_equality_rtol"]``); rho reported on its own.
+    Without a margin (nan), the solver's status "optimal" stands for the certificate.
+
+    Examples
+    --------
+    >>> lmi_result("optimal", np.array([[1.0]]), 2.0, rho=1.2, margin=1e-3, equality_residual=0.0).message[:52]
+    'the LMIs hold (margin 1.0e-03 >= -5.0e-07), but the '
+    >>> lmi_result("infeasible_inaccurate").status
+    'inaccurate'
+    >>> miss = lmi_result("optimal_inaccurate", np.array([[1.0]]), 2.0, rho=0.5, margin=-1e-3, equality_residual=0.0)
+    >>> miss.feasible, miss.status, miss.L is None
+    (False, 'inaccurate', True)
+    """
+    common = dict(solver_status=solver_status, rho=rho, margin=margin, equality_residual=equality_residual,
+                  variables=variables or {})
+    verified = (L is not None and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
+                and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
+    if not verified:
+        status, message = _not_feasible(solver_status, L, margin, equality_residual, eps)
+        return LMIResult(feasible=False, L=None, bound=np.inf, converged=False, status=status, message=message,
+                         **common)
+    stabilizing = bool(rho < 1)
+    text = f"the LMIs hold (margin {margin:.1e} >= {-eps / 2:.1e})" if not np.isnan(margin) else \
+        f"the solver reports {solver_status!r}"
+    if stabilizing:
+        message = f"{text}; the gain gives rho = {rho:.4f} (mean-square stabilising)"
+    else:
+        message = (f"{text}, but the recovered gain does not stabilise (rho = {rho:.4f} >= 1), which the theorem "
+                   f"excludes: a numerical failure of the gain's recovery, or a counterexample")
+    return LMIResult(feasible=True, L=L, bound=bound, stabilizing=stabilizing, converged=True, status="converged",
+                     message=message, **common)
+
+
+def _not_feasible(solver_status, L, margin, residual, eps):
+    """(status, message) of a solve without a verified certificate."""
+    if solver_status == cp.INFEASIBLE:
+        return "infeasible", "the solver certifies that the LMIs are infeasible"
+    if solver_status in (cp.INFEASIBLE_INACCURATE, cp.OPTIMAL_INACCURATE) or L is not None:
+        found = "" if L is None else f"; its matrices miss the LMIs (margin {margin:.1e}, equality residual {residual:.1e})"
+        return "inaccurate", (f"the solver stopped short of its accuracy (status {solver_status!r}){found}: "
+                              f"feasibility is undecided; rescale the system or try another solver")
+    return "infeasible", f"the solver found no solution (status {solver_status!r})"
 
 
 def performance_output(sys):
@@ -95,10 +174,6 @@ def performance_output(sys):
         D[i, :nx] = (vec * np.sqrt(np.clip(lam, 0, None))) @ vec.T
         E[i, nx:] = np.linalg.cholesky(sys.R[i]).T
     return D, E
-
-
-def _sym(X):
-    return 0.5 * (X + X.T)
 
 
 def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
@@ -169,20 +244,39 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
         mid = sys.A[i] @ G[g] + sys.B[i] @ F[g] @ sys.C[i]
         lmi1 = cp.bmat([[W[i], top], [top.T, corner]])
         lmi2 = cp.bmat([[Y[i] - mu[i] * HHt[i], mid], [mid.T, corner]])
-        cons += [_sym(lmi1) >> eps * np.eye(2 * nx + nu), _sym(lmi2) >> eps * np.eye(2 * nx),
+        cons += [0.5 * (lmi1 + lmi1.T) >> eps * np.eye(2 * nx + nu), 0.5 * (lmi2 + lmi2.T) >> eps * np.eye(2 * nx),
                  Y[i] >> eps * np.eye(nx), W[i] >> 0,
                  Mv[g] @ sys.C[i] == sys.C[i] @ G[g]]
     prob = cp.Problem(cp.Minimize(sum(cp.trace(Wi) for Wi in W)), cons)
-    try:
-        prob.solve(solver=solver)
-    except cp.SolverError as err:
-        return lmi_result(f"solver error: {err}")
-    if prob.status != cp.OPTIMAL:
-        return lmi_result(prob.status)
+    status = solve_quietly(prob, solver)
+    if status not in _CHECKED:
+        return lmi_result(status)
+    margin, residual = certificate(cons)
     gains = np.stack([F[g].value @ np.linalg.inv(Mv[g].value) for g in range(n_gains)])
     closed = sys.A + sys.B @ (gains if mode_observed else gains[0]) @ sys.C
-    return lmi_result(prob.status, gains if mode_observed else gains[0], float(prob.value),
-                      ms_spectral_radius(closed, sys.T))
+    variables = {name: [v.value for v in group] for name, group in (("F", F), ("G", G), ("M", Mv), ("W", W), ("Y", Y))}
+    return lmi_result(status, gains if mode_observed else gains[0], float(prob.value),
+                      ms_spectral_radius(closed, sys.T), margin, residual, eps, variables)
+
+
+def solve_quietly(prob, solver):
+    """Solve ``prob`` with ``solver``; cvxpy's warnings (e.g. "Solution may be inaccurate") are caught,
+    since the result reports the status in its own words. Returns the status string, or
+    "solver error: ..." when the solver raised.
+
+    Examples
+    --------
+    >>> x = cp.Variable()
+    >>> solve_quietly(cp.Problem(cp.Minimize(x), [x >= 1]), "CLARABEL")
+    'optimal'
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        try:
+            prob.solve(solver=solver)
+        except cp.SolverError as err:
+            return f"solver error: {err}"
+    return prob.status
 
 
 def check_solver(solver, name="solver"):

@@ -5,6 +5,11 @@ takes a seeded ``numpy.random.Generator`` (one per instance, from ``SeedSequence
 draws an instance, and returns an ``Outcome``: ``"holds"``, ``"fails"`` or
 ``"not_applicable"`` (the premise is false for this instance), with the numbers that decide
 it. A statement with no checkable content has ``check=None`` and says why in ``not_checkable``.
+
+Every check can fail: called as ``check(rng, mutant=True)`` it runs the same comparison
+against a planted false variant of the claim or of the computation it tests (a dropped term,
+a flipped inequality, a factor changed), described in ``mutant``; the study records how often
+the check catches it.
 """
 
 from dataclasses import dataclass, field
@@ -33,21 +38,27 @@ class Statement:
 
     key            ``statement_<chapter>_<number>``, e.g. ``statement_3_19`` (the record key)
     label          as the thesis names it, e.g. ``"Theorem 3.19"``
-    summary        a short statement in words
+    summary        a short statement in words, math in MathJax ``$...$``
     checked        what one instance checks, and against what independent computation
-    check          ``check(rng) -> Outcome``; ``None`` when there is nothing to check
+    check          ``check(rng, mutant=False) -> Outcome``; ``None`` when there is nothing to check
+    mutant         the planted false variant that ``check(rng, mutant=True)`` tests
     not_checkable  why there is nothing to check (when ``check`` is ``None``)
     expensive      one instance costs more than a second (the study then runs >= 100, not >= 1000)
+    summarise      ``summarise(outcomes) -> dict``, recorded next to the counts (optional)
     """
 
     key: str
     label: str
     summary: str
     checked: str
-    check: Callable[[np.random.Generator], Outcome] | None = None
+    check: Callable[..., Outcome] | None = None
+    mutant: str = ""
     not_checkable: str = ""
     expensive: bool = False
+    summarise: Callable[[list], dict] | None = None
 
     def __post_init__(self):
         if (self.check is None) == (not self.not_checkable):
             raise ValueError(f"{self.key}: give either a check or the reason it is not checkable")
+        if (self.check is None) != (not self.mutant):
+            raise ValueError(f"{self.key}: a check needs the description of its mutant (and only a check has one)")

@@ -19,11 +19,9 @@ import numpy as np
 from asoc.progress import progress_bar
 
 from . import STATEMENTS
-from .chapter2 import SUMMARIES as CHAPTER_2_SUMMARIES
-from .chapter3 import SUMMARIES as CHAPTER_3_SUMMARIES
 
-SUMMARIES = {**CHAPTER_2_SUMMARIES, **CHAPTER_3_SUMMARIES}
 BATCH = 25                                 # instances per task: amortises the executor's overhead
+MUTANT_SUFFIX = ":mutant"                  # a mutant's instances draw from the seeds of key + suffix
 
 
 def instance_seed(key: str, seed: int, index: int) -> np.random.SeedSequence:
@@ -48,19 +46,28 @@ def statement(key: str):
     raise ValueError(f"key: expected one of the statement keys ({STATEMENTS[0].key}, ...), found {key!r}")
 
 
-def run_instance(key: str, seed: int, index: int):
-    """One instance of one statement: the Outcome, or ("error", message) when the check raised."""
-    rng = np.random.default_rng(instance_seed(key, seed, index))
+def run_instance(key: str, seed: int, index: int, mutant: bool = False):
+    """One instance of one statement (or of its mutant, drawn from the seeds of ``key + ":mutant"``):
+    the Outcome, or ("error", message) when the check raised.
+
+    Examples
+    --------
+    >>> run_instance("statement_3_30", 2017, 0).verdict, run_instance("statement_3_30", 2017, 0, mutant=True).verdict
+    ('holds', 'fails')
+    """
+    seed_key = key + MUTANT_SUFFIX if mutant else key
+    rng = np.random.default_rng(instance_seed(seed_key, seed, index))
+    check = statement(key).check
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            return statement(key).check(rng)
+            return check(rng, mutant=True) if mutant else check(rng)
         except Exception as err:                                      # a checker bug: reported, not hidden
             return ("error", f"{type(err).__name__}: {err}")
 
 
-def _run_batch(key, seed, indices):
-    return [(i, run_instance(key, seed, i)) for i in indices]
+def _run_batch(key, seed, indices, mutant):
+    return [(i, run_instance(key, seed, i, mutant)) for i in indices]
 
 
 @dataclass
@@ -78,13 +85,21 @@ class StatementResult:
     error_messages: dict = field(default_factory=dict)
     summary: dict = field(default_factory=dict)
     seconds: float = 0.0
+    mutant: dict | None = None
+    corrected: dict | None = None
 
     def record(self) -> dict:
-        """The recorded value: counts, failing indices, the statement's summary and timing."""
+        """The recorded value: counts, failing indices, the statement's summary, its mutant and timing."""
         counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable, "errors": self.errors}
-        return {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds, "fails": self.fails,
-                "not_applicable": self.not_applicable, "errors": self.errors, "failing": self.failing,
-                "errored": sorted(self.error_messages), "summary": self.summary, "seconds": round(self.seconds, 2)}
+        record = {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds,
+                  "fails": self.fails, "not_applicable": self.not_applicable, "errors": self.errors,
+                  "failing": self.failing, "errored": sorted(self.error_messages), "summary": self.summary,
+                  "seconds": round(self.seconds, 2)}
+        if self.mutant is not None:
+            record["mutant"] = self.mutant
+        if self.corrected is not None:
+            record["corrected"] = self.corrected
+        return record
 
 
 def _tally(key, n, results, seconds):
@@ -100,18 +115,35 @@ def _tally(key, n, results, seconds):
         if out.verdict == "fails":
             res.failing.append(index)
             res.failures[index] = out.numbers
-    if key in SUMMARIES:
-        res.summary = SUMMARIES[key](outcomes)
+    summarise = statement(key).summarise
+    if summarise is not None:
+        res.summary = summarise(outcomes)
+        res.corrected = res.summary.pop("corrected", None)        # a corrected reading checked beside the claim
     return res
 
 
-def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progress=True):
+def _mutant_record(key, results):
+    """What the mutant's instances gave: ``{"description", "fails", "instances"}`` (+ premise-false and
+    errors when there were any). The mutant is caught when ``fails > 0``."""
+    verdicts = [out if isinstance(out, tuple) else out.verdict for _, out in results]
+    record = {"description": statement(key).mutant, "fails": verdicts.count("fails"), "instances": len(verdicts)}
+    for name, count in (("not_applicable", verdicts.count("not_applicable")),
+                        ("errors", sum(isinstance(v, tuple) for v in verdicts))):
+        if count:
+            record[name] = count
+    return record
+
+
+def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progress=True, mutants=None):
     """Check every statement (or those in ``only``) on its instances; returns {key: StatementResult}.
 
     Parameters
     ----------
     instances : int or callable
         Instances per statement, or ``instances(statement) -> int`` (e.g. fewer for expensive ones).
+    mutants : int or callable, optional
+        Instances of each statement's mutant (the same check against a planted false variant;
+        default none); recorded as the result's ``mutant``.
     seed : int
         Study seed; instance ``i`` of ``key`` uses :func:`instance_seed`.
     only : iterable of str, optional
@@ -128,24 +160,31 @@ def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progre
         unknown = set(only) - {st.key for st in STATEMENTS}
         if unknown:
             raise ValueError(f"only: expected statement keys such as 'statement_3_19', found {sorted(unknown)}")
-    counts = {st.key: int(instances(st) if callable(instances) else instances) for st in chosen}
-    tasks = [(st.key, list(range(start, min(start + BATCH, counts[st.key]))))
-             for st in chosen for start in range(0, counts[st.key], BATCH)]
-    jobs = (joblib.delayed(_run_batch)(key, seed, indices) for key, indices in tasks)
-    collected = {st.key: [] for st in chosen}
+    count = lambda n, st: 0 if n is None else int(n(st) if callable(n) else n)
+    counts = {(st.key, mutant): count(n, st) for st in chosen for mutant, n in ((False, instances), (True, mutants))}
+    tasks = [(key, mutant, list(range(start, min(start + BATCH, n))))
+             for (key, mutant), n in counts.items() for start in range(0, n, BATCH)]
+    jobs = (joblib.delayed(_run_batch)(key, seed, indices, mutant) for key, mutant, indices in tasks)
+    collected = {task: [] for task in counts}
     elapsed = {st.key: 0.0 for st in chosen}
     bar = progress_bar(total=sum(counts.values()), enabled=progress, desc="theorems", unit="instance")
-    start = time.perf_counter()
     with _backend(scheduler, n_jobs) as parallel:
-        last = start
-        for (key, _), batch in zip(tasks, parallel(jobs)):
+        last = time.perf_counter()
+        for (key, mutant, _), batch in zip(tasks, parallel(jobs)):
             now = time.perf_counter()
             elapsed[key] += now - last
             last = now
-            collected[key].extend(batch)
+            collected[key, mutant].extend(batch)
             bar.update(len(batch))
     bar.close()
-    return {key: _tally(key, counts[key], collected[key], elapsed[key]) for key in collected}
+    results = {st.key: _tally(st.key, counts[st.key, False], collected[st.key, False], elapsed[st.key])
+               for st in chosen}
+    if mutants is not None:
+        for key, res in results.items():
+            res.mutant = _mutant_record(key, collected[key, True])
+            if res.corrected is not None:                      # the check's mutant is the corrected reading's
+                res.corrected["mutant"] = res.mutant
+    return results
 
 
 class _backend:

@@ -12,7 +12,10 @@ import itertools
 import numpy as np
 import scipy.optimize
 
+from asoc.linalg import sym, transpose
 from asoc.mjls import closed_loop, ms_spectral_radius, random_mjls
+
+from .core import Outcome
 
 FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
 Z_SCORE = 6.0         # Monte Carlo tolerance in standard errors (per compared entry; false alarm ~ 2e-9)
@@ -260,10 +263,8 @@ class ModeOperator:
     [S_1^T ... S_M^T], then each run's own block of m columns.
 
     This computes M times the products that one matmul per mode over its runs computes, but in
-    one BLAS call instead of M gathers, products and scatters on arrays of a few columns. Each
-    run's entries are the same dot products; whether their last bits equal the per-mode
-    products' depends on the BLAS kernels (on this project's machine they do, on emulated
-    other CPUs not always).
+    one BLAS call instead of M gathers, products and scatters on arrays of a few columns (the
+    same dot products, equal to rounding).
 
     Parameters
     ----------
@@ -292,63 +293,6 @@ class ModeOperator:
         return (x @ self.stacked).reshape(-1, self.m).take(modes.run_major, axis=0)
 
 
-class ModeQuadratic:
-    """x_r^T S_{theta_r} x_r for all runs, bit for bit ``np.einsum("ra,rab,rb->r", x, S[theta], x)``:
-    the terms (x_a S_ab) x_b added one by one to 0 in the order of (a, b), each over all runs at once
-    (numpy reduces the leading axis of the (n n, runs) terms one row after another; the final + 0
-    turns a sum of -0 into einsum's +0).
-
-    Parameters
-    ----------
-    S : ndarray, shape (M, n, n)
-        One matrix per mode.
-
-    Examples
-    --------
-    >>> S = np.array([[[1.0, 0.0], [0.0, 2.0]], [[0.0, 1.0], [1.0, 0.0]]])
-    >>> ModeQuadratic(S)(np.array([[1.0, 1.0], [1.0, 2.0]]), np.array([0, 1]))
-    array([3., 4.])
-    """
-
-    def __init__(self, S):
-        S = np.asarray(S, dtype=float)
-        if S.ndim != 3 or S.shape[1] != S.shape[2]:
-            raise ValueError(f"S: expected one square matrix per mode, shape (M, n, n), found shape {S.shape}")
-        self.n = S.shape[1]
-        self.entries = np.ascontiguousarray(S.reshape(len(S), -1).T)                 # (n n, M): S_ab per mode
-
-    def __call__(self, x, theta):
-        """The quadratic form of every row of ``x`` (runs, n) with the matrix of its mode ``theta``."""
-        n = self.n
-        xt = np.ascontiguousarray(x.T)
-        terms = self.entries.take(theta, axis=1)                                        # (n n, runs)
-        by_entry = terms.reshape(n, n, -1)
-        np.multiply(xt[:, None, :], by_entry, out=by_entry)
-        np.multiply(by_entry, xt[None, :, :], out=by_entry)
-        return np.add.reduce(terms, axis=0) + 0.0
-
-
-def row_sums(P):
-    """``np.sum(P, axis=1)`` of P (runs, k) bit for bit, without a reduction over the narrow axis.
-
-    numpy adds fewer than 8 entries of a row one by one to 0 (pairwise summation starts at 8):
-    here each column is added to all runs at once. With 8 or more columns, ``np.sum`` itself.
-
-    Examples
-    --------
-    >>> P = np.array([[1.0, 1e-16, 1e-16], [0.5, 2.0, -1.0]])
-    >>> bool(np.array_equal(row_sums(P), np.sum(P, axis=1)))
-    True
-    """
-    if P.shape[1] >= 8:
-        return np.sum(P, axis=1)
-    columns = np.ascontiguousarray(P.T)
-    total = columns[0] + 0.0
-    for column in columns[1:]:
-        total += column
-    return total
-
-
 def moment_estimate(samples):
     """Mean and standard error over the first axis (runs)."""
     return samples.mean(axis=0), samples.std(axis=0, ddof=1) / np.sqrt(len(samples))
@@ -357,40 +301,16 @@ def moment_estimate(samples):
 def indicator_moment_estimate(x, theta, n_modes):
     """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n, n).
 
-    Bit for bit :func:`moment_estimate` of the (runs, M, n, n) array of the samples, with about
-    half its work: x_r x_r^T is symmetric, so only the entries a <= b are estimated (then
-    mirrored), on an array of shape (runs, M, n (n + 1) / 2) that numpy sums over the runs as it
-    sums the samples (one run after another for each entry, as both have more than one entry per
-    run, or pairwise when both have one). That array holds the samples, then the squared
-    deviations from the mean, (-mean)^2 where a run is in another mode; the mean's sum is not
-    repeated for the standard deviation.
-
     Examples
     --------
     >>> x, theta = np.array([[1.0, 0.5], [2.0, -1.0], [3.0, 0.0]]), np.array([0, 1, 0])
-    >>> samples = np.zeros((3, 2, 2, 2))
-    >>> samples[np.arange(3), theta] = np.einsum("ra,rb->rab", x, x)
     >>> mean, se = indicator_moment_estimate(x, theta, 2)
-    >>> all(np.array_equal(a, b) for a, b in zip((mean, se), moment_estimate(samples)))
-    True
+    >>> (3 * mean).round(12).tolist()                # mode 0: x x^T of runs 0 and 2; mode 1: of run 1
+    [[[10.0, 0.5], [0.5, 0.25]], [[4.0, -2.0], [-2.0, 1.0]]]
     """
-    runs, n = x.shape
-    first, second = np.triu_indices(n)
-    products = np.multiply(x[:, first], x[:, second])
-    products += 0.0                                            # einsum's x_a x_b (added to 0), a <= b
-    table = np.zeros((runs, n_modes, len(first)))
-    own = table.reshape(runs * n_modes, len(first))             # row r M + theta_r: run r's own mode
-    rows = _run_offsets(runs, n_modes) + theta
-    own[rows] = products
-    mean = table.sum(axis=0) / runs
-    table[...] = np.square(mean)
-    deviations = mean.take(theta, axis=0)
-    np.subtract(products, deviations, out=deviations)
-    own[rows] = np.square(deviations, out=deviations)
-    se = np.sqrt(table.sum(axis=0) / (runs - 1)) / np.sqrt(runs)
-    mirror = np.zeros((n, n), dtype=np.intp)
-    mirror[first, second] = mirror[second, first] = np.arange(len(first))
-    return mean[:, mirror], se[:, mirror]
+    samples = np.zeros((len(x), n_modes, x.shape[1], x.shape[1]))
+    samples[np.arange(len(x)), theta] = np.einsum("ra,rb->rab", x, x)
+    return moment_estimate(samples)
 
 
 def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, steps=100, tail=1e-4):
@@ -426,5 +346,86 @@ def random_spd_stack(rng, M, n, scale=1.0):
 
 def min_eig(S):
     """Smallest eigenvalue over a stack of symmetric matrices."""
-    S = np.asarray(S)
-    return float(np.min(np.linalg.eigvalsh(0.5 * (S + np.swapaxes(S, -1, -2)))))
+    return float(np.min(np.linalg.eigvalsh(sym(np.asarray(S)))))
+
+
+def trace_sum(A, B):
+    """sum_i tr[A_i B_i] over a stack (or tr[A B] of two matrices).
+
+    Examples
+    --------
+    >>> trace_sum(np.stack([np.eye(2), 2 * np.eye(2)]), np.stack([np.eye(2)] * 2))
+    6.0
+    """
+    return float(np.sum(A * transpose(B)))
+
+
+def verdict(ok):
+    """ "holds" if ``ok`` else "fails"."""
+    return "holds" if ok else "fails"
+
+
+def outcome(verdict, sys=None, **numbers):
+    """An Outcome with plain numbers; a failing instance also carries its system as data.
+
+    Examples
+    --------
+    >>> outcome("holds", None, gap=np.float64(0.5), ok=np.bool_(True)).numbers
+    {'gap': 0.5, 'ok': True}
+    """
+    clean = {k: (v.tolist() if isinstance(v, np.ndarray) else (float(v) if isinstance(v, np.floating) else
+                 (bool(v) if isinstance(v, np.bool_) else v))) for k, v in numbers.items()}
+    if sys is not None:
+        clean.update(size(sys))
+        if verdict == "fails":
+            clean["system"] = system_data(sys)
+    return Outcome(verdict, clean)
+
+
+def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
+    """Rescale A_i, B_i so that the closed loop of ``gain_fn(sys)`` has rho uniform in [low, high]."""
+    target = rng.uniform(low, high)
+    factor = radius_to(sys, gain_fn(sys), target)
+    return rescaled(sys, factor), target
+
+
+def sym_noise(rng, m, n):
+    """m random symmetric n x n matrices with standard normal entries (symmetrised)."""
+    return sym(rng.standard_normal((m, n, n)))
+
+
+# ---------------------------------------------------------------- Gaussian-mixture initial states
+
+def gaussian_mixture(rng, sys):
+    """A random Gaussian mixture of x_0 over the modes: weights mu_0, means (M, n), covariances (M, n, n)."""
+    mu0 = rng.dirichlet(np.ones(sys.M))
+    mean0 = rng.standard_normal((sys.M, sys.nx))
+    cov0 = random_spd_stack(rng, sys.M, sys.nx, 0.2)
+    return mu0, mean0, cov0
+
+
+def sample_mixture(rng, mu0, mean0, cov0, n_runs):
+    """``n_runs`` draws (x_0, theta_0) of the mixture."""
+    theta = initial_modes(rng, mu0, n_runs)
+    chol = ModeOperator(np.linalg.cholesky(cov0))
+    x = mean0[theta] + chol(rng.standard_normal((n_runs, mean0.shape[1])), RunModes(theta, len(mu0)))
+    return x, theta
+
+
+def z_scores(x, theta, exact, mu, min_hits=100):
+    """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over the
+    runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
+    modes have too few samples for a normal standard error)."""
+    mean, se = indicator_moment_estimate(x, theta, len(mu))
+    seen = mu * len(x) >= min_hits
+    if not seen.any():
+        return 0.0
+    scale = 1e-12 * (1 + np.abs(exact).max())
+    return float(np.max(np.abs(mean - exact)[seen] / np.maximum(se, scale)[seen]))
+
+
+def norm_scale(rng, Acl):
+    """Factor making max_i ||Acl_i||_2 uniform on [0.5, 1.5]. A Monte Carlo estimate of a moment is only
+    trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i multiplies
+    x x^T by 9 per step, and a few samples decide the mean (the standard error then misleads)."""
+    return float(rng.uniform(0.5, 1.5) / np.max(np.linalg.norm(Acl, ord=2, axis=(1, 2))))

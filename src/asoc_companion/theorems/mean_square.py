@@ -1,0 +1,124 @@
+"""Checks of Sec. 3.3-3.4: mean-square stability (Thm. 3.1, Cor. 3.2) and the step of Prop. 3.5.
+
+Mean-square stability is decided from its definition, independently of the printed matrices:
+the second moments X_k^j = E{x_k x_k^T 1(theta_k = j)} of x_{k+1} = A_{theta_k} x_k follow the
+linear map X -> (sum_i p_ij A_i X_i A_i^T)_j, and E{|x_k|^2} -> 0 for every initial condition
+exactly when that map's spectral radius is below 1 (Costa, Fragoso and Marques 2005, Thm. 3.9).
+:func:`moment_map_radius` builds the map's matrix column by column from its action on the
+basis matrices (no Kronecker algebra, no library operator) and takes its eigenvalues densely.
+"""
+
+import numpy as np
+import scipy.optimize
+
+from asoc.linalg import transpose
+from asoc.mjls import ms_spectral_radius, successor_average
+from asoc.mjls.operators import kronecker_matrix
+
+from .instances import draw_system, min_eig, outcome, random_spd, random_spd_stack, verdict
+
+DECISIVE = 1e-9       # |rho - 1| below this leaves mean-square stability undecided by rounding
+
+
+def moment_map_matrix(A, T):
+    """The matrix of X -> (sum_i p_ij A_i X_i A_i^T)_j on the stacked entries of (X_1, ..., X_M),
+    column k the image of the k-th basis matrix.
+
+    Examples
+    --------
+    >>> moment_map_matrix(np.array([[[0.5]], [[2.0]]]), np.array([[0.5, 0.5], [0.0, 1.0]]))
+    array([[0.125, 0.   ],
+           [0.125, 4.   ]])
+    """
+    M, n, _ = A.shape
+    basis = np.eye(M * n * n).reshape(M * n * n, M, n, n)
+    images = np.einsum("ij,iab,Nibc,idc->Njad", T, A, basis, A)
+    return images.reshape(M * n * n, M * n * n).T
+
+
+def moment_map_radius(A, T):
+    """Spectral radius of :func:`moment_map_matrix` (dense eigenvalues).
+
+    Examples
+    --------
+    >>> A = np.array([[[0.5]], [[2.0]]])
+    >>> round(moment_map_radius(A, np.array([[0.5, 0.5], [0.5, 0.5]])), 6)     # (0.25 + 4) / 2
+    2.125
+    """
+    return float(np.max(np.abs(np.linalg.eigvals(moment_map_matrix(A, T)))))
+
+
+def check_3_1(rng, mutant=False):
+    """Thm. 3.1: PD solutions Q of the coupled Lyapunov equations (either form) for PD S imply MSS.
+    Mutant: the premise negated (a solution with an eigenvalue <= 0 in both forms "implies" MSS)."""
+    sys = draw_system(rng)
+    A, T, M, n = sys.A, sys.T, sys.M, sys.nx
+    S = random_spd_stack(rng, M, n)
+    op = kronecker_matrix(A, T)
+    eye = np.eye(M * n * n)
+    try:
+        Q_first = np.linalg.solve(eye - op.T, S.ravel()).reshape(M, n, n)     # A_i^T E_i(Q) A_i - Q_i = -S_i
+        Q_second = np.linalg.solve(eye - op, S.ravel()).reshape(M, n, n)      # D_j(A Q A^T) - Q_j = -S_j
+    except np.linalg.LinAlgError:
+        return outcome("not_applicable", sys, reason="singular coupled Lyapunov operator")
+    eig_first, eig_second = min_eig(Q_first), min_eig(Q_second)
+    rho = moment_map_radius(A, T)
+    numbers = dict(min_eig_Q_first_form=eig_first, min_eig_Q_second_form=eig_second, moment_map_radius=rho)
+    premise = eig_first > 0 or eig_second > 0
+    if premise == mutant or abs(rho - 1) < DECISIVE:
+        return outcome("not_applicable", sys, **numbers)
+    return outcome(verdict(rho < 1), sys, **numbers)
+
+
+def printed_matrix(A, T):
+    """The matrix of Cor. 3.2 as printed: diag[A_1 (x) A_1, ..., A_M (x) A_M] (T^T (x) I_{n^2}).
+
+    Examples
+    --------
+    >>> printed_matrix(np.array([[[2.0]]]), np.array([[1.0]]))
+    array([[4.]])
+    """
+    M, n, _ = A.shape
+    blocks = np.zeros((M * n * n, M * n * n))
+    for i in range(M):
+        blocks[i * n * n:(i + 1) * n * n, i * n * n:(i + 1) * n * n] = np.kron(A[i], A[i])
+    return blocks @ np.kron(T.T, np.eye(n * n))
+
+
+def check_3_2(rng, mutant=False):
+    """Cor. 3.2: rho(M) < 1 of the printed M implies MSS, decided by :func:`moment_map_radius`.
+    Mutant: M / 2 in place of M (a factor changed: "rho(M) < 2 implies MSS")."""
+    sys = draw_system(rng)
+    matrix = printed_matrix(sys.A, sys.T) / (2.0 if mutant else 1.0)
+    rho = float(np.max(np.abs(np.linalg.eigvals(matrix))))
+    rho_map = moment_map_radius(sys.A, sys.T)
+    numbers = dict(rho_printed=rho, rho_library=ms_spectral_radius(sys.A, sys.T), moment_map_radius=rho_map)
+    if not rho < 1 or abs(rho_map - 1) < DECISIVE:
+        return outcome("not_applicable", sys, **numbers)
+    return outcome(verdict(rho_map < 1), sys, **numbers)
+
+
+def check_3_5(rng, mutant=False):
+    """Prop. 3.5 at step K-1: J*_{K-1} = x^T Psi x + Delta, against a numerical minimisation over u.
+    Mutant: the closed form without Delta (the noise's cost dropped)."""
+    sys = draw_system(rng, max_states=2)
+    A, B, Q, R, T, M = sys.A, sys.B, sys.Q, sys.R, sys.T, sys.M
+    W = random_spd(rng, sys.nx, 0.1)                               # covariance of w_k (3.2)
+    belief = rng.dirichlet(np.ones(M))                             # p(theta_{K-1} | I_{K-1})
+    x = rng.standard_normal(sys.nx) * 2
+    EQ = successor_average(T, Q)                                   # E{Q_{theta_K} | theta_{K-1} = i}
+
+    def expected_cost(u):
+        nxt = A @ x + B @ u
+        return float(belief @ (np.einsum("a,iab,b->i", x, Q, x) + np.einsum("a,iab,b->i", u, R, u)
+                               + np.einsum("ia,iab,ib->i", nxt, EQ, nxt) + np.einsum("iab,ba->i", EQ, W)))
+
+    res = scipy.optimize.minimize(expected_cost, np.zeros(sys.nu), method="BFGS", options={"gtol": 1e-12})
+    Ew = lambda S: np.einsum("i,i...->...", belief, S)
+    At, Bt = transpose(A), transpose(B)
+    psi = Ew(Q + At @ EQ @ A) - Ew(At @ EQ @ B) @ np.linalg.solve(Ew(R + Bt @ EQ @ B), Ew(Bt @ EQ @ A))
+    delta = 0.0 if mutant else float(belief @ np.einsum("iab,ba->i", EQ, W))
+    closed = float(x @ psi @ x + delta)
+    rel = abs(closed - res.fun) / max(abs(res.fun), 1e-12)
+    return outcome(verdict(rel < 1e-7), sys, closed_form=closed, minimised=res.fun, relative_difference=rel,
+                   delta=delta)
