@@ -82,7 +82,11 @@ def check_3_15(rng, mutant=False):
 def summarise_3_15(outcomes):
     """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i), on every instance drawn."""
     holds = sum(bool(o.numbers["corrected_holds"]) for o in outcomes)
-    return {"corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
+    return {"diagnosis": ("A typo in (3.30): with u_k = L y_k = L C_i x_k the stage cost of (3.11) is "
+                          "x_k^T (Q_i + C_i^T L^T R_i L C_i) x_k, so the printed weight Q_i + L^T R_i L drops C_i "
+                          "(it is even undefined unless n_y = n_x); the proof's substitution of u_k holds only "
+                          "for C_i = I."),
+            "corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
                                        "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf R_i\\mathbf L\\mathbf C_i$",
                           "holds": holds, "fails": len(outcomes) - holds, "instances": len(outcomes)}}
 
