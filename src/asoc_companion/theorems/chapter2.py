@@ -85,43 +85,6 @@ def _lib_gp_posterior(covariance, shape, D, y, alpha, l, sigma_n, D_star, D_star
     return mean, var, cov
 
 
-def _lib_covariance(name):
-    from asoc.gp import COVARIANCES
-    return COVARIANCES[name]
-
-
-def _lib_covariance_unchecked(name):
-    """The library's unchecked fast path of the covariance ``name`` (for the kernel search)."""
-    from asoc.gp.kernels import COVARIANCES_UNCHECKED
-    return COVARIANCES_UNCHECKED[name]
-
-
-def _lib_distance_matrix(family, config):
-    """The library's distances for a configuration of ``family`` (see ``_FAMILIES``)."""
-    from asoc import gp
-    N = len(config["items"])
-    D = np.zeros((N, N))
-    if family == "mcvmd":
-        return gp.mcvmd_matrix(np.array(config["items"]))
-    if family == "omat":
-        return gp.omat_matrix(np.array(config["items"]), q=2)
-    for i, j in itertools.combinations(range(N), 2):
-        a, b = config["items"][i], config["items"][j]
-        if family == "ospa":
-            d = gp.ospa(np.array(a), np.array(b), c=config["c"], p=2)
-        elif family == "wasserstein_gaussian":
-            d = gp.wasserstein_gaussian(a[0], a[1], b[0], b[1])
-        elif family == "hellinger":
-            h = gp.hellinger_gaussian([a[0]], [[a[1] ** 2]], [b[0]], [[b[1] ** 2]])
-            d = h ** 4 if config["exponent"] == "printed" else h     # thesis: (1 - BC)^2 = (h^2)^2
-        elif family == "jensen_shannon":
-            d = gp.jensen_shannon(_step_density(a), _step_density(b), 0.0, 1.0)
-        elif family == "lq":
-            d = gp.lq_distance(_step_density(a), _step_density(b), config["q"], 0.0, 1.0)
-        D[i, j] = D[j, i] = d
-    return D
-
-
 # --------------------------------------------------------------------------------------
 # Random instances
 # --------------------------------------------------------------------------------------
