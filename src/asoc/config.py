@@ -61,9 +61,36 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         (60, 150),
         "Krylov-space sizes tried in turn for rho: 20 vectors stall on a dominant eigenvalue of "
         "multiplicity 4 (the larger-plant page's chain), 60 converge there in 10 ms."),
-    "mjls.rho_tolerance": (
-        1e-9,
-        "A spectral radius within this distance of 1 is reported as undecided."),
+    "mjls.bracket_rtol": (
+        1e-12,
+        "Relative width of the certified bracket of rho at which its refinement stops (it also "
+        "stops where the rounding margin dominates, or when a cone power step narrows it by less "
+        "than 10 %)."),
+    "mjls.bracket_power_steps": (
+        8,
+        "Shifted cone power steps X <- L(X) + rho X that tighten the bracket of rho after the "
+        "eigen-solver: each costs one application of L and M Cholesky factorisations; a step "
+        "that narrows the bracket by less than 10 % ends them."),
+    "mjls.power_max_steps": (
+        2000,
+        "Steps of the shifted cone power method where it is the only method (ARPACK failed "
+        "above the dense fallback size): the bracket it reaches is reported, undecided if it "
+        "straddles 1."),
+    "mjls.bracket_warn_rtol": (
+        1e-4,
+        "ms_spectral_radius warns when the certified bracket of rho is relatively wider than "
+        "this (defective spectra): the pages print rho to 4 digits. Where the Perron stack is "
+        "singular (e.g. triangular modes), the rounding margin alone makes brackets of 1e-5."),
+    "mjls.solve_residual_max": (
+        1e-8,
+        "Largest relative residual ||X - L(X) - W|| / ||W|| of a coupled Lyapunov solution that is "
+        "accepted: an iterative solve above it falls back to a dense solve, or warns; "
+        "steady_state_second_moment raises. Four orders above the iterative target, so that "
+        "rounding near rho = 1 does not trip it; the failures it catches had 5e3 and 5e4."),
+    "mjls.dense_fallback_solve": (
+        2048,
+        "Up to this size M n^2 an iterative coupled-Lyapunov solve that misses its residual is "
+        "redone by a dense LU factorisation (2048^2 doubles: 32 MB, about 1 s on 2 cores)."),
     "mjls.solve_tolerance": (
         1e-12,
         "Relative residual ||X - L(X) - W|| / ||W|| at which the iterative coupled-Lyapunov "
@@ -113,10 +140,10 @@ def reset_defaults() -> None:
     Examples
     --------
     >>> from asoc import config
-    >>> config.set_defaults(**{"mjls.rho_tolerance": 1e-6})
+    >>> config.set_defaults(**{"mjls.bracket_rtol": 1e-6})
     >>> config.reset_defaults()
-    >>> config.defaults["mjls.rho_tolerance"]
-    1e-09
+    >>> config.defaults["mjls.bracket_rtol"]
+    1e-12
     """
     defaults.clear()
     defaults.update({key: value for key, (value, _) in _REGISTRY.items()})

@@ -26,9 +26,8 @@ from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_
                                optimality_system)
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 from asoc.mjls.lmi import performance_output
-from asoc.mjls.moments import h2_cost_unchecked
-from asoc.mjls.operators import (closed_loop_unchecked, kronecker_matrix, radii_and_moments_unchecked,
-                                 radius_and_moments_unchecked)
+from asoc.mjls.lyapunov import radii_and_moments, radius_and_moments
+from asoc.mjls.operators import ms_operator
 
 from .core import Outcome, Statement
 from .instances import (Z_SCORE, ModeChain, ModeOperator, ModeQuadratic, RunModes, best_scalar_gain, draw_system,
@@ -87,7 +86,7 @@ def check_3_1(rng):
     sys = draw_system(rng)
     A, T, M, n = sys.A, sys.T, sys.M, sys.nx
     S = random_spd_stack(rng, M, n)
-    op = kronecker_matrix(A, T)
+    op = ms_operator(A, T, check=False)
     eye = np.eye(M * n * n)
     try:
         Q_first = np.linalg.solve(eye - op.T, S.ravel()).reshape(M, n, n)     # A_i^T E_i(Q) A_i - Q_i = -S_i
@@ -368,7 +367,7 @@ def _costate(sys, L):
     Acl = closed_loop(sys, L)
     LC = L @ sys.C
     rhs = (sys.Q + _T(LC) @ sys.R @ LC).ravel()
-    P = np.linalg.solve(np.eye(rhs.size) - kronecker_matrix(Acl, sys.T).T, rhs).reshape(sys.Q.shape)
+    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T, rhs).reshape(sys.Q.shape)
     return 0.5 * (P + _T(P))
 
 
@@ -386,16 +385,16 @@ def check_3_17(rng):
         """The H2 cost of L = tan(t) (inf when not stabilising), on the system validated once: the
         library's unchecked paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost."""
         L = np.array([[np.tan(t)]])
-        _, X = radius_and_moments_unchecked(closed_loop_unchecked(sys, L), sys.T, noise)
-        return np.inf if X is None else h2_cost_unchecked(sys, L, X)
+        _, X = radius_and_moments(closed_loop(sys, L, check=False), sys.T, noise, check=False)
+        return np.inf if X is None else h2_cost(sys, L, X, check=False)
 
     costs = np.full(len(s), np.inf)                         # cost(t) at the grid points with rho < 1, at once
     grid = np.flatnonzero(radii < 1)
     gains = np.tan(s[grid])
-    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop_unchecked of each
-    for index, gain, X in zip(grid, gains, radii_and_moments_unchecked(loops, sys.T, noise)[1]):
+    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop(check=False) of each
+    for index, gain, X in zip(grid, gains, radii_and_moments(loops, sys.T, noise, check=False)[1]):
         if X is not None:
-            costs[index] = h2_cost_unchecked(sys, np.array([[gain]]), X)
+            costs[index] = h2_cost(sys, np.array([[gain]]), X, check=False)
     best = int(np.argmin(costs))
     res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)]),
                                          method="bounded", options={"xatol": 1e-12})
@@ -574,7 +573,7 @@ def check_3_26(rng):
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
     _, Xt, rho = steady_state_cost(sys, F, K, L)
     At, _, Qt = augmented_closed_loop(sys, F, K, L)
-    Pt = np.linalg.solve(np.eye(Qt.size) - kronecker_matrix(At, sys.T).T, Qt.ravel()).reshape(Qt.shape)
+    Pt = np.linalg.solve(np.eye(Qt.size) - ms_operator(At, sys.T, check=False).T, Qt.ravel()).reshape(Qt.shape)
     Pt = 0.5 * (Pt + _T(Pt))
     n = sys.nx
 
