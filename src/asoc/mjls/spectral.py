@@ -485,33 +485,59 @@ def _bracket(A, T, estimate):
     M, n, _ = A.shape
     rtol = config.defaults["mjls.bracket_rtol"]
     bracket = _Bracket(A, T)
-    X = estimate.X
     with single_threaded():
-        Y = bracket.consider(X, rtol)
-        if not bracket.width_reached(rtol) and np.isfinite(estimate.rho) and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
-            previous = np.inf
-            for X_r in _resolvent_stacks(A, T, estimate.rho):
-                own = _Bracket(A, T)
-                own.consider(X_r, rtol)
-                bracket.merge(own)
-                if not own.upper < previous:                # X_r too ill-conditioned from here on
-                    break
-                previous = own.upper
-        steps = config.defaults["mjls.bracket_power_steps"] if np.isfinite(estimate.rho) else config.defaults["mjls.power_max_steps"]
-        width = np.inf
-        for _ in range(steps):
-            if bracket.width_reached(rtol):
-                break
-            shift = estimate.rho if np.isfinite(estimate.rho) else 0.5 * (bracket.lower + bracket.upper)
-            X = Y + shift * X
-            X /= np.abs(X).max()
-            Y = bracket.consider(X, rtol)
-            new_width = bracket.upper - bracket.lower
-            if np.isfinite(estimate.rho) and not new_width < 0.9 * width:     # stalled: more steps will not help
-                break
-            width = new_width
-    rho = estimate.rho if np.isfinite(estimate.rho) else 0.5 * (bracket.lower + bracket.upper)
+        Y = bracket.consider(estimate.X, rtol)
+        if not np.isfinite(estimate.rho):
+            X, rho = _power_method(bracket, estimate.X, Y, rtol)
+        else:
+            if not bracket.width_reached(rtol) and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
+                _resolvent_bounds(bracket, estimate.rho, rtol)
+            X, rho = _power_steps(bracket, estimate.X, Y, estimate.rho, rtol), estimate.rho
     return bracket.lower, bracket.upper, float(np.clip(rho, bracket.lower, bracket.upper)), X
+
+
+def _resolvent_bounds(bracket, rho, rtol):
+    """Bounds at solutions of r X - L(X) = I for r from 2 rho down towards rho, while they improve."""
+    previous = np.inf
+    for X_r in _resolvent_stacks(bracket.A, bracket.T, rho):
+        own = _Bracket(bracket.A, bracket.T)
+        own.consider(X_r, rtol)
+        bracket.merge(own)
+        if not own.upper < previous:                        # X_r too ill-conditioned from here on
+            return
+        previous = own.upper
+
+
+def _power_steps(bracket, X, Y, rho, rtol):
+    """Up to ``mjls.bracket_power_steps`` steps X <- L(X) + rho X, while each narrows the bracket by 10 %."""
+    width = np.inf
+    for _ in range(config.defaults["mjls.bracket_power_steps"]):
+        if bracket.width_reached(rtol):
+            break
+        X = Y + rho * X
+        X /= np.abs(X).max()
+        Y = bracket.consider(X, rtol)
+        if not bracket.upper - bracket.lower < 0.9 * width:          # stalled: more steps will not help
+            break
+        width = bracket.upper - bracket.lower
+    return X
+
+
+def _power_method(bracket, X, Y, rtol):
+    """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of rho,
+    until the bracket is narrow, or r has converged and the bracket stopped narrowing (a singular Perron
+    stack), or ``mjls.power_max_steps``."""
+    rho, width = np.inf, np.inf
+    for _ in range(config.defaults["mjls.power_max_steps"]):
+        rho, previous = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum()), rho
+        if bracket.width_reached(rtol) or (abs(rho - previous) <= rtol * rho
+                                           and not bracket.upper - bracket.lower < 0.9 * width):
+            break
+        width = bracket.upper - bracket.lower
+        X = Y + rho * X
+        X /= np.abs(X).max()
+        Y = bracket.consider(X, rtol)
+    return X, rho
 
 
 def _resolvent_stacks(A, T, rho):
