@@ -305,7 +305,8 @@ def _balance(A):
     M, n, _ = A.shape
     d = np.ones(n)
     if n > 1:
-        _, (d, _) = scipy.linalg.matrix_balance(np.abs(A).sum(axis=0), permute=False, separate=True)
+        with np.errstate(invalid="ignore"):                        # scipy casts its unused permutation
+            d = np.diag(scipy.linalg.matrix_balance(np.abs(A).sum(axis=0), permute=False)[1]).copy()
     Ab = A / d[:, None] * d[None, :]
     top = float(np.abs(Ab).max())
     s = 1.0 if top == 0.0 or not np.isfinite(top) else float(2.0 ** np.round(np.log2(top)))
