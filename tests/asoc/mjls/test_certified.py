@@ -150,3 +150,22 @@ def test_non_normal_modes():
     result = mean_square_stability(A, T)
     assert_contains(result, rho, rtol=1e-10)
     assert result.stabilizing is (rho < 1)
+
+
+def test_augmented_closed_loop_of_a_dynamic_controller():
+    """The augmented closed loop (3.39) is just an (A~, T) pair: its bracket holds the dense radius, and the
+    verdict follows it, for a stabilising and a destabilising controller."""
+    from asoc.mjls import augmented_closed_loop
+    from asoc.mjls.examples import sec373_system
+
+    sys = sec373_system(1)
+    F, K = 0.5 * np.eye(2), np.array([[0.1], [0.2]])
+    for L, stable in ((np.array([[-0.3, -0.2]]), False), (np.zeros((1, 2)), False)):
+        At = augmented_closed_loop(sys, F, K, L)[0]
+        result = mean_square_stability(At, sys.T)
+        assert_contains(result, dense_rho(At, sys.T), rtol=1e-10)
+        assert result.stabilizing is (dense_rho(At, sys.T) < 1) and result.stable is stable
+    scaled = 0.5 * augmented_closed_loop(sys, F, K, np.zeros((1, 2)))[0]
+    result = mean_square_stability(scaled, sys.T)
+    assert_contains(result, dense_rho(scaled, sys.T), rtol=1e-10)
+    assert result.stabilizing is True
