@@ -345,12 +345,16 @@ def _estimate(A, T, method, adjoint=False, rho_hint=None):
     if method == "power":
         return _Estimate(np.nan, np.broadcast_to(np.eye(n), (M, n, n)).copy(), "power")
     K = kronecker_stack(A[None], T)[0]
-    lam, left, right = scipy.linalg.eig(K.T if adjoint else K, left=True, right=True)
+    K = K.T if adjoint else K
+    if method == "dense":
+        lam, left, right = scipy.linalg.eig(K, left=True, right=True)
+    else:                                               # the fallback, up to M n^2 = 1024: no left vectors
+        lam, right = scipy.linalg.eig(K)
     rho = float(np.max(np.abs(lam)))
     top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-8))
     k = top[np.argmax(lam[top].real)]                             # the real Perron eigenvalue
-    return _Estimate(rho, _psd_stack(right[:, k], M, n), "dense" if method == "dense" else method,
-                     _first_order_lower(K, lam, left, right))
+    return _Estimate(rho, _psd_stack(right[:, k], M, n), method,
+                     _first_order_lower(K, lam, left, right) if method == "dense" else 0.0)
 
 
 def _single_mode(A, adjoint):
