@@ -264,7 +264,7 @@ def average_cost_and_gradient(sys, F, K, L):
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     M, n, _ = At.shape
     solve = coupled_lyapunov_solver(At, sys.T)
-    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)))
+    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")
     if not (np.all(np.isfinite(Y.X)) and Y.residual < 1e-8 and _positive_definite(Y.X)):
         return np.inf, None
     mu = sys.mu_inf

@@ -134,10 +134,13 @@ def solve_coupled_lyapunov(A, T, W, adjoint=False, method="auto", tol=None):
 
 
 def coupled_lyapunov_solver(A, T, method="auto", tol=None):
-    """A function (W, adjoint=False) -> :class:`LyapunovSolution` for one closed loop A.
+    """A function (W, adjoint=False, on_miss="fallback") -> :class:`LyapunovSolution` for one closed loop A.
 
     The dense method factorises I - L once for all right-hand sides and both directions.
-    Arguments as :func:`solve_coupled_lyapunov`.
+    Arguments as :func:`solve_coupled_lyapunov`. ``on_miss="report"`` returns an iterative
+    solution that misses ``mjls.solve_residual_max`` as it is (``accepted`` False), without the
+    dense fallback or the warning: for callers that test stability by the solve and check
+    ``accepted`` themselves (e.g. an exact design's line search through unstable gains).
 
     Examples
     --------
@@ -161,13 +164,13 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=None):
         X = sym(dense[0].solve(W, adjoint))
         return X, residual(A, T, X, W, adjoint)
 
-    def solve(W, adjoint=False):
+    def solve(W, adjoint=False, on_miss="fallback"):
         if method == "dense":
             X, res = dense_solve(W, adjoint)
             return LyapunovSolution(X=X, residual=res, method="dense", iterations=0)
         with single_threaded():
             X, res, used, it = _iterative(A, T, W, adjoint, method, tol, auto)
-        if not res <= config.defaults["mjls.solve_residual_max"]:
+        if on_miss == "fallback" and not res <= config.defaults["mjls.solve_residual_max"]:
             if M * n * n <= config.defaults["mjls.dense_fallback_solve"]:
                 X2, res2 = dense_solve(W, adjoint)
                 if not res <= res2:

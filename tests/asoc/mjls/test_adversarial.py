@@ -246,3 +246,14 @@ def test_spectral_radius_is_inside_its_bracket_everywhere():
         assert result.rho_lower <= result.rho <= result.rho_upper
         assert spectral_radius(A, T) == result.rho
         assert result.rho_lower <= dense_rho(A, T) * (1 + 1e-12) and dense_rho(A, T) * (1 - 1e-12) <= result.rho_upper
+
+
+def test_a_stability_probe_can_take_the_miss_as_reported():
+    """on_miss="report": the non-solution comes back with accepted False, no fallback, no warning."""
+    from asoc.mjls.lyapunov import coupled_lyapunov_solver
+
+    A, T, W = near_one_system()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sol = coupled_lyapunov_solver(A, T, method="fixed_point")(W, on_miss="report")
+    assert sol.method == "fixed_point" and not sol.accepted
