@@ -408,7 +408,9 @@ def _certified(A, T, method):
     """MeanSquareStability of (A, T): balance, estimate, bracket, scale back."""
     Ab, _, s = _balance(A)
     estimate = _estimate(Ab, T, method)
-    lower, upper, rho, _ = _bracket(Ab, T, estimate)
+    lower, upper, rho, X = _bracket(Ab, T, estimate)
+    if lower < rho * (1 - config.defaults["mjls.bracket_rtol"]) and estimate.method != "single_mode":
+        lower = max(lower, _residual_lower(Ab, T, rho, X, estimate.method, upper))
     if lower < estimate.lower <= upper:
         lower = estimate.lower
     with np.errstate(over="ignore"):
@@ -530,19 +532,41 @@ def _power_steps(bracket, X, Y, rho, rtol):
 
 def _power_method(bracket, X, Y, rtol):
     """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of rho,
-    until the bracket is narrow, or r has converged and the bracket stopped narrowing (a singular Perron
-    stack), or ``mjls.power_max_steps``."""
-    rho, width = np.inf, np.inf
+    until the bracket is narrow, or X has converged (to 1e-13, e.g. to a singular Perron stack, where the
+    bracket stays wide), or ``mjls.power_max_steps``."""
+    rho = np.inf
     for _ in range(config.defaults["mjls.power_max_steps"]):
-        rho, previous = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum()), rho
-        if bracket.width_reached(rtol) or (abs(rho - previous) <= rtol * rho
-                                           and not bracket.upper - bracket.lower < 0.9 * width):
+        rho = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum())
+        if bracket.width_reached(rtol):
             break
-        width = bracket.upper - bracket.lower
-        X = Y + rho * X
+        X, previous = Y + rho * X, X
         X /= np.abs(X).max()
+        if np.abs(X - previous).max() <= 1e-13:
+            break
         Y = bracket.consider(X, rtol)
     return X, rho
+
+
+def _residual_lower(A, T, rho, X, method, upper):
+    """rho - 10 s ||E||, or 0: the pair (rho, X) is exact for L + E with ||E|| = ||L(X) - rho X|| / ||X||
+    (plus the rounding of that residual, bounded as in the Collatz-Wielandt margin), and rho moves by at
+    most s ||E|| to first order, s = ||X|| ||P|| / <P, X> with P the left Perron stack
+    (from a second eigen-solve, on L*). Tight where the Perron stack is singular or badly scaled (periodic
+    chains), where the Collatz-Wielandt lower bound is not."""
+    P = _estimate(A, T, "power" if method == "power" else "arnoldi" if method.startswith("arnoldi") else method,
+                  adjoint=True, rho_hint=rho)
+    P = P.X if P.method != "power" else _adjoint_power(A, T, rho)
+    M, n, _ = A.shape
+    norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
+    rounding = 10.0 * (2 * n + M) * _EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X)
+    with single_threaded():
+        residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
+    error = (residual + np.linalg.norm(rounding)) / np.linalg.norm(X)         # with its own rounding
+    inner = float(np.einsum("iab,iab->", P, X))
+    if not inner > 0:
+        return 0.0
+    bound = rho - 10.0 * np.linalg.norm(X) * np.linalg.norm(P) / inner * error
+    return float(bound) if 0 < bound <= upper else 0.0
 
 
 def _resolvent_stacks(A, T, rho):

@@ -145,18 +145,24 @@ def test_perron_pair_and_gradient_on_a_periodic_chain(M, dense):
     assert abs(fd) > 1e-3                                                    # a zero gradient would fail
 
 
-def test_perron_pair_where_arpack_fails():
-    """A cyclic chain of many modes with too few Arnoldi iterations allowed: the fallback gives the pair."""
-    M, n = 40, 2
-    A = np.stack([np.diag([0.9, 0.2 + 0.01 * i]) for i in range(M)])
+@pytest.mark.parametrize("M, fallback", [(40, "arnoldi+dense"), (6, "power")])
+def test_perron_pair_where_arpack_fails(M, fallback):
+    """A cyclic chain with a Krylov space too small for ARPACK (3 vectors): dense eigenvectors up to
+    mjls.dense_fallback_radius, the shifted cone power method above (forced here by a fallback size of 0)."""
+    A = np.stack([np.random.default_rng(i).standard_normal((3, 3)) / 2 for i in range(M)])
     T = np.roll(np.eye(M), 1, axis=1)
-    with config.option_context(**{"mjls.arnoldi_subspaces": (3,), "mjls.dense_max_radius": 0}):
+    rho_dense = dense_rho(A, T)
+    limits = {"mjls.arnoldi_subspaces": (3,), "mjls.dense_max_radius": 0}
+    if fallback == "power":
+        limits["mjls.dense_fallback_radius"] = 0
+    with config.option_context(**limits):
         result = mean_square_stability(A, T)
         rho, X, P = perron_pair(A, T)
-    assert result.method in ("arnoldi+dense", "arnoldi")
-    assert rho == pytest.approx(0.81, rel=1e-10)
-    np.testing.assert_allclose(second_moment_map(A, T, X), rho * X, atol=1e-9)
-    np.testing.assert_allclose(costate_map(A, T, P), rho * P, atol=1e-9)
+    assert result.method == fallback
+    assert result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
+    assert rho == pytest.approx(rho_dense, rel=1e-8 if fallback == "power" else 1e-12)
+    np.testing.assert_allclose(second_moment_map(A, T, X), rho * X, atol=1e-6 * rho)
+    np.testing.assert_allclose(costate_map(A, T, P), rho * P, atol=1e-6 * rho)
 
 
 # ------------------------------------------------------------------ balancing and overflow
