@@ -249,7 +249,7 @@ def perron_pair(A, T, method="auto"):
     Ab, d, s = _balance(A)
     estimate = _estimate(Ab, T, method)
     _, _, rho, X = _bracket(Ab, T, estimate)
-    left = _estimate(Ab, T, method, adjoint=True, rho_hint=rho)
+    left = _estimate(Ab, T, method, adjoint=True)
     P = left.X if left.method != "power" else _adjoint_power(Ab, T, rho)
     with np.errstate(over="ignore"):
         rho = (rho * s) * s
@@ -327,7 +327,7 @@ def _psd_stack(v, M, n):
     return sym(Z) / top if top > 0 else np.broadcast_to(np.eye(n), (M, n, n)).copy()
 
 
-def _estimate(A, T, method, adjoint=False, rho_hint=None):
+def _estimate(A, T, method, adjoint=False):
     """rho and a PSD eigenvector of L (or L*) from the eigen-solver ``method`` (see mean_square_stability)."""
     M, n, _ = A.shape
     dim = M * n * n
@@ -338,7 +338,7 @@ def _estimate(A, T, method, adjoint=False, rho_hint=None):
     if method == "single_mode":
         return _single_mode(A[0], adjoint)
     if method == "arnoldi" and dim > 3:
-        estimate = _arnoldi(A, T, adjoint, rho_hint)
+        estimate = _arnoldi(A, T, adjoint)
         if estimate is not None:
             return estimate
         method = "arnoldi+dense" if dim <= config.defaults["mjls.dense_fallback_radius"] else "power"
@@ -379,13 +379,13 @@ def _first_order_lower(K, lam, left, right):
     return float(max(0.0, np.max(bounds)))
 
 
-def _arnoldi(A, T, adjoint, rho_hint):
+def _arnoldi(A, T, adjoint):
     """ARPACK on L (or L*): the largest-modulus eigenvalue; when it is not real positive (periodic
     chains), again on L + |lambda| I, where the Perron eigenvalue is strictly dominant. None on failure."""
     M, n, _ = A.shape
     dim = M * n * n
     v0 = np.broadcast_to(np.eye(n), (M, n, n)).ravel()
-    shift = 0.0 if rho_hint is None else float(rho_hint)
+    shift = 0.0
     for ncv in config.defaults["mjls.arnoldi_subspaces"]:
         try:
             with single_threaded():
@@ -409,7 +409,7 @@ def _certified(A, T, method):
     Ab, _, s = _balance(A)
     estimate = _estimate(Ab, T, method)
     lower, upper, rho, X = _bracket(Ab, T, estimate)
-    if lower < rho * (1 - config.defaults["mjls.bracket_rtol"]) and estimate.method != "single_mode":
+    if lower < rho * (1 - np.sqrt(config.defaults["mjls.bracket_rtol"])) and estimate.method != "single_mode":
         lower = max(lower, _residual_lower(Ab, T, rho, X, estimate.method, upper))
     if lower < estimate.lower <= upper:
         lower = estimate.lower
@@ -554,7 +554,7 @@ def _residual_lower(A, T, rho, X, method, upper):
     (from a second eigen-solve, on L*). Tight where the Perron stack is singular or badly scaled (periodic
     chains), where the Collatz-Wielandt lower bound is not."""
     P = _estimate(A, T, "power" if method == "power" else "arnoldi" if method.startswith("arnoldi") else method,
-                  adjoint=True, rho_hint=rho)
+                  adjoint=True)
     P = P.X if P.method != "power" else _adjoint_power(A, T, rho)
     M, n, _ = A.shape
     norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
