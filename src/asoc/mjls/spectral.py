@@ -246,10 +246,10 @@ def perron_pair(A, T, method="auto"):
     >>> round(rho, 6), X.ravel().round(4), P.ravel().round(4)
     (0.45, array([0.8742, 0.4856]), array([0.4856, 0.8742]))
     """
+    _check_method(method)
     Ab, d, s = _balance(A)
-    estimate = _estimate(Ab, T, method)
-    _, _, rho, X = _bracket(Ab, T, estimate)
-    left = _estimate(Ab, T, method, adjoint=True)
+    _, _, rho, X, estimate = _certify(Ab, T, method)
+    left = _estimate(Ab, T, estimate.method.split("+")[-1], adjoint=True)
     P = left.X if left.method != "power" else _adjoint_power(Ab, T, rho)
     with np.errstate(over="ignore"):
         rho = (rho * s) * s
@@ -292,6 +292,11 @@ def certified_upper_bound(A, T, X):
 
 # ---------------------------------------------------------------- the estimate
 
+def _check_method(method):
+    if method not in ("auto", "dense", "arnoldi", "power"):
+        raise ValueError(f"method: expected one of 'auto', 'dense', 'arnoldi', 'power', found {method!r}")
+
+
 @dataclass(frozen=True)
 class _Estimate:
     rho: float          # eigen-solver's rho (nan for the power method)
@@ -328,17 +333,16 @@ def _psd_stack(v, M, n):
 
 
 def _estimate(A, T, method, adjoint=False):
-    """rho and a PSD eigenvector of L (or L*) from the eigen-solver ``method`` (see mean_square_stability)."""
+    """rho and a PSD eigenvector of L (or L*) from the eigen-solver ``method`` (see mean_square_stability;
+    also "single_mode" and "arnoldi+dense", the dense fallback without left eigenvectors)."""
     M, n, _ = A.shape
     dim = M * n * n
-    if method not in ("auto", "dense", "arnoldi", "power"):
-        raise ValueError(f"method: expected one of 'auto', 'dense', 'arnoldi', 'power', found {method!r}")
     if method == "auto":
         method = "single_mode" if M == 1 else "dense" if dim <= config.defaults["mjls.dense_max_radius"] else "arnoldi"
     if method == "single_mode":
         return _single_mode(A[0], adjoint)
     if method == "arnoldi" and dim > 3:
-        estimate = _arnoldi(A, T, adjoint)
+        estimate = next(_arnoldi(A, T, adjoint), None)
         if estimate is not None:
             return estimate
         method = "arnoldi+dense" if dim <= config.defaults["mjls.dense_fallback_radius"] else "power"
@@ -380,13 +384,14 @@ def _first_order_lower(K, lam, left, right):
 
 
 def _arnoldi(A, T, adjoint):
-    """ARPACK on L (or L*): the largest-modulus eigenvalue; when it is not real positive (periodic
-    chains), again on L + |lambda| I, where the Perron eigenvalue is strictly dominant. None on failure."""
+    """Estimates by ARPACK on L (or L*), one per Krylov-space size of ``mjls.arnoldi_subspaces`` that
+    converges: the largest-modulus eigenvalue; when it is not real positive (periodic chains), again on
+    L + |lambda| I, where the Perron eigenvalue is strictly dominant."""
     M, n, _ = A.shape
     dim = M * n * n
     v0 = np.broadcast_to(np.eye(n), (M, n, n)).ravel()
-    shift = 0.0
     for ncv in config.defaults["mjls.arnoldi_subspaces"]:
+        shift = 0.0
         try:
             with single_threaded():
                 for _ in range(2):
@@ -394,25 +399,50 @@ def _arnoldi(A, T, adjoint):
                                                       tol=1e-14, ncv=min(dim - 1, ncv), maxiter=max(1000, dim), v0=v0)
                     lam = complex(lam[0]) - shift
                     if abs(lam.imag) <= 1e-8 * abs(lam) and lam.real >= 0:
-                        return _Estimate(abs(lam), _psd_stack(V[:, 0], M, n), "arnoldi")
+                        break
                     shift = abs(lam)
+            yield _Estimate(abs(lam), _psd_stack(V[:, 0], M, n), "arnoldi")
         except scipy.sparse.linalg.ArpackError:
-            if ncv >= dim - 1:
-                break
-    return None
+            pass
+        if ncv >= dim - 1:
+            return
 
 
 # ---------------------------------------------------------------- the certificate
 
+def _estimates(A, T, method):
+    """The eigen-solver's estimates in turn: Arnoldi with each Krylov-space size, then its fallback."""
+    M, n, _ = A.shape
+    if method == "auto" and M > 1 and M * n * n > config.defaults["mjls.dense_max_radius"]:
+        method = "arnoldi"
+    if method == "arnoldi" and M * n * n > 3:
+        yield from _arnoldi(A, T, False)
+        method = "arnoldi+dense" if M * n * n <= config.defaults["mjls.dense_fallback_radius"] else "power"
+    yield _estimate(A, T, method)
+
+
+def _certify(A, T, method):
+    """(lower, upper, rho, X, estimate) for the balanced (A, T): the first estimate inside a narrow bracket
+    (relative width 1e-6), else the narrowest (a subdominant eigenvalue from a small Krylov space fails it)."""
+    best = None
+    for estimate in _estimates(A, T, method):
+        lower, upper, rho, X = _bracket(A, T, estimate)
+        if lower < rho * (1 - np.sqrt(config.defaults["mjls.bracket_rtol"])) and estimate.method != "single_mode":
+            lower = max(lower, _residual_lower(A, T, rho, X, estimate.method, upper))
+        if lower < estimate.lower <= upper:
+            lower = estimate.lower
+        if best is None or upper - lower < best[1] - best[0]:
+            best = lower, upper, rho, X, estimate
+        if lower <= estimate.rho <= upper and upper - lower <= 1e-6 * upper:
+            break
+    return best
+
+
 def _certified(A, T, method):
     """MeanSquareStability of (A, T): balance, estimate, bracket, scale back."""
+    _check_method(method)
     Ab, _, s = _balance(A)
-    estimate = _estimate(Ab, T, method)
-    lower, upper, rho, X = _bracket(Ab, T, estimate)
-    if lower < rho * (1 - np.sqrt(config.defaults["mjls.bracket_rtol"])) and estimate.method != "single_mode":
-        lower = max(lower, _residual_lower(Ab, T, rho, X, estimate.method, upper))
-    if lower < estimate.lower <= upper:
-        lower = estimate.lower
+    lower, upper, rho, _, estimate = _certify(Ab, T, method)
     with np.errstate(over="ignore"):
         lower, upper, rho = ((value * s) * s for value in (lower, upper, rho))
     if upper < 1:
