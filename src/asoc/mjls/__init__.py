@@ -4,7 +4,8 @@ The model (3.7): x_{k+1} = A_theta x_k + B_theta u_k + H_theta w_k, y_k = C_thet
 with a Markov chain theta_k (transition matrix T) that the controller does not observe.
 
 Modules: ``system`` (the model), ``operators`` (the second-moment operator of Cor. 3.2 and the
-closed loops), ``spectral`` (Cor. 3.2: rho with a certified bracket, the verdict),
+closed loops), ``spectral`` (Cor. 3.2: rho with a certified bracket, the verdict), ``certificate`` (its
+Collatz-Wielandt bounds),
 ``lyapunov`` (coupled Lyapunov equations), ``moments`` (Prop. 3.7, 3.14),
 ``static`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12), ``dynamic`` (Alg. 3.2), ``finite_horizon``
 (Alg. 3.3), ``observed`` and ``optimal_observed`` (the mode-observing optimum [38] for

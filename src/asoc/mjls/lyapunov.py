@@ -21,7 +21,8 @@ from .. import config
 from ..linalg import sym
 from ..validation import real_array, stochastic_matrix
 from .operators import costate_map, kronecker_stack, linear_operator, second_moment_map, single_threaded
-from .spectral import certified_upper_bound, mean_square_stability
+from .certificate import certified_upper_bound
+from .spectral import mean_square_stability
 
 #: The iterative methods of :func:`solve_coupled_lyapunov`.
 ITERATIVE = ("bicgstab", "gmres", "fixed_point")
