@@ -60,7 +60,8 @@ _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.arnoldi_subspaces": (
         (20, 60, 150),
         "Krylov-space sizes tried in turn for rho, the next when ARPACK does not converge or its "
-        "estimate is not inside a certified bracket of relative width 1e-6: 20 vectors stall on "
+        "estimate is not inside a certified bracket of relative width mjls.bracket_warn_rtol: "
+        "20 vectors stall on "
         "a dominant eigenvalue of multiplicity 4 (the larger-plant page's chain) or return a "
         "subdominant one, 60 converge there in 10 ms; at n = M = 100, 20 vectors take 21 "
         "products (1.4 s), 60 take 61 products and their orthogonalisation (10 s, loaded 2 cores)."),
@@ -82,7 +83,8 @@ _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.bracket_warn_rtol": (
         1e-4,
         "ms_spectral_radius warns when the certified bracket of rho is relatively wider than "
-        "this (defective spectra): the pages print rho to 4 digits. Where the Perron stack is "
+        "this (defective spectra), and Arnoldi tries its next Krylov space: the pages print rho "
+        "to 4 digits. Where the Perron stack is "
         "singular (e.g. triangular modes), the rounding margin alone makes brackets of 1e-5."),
     "mjls.solve_residual_max": (
         1e-8,

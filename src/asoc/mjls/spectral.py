@@ -409,7 +409,8 @@ def _estimates(A, T, method):
 
 def _certify(A, T, method):
     """(lower, upper, rho, X, estimate) for the balanced (A, T): the first estimate inside a narrow bracket
-    (relative width 1e-6), else the narrowest (a subdominant eigenvalue from a small Krylov space fails it)."""
+    (relative width ``mjls.bracket_warn_rtol``), else the narrowest (a subdominant eigenvalue from a small
+    Krylov space fails the test: the bracket holds rho, not it)."""
     best = None
     for estimate in _estimates(A, T, method):
         lower, upper, rho, X = refine(A, T, estimate.X, estimate.rho)
@@ -419,7 +420,7 @@ def _certify(A, T, method):
             lower = estimate.lower
         if best is None or upper - lower < best[1] - best[0]:
             best = lower, upper, rho, X, estimate
-        if lower <= estimate.rho <= upper and upper - lower <= 1e-6 * upper:
+        if lower <= estimate.rho <= upper and upper - lower <= config.defaults["mjls.bracket_warn_rtol"] * upper:
             break
     return best
 
