@@ -58,13 +58,17 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         "When Arnoldi does not converge: dense eigenvalues up to this M n^2 (0.85 s at 1024), "
         "the cone power method above it."),
     "mjls.arnoldi_subspaces": (
-        (20, 60, 150),
+        (60, 150),
         "Krylov-space sizes tried in turn for rho, the next when ARPACK does not converge or its "
         "estimate is not inside a certified bracket of relative width mjls.bracket_warn_rtol: "
-        "20 vectors stall on "
-        "a dominant eigenvalue of multiplicity 4 (the larger-plant page's chain) or return a "
-        "subdominant one, 60 converge there in 10 ms; at n = M = 100, 20 vectors take 21 "
-        "products (1.4 s), 60 take 61 products and their orthogonalisation (10 s, loaded 2 cores)."),
+        "20 vectors stall on a dominant eigenvalue of multiplicity 4 (the larger-plant page's "
+        "chain) or return a subdominant one, 60 converge there in 10 ms; at n = 32, M = 8, 60 "
+        "vectors take 0.01 s, 20 vectors 0.15 s (51 products)."),
+    "mjls.arnoldi_lean_from": (
+        100_000,
+        "From this size M n^2 on, 20 Krylov vectors are tried before mjls.arnoldi_subspaces: at "
+        "n = M = 100 (M n^2 = 10^6) they take 21 products (1.4 s), 60 vectors 61 products and "
+        "their orthogonalisation (10 s, loaded 2 cores)."),
     "mjls.bracket_rtol": (
         1e-12,
         "Relative width of the certified bracket of rho at which its refinement stops (it also "

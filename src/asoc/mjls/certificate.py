@@ -15,7 +15,7 @@ import scipy.linalg
 
 from .. import config
 from ..linalg import sym, transpose
-from .operators import kronecker_stack, second_moment_map, single_threaded
+from .operators import kronecker_stack, second_moment_map
 
 EPS = np.finfo(float).eps
 #: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector estimate
@@ -109,7 +109,8 @@ class Bracket:
 def refine(A, T, X0, rho):
     """(lower, upper, rho, X): Collatz-Wielandt bounds at the eigenvector estimate X0 of rho (nan: none, the
     power method alone), at resolvent solutions (small sizes) and along the shifted cone power method;
-    X the last iterate.
+    X the last iterate. Call it with BLAS on one thread (``asoc.mjls.operators.single_threaded``):
+    its work is small products and M small eigenproblems.
 
     Examples
     --------
@@ -120,14 +121,13 @@ def refine(A, T, X0, rho):
     M, n, _ = A.shape
     rtol = config.defaults["mjls.bracket_rtol"]
     bracket = Bracket(A, T)
-    with single_threaded():
-        Y = bracket.consider(X0, rtol)
-        if not np.isfinite(rho):
-            X, rho = _power_method(bracket, X0, Y, rtol)
-        else:
-            if not bracket.width_reached(rtol) and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
-                _resolvent_bounds(bracket, rho, rtol)
-            X = _power_steps(bracket, X0, Y, rho, rtol)
+    Y = bracket.consider(X0, rtol)
+    if not np.isfinite(rho):
+        X, rho = _power_method(bracket, X0, Y, rtol)
+    else:
+        if not bracket.width_reached(rtol) and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
+            _resolvent_bounds(bracket, rho, rtol)
+        X = _power_steps(bracket, X0, Y, rho, rtol)
     return bracket.lower, bracket.upper, float(np.clip(rho, bracket.lower, bracket.upper)), X
 
 
@@ -193,8 +193,7 @@ def residual_lower_bound(A, T, rho, X, P, upper):
     M, n, _ = A.shape
     norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
     rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X)
-    with single_threaded():
-        residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
+    residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
     error = (residual + np.linalg.norm(rounding)) / np.linalg.norm(X)         # with its own rounding
     inner = float(np.einsum("iab,iab->", P, X))
     if not inner > 0:
