@@ -8,12 +8,16 @@ stack X > 0 the Collatz-Wielandt bounds
 
     min_j lambda_min(X_j^{-1/2} L(X)_j X_j^{-1/2}) <= rho <= max_j lambda_max(X_j^{-1/2} L(X)_j X_j^{-1/2})
 
-hold, and they meet at the Perron stack. They are evaluated at the eigen-solver's eigenvector
-(made positive semidefinite, shifted into the interior where needed), at solutions of the
-resolvent equation r X - L(X) = I for r just above the estimate (which is positive definite iff
-r > rho), and at a few steps of the shifted cone power method X <- L(X) + rho X, which converges
-also on periodic chains. The verdict follows the bracket: stable iff its upper end is below 1,
-unstable iff its lower end is at least 1, undecided otherwise.
+hold, and they meet at the Perron stack (:mod:`asoc.mjls.certificate`). They are evaluated at
+the eigen-solver's eigenvector (made positive semidefinite, shifted into the interior where
+needed), at solutions of the resolvent equation r X - L(X) = I for r just above the estimate
+(positive definite iff r > rho), and at a few steps of the shifted cone power method
+X <- L(X) + rho X, which converges also on periodic chains. Where the Perron stack is singular
+(reducible or triangular modes) or badly scaled (periodic chains), the lower end also comes from
+first-order eigenvalue perturbation with the left Perron stack. An Arnoldi estimate that is not
+inside a narrow bracket (a subdominant eigenvalue) is replaced by the next Krylov space's. The
+verdict follows the bracket: stable iff its upper end is below 1, unstable iff its lower end is at
+least 1, undecided otherwise.
 
 Before any eigen-solve the modes are balanced, A_i -> D^-1 A_i D with one diagonal D (powers
 of 2, from ``scipy.linalg.matrix_balance`` of sum_i |A_i|) and scaled by a power of 2: both are
@@ -33,6 +37,7 @@ from .. import config
 from ..linalg import sym, transpose
 from .certificate import EPS, refine, residual_lower_bound
 from .operators import costate_map, kronecker_stack, linear_operator, mode_stack, single_threaded
+
 
 class Verdict(enum.Enum):
     """Mean-square stability verdict of Cor. 3.2 from the certified bracket of rho."""
