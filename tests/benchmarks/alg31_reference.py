@@ -7,7 +7,7 @@ what the library's moment updates gain.
 
 import numpy as np
 
-from asoc.mjls.stability import closed_loop
+from asoc.mjls import closed_loop
 from asoc.mjls.static import gain_from_moments
 from asoc.mjls.system import predecessor_sum, successor_average
 

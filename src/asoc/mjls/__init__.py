@@ -3,7 +3,10 @@
 The model (3.7): x_{k+1} = A_theta x_k + B_theta u_k + H_theta w_k, y_k = C_theta x_k (+ J_theta v_k),
 with a Markov chain theta_k (transition matrix T) that the controller does not observe.
 
-Modules: ``system`` (the model), ``stability`` (Cor. 3.2), ``moments`` (Prop. 3.7, 3.14),
+Modules: ``system`` (the model), ``operators`` (the second-moment operator of Cor. 3.2 and the
+closed loops), ``spectral`` (Cor. 3.2: rho with a certified bracket, the verdict), ``certificate`` (its
+Collatz-Wielandt bounds),
+``lyapunov`` (coupled Lyapunov equations), ``moments`` (Prop. 3.7, 3.14),
 ``static`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12), ``dynamic`` (Alg. 3.2), ``finite_horizon``
 (Alg. 3.3), ``observed`` and ``optimal_observed`` (the mode-observing optimum [38] for
 state feedback and for output feedback), ``baselines`` ([52], [163], [165]),
@@ -27,11 +30,13 @@ from .optimal_observed import ModeObservedLQG, ModeObservedResult, mode_observed
 from .random import random_mjls
 from .simulate import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
                        StaticGain, TimeVariantGain, simulate)
-from .stability import closed_loop, ms_operator, ms_spectral_radius
+from .operators import closed_loop, ms_operator
+from .spectral import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
 from .static import StaticOutputFeedbackResult, gain_from_moments, static_output_feedback
 from .system import MJLS, predecessor_sum, successor_average, stationary_distribution
 
 __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator", "ms_spectral_radius",
+           "mean_square_stability", "MeanSquareStability", "Verdict",
            "closed_loop", "second_moment_step", "second_moments", "steady_state_second_moment",
            "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
            "static_output_lmi", "LMIResult", "observed_mode_state_feedback", "ObservedModeResult",

@@ -28,7 +28,7 @@ import numpy as np
 from ..result import IterativeResult
 from ..validation import boolean, integer, probability_vector, real_array, real_scalar, semidefinite
 from .lmi import EPS, check_solver, lmi_result, performance_output
-from .stability import ms_spectral_radius
+from .spectral import ms_spectral_radius
 from .system import check_system
 
 

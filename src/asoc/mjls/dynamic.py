@@ -24,8 +24,9 @@ import scipy.sparse.linalg
 from ..result import IterativeResult
 from ..validation import boolean, choice, generator, integer, real_scalar
 from .moments import steady_state_second_moment
-from .operators import augmented_closed_loop, check_gains, noise_covariances, spectral_radius  # noqa: F401 (public here)
+from .operators import augmented_closed_loop, check_gains, noise_covariances  # noqa: F401 (public here)
 from .operators import single_threaded
+from .spectral import spectral_radius
 from .system import check_system, predecessor_sum, successor_average
 
 METHODS = ("lstsq", "sdp")

@@ -28,10 +28,11 @@ from .dynamic import dynamic_output_feedback
 from .finite_horizon import (_initial_gains, augmented_initial_moment, check_initial_state, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback, mode_distributions, stages,
                              time_variant_controller)
-from . import operators
-from .operators import (augmented_closed_loop, coupled_lyapunov_solver, costate_map,
-                        kronecker_matrix, noise_covariances, second_moment_map, single_threaded,
-                        spectral_radius)
+from .. import config
+from .lyapunov import coupled_lyapunov_solver
+from .operators import (augmented_closed_loop, costate_map, ms_operator, noise_covariances, second_moment_map,
+                        single_threaded)
+from .spectral import spectral_radius
 from .system import check_system, predecessor_sum, successor_average
 
 ARMIJO = 1e-4                 # sufficient-decrease constant of the backtracking line search
@@ -233,7 +234,7 @@ def average_cost_and_gradient(sys, F, K, L):
     Mean-square stability is tested without eigenvalues: the closed loop is stable iff the
     solution Y of Y_j = sum_i p_ij A~_i Y_i A~_i^T + I is positive definite (the coupled
     Lyapunov test, cf. Thm. 3.9); Y, X and P come from one solver
-    (:func:`asoc.mjls.operators.coupled_lyapunov_solver`: one LU factorisation when M n^2 is
+    (:func:`asoc.mjls.lyapunov.coupled_lyapunov_solver`: one LU factorisation when M n^2 is
     small, else BiCGSTAB on the operator; a Y whose relative residual exceeds 1e-8 counts
     as not stable).
 
@@ -263,7 +264,7 @@ def average_cost_and_gradient(sys, F, K, L):
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     M, n, _ = At.shape
     solve = coupled_lyapunov_solver(At, sys.T)
-    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)))
+    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")
     if not (np.all(np.isfinite(Y.X)) and Y.residual < 1e-8 and _positive_definite(Y.X)):
         return np.inf, None
     mu = sys.mu_inf
@@ -334,8 +335,8 @@ def _perron_pair(At, T):
     """rho and the right and left Perron eigenvectors X, V (real symmetric stacks) of the
     second-moment operator: dense eigenvectors for small M n^2, else Arnoldi on L and L*."""
     M, n, _ = At.shape
-    if M * n * n <= operators.DENSE_MAX_RADIUS:
-        lam, left, right = scipy.linalg.eig(kronecker_matrix(At, T), left=True, right=True)
+    if M * n * n <= config.defaults["mjls.dense_max_radius"]:
+        lam, left, right = scipy.linalg.eig(ms_operator(At, T, check=False), left=True, right=True)
         rho = float(np.max(np.abs(lam)))
         top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-9))
         k = top[np.argmax(lam[top].real)]                             # the real Perron eigenvalue

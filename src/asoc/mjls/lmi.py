@@ -24,7 +24,7 @@ from .. import config
 from ..linalg import sym
 from ..result import IterativeResult
 from ..validation import boolean, real_scalar
-from .stability import ms_spectral_radius
+from .spectral import ms_spectral_radius
 from .system import check_system
 
 EPS = 1e-6

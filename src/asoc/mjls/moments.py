@@ -2,8 +2,11 @@
 
 import numpy as np
 
+from ..linalg import transpose
 from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
-from .operators import second_moment_map, solve_coupled_lyapunov
+from .lyapunov import solve_coupled_lyapunov
+from .operators import gain_matrix, second_moment_map
+from .spectral import mean_square_stability
 from .system import check_system, predecessor_sum
 
 
@@ -127,9 +130,10 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     """X_inf^i solving the coupled Lyapunov equations of Prop. 3.7 / (3.32) directly.
 
     Vectorised: vec X^j = sum_i p_ij [(Acl_i (x) Acl_i) vec X^i + mu_i vec(H_i H_i^T)], solved
-    by :func:`asoc.mjls.operators.solve_coupled_lyapunov` (dense LU for small M n^2, else
-    BiCGSTAB on the operator to a relative residual of 1e-12). Only meaningful when the
-    closed loop is mean-square stable (Cor. 3.2).
+    by :func:`asoc.mjls.lyapunov.solve_coupled_lyapunov` (dense LU for small M n^2, else
+    BiCGSTAB on the operator to a relative residual of 1e-12). A stationary moment exists
+    only when the closed loop is mean-square stable (Cor. 3.2): that is certified first
+    (:func:`asoc.mjls.mean_square_stability`), and the solution's residual is checked.
 
     Parameters
     ----------
@@ -150,7 +154,9 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     TypeError, ValueError
         As :func:`second_moment_step` (``mu_inf`` a distribution).
     numpy.linalg.LinAlgError
-        If I - M is singular (rho(M) = 1).
+        If mean-square stability is not certified (rho >= 1, or its bracket straddles 1, e.g.
+        rho = 1 exactly: I - M is singular), or the solution misses the residual
+        ``config.defaults["mjls.solve_residual_max"]``.
 
     Examples
     --------
@@ -158,12 +164,29 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
 
     >>> steady_state_second_moment(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]], [1.0]).round(4)
     array([[[1.3333]]])
+
+    A random walk (rho = 1) has none:
+
+    >>> steady_state_second_moment(np.array([[[1.0]]]), np.array([[[1.0]]]), [[1.0]], [1.0])
+    Traceback (most recent call last):
+    ...
+    numpy.linalg.LinAlgError: no stationary second moment: the closed loop is not certified mean-square stable (rho = 1 in [1, 1], undecided; Cor. 3.2)
     """
     Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
-    return solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt)).X
+    stability = mean_square_stability(Acl, T, check=False)
+    if not stability.stable:
+        raise np.linalg.LinAlgError(
+            f"no stationary second moment: the closed loop is not certified mean-square stable (rho = "
+            f"{stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], {stability.verdict.value}; "
+            f"Cor. 3.2)")
+    solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt))
+    if not solution.accepted:
+        raise np.linalg.LinAlgError(f"the stationary second moment was not found: relative residual "
+                                    f"{solution.residual:.3g} of the coupled Lyapunov solve ({solution.method})")
+    return solution.X
 
 
-def h2_cost(sys, L, X_inf):
+def h2_cost(sys, L, X_inf, check=True):
     """sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_inf^i] (Prop. 3.7 and Prop. 3.15).
 
     Parameters
@@ -173,6 +196,9 @@ def h2_cost(sys, L, X_inf):
         Static gain.
     X_inf : numpy.ndarray, shape (M, nx, nx)
         Stationary second moments of the closed loop (:func:`steady_state_second_moment`).
+    check : bool
+        Validate the arguments (False: ``L`` a float (nu, ny) array and ``X_inf`` a symmetric
+        (M, nx, nx) stack, for loops over many gains).
 
     Returns
     -------
@@ -196,28 +222,10 @@ def h2_cost(sys, L, X_inf):
     >>> round(h2_cost(sys, [[-0.4]], X), 4)
     0.7999
     """
-    from .stability import gain_matrix
-
-    check_system(sys)
-    L = gain_matrix(L, "L", sys.nu, sys.ny)
-    X_inf = semidefinite(real_array(X_inf, "X_inf", shape=(sys.M, sys.nx, sys.nx)), "X_inf")
-    return h2_cost_unchecked(sys, L, X_inf)
-
-
-def h2_cost_unchecked(sys, L, X_inf):
-    """sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_inf^i] (Prop. 3.7) on validated arguments.
-
-    For loops over many gains: ``L`` must be a float array of shape (nu, ny) and ``X_inf`` a
-    symmetric (M, nx, nx) stack (e.g. from :func:`asoc.mjls.operators.solve_coupled_lyapunov`);
-    :func:`h2_cost` checks both and then calls this.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec354_system
-    >>> sys = sec354_system(1)
-    >>> round(h2_cost_unchecked(sys, np.array([[-0.4]]), np.broadcast_to(np.eye(2), (2, 2, 2))), 4)
-    5.6
-    """
+    if check:
+        check_system(sys)
+        L = gain_matrix(L, "L", sys.nu, sys.ny)
+        X_inf = semidefinite(real_array(X_inf, "X_inf", shape=(sys.M, sys.nx, sys.nx)), "X_inf")
     LC = L @ sys.C
-    weight = sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
+    weight = sys.Q + transpose(LC) @ sys.R @ LC
     return float(np.einsum("iab,iba->", weight, X_inf))

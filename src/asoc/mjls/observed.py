@@ -21,7 +21,7 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, integer, real_scalar
-from .stability import ms_spectral_radius
+from .spectral import ms_spectral_radius
 from .system import check_system
 
 DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as Alg. 3.2's bounds)

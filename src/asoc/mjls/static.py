@@ -10,8 +10,9 @@ import numpy as np
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .moments import h2_cost, steady_state_second_moment
-from .operators import closed_loop_unchecked, coupled_lyapunov_solver, spectral_radius
-from .stability import ms_spectral_radius
+from .lyapunov import coupled_lyapunov_solver
+from .operators import closed_loop
+from .spectral import ms_spectral_radius, spectral_radius
 from .system import check_system, predecessor_sum, successor_average
 
 GAIN_FLOOR = 1e-12     # absolute floor of the gain's norm in its relative change (a zero gain converges)
@@ -300,7 +301,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
         if it > 1 and change < tol:
             status = "converged"
             break
-        if until_stabilizing and spectral_radius(closed_loop_unchecked(sys, L), sys.T) < 1:
+        if until_stabilizing and spectral_radius(closed_loop(sys, L, check=False), sys.T) < 1:
             stabilized = True
             break
         period = cycle.period(it, L, pair) if cycle is not None else None
@@ -319,7 +320,7 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
 
     Each step solves the two coupled linear equations X = predecessor_sum(Acl X Acl^T + mu H H^T) and
-    P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (:func:`asoc.mjls.operators.coupled_lyapunov_solver`:
+    P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (:func:`asoc.mjls.lyapunov.coupled_lyapunov_solver`:
     one LU factorisation of size M nx^2 for both when small, else BiCGSTAB on the operator).
     Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when an iterate
     does not stabilise (the moments have no solution then).
@@ -332,7 +333,7 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     X = P = None
     it = 0
     for it in range(1, max_iter + 1):
-        Acl = closed_loop_unchecked(sys, L)
+        Acl = closed_loop(sys, L, check=False)
         if not spectral_radius(Acl, sys.T) < 1:
             stabilized, status = False, "diverged"
             break
@@ -443,7 +444,7 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     seconds = time.perf_counter() - start
     L = run["L"]
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
-    Acl = closed_loop_unchecked(sys, L)
+    Acl = closed_loop(sys, L, check=False)
     rho = ms_spectral_radius(Acl, sys.T)
     stabilizing = bool(rho < 1)
     cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf

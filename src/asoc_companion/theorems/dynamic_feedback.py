@@ -16,7 +16,7 @@ from asoc.mjls import average_cost_and_gradient, dynamic_output_feedback, ms_spe
 from asoc.mjls import steady_state_cost, successor_average
 from asoc.mjls.dynamic import augmented_closed_loop, noise_covariances
 from asoc.mjls.finite_horizon import augmented_initial_moment
-from asoc.mjls.operators import kronecker_matrix
+from asoc.mjls.operators import ms_operator
 
 from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, draw_system, gaussian_mixture, initial_modes,
                         min_eig, norm_scale, outcome, random_spd_stack, rescaled, sample_mixture,
@@ -179,7 +179,7 @@ def check_3_26(rng, mutant=False):
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
     _, Xt, rho = steady_state_cost(sys, F, K, L)
     At, _, Qt = augmented_closed_loop(sys, F, K, L)
-    Pt = np.linalg.solve(np.eye(Qt.size) - kronecker_matrix(At, sys.T).T, Qt.ravel()).reshape(Qt.shape)
+    Pt = np.linalg.solve(np.eye(Qt.size) - ms_operator(At, sys.T, check=False).T, Qt.ravel()).reshape(Qt.shape)
     Pt = sym(Pt)
     n = sys.nx
     sign = -1.0 if mutant else 1.0

@@ -13,7 +13,7 @@ import scipy.optimize
 
 from asoc.linalg import transpose
 from asoc.mjls import ms_spectral_radius, successor_average
-from asoc.mjls.operators import kronecker_matrix
+from asoc.mjls.operators import ms_operator
 
 from .instances import draw_system, min_eig, outcome, random_spd, random_spd_stack, verdict
 
@@ -54,7 +54,7 @@ def check_3_1(rng, mutant=False):
     sys = draw_system(rng)
     A, T, M, n = sys.A, sys.T, sys.M, sys.nx
     S = random_spd_stack(rng, M, n)
-    op = kronecker_matrix(A, T)
+    op = ms_operator(A, T, check=False)
     eye = np.eye(M * n * n)
     try:
         Q_first = np.linalg.solve(eye - op.T, S.ravel()).reshape(M, n, n)     # A_i^T E_i(Q) A_i - Q_i = -S_i

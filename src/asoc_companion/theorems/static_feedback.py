@@ -14,9 +14,8 @@ import scipy.optimize
 from asoc.linalg import sym, transpose
 from asoc.mjls import (closed_loop, gain_from_moments, h2_cost, predecessor_sum, second_moments,
                        static_output_feedback, steady_state_second_moment, successor_average)
-from asoc.mjls.moments import h2_cost_unchecked
-from asoc.mjls.operators import (closed_loop_unchecked, kronecker_matrix, radii_and_moments_unchecked,
-                                 radius_and_moments_unchecked)
+from asoc.mjls.lyapunov import radii_and_moments, radius_and_moments
+from asoc.mjls.operators import ms_operator
 
 from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, best_scalar_gain, draw_system,
                         gaussian_mixture, norm_scale, outcome, random_spd_stack, rescaled, sample_mixture,
@@ -141,7 +140,7 @@ def _costate(sys, L):
     Acl = closed_loop(sys, L)
     LC = L @ sys.C
     rhs = (sys.Q + transpose(LC) @ sys.R @ LC).ravel()
-    P = np.linalg.solve(np.eye(rhs.size) - kronecker_matrix(Acl, sys.T).T, rhs).reshape(sys.Q.shape)
+    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T, rhs).reshape(sys.Q.shape)
     return sym(P)
 
 
@@ -158,18 +157,18 @@ def check_3_17(rng, mutant=False):
 
     def cost(t):
         """The H2 cost of L = tan(t) (inf when not stabilising), on the system validated once: the
-        library's unchecked paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost."""
+        library's check=False paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost."""
         L = np.array([[np.tan(t)]])
-        _, X = radius_and_moments_unchecked(closed_loop_unchecked(sys, L), sys.T, noise)
-        return np.inf if X is None else h2_cost_unchecked(sys, L, X)
+        _, X = radius_and_moments(closed_loop(sys, L, check=False), sys.T, noise, check=False)
+        return np.inf if X is None else h2_cost(sys, L, X, check=False)
 
     costs = np.full(len(s), np.inf)                         # cost(t) at the grid points with rho < 1, at once
     grid = np.flatnonzero(radii < 1)
     gains = np.tan(s[grid])
-    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop_unchecked of each
-    for index, gain, X in zip(grid, gains, radii_and_moments_unchecked(loops, sys.T, noise)[1]):
+    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop of each
+    for index, gain, X in zip(grid, gains, radii_and_moments(loops, sys.T, noise, check=False)[1]):
         if X is not None:
-            costs[index] = h2_cost_unchecked(sys, np.array([[gain]]), X)
+            costs[index] = h2_cost(sys, np.array([[gain]]), X, check=False)
     best = int(np.argmin(costs))
     res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)]),
                                          method="bounded", options={"xatol": 1e-12})

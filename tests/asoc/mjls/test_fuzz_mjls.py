@@ -40,6 +40,7 @@ CALLS = {
                                           n_modes=2)),
     "ms_spectral_radius": (mjls.ms_spectral_radius, dict(A_stack=SYS.A, T=SYS.T)),
     "ms_operator": (mjls.ms_operator, dict(A_stack=SYS.A, T=SYS.T)),
+    "mean_square_stability": (mjls.mean_square_stability, dict(A_stack=SYS.A, T=SYS.T)),
     "closed_loop": (mjls.closed_loop, dict(sys=SYS, L=[[-0.5]])),
     "second_moment_step": (mjls.second_moment_step, dict(Acl=SYS.A * 0.5, HHt=X2, T=SYS.T, X=X2, mu=SYS.mu_inf)),
     "second_moments": (mjls.second_moments, dict(Acl=SYS.A * 0.5, HHt=X2, T=SYS.T, X0=X2, mu0=SYS.mu_inf,

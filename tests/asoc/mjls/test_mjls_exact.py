@@ -15,7 +15,7 @@ from asoc.mjls.examples import (SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_sy
 from asoc.mjls.exact import (_pack, _unpack, average_cost_and_gradient, closed_loop_radius,
                              finite_horizon_cost_and_gradient)
 from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
-from asoc.mjls.stability import ms_spectral_radius
+from asoc.mjls import ms_spectral_radius
 from test_mjls_dynamic import initial_state, random_system
 
 EPS = np.finfo(float).eps

@@ -1,16 +1,23 @@
-"""Matrix-free second-moment operators (asoc.mjls.operators) against the dense Kronecker path."""
+"""Matrix-free second-moment operators (asoc.mjls.operators, spectral, lyapunov) against the dense
+Kronecker path."""
 
 import numpy as np
 import pytest
 
+from asoc import config
 from asoc.mjls import ms_operator, ms_spectral_radius
+from asoc.mjls.lyapunov import coupled_lyapunov_solver, radii_and_moments, radius_and_moments, solve_coupled_lyapunov
+from asoc.mjls.operators import costate_map, second_moment_map
+from asoc.mjls.spectral import Verdict, mean_square_stability, spectral_radius
 from asoc_companion.scaling import scaling_system
 from asoc_companion.timing import fitted_exponent
-from asoc.mjls.operators import (DENSE_MAX_RADIUS, DENSE_MAX_SOLVE, Verdict, costate_map,
-                                 coupled_lyapunov_solver, kronecker_matrix, mean_square_stability,
-                                 radii_and_moments_unchecked, radius_and_moments_unchecked,
-                                 second_moment_map, solve_coupled_lyapunov,
-                                 spectral_radius, switch_points)
+
+
+def switch_points(radius=None, solve=None):
+    """The dense/iterative switch points set for a block (None: unchanged)."""
+    values = {key: value for key, value in (("mjls.dense_max_radius", radius), ("mjls.dense_max_solve", solve))
+              if value is not None}
+    return config.option_context(**values)
 
 
 def stack(rng, M, n):
@@ -23,7 +30,7 @@ def test_maps_match_kronecker_matrix_and_are_adjoint(n, M):
     s = scaling_system(np.random.default_rng(n + 10 * M), n, M)
     rng = np.random.default_rng(1)
     X, P = stack(rng, M, n), stack(rng, M, n)
-    K = kronecker_matrix(s.A, s.T)
+    K = ms_operator(s.A, s.T)
     np.testing.assert_allclose(second_moment_map(s.A, s.T, X).ravel(), K @ X.ravel(), rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(costate_map(s.A, s.T, P).ravel(), K.T @ P.ravel(), rtol=1e-12, atol=1e-12)
     lhs = np.vdot(second_moment_map(s.A, s.T, X), P)
@@ -42,7 +49,7 @@ def test_spectral_radius_methods_agree_with_cor_3_2(n, M, scale):
 
 
 def test_auto_switches_at_the_measured_sizes():
-    assert DENSE_MAX_RADIUS < DENSE_MAX_SOLVE
+    assert config.defaults["mjls.dense_max_radius"] < config.defaults["mjls.dense_max_solve"]
     s = scaling_system(np.random.default_rng(3), 12, 4)               # M n^2 = 576: matrix-free
     W = stack(np.random.default_rng(4), 4, 12)
     sol = coupled_lyapunov_solver(s.A, s.T)(W)
@@ -65,48 +72,49 @@ def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
 
 
 @pytest.mark.parametrize("adjoint", [False, True])
-def test_dense_solve_is_scipy_lu_bit_for_bit(adjoint):
-    """The dense path calls LAPACK getrf/getrs directly: the same numbers as scipy.linalg.lu_factor/lu_solve."""
-    import scipy.linalg
-
+def test_dense_solve_is_the_kronecker_solve(adjoint):
+    """The dense path (LAPACK getrf/getrs) against numpy's solve of the Kronecker system, to rounding."""
     s = scaling_system(np.random.default_rng(8), 3, 3)
     W = stack(np.random.default_rng(9), 3, 3)
-    lu = scipy.linalg.lu_factor(np.eye(27) - kronecker_matrix(s.A, s.T), check_finite=False)
-    X = scipy.linalg.lu_solve(lu, W.ravel(), trans=1 if adjoint else 0).reshape(W.shape)
+    K = ms_operator(s.A, s.T)
+    X = np.linalg.solve(np.eye(27) - (K.T if adjoint else K), W.ravel()).reshape(W.shape)
     sol = solve_coupled_lyapunov(s.A, s.T, W, adjoint=adjoint, method="dense")
-    assert np.array_equal(sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)))
+    np.testing.assert_allclose(sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)), rtol=1e-10, atol=1e-12 * np.abs(X).max())
     with pytest.raises(ValueError, match="infs or NaNs"):
         solve_coupled_lyapunov(s.A, s.T, np.full_like(W, np.nan), method="dense")
 
 
 @pytest.mark.parametrize("scale", [0.5, 0.99, 1.5])
 @pytest.mark.parametrize("switch", [None, 0])
-def test_radius_and_moments_unchecked_is_the_checked_pair(scale, switch):
+def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
     """One Kronecker matrix for rho and X: the same numbers as spectral_radius and solve_coupled_lyapunov
     (dense sizes; with the switch points at 0, through those functions' matrix-free paths)."""
     s = scaling_system(np.random.default_rng(10), 3, 2)
     A = s.A * np.sqrt(scale / spectral_radius(s.A, s.T))
     W = stack(np.random.default_rng(11), 2, 3)
     with switch_points(radius=switch, solve=switch):
-        rho, X = radius_and_moments_unchecked(A, s.T, W)
-        assert rho == spectral_radius(A, s.T)
+        rho, X = radius_and_moments(A, s.T, W)
+        assert rho == pytest.approx(spectral_radius(A, s.T), rel=1e-12)
         if scale < 1:
-            assert np.array_equal(X, solve_coupled_lyapunov(A, s.T, W).X)
+            np.testing.assert_allclose(X, solve_coupled_lyapunov(A, s.T, W).X, rtol=1e-9, atol=1e-12)
         else:
             assert X is None
 
 
 @pytest.mark.parametrize("switch", [None, 0])
-def test_radii_and_moments_unchecked_is_each_loop_alone(switch):
+def test_radii_and_moments_is_each_loop_alone(switch):
     """The stacked fast path: each closed loop's rho and X as from the checked functions."""
     s = scaling_system(np.random.default_rng(12), 3, 3)
     loops = np.stack([s.A * np.sqrt(scale / spectral_radius(s.A, s.T)) for scale in (0.3, 1.2, 0.9, 2.0)])
     W = stack(np.random.default_rng(13), 3, 3)
     with switch_points(radius=switch, solve=switch):
-        rho, X = radii_and_moments_unchecked(loops, s.T, W)
+        rho, X = radii_and_moments(loops, s.T, W)
         for loop, r, x in zip(loops, rho, X):
-            assert r == spectral_radius(loop, s.T)
-            assert (x is None) if r >= 1 else np.array_equal(x, solve_coupled_lyapunov(loop, s.T, W).X)
+            assert r == pytest.approx(spectral_radius(loop, s.T), rel=1e-12)
+            if r >= 1:
+                assert x is None
+            else:
+                np.testing.assert_allclose(x, solve_coupled_lyapunov(loop, s.T, W).X, rtol=1e-9, atol=1e-12)
 
 
 def test_verdict_is_undecided_within_rounding_of_one():
@@ -119,6 +127,7 @@ def test_verdict_is_undecided_within_rounding_of_one():
     assert mean_square_stability(A * np.sqrt(1.01 / rho), T).verdict is Verdict.UNSTABLE
     near = mean_square_stability(A / np.sqrt(rho) * (1 - 1e-6), T)
     assert near.stable and near.margin == pytest.approx(2e-6, rel=1e-3)
+    assert near.rho_lower <= near.rho <= near.rho_upper < 1
 
 
 def test_fitted_exponent_recovers_a_power_law():
@@ -130,14 +139,15 @@ def test_arnoldi_radius_on_the_larger_plants_hard_closed_loops(case):
     """Two closed loops of the larger-plant page (tests/reference/arnoldi_hard_cases.json). With 20
     Krylov vectors ARPACK stalled on the first (a fourfold dominant eigenvalue; the cone power
     method then took 70 s) and returned a subdominant eigenvalue for the second; the spaces of
-    ARNOLDI_SUBSPACES must give rho itself, without any fallback."""
+    mjls.arnoldi_subspaces must give rho itself, without any fallback, inside a narrow certified bracket."""
     import json
     from pathlib import Path
 
-    from asoc.mjls.operators import _arnoldi_radius
-
     cases = json.loads((Path(__file__).parents[2] / "reference" / "arnoldi_hard_cases.json").read_text())
     A, T = np.array(cases[case]["A"]), np.array(cases[case]["T"])
-    rho = _arnoldi_radius(A, T)
-    # rho_dense: the largest modulus of np.linalg.eigvals(kronecker_matrix(A, T)), stored (2048^2 is slow)
-    assert rho is not None and rho == pytest.approx(cases[case]["rho_dense"], rel=1e-10)
+    result = mean_square_stability(A, T, method="arnoldi")
+    # rho_dense: the largest modulus of np.linalg.eigvals(ms_operator(A, T)), stored (2048^2 is slow)
+    rho_dense = cases[case]["rho_dense"]
+    assert result.method == "arnoldi" and result.rho == pytest.approx(rho_dense, rel=1e-10)
+    assert result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
+    assert result.verdict is Verdict.STABLE and result.rho_upper - rho_dense <= 1e-5 * rho_dense

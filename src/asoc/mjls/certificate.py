@@ -1,0 +1,219 @@
+"""Collatz-Wielandt bounds of the second-moment operator L of Cor. 3.2, with a margin for rounding.
+
+L is positive on the cone of positive semidefinite stacks. For X > 0, L(X) <= beta X implies
+rho(L) <= beta, and L(X) >= alpha X implies rho(L) >= alpha; with X_j = C_j C_j^T, alpha and beta
+are the extreme eigenvalues of C_j^{-1} L(X)_j C_j^{-T} over j. :class:`Bracket` keeps the best
+bounds found over the stacks it is shown; :func:`refine` shows it the eigen-solver's eigenvector,
+resolvent solutions and shifted cone power iterates. :func:`asoc.mjls.mean_square_stability`
+describes the method and its margin for rounding.
+"""
+
+import warnings
+
+import numpy as np
+import scipy.linalg
+
+from .. import config
+from ..linalg import sym, transpose
+from .operators import kronecker_stack, second_moment_map
+
+EPS = np.finfo(float).eps
+#: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector estimate
+#: into the interior of the cone for the Collatz-Wielandt bounds: the first valid one gives the bounds.
+_SHIFTS = (0.0, 1e-12, 1e-9, 1e-6, 1e-3)
+#: Relative distances r / rho_hat - 1 of the resolvent equations tried, largest first (while they improve
+#: the upper bound): near a defective eigenvalue only the larger ones give a well-conditioned X.
+_RESOLVENT_GAPS = (1.0, 0.3, 0.1, 1e-2, 1e-3, 1e-6, 1e-9, 1e-12)
+
+
+
+def certified_upper_bound(A, T, X):
+    """The Collatz-Wielandt upper bound of rho (Cor. 3.2) at a stack X > 0, with its rounding margin.
+
+    max_j lambda_max(X_j^{-1/2} L(X)_j X_j^{-1/2}) widened as in :func:`mean_square_stability`;
+    inf when X is not positive definite. For the solution of X = L(X) + W with W > 0 it is
+    below 1 iff the closed loop is mean-square stable (Thm. 3.1). Arguments are not validated.
+
+    Examples
+    --------
+    >>> A = np.array([[[0.5]]]); T = np.array([[1.0]])
+    >>> round(certified_upper_bound(A, T, np.array([[[4 / 3]]])), 9), certified_upper_bound(A, T, -np.ones((1, 1, 1)))
+    (0.25, inf)
+    """
+    bracket = Bracket(A, T)
+    bracket.bounds(sym(X), sym(second_moment_map(A, T, sym(X))))
+    return bracket.upper
+
+
+class Bracket:
+    """The best Collatz-Wielandt bounds found so far for (A, T)."""
+
+    def __init__(self, A, T):
+        M, n, _ = A.shape
+        self.A, self.T = A, T
+        self.lower, self.upper, self.margin = 0.0, np.inf, 0.0
+        self.gamma = 10.0 * (2 * n + M) * EPS
+        self.norm_A2 = np.einsum("iab,iab->i", A, A)
+        self.identity = np.broadcast_to(np.eye(n), (M, n, n))
+        self.L_identity = None
+
+    def width_reached(self, rtol):
+        """The bracket is as narrow as asked, or as rounding allows (a margin below sqrt(rtol) rho)."""
+        return bool(np.isfinite(self.upper) and self.upper - self.lower <= rtol * self.upper + 4.0 * self.margin
+                    and self.margin <= np.sqrt(rtol) * self.upper)
+
+    def consider(self, X, rtol):
+        """Bounds at X (PSD), shifted into the interior as needed; returns L(X)."""
+        Y = sym(second_moment_map(self.A, self.T, X))
+        top = float(np.abs(X).max())
+        for eta in _SHIFTS:
+            if eta > 0 and self.L_identity is None:
+                self.L_identity = sym(second_moment_map(self.A, self.T, self.identity))
+            if eta == 0:
+                self.bounds(X, Y)
+            else:
+                self.bounds(X + eta * top * self.identity, Y + eta * top * self.L_identity)
+            if self.width_reached(rtol):
+                break
+        return Y
+
+    def merge(self, other):
+        """Keep the better of each bound of this bracket and ``other``."""
+        if other.upper < self.upper:
+            self.upper, self.margin = other.upper, other.margin
+        self.lower = max(self.lower, other.lower)
+
+    def bounds(self, X, Y):
+        """Update the bracket with the bounds at X > 0 with Y = L(X) (nothing when X is not definite)."""
+        try:
+            C = np.linalg.cholesky(X)
+        except np.linalg.LinAlgError:
+            return
+        with np.errstate(all="ignore"):
+            Ci = np.linalg.inv(C)
+            lam = np.linalg.eigvalsh(sym(Ci @ Y @ transpose(Ci)))
+        if not np.all(np.isfinite(lam)):
+            return
+        alpha, beta = lam[:, 0], lam[:, -1]
+        inv_norm2 = np.einsum("iab,iab->i", Ci, Ci)                   # ||C^-1||_F^2 >= 1 / lambda_min(X_j)
+        norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
+        rounding = self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
+        margin = self.gamma * (rounding + np.maximum(abs(alpha), abs(beta)) * norm_X) * inv_norm2
+        lower, upper = float(np.max([0.0, (alpha - margin).min()])), float((beta + margin).max())
+        if upper < self.upper:
+            self.upper, self.margin = upper, float(margin.max())
+        if lower > self.lower:
+            self.lower = lower
+
+
+def refine(A, T, X0, rho):
+    """(lower, upper, rho, X): Collatz-Wielandt bounds at the eigenvector estimate X0 of rho (nan: none, the
+    power method alone), at resolvent solutions (small sizes) and along the shifted cone power method;
+    X the last iterate. Call it with BLAS on one thread (``asoc.mjls.operators.single_threaded``):
+    its work is small products and M small eigenproblems.
+
+    Examples
+    --------
+    >>> A = np.array([[[0.5]], [[1.2]]]); T = np.array([[0.5, 0.5], [0.5, 0.5]])
+    >>> [round(v, 9) for v in refine(A, T, np.ones((2, 1, 1)), np.nan)[:3]]
+    [0.845, 0.845, 0.845]
+    """
+    M, n, _ = A.shape
+    rtol = config.defaults["mjls.bracket_rtol"]
+    bracket = Bracket(A, T)
+    Y = bracket.consider(X0, rtol)
+    if not np.isfinite(rho):
+        X, rho = _power_method(bracket, X0, Y, rtol)
+    else:
+        if not bracket.width_reached(rtol) and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
+            _resolvent_bounds(bracket, rho, rtol)
+        X = _power_steps(bracket, X0, Y, rho, rtol)
+    return bracket.lower, bracket.upper, float(np.clip(rho, bracket.lower, bracket.upper)), X
+
+
+def _resolvent_bounds(bracket, rho, rtol):
+    """Bounds at solutions of r X - L(X) = I for r from 2 rho down towards rho, while they improve."""
+    previous = np.inf
+    for X_r in _resolvent_stacks(bracket.A, bracket.T, rho):
+        own = Bracket(bracket.A, bracket.T)
+        own.consider(X_r, rtol)
+        bracket.merge(own)
+        if not own.upper < previous:                        # X_r too ill-conditioned from here on
+            return
+        previous = own.upper
+
+
+def _power_steps(bracket, X, Y, rho, rtol):
+    """Up to ``mjls.bracket_power_steps`` steps X <- L(X) + rho X, while each narrows the bracket by 10 %."""
+    width = np.inf
+    for _ in range(config.defaults["mjls.bracket_power_steps"]):
+        if bracket.width_reached(rtol):
+            break
+        X = Y + rho * X
+        X /= np.abs(X).max()
+        Y = bracket.consider(X, rtol)
+        if not bracket.upper - bracket.lower < 0.9 * width:          # stalled: more steps will not help
+            break
+        width = bracket.upper - bracket.lower
+    return X
+
+
+def _power_method(bracket, X, Y, rtol):
+    """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of rho,
+    until the bracket is narrow, or X has converged (to 1e-13, e.g. to a singular Perron stack, where the
+    bracket stays wide), or ``mjls.power_max_steps``."""
+    rho = np.inf
+    for _ in range(config.defaults["mjls.power_max_steps"]):
+        rho = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum())
+        if bracket.width_reached(rtol):
+            break
+        X, previous = Y + rho * X, X
+        X /= np.abs(X).max()
+        if np.abs(X - previous).max() <= 1e-13:
+            break
+        Y = bracket.consider(X, rtol)
+    return X, rho
+
+
+def residual_lower_bound(A, T, rho, X, P, upper):
+    """rho - 10 s ||E|| for an eigen-pair estimate (rho, X) of Cor. 3.2's operator and its left Perron stack P.
+
+    The pair is exact for L + E with ||E|| = ||L(X) - rho X|| / ||X|| (plus the rounding of that
+    residual, bounded as in the Collatz-Wielandt margin), and rho moves by at most s ||E|| to first
+    order, s = ||X|| ||P|| / <P, X> (Wilkinson). Tight where the Perron stack is singular or badly
+    scaled (periodic chains), where the Collatz-Wielandt lower bound is not. 0 when the bound is not
+    in (0, upper].
+
+    Examples
+    --------
+    >>> A = np.array([[[0.9, 0.0], [0.0, 0.5]]]); T = np.array([[1.0]]); X = np.array([[[1.0, 0.0], [0.0, 0.0]]])
+    >>> bool(0.81 - 1e-12 < residual_lower_bound(A, T, 0.81, X, X, 1.0) <= 0.81)
+    True
+    """
+    M, n, _ = A.shape
+    norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
+    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X)
+    residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
+    error = (residual + np.linalg.norm(rounding)) / np.linalg.norm(X)         # with its own rounding
+    inner = float(np.einsum("iab,iab->", P, X))
+    if not inner > 0:
+        return 0.0
+    bound = rho - 10.0 * np.linalg.norm(X) * np.linalg.norm(P) / inner * error
+    return float(bound) if 0 < bound <= upper else 0.0
+
+
+def _resolvent_stacks(A, T, rho):
+    """Solutions X of r X - L(X) = I for r just above rho: X > 0 iff r > rho(L), and then L(X) < r X."""
+    M, n, _ = A.shape
+    eye = np.broadcast_to(np.eye(n), (M, n, n))
+    K = kronecker_stack(A[None], T)[0] if M > 1 else None
+    for gap in _RESOLVENT_GAPS:
+        r = max(rho, 1e-300) * (1 + gap)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if K is None:
+                X = scipy.linalg.solve_discrete_lyapunov(A[0] / np.sqrt(r), np.eye(n) / r)[None]
+            else:
+                X = scipy.linalg.solve(r * np.eye(M * n * n) - K, eye.ravel()).reshape(M, n, n)
+        if np.all(np.isfinite(X)):
+            yield sym(X)
