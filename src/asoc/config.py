@@ -68,6 +68,45 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         1e-12,
         "Relative residual ||X - L(X) - W|| / ||W|| at which the iterative coupled-Lyapunov "
         "solve stops."),
+    "mjls.divergence_threshold": (
+        1e100,
+        "Alg. 3.2 stops as diverged when an entry of its bounds exceeds this: the bounds of a "
+        "controller that does not stabilise grow geometrically, and would overflow."),
+    "mjls.alg32_max_period": (
+        4,
+        "Alg. 3.2 compares its bounds with those of the last this-many iterations: equal to tol "
+        "with the previous one means converged, with an earlier one a cycle. The cycles measured "
+        "(networked loop of asoc.mjls.examples) have period 2."),
+    "mjls.alg32_patience": (
+        50,
+        "Window w of Alg. 3.2's progress test: it stops without converging (no_progress) when the "
+        "smallest relative change of its bounds over the last w iterations is not below that of "
+        "the w before, or their ratio predicts that tol is not reached within max_iter. On the "
+        "Scaling page's family (n = 16, M = 4) the changes stay between 0.03 and 0.9 for 1,000 "
+        "iterations; a slow but converging random system (3 states, 3 modes) needs 1,600 "
+        "iterations at a rate of 0.99 per iteration, which the test lets run."),
+    "mjls.exact_warm_start_iterations": (
+        30,
+        "Iterations of Alg. 3.2 run to start exact_dynamic_output_feedback (with the averaged LQG "
+        "compensator as the other candidate). At n = 16, M = 4, 10 and 30 iterations give a start "
+        "within 1e-4 of the optimum's cost, so a full run (to 10,000 iterations there) buys nothing."),
+    "mjls.rho_start": (
+        0.999,
+        "The search for a stabilising start of the exact design stops once rho is below this."),
+    "mjls.radius_max_iter": (
+        1000,
+        "BFGS iterations of a search that minimises rho (stabilising start, min-radius design)."),
+    "mjls.lbfgs_memory": (
+        200,
+        "Pairs kept by L-BFGS in the exact finite-horizon design (K (nc^2 + nc ny + nu nc) gains)."),
+    "optimize.armijo": (
+        1e-4,
+        "Sufficient-decrease constant of the backtracking line search of asoc.optimize.bfgs "
+        "(Nocedal and Wright's customary value)."),
+    "optimize.min_step": (
+        2.0 ** -40,
+        "The line search of asoc.optimize.bfgs gives up below this step length (then restarts "
+        "from a gradient step, or stops with no_progress)."),
 }
 
 #: The current value of every tunable, keyed ``"<subpackage>.<name>"``.

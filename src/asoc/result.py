@@ -16,6 +16,7 @@ STATUS_CODES = {
     "linalg_error": "a linear-algebra step failed (singular or indefinite matrix)",
     "infeasible": "the problem has no solution (e.g. infeasible LMIs)",
     "no_progress": "the iteration stopped making progress before the stopping criterion",
+    "cycle": "the iterates repeat with a period of two or more iterations instead of converging",
 }
 
 

@@ -14,10 +14,9 @@ examples), ``comparison`` (Table 3.2).
 
 from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
                       steady_state_cost)
-from .exact import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, MinRadiusResult,
-                    average_cost_and_gradient, exact_dynamic_output_feedback,
-                    exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
-                    radius_and_gradient)
+from .exact import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, exact_dynamic_output_feedback,
+                    exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback)
+from .gradients import average_cost_and_gradient, radius_and_gradient
 from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback)
 from .lmi import LMIResult, static_output_lmi
@@ -42,4 +41,4 @@ __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribut
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
            "min_radius_dynamic_output_feedback", "radius_and_gradient", "ExactDynamicOutputFeedbackResult",
-           "ExactFiniteHorizonResult", "MinRadiusResult", "random_mjls"]
+           "ExactFiniteHorizonResult", "random_mjls"]

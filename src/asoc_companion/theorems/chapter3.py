@@ -22,8 +22,9 @@ from asoc.mjls import (average_cost_and_gradient, closed_loop, dynamic_output_fe
                        finite_horizon_dynamic_output_feedback, gain_from_moments, h2_cost, ms_spectral_radius,
                        predecessor_sum, second_moments, static_output_feedback, static_output_lmi,
                        steady_state_cost, steady_state_second_moment, successor_average)
-from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_moment_step, noise_covariances,
-                               optimality_system)
+from asoc.mjls.bound import bound_costate_step, bound_moment_step
+from asoc.mjls.operators import augmented_closed_loop, noise_covariances
+from asoc.mjls.optimality import optimality_system
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 from asoc.mjls.lmi import performance_output
 from asoc.mjls.moments import h2_cost_unchecked
