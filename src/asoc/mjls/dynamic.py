@@ -10,21 +10,24 @@ controller (Prop. 3.24), to set next to the bound.
 Why Alg. 3.2 may not stop. Its Step 3 asks for unchanged gains, and gains need not settle:
 
 - the matrix H of (3.51) is (numerically) singular near the fixed point when the controller
-  state does not excite every direction (Xunder of low numerical rank, e.g. ny << nx), so
-  (3.51) is ill-posed and its minimum-norm solution depends discontinuously on the bounds;
-- on the networked loop of :func:`asoc.mjls.examples.networked_loop` (y = C x, packets lost
-  with probability 0.1 or 0.4) the iteration then settles into a 2-cycle: alternate
-  iterates have H of full rank and H with two singular values below 1e-17 ||H||, the bounds
-  of each converge to their own limits, and their Markov parameters L F^k K differ
-  (-0.1833 and -0.1831 at k = 0): two different controllers, not one controller in two
-  state coordinates;
-- on the random family of the Scaling page (n = 16, M = 4) the bounds wander (the bound
-  between 1.94 and 2.7, relative changes 0.03-0.9 per iteration after 1,000 iterations,
-  the Markov parameters changing by O(1)) while the true cost stays within 6e-4 of the
-  exact optimum (1.9401-1.9410 against 1.94005);
+  state does not excite every direction (Xunder of low numerical rank), so (3.51) is
+  ill-posed: its minimum-norm solution (threshold ``mjls.rank_rtol``) fixes the gains only
+  up to a null space, and where the iteration goes depends on that truncation;
+- on the networked loop of :func:`asoc.mjls.examples.networked_loop` (y = C x, input packets
+  lost) H has four singular values below 1e-16 ||H|| (the next is 1e-3 ||H||), and the
+  iteration settles into a 2-cycle: the bounds of alternate iterates converge to two
+  different limits, whose Markov parameters L F^k K differ (L K = -0.1652 and -0.1656):
+  two controllers, with true costs 0.137689 and 0.137694 (exact optimum 0.137634). With
+  ``mjls.rank_rtol`` = 1e-14 the same loop converges in 87 iterations (true cost 0.1376346),
+  with 1e-12 to 1e-6 it cycles; 1e-10 is the default because smaller thresholds let
+  Alg. 3.2 diverge on the Scaling page (n = 8, 16);
+- on the random family of the Scaling page (n = 16, M = 4) the bounds wander: in the first
+  200 iterations the bound varies between 1.94 and 2.74 and the relative change per
+  iteration stays between 0.03 and 0.9, while the true cost stays within 6e-4 of the exact
+  optimum (1.94012 to 1.94101 against 1.94005);
 - the similarity (F, K, L) ~ (S F S^-1, S K, L S^-1), which leaves the closed loop
-  unchanged, is not the cause: the bounds, which Step 3 would also have to hold still,
-  are not invariant under it, and they do move.
+  unchanged, is not the cause: the Markov parameters, which it leaves invariant, change
+  between the iterates as well.
 
 So :func:`dynamic_output_feedback` stops on the bounds (as the author's reference code):
 converged when they stop changing, ``"cycle"`` when they repeat with a period of 2 to
@@ -175,7 +178,7 @@ class DynamicOutputFeedbackResult(IterativeResult):
 
 
 
-class _Stopping:
+class StoppingRule:
     """The stopping rule of :func:`dynamic_output_feedback` on the four bounds.
 
     Keeps the last ``mjls.alg32_max_period`` iterates. After each, the relative change
@@ -310,7 +313,7 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
 def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
     """The iteration of Alg. 3.2 (Steps 2-4) until its stopping rule; arguments not validated.
 
-    Returns a dict: ``status``, ``iterations``, ``stopping`` (the :class:`_Stopping` rule,
+    Returns a dict: ``status``, ``iterations``, ``stopping`` (the :class:`StoppingRule` rule,
     with its last change and period), ``best`` (bound, (F, K, L), (Xbar, Xunder, Pbar,
     Punder), GainSolve) of the returned iterate (the smallest bound of the last period),
     ``traces`` (iterations + 1, 4, M), ``worst_residual`` and ``failure`` (the error message of
@@ -328,7 +331,7 @@ def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
     divergence, rank_rtol = config.defaults["mjls.divergence_threshold"], config.defaults["mjls.rank_rtol"]
     bounds = tuple(initial_bounds(sys, init, rng))
     traces = [np.trace(np.array(bounds), axis1=-2, axis2=-1)]
-    stopping = _Stopping(tol, max_iter)
+    stopping = StoppingRule(tol, max_iter)
     stopping.status(0, bounds)
     iterates = deque(maxlen=stopping.max_period)         # (bound, gains, bounds, solve) of the last iterations
     worst_residual, failure, status, it = 0.0, "", "max_iterations", 0

@@ -394,3 +394,62 @@ def test_bad_input_is_named_on_the_matrix_free_path(monkeypatch, sys3, kwargs, m
         dynamic_output_feedback(sys3, **kwargs)
     with pytest.raises(ValueError, match="method"):
         gains_from_bounds(*optimality_args(sys3, 0), method="cg")
+
+
+def _verdicts(sequence, tol=1e-10, max_iter=10_000):
+    """The verdicts of Alg. 3.2's stopping rule on a sequence of (scalar) bound iterates."""
+    from asoc.mjls.dynamic import StoppingRule
+
+    rule = StoppingRule(tol, max_iter)
+    for it, value in enumerate(sequence):
+        verdict = rule.status(it, tuple(np.full((1, 1, 1), v) for v in value))
+        if verdict is not None:
+            return verdict, it, rule
+    return None, len(sequence), rule
+
+
+def test_stopping_rule_tells_a_cycle_from_an_oscillating_convergence():
+    """A 2-cycle is a cycle; a sequence converging like (-0.99)^k (small lag-2 change) is not."""
+    k = np.arange(5000)[:, None]
+    cycle = 1.0 + 0.1 * (-1.0) ** k + 1e-3 * 0.5 ** k * np.ones(4)
+    verdict, it, rule = _verdicts(cycle)
+    assert (verdict, rule.period) == ("cycle", 2) and it < 60
+    oscillating = 1.0 + 0.1 * (-0.99) ** k * np.ones(4)
+    assert _verdicts(oscillating)[0] == "converged"
+
+
+def test_stopping_rule_stops_wandering_and_diverging_sequences_within_a_few_windows():
+    w = config.defaults["mjls.alg32_patience"]
+    wandering = 1.0 + np.random.default_rng(0).random((5000, 4))
+    verdict, it, _ = _verdicts(wandering)
+    assert verdict == "no_progress" and it <= 2 * w + 5
+    growing = 9.0 ** np.arange(200)[:, None] * np.ones(4)
+    verdict, it, _ = _verdicts(growing)
+    assert verdict == "diverged" and it <= 2 * w + 5
+    slow = 1.0 + 0.995 ** np.arange(8000)[:, None] * np.ones(4)    # converges, slowly: not stopped early
+    assert _verdicts(slow)[0] == "converged"
+    assert _verdicts(slow, max_iter=1000)[0] == "no_progress"      # ... unless tol is out of reach
+
+
+def test_alg32_stops_on_the_cycle_of_the_networked_loop_and_names_the_exact_design():
+    from asoc.mjls import exact_dynamic_output_feedback
+    from asoc.mjls.examples import networked_loop
+
+    sys = networked_loop()
+    with pytest.warns(RuntimeWarning, match="cycle of period 2.*exact_dynamic_output_feedback"):
+        r = dynamic_output_feedback(sys)
+    assert (r.status, r.period, r.converged) == ("cycle", 2, False) and r.iterations < 200
+    other = dynamic_output_feedback(sys, max_iter=r.iterations - 1, warn=False)   # the other member
+    assert r.bound <= other.bound
+    assert r.cost == pytest.approx(steady_state_cost(sys, r.F, r.K, r.L)[0], rel=1e-12)
+    exact = exact_dynamic_output_feedback(sys)
+    assert exact.converged and exact.cost < min(r.cost, other.cost)
+
+
+def test_alg32_on_an_unstabilisable_plant_stops_as_diverged_within_a_few_windows():
+    A = 3.0 * np.eye(2)
+    sys = MJLS([A, A], np.zeros((2, 1)), [[1.0, 0.0]], np.eye(2), np.eye(2), np.eye(1), [[0.5, 0.5], [0.5, 0.5]],
+               J=0.1 * np.ones((1, 1)))
+    r = dynamic_output_feedback(sys, warn=False)
+    assert r.status == "diverged" and r.iterations <= 2 * config.defaults["mjls.alg32_patience"] + 5
+    assert "exact_dynamic_output_feedback" in r.message
