@@ -1,4 +1,18 @@
-"""Static output feedback u_k = L y_k without mode observation (Sec. 3.5.3, Alg. 3.1)."""
+"""Static output feedback u_k = L y_k without mode observation (Sec. 3.5.3, Alg. 3.1).
+
+Measurement noise. The thesis's model (3.7) for Alg. 3.1 has y = C x; with the noise of
+Sec. 3.6, y = C x + J v (v standard normal), u = L y gives
+
+    x_{k+1} = (A_i + B_i L C_i) x_k + B_i L J_i v_k + H_i w_k,
+
+so the second-moment recursion (3.35) gains the term B_i L J_i J_i^T L^T B_i^T mu_i next to
+H_i H_i^T mu_i, and the stage cost E{u^T R u 1(theta = i)} = tr[R_i L (C_i X_i C_i^T +
+mu_i J_i J_i^T) L^T] the term tr[R_i L J_i J_i^T L^T] mu_i. The costate (3.33) does not
+change (the noise enters neither A_cl nor the weights). Setting the derivative of the
+Lagrangian over L to zero, the term of the noise adds R_i L mu_i J_i J_i^T and
+B_i^T E_i(P) B_i L mu_i J_i J_i^T, so in (3.31) and (3.34) C_i X_i C_i^T becomes
+C_i X_i C_i^T + mu_i J_i J_i^T. With J = 0 (J = None) nothing changes.
+"""
 
 import math
 import time
@@ -9,12 +23,10 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
-from .moments import h2_cost, steady_state_second_moment
-from .operators import closed_loop_unchecked, coupled_lyapunov_solver, spectral_radius
-from .stability import ms_spectral_radius
+from ..linalg import relative_change, transpose
+from .operators import closed_loop_unchecked, coupled_lyapunov_solver, mean_square_stability, noise_covariances
+from .operators import spectral_radius
 from .system import check_system, predecessor_sum, successor_average
-
-GAIN_FLOOR = 1e-12     # absolute floor of the gain's norm in its relative change (a zero gain converges)
 
 
 @dataclass(kw_only=True)
@@ -62,8 +74,11 @@ class StaticOutputFeedbackResult(IterativeResult):
     seconds: float = 0.0
 
 
-def gain_from_moments(sys, X, P, method="vec", R=None):
+def gain_from_moments(sys, X, P, method="vec"):
     """L solving (3.31) for given X^i, P^i: Prop. 3.18 (``"vec"``) or its SDP (``"sdp"``).
+
+    With measurement noise J, C_i X_i C_i^T is C_i X_i C_i^T + mu_inf,i J_i J_i^T (module
+    docstring).
 
     Parameters
     ----------
@@ -72,8 +87,6 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
         Second moments and multipliers.
     method : {"vec", "sdp"}
         Solve the vectorised linear equation (3.34) or the SDP of Prop. 3.18.
-    R : numpy.ndarray, shape (M, nu, nu), optional
-        Overrides sys.R (used by Alg. 3.1's scaled iteration).
 
     Returns
     -------
@@ -99,12 +112,10 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
     check_system(sys)
     X = semidefinite(real_array(X, "X", shape=(sys.M, sys.nx, sys.nx)), "X")
     P = semidefinite(real_array(P, "P", shape=(sys.M, sys.nx, sys.nx)), "P")
-    if R is not None:
-        R = real_array(R, "R", shape=(sys.M, sys.nu, sys.nu))
     choice(method, "method", ("vec", "sdp"))
     EP = successor_average(sys.T, P)
-    S = (sys.R if R is None else R) + np.swapaxes(sys.B, 1, 2) @ EP @ sys.B                     # (M, nu, nu)
-    W = sys.C @ X @ np.swapaxes(sys.C, 1, 2)                                # (M, ny, ny)
+    S = sys.R + transpose(sys.B) @ EP @ sys.B                     # (M, nu, nu)
+    W = sys.C @ X @ transpose(sys.C) + sys.mu_inf[:, None, None] * noise_covariances(sys)[1]   # (M, ny, ny)
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
     if method == "sdp":
         return _gain_sdp(S, W, N)
@@ -137,20 +148,33 @@ class _Recursion:
         self.A, self.B, self.C, self.Bt, self.Ct = sys.A, sys.B, sys.C, swap(sys.B), swap(sys.C)
         self.Q, self.R, self.T, self.Tt = sys.Q, sys.R, sys.T, np.ascontiguousarray(sys.T.T)
         self.muHHt = sys.mu_inf[:, None, None] * (sys.H @ swap(sys.H))
+        self.muJJt = None if sys.J is None else sys.mu_inf[:, None, None] * (sys.J @ swap(sys.J))
         self.nu, self.ny = sys.nu, sys.ny
         self.scalar_gain = sys.nu == sys.ny == 1
 
-    def gain(self, Xs, EP, cP):
-        """(3.34) with R scaled by cP = 1 / s_P."""
+    def terms(self, Xs, EP, cX, cP):
+        """S_i = R_i cP + B_i^T E_i(P) B_i, W_i = C_i Xs_i C_i^T + cX mu_i J_i J_i^T and
+        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables."""
         BtEP = self.Bt @ EP
         S = cP * self.R + BtEP @ self.B
         XCt = Xs @ self.Ct
-        W = self.C @ XCt
-        N = (BtEP @ self.A @ XCt).sum(axis=0)
+        W = self.C @ XCt if self.muJJt is None else self.C @ XCt + cX * self.muJJt
+        return S, W, (BtEP @ self.A @ XCt).sum(axis=0)
+
+    def gain(self, Xs, EP, cX, cP):
+        """(3.34) with R scaled by cP = 1 / s_P and the measurement noise by cX = 1 / s_X."""
+        S, W, N = self.terms(Xs, EP, cX, cP)
         if self.scalar_gain:
             return -N / (W * S).sum()
         lhs = np.einsum("iab,icd->acbd", W, S).reshape(self.ny * self.nu, -1)
         return -np.linalg.solve(lhs, N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
+
+    def noise(self, L):
+        """mu_i (H_i H_i^T + B_i L J_i J_i^T L^T B_i^T): the constant term of (3.35) for the gain L."""
+        if self.muJJt is None:
+            return self.muHHt
+        BL = self.B @ L
+        return self.muHHt + BL @ self.muJJt @ transpose(BL)
 
     def moments(self, L, Xs, EP, cX, cP, out):
         """(3.35) into out[0] (next X, constant term scaled by cX = 1 / s_X) and out[1] (next P, by cP).
@@ -169,7 +193,7 @@ class _Recursion:
             LC = L @ self.C
             LtRL = LC.swapaxes(1, 2) @ self.R @ LC
         Aclt = Acl.swapaxes(1, 2)
-        Y = Acl @ Xs @ Aclt + cX * self.muHHt
+        Y = Acl @ Xs @ Aclt + cX * self.noise(L)
         np.matmul(self.Tt, Y.reshape(len(Y), -1), out=out[0].reshape(len(Y), -1))
         np.add(Aclt @ EP @ Acl, cP * (self.Q + LtRL), out=out[1])
 
@@ -193,8 +217,10 @@ class _ScaledPair:
         self._logs = [self.log_scales]
 
     def largest_entries(self):
-        """max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a NaN."""
-        return np.abs(self.next, out=self._magnitudes).max(axis=(1, 2, 3), keepdims=True)
+        """max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a
+        NaN, and 1 where it is zero (a zero iterate, e.g. of a system without noise, stays zero)."""
+        largest = np.abs(self.next, out=self._magnitudes).max(axis=(1, 2, 3), keepdims=True)
+        return np.where(largest == 0.0, 1.0, largest)
 
     def accept(self, scales):
         """Make ``next / scales`` the current pair; return the changes of the directions of X and P."""
@@ -283,9 +309,9 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
         EP = (T @ Ps.reshape(M, -1)).reshape(Ps.shape)
         try:
             if method == "vec":
-                L_new = rec.gain(Xs, EP, cP)
+                L_new = rec.gain(Xs, EP, cX, cP)
             else:
-                L_new = gain_from_moments(sys, Xs, Ps, "sdp", R=sys.R * cP)
+                L_new = _gain_sdp(*rec.terms(Xs, EP, cX, cP))
         except np.linalg.LinAlgError:
             status = "linalg_error"
             break
@@ -295,7 +321,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
         if not (math.isfinite(sX) and math.isfinite(sP) and _finite(L_new)):
             status = "diverged"
             break
-        change = max(_relative_change(L, L_new), *pair.accept(scales))
+        change = max(relative_change(L, L_new), *pair.accept(scales))
         L = L_new
         if it > 1 and change < tol:
             status = "converged"
@@ -325,7 +351,6 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     does not stabilise (the moments have no solution then).
     """
     M = sys.M
-    rhs_X = predecessor_sum(sys.T, rec.muHHt)
     trace_X, trace_P = [], []
     stabilized = True
     status, change = "max_iterations", np.inf
@@ -338,17 +363,17 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
             break
         solve = coupled_lyapunov_solver(Acl, sys.T)
         LC = L @ sys.C
-        X = solve(rhs_X).X
+        X = solve(predecessor_sum(sys.T, rec.noise(L))).X
         P = solve(sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC, adjoint=True).X
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
         try:
-            L_new = (rec.gain(X, successor_average(sys.T, P), 1.0) if method == "vec"
-                     else gain_from_moments(sys, X, P, "sdp"))
+            EP = successor_average(sys.T, P)
+            L_new = rec.gain(X, EP, 1.0, 1.0) if method == "vec" else _gain_sdp(*rec.terms(X, EP, 1.0, 1.0))
         except np.linalg.LinAlgError:
             status = "linalg_error"
             break
-        change = _relative_change(L, L_new)
+        change = relative_change(L, L_new)
         L = L_new
         if change < tol:
             status = "converged"
@@ -442,11 +467,8 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
             run = _step_iteration(sys, rec, tol, max_iter, init, method, False)
     seconds = time.perf_counter() - start
     L = run["L"]
-    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
-    Acl = closed_loop_unchecked(sys, L)
-    rho = ms_spectral_radius(Acl, sys.T)
-    stabilizing = bool(rho < 1)
-    cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf
+    cost, _, stability = _static_cost(sys, L)
+    rho, stabilizing = stability.rho, bool(stability.stable)
     status, message = run["status"], _message(run, tol)
     if warn and status != "converged":
         warnings.warn(f"Algorithm 3.1 {message}", RuntimeWarning, stacklevel=2)
@@ -470,9 +492,58 @@ def _message(run, tol):
             "linalg_error": f"stopped at iteration {it}: the gain equation (3.34) is singular"}[run["status"]]
 
 
-def _relative_change(old, new):
-    """||new - old||_F / max(||new||_F, GAIN_FLOOR): the relative change of the gain L (Step 4 of
-    Alg. 3.1; the floor lets a zero gain converge)."""
-    a, b = old.ravel(), new.ravel()
-    difference = b - a
-    return math.sqrt(difference.dot(difference)) / max(math.sqrt(b.dot(b)), GAIN_FLOOR)
+def static_cost(sys, L):
+    """The average cost (3.9) of u = L y (Prop. 3.7), with the measurement noise J of Sec. 3.6.
+
+    sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + mu_i tr[R_i L J_i J_i^T L^T], with X the
+    stationary second moment of (3.32) with the noise term mu_i (H_i H_i^T + B_i L J_i J_i^T
+    L^T B_i^T) (module docstring); with J = None, Prop. 3.7 as it stands.
+
+    Parameters
+    ----------
+    sys : MJLS
+    L : array_like, shape (nu, ny)
+
+    Returns
+    -------
+    cost : float
+        inf unless the closed loop is certified mean-square stable.
+    X : numpy.ndarray, shape (M, nx, nx), or None
+        The stationary second moments (None when not stable).
+    stability : MeanSquareStability
+        rho of Cor. 3.2 and its verdict (:func:`asoc.mjls.operators.mean_square_stability`).
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``sys`` is not an MJLS, or ``L`` not a finite real (nu, ny) array.
+
+    Examples
+    --------
+    Noise on the measurement raises the cost of a gain:
+
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> noisy = sys.replace(J=0.5 * np.ones((1, 1)))
+    >>> round(static_cost(sys, [[-0.4]])[0], 4), round(static_cost(noisy, [[-0.4]])[0], 4)
+    (0.7999, 1.7781)
+    """
+    from .stability import gain_matrix
+
+    check_system(sys)
+    return _static_cost(sys, gain_matrix(L, "L", sys.nu, sys.ny))
+
+
+def _static_cost(sys, L):
+    Acl = closed_loop_unchecked(sys, L)
+    stability = mean_square_stability(Acl, sys.T)
+    if not stability.stable:
+        return np.inf, None, stability
+    noise = _Recursion(sys).noise(L)
+    X = coupled_lyapunov_solver(Acl, sys.T)(predecessor_sum(sys.T, noise)).X
+    LC = L @ sys.C
+    cost = np.einsum("iab,iba->", sys.Q + transpose(LC) @ sys.R @ LC, X)
+    if sys.J is not None:
+        LJ = L @ sys.J
+        cost += np.einsum("i,iab,iba->", sys.mu_inf, sys.R, LJ @ transpose(LJ))
+    return float(cost), X, stability
