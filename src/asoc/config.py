@@ -99,6 +99,11 @@ _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.lbfgs_memory": (
         200,
         "Pairs kept by L-BFGS in the exact finite-horizon design (K (nc^2 + nc ny + nu nc) gains)."),
+    "mjls.auto_switch_iterations": (
+        200,
+        "Alg. 3.1 with moments='auto' switches from the thesis's iteration to exact moment solves "
+        "when its convergence rate predicts more than this many further iterations. Placeholder "
+        "pending measurement."),
     "optimize.armijo": (
         1e-4,
         "Sufficient-decrease constant of the backtracking line search of asoc.optimize.bfgs "

@@ -7,10 +7,10 @@ rows of T. :func:`dense_bytes` is the memory the dense Kronecker path would need
 
 import numpy as np
 
-from asoc.mjls import MJLS
+from asoc.mjls import MJLS, ms_spectral_radius
 
 
-def scaling_system(rng, n, M, norm=0.95, inputs=None):
+def scaling_system(rng, n, M, norm=0.95, inputs=None, radius=None):
     """A random MJLS with n states, M modes and ``inputs`` = ny = nu (default max(1, n // 8)).
 
     A_i = norm * G_i / ||G_i||_2 with G_i standard normal; B_i, C_i standard normal scaled by
@@ -25,6 +25,9 @@ def scaling_system(rng, n, M, norm=0.95, inputs=None):
         Spectral norm of every A_i.
     inputs : int, optional
         Number of inputs and of outputs.
+    radius : float, optional
+        If given, every A_i is then scaled by one common factor so that the open loop has
+        this mean-square spectral radius (Cor. 3.2), e.g. 0.99 for a barely stable one.
 
     Returns
     -------
@@ -35,6 +38,10 @@ def scaling_system(rng, n, M, norm=0.95, inputs=None):
     >>> s = scaling_system(np.random.default_rng(0), 4, 2)
     >>> s.nx, s.M, s.nu, round(float(np.linalg.norm(s.A[0], 2)), 12)
     (4, 2, 1, 0.95)
+    >>> from asoc.mjls import ms_spectral_radius
+    >>> s = scaling_system(np.random.default_rng(0), 4, 2, radius=0.99)
+    >>> round(ms_spectral_radius(s.A, s.T), 12)
+    0.99
     """
     m = max(1, n // 8) if inputs is None else inputs
     A = rng.standard_normal((M, n, n))
@@ -42,6 +49,8 @@ def scaling_system(rng, n, M, norm=0.95, inputs=None):
     B = rng.standard_normal((M, n, m)) / np.sqrt(n)
     C = rng.standard_normal((M, m, n)) / np.sqrt(n)
     T = rng.dirichlet(np.ones(M), size=M)
+    if radius is not None:
+        A *= np.sqrt(radius / ms_spectral_radius(A, T))         # rho scales with the square of A
     eye = lambda k: np.broadcast_to(np.eye(k), (M, k, k))
     return MJLS(A, B, C, 0.3 * eye(n), eye(n), eye(m), T, J=0.2 * eye(m))
 

@@ -45,6 +45,8 @@ class ObservedModeResult(IterativeResult):
         ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
     iterations : int
     seconds : float
+    controller : ModeDependentGain
+        The gains for :func:`asoc.mjls.simulate`.
 
     Examples
     --------
@@ -60,6 +62,14 @@ class ObservedModeResult(IterativeResult):
     stabilizing: bool
     iterations: int
     seconds: float
+
+    @property
+    def controller(self):
+        """u = L_theta x as a :class:`asoc.mjls.ModeDependentGain` (it observes the mode; the
+        state is the output of the systems this design is for, C = I)."""
+        from .simulate import ModeDependentGain
+
+        return ModeDependentGain(self.L)
 
 
 def riccati_step(sys, P):

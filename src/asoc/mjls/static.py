@@ -23,6 +23,7 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
+from .. import config
 from ..linalg import relative_change, transpose
 from .operators import closed_loop_unchecked, coupled_lyapunov_solver, mean_square_stability, noise_covariances
 from .operators import spectral_radius
@@ -54,13 +55,15 @@ class StaticOutputFeedbackResult(IterativeResult):
         ``trace_X`` and ``trace_P``: traces of X^i and P^i per iteration, (iterations + 1, M).
     seconds : float
         Wall time of the iteration.
+    controller : StaticGain
+        u = L y for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`.
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec354_system
     >>> res = static_output_feedback(sec354_system(1), max_iter=3, warn=False)
-    >>> res.converged, res.status, res.iterations
-    (False, 'max_iterations', 3)
+    >>> res.converged, res.status, res.iterations, type(res.controller).__name__
+    (False, 'max_iterations', 3, 'StaticGain')
     """
 
     L: np.ndarray
@@ -72,6 +75,13 @@ class StaticOutputFeedbackResult(IterativeResult):
     P: np.ndarray
     history: dict = field(repr=False)
     seconds: float = 0.0
+
+    @property
+    def controller(self):
+        """u = L y as a :class:`asoc.mjls.StaticGain`."""
+        from .simulate import StaticGain
+
+        return StaticGain(self.L)
 
 
 def gain_from_moments(sys, X, P, method="vec"):
@@ -283,13 +293,15 @@ def _finite(L):
     return math.isfinite(L[0, 0]) if L.size == 1 else bool(np.isfinite(L).all())
 
 
-MOMENTS = ("step", "exact")
+MOMENTS = ("auto", "step", "exact")
 
 
 def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, skip_cycles=True):
     """The thesis's iteration (3.34)-(3.35) in scaled variables (see static_output_feedback).
 
-    With ``until_stabilizing`` it also stops at the first stabilising gain. With
+    ``until_stabilizing``: False, "each" (stop at the first stabilising gain, moments="exact")
+    or "slow" (moments="auto": stop at a stabilising gain once :class:`_Rate` predicts more
+    than ``mjls.auto_switch_iterations`` further iterations). With
     ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`_Cycle`) is skipped to
     ``max_iter`` in whole periods: the same result as iterating through them. Returns a dict
     with L, the unscaled X, P, converged, iterations, stabilized and the trace histories.
@@ -298,6 +310,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
     pair = _ScaledPair(init, M, sys.nx)
     cycle = _Cycle() if skip_cycles and method == "vec" else None
     stabilized = False
+    rate = _Rate(tol)
     status, change = "max_iterations", np.inf
     L = np.zeros((sys.nu, sys.ny))
     T = sys.T
@@ -326,9 +339,10 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
         if it > 1 and change < tol:
             status = "converged"
             break
-        if until_stabilizing and spectral_radius(closed_loop_unchecked(sys, L), sys.T) < 1:
-            stabilized = True
-            break
+        if until_stabilizing == "each" or (until_stabilizing == "slow" and rate.slow(it, change)):
+            if spectral_radius(closed_loop_unchecked(sys, L), sys.T) < 1:
+                stabilized = True
+                break
         period = cycle.period(it, L, pair) if cycle is not None else None
         if period is not None:                          # skip whole periods: the same state after them
             times = (max_iter - it) // period
@@ -339,6 +353,30 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
     trace_X, trace_P = pair.traces()
     return dict(L=L, X=X, P=P, status=status, change=change, iterations=it, stabilized=stabilized,
                 trace_X=trace_X, trace_P=trace_P)
+
+
+class _Rate:
+    """When the thesis's iteration is slow: its change falls by a rate r per iteration,
+    estimated over the last ``window`` iterations; it is slow when log(tol / change) / log r,
+    the iterations still to go, exceeds ``mjls.auto_switch_iterations``. Checked after
+    ``window`` iterations, then at doubling intervals (each check may cost a spectral radius)."""
+
+    window = 10
+
+    def __init__(self, tol):
+        self.tol, self.changes, self.next_check = tol, [], self.window
+        self.threshold = config.defaults["mjls.auto_switch_iterations"]
+
+    def slow(self, it, change):
+        self.changes.append(change)
+        if it < self.next_check or len(self.changes) <= self.window:
+            return False
+        self.next_check = 2 * it
+        first, last = self.changes[-self.window - 1], self.changes[-1]
+        if not (0 < last < first):
+            return True                                 # not contracting: try the exact moments
+        remaining = np.log(self.tol / last) / np.log(last / first) * self.window
+        return remaining > self.threshold
 
 
 def _exact_iteration(sys, rec, L, tol, max_iter, method):
@@ -383,7 +421,7 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
 
 
 def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True,
-                           moments="step"):
+                           moments="auto"):
     """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
 
     When the gain does not stabilise the MJLS, X^i and P^i grow geometrically while the
@@ -414,8 +452,12 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     warn : bool
         Warn (RuntimeWarning) when the iteration does not converge, or converges to a gain
         that does not stabilise.
-    moments : {"step", "exact"}
-        ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
+    moments : {"auto", "step", "exact"}
+        ``"auto"`` (default): the thesis's iteration, switching to ``"exact"`` at a
+        stabilising gain once the rate of its last 10 changes predicts more than
+        ``config.defaults["mjls.auto_switch_iterations"]`` further iterations (checked after
+        10 iterations, then at doubling intervals). An easy system converges before the
+        switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
         update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
         thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with
         the exact solution of the two moment equations (3.32)-(3.33) for the current gain
@@ -455,7 +497,7 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     warn = boolean(warn, "warn")
     start = time.perf_counter()
     rec = _Recursion(sys)
-    run = _step_iteration(sys, rec, tol, max_iter, init, method, moments == "exact")
+    run = _step_iteration(sys, rec, tol, max_iter, init, method, {"auto": "slow", "exact": "each"}.get(moments, False))
     if run["stabilized"]:
         exact = _exact_iteration(sys, rec, run["L"], tol, max_iter - run["iterations"], method)
         if exact["stabilized"]:

@@ -438,12 +438,12 @@ def decide_3_19(sys):
     L_best, rho_best = best_scalar_gain(sys)
     if not rho_best < 1:
         return _outcome("not_applicable", sys, min_rho_over_L=rho_best, best_L=L_best)
-    run = static_output_feedback(sys, warn=False)
+    run = static_output_feedback(sys, warn=False, moments="step")
     numbers = dict(min_rho_over_L=rho_best, best_L=L_best, margin=1 - rho_best, alg_L=float(run.L[0, 0]),
                    alg_rho=run.rho, alg_converged=run.converged, alg_iterations=run.iterations)
     if not (run.converged and run.stabilizing):
         return _outcome("fails", sys, **numbers)
-    other = static_output_feedback(sys, init=1.0, warn=False)
+    other = static_output_feedback(sys, init=1.0, warn=False, moments="step")
     same = other.converged and abs(other.L[0, 0] - run.L[0, 0]) <= 1e-6 * (1 + abs(run.L[0, 0]))
     return _outcome(_verdict(same), sys, alg_L_from_identity=float(other.L[0, 0]), **numbers)
 

@@ -268,13 +268,18 @@ def test_alg31_exact_moments_reach_the_same_fixed_point(system):
         sys = sec354_system(2, "state")
     else:
         sys = sec354_system(int(system[-1]))
-    a = static_output_feedback(sys)
+    a = static_output_feedback(sys, moments="step")
     b = static_output_feedback(sys, moments="exact")
-    assert a.converged and b.converged and a.stabilizing and b.stabilizing
-    assert np.abs(a.L - b.L).max() <= 1e-8
+    c = static_output_feedback(sys)                  # moments="auto"
+    assert a.converged and b.converged and c.converged and a.stabilizing and b.stabilizing
+    assert np.abs(a.L - b.L).max() <= 1e-8 and np.abs(a.L - c.L).max() <= 1e-8
     assert b.cost == pytest.approx(a.cost, rel=1e-8)
     if system == "T2":
         assert b.iterations < a.iterations / 10      # the thesis's iteration contracts slowly here
+        assert c.iterations < a.iterations / 10      # ... and "auto" switches to the exact moments
+    if system == "T1":
+        assert c.iterations == a.iterations          # an easy system: "auto" is the thesis's iteration
+        np.testing.assert_array_equal(c.history["trace_X"], a.history["trace_X"])
 
 
 def test_alg31_exact_moments_fall_back_where_no_gain_stabilises():
