@@ -10,6 +10,10 @@ import numpy as np
 from asoc.mjls import MJLS, ms_spectral_radius
 
 
+#: The largest published MJLS size (issue 26): states, modes, inputs = outputs, open-loop rho.
+PUBLISHED_SIZE = {"n": 100, "M": 100, "inputs": 12, "radius": 0.99}
+
+
 def scaling_system(rng, n, M, norm=0.95, inputs=None, radius=None):
     """A random MJLS with n states, M modes and ``inputs`` = ny = nu (default max(1, n // 8)).
 
@@ -53,6 +57,21 @@ def scaling_system(rng, n, M, norm=0.95, inputs=None, radius=None):
         A *= np.sqrt(radius / ms_spectral_radius(A, T))         # rho scales with the square of A
     eye = lambda k: np.broadcast_to(np.eye(k), (M, k, k))
     return MJLS(A, B, C, 0.3 * eye(n), eye(n), eye(m), T, J=0.2 * eye(m))
+
+
+def published_size_system(rng):
+    """The largest MJLS size in public code we found (a policy-gradient study in C++): n = 100
+    states, M = 100 modes, nu = ny = 12, here with the open loop scaled to rho = 0.99.
+
+    Building it takes one spectral radius of size M n^2 = 1e6 (a few seconds).
+
+    Examples
+    --------
+    >>> PUBLISHED_SIZE
+    {'n': 100, 'M': 100, 'inputs': 12, 'radius': 0.99}
+    """
+    return scaling_system(rng, PUBLISHED_SIZE["n"], PUBLISHED_SIZE["M"], inputs=PUBLISHED_SIZE["inputs"],
+                          radius=PUBLISHED_SIZE["radius"])
 
 
 def dense_bytes(n, M):
