@@ -77,3 +77,49 @@ def published_size_system(rng):
 def dense_bytes(n, M):
     """Memory of the dense Kronecker matrix of the second-moment operator: 8 (M n^2)^2 bytes."""
     return 8 * (M * n * n) ** 2
+
+
+def published_size_timings(rng, n, M, inputs, radius, runs=1000, horizon=100):
+    """Wall-clock seconds of three computations on one :func:`scaling_system` of the given size.
+
+    The open loop's mean-square spectral radius (Cor. 3.2), Alg. 3.1 to its stopping rule
+    (``moments="auto"``) and a Monte Carlo simulation of ``runs`` x ``horizon`` steps with the
+    gain it returns. The system is drawn with its open loop scaled to ``radius``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the system, then the simulation.
+    n, M, inputs : int
+        States, modes, inputs (= outputs).
+    radius : float
+        Open-loop mean-square spectral radius.
+    runs, horizon : int
+        Size of the Monte Carlo simulation.
+
+    Returns
+    -------
+    dict
+        ``rho_s``, ``alg31_s``, ``simulate_s`` (seconds), ``alg31_iterations``, ``alg31_status``.
+
+    Examples
+    --------
+    >>> t = published_size_timings(np.random.default_rng(0), 4, 3, 1, 0.9, runs=10, horizon=5)
+    >>> sorted(t), t["alg31_status"]
+    (['alg31_iterations', 'alg31_s', 'alg31_status', 'rho_s', 'simulate_s'], 'converged')
+    """
+    import time
+
+    from asoc.mjls import simulate, static_output_feedback
+
+    s = scaling_system(rng, n, M, inputs=inputs, radius=radius)
+    start = time.perf_counter()
+    ms_spectral_radius(s.A, s.T)
+    rho_s = time.perf_counter() - start
+    start = time.perf_counter()
+    design = static_output_feedback(s, warn=False)
+    alg31_s = time.perf_counter() - start
+    start = time.perf_counter()
+    simulate(s, design, np.zeros(n), horizon, runs, rng)
+    return dict(rho_s=rho_s, alg31_s=alg31_s, simulate_s=time.perf_counter() - start,
+                alg31_iterations=design.iterations, alg31_status=design.status)
