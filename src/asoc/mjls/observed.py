@@ -21,7 +21,7 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, integer, real_scalar
-from .stability import ms_spectral_radius
+from .operators import mean_square_stability
 from .system import check_system
 
 DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as Alg. 3.2's bounds)
@@ -156,9 +156,10 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
             break
     try:
         L, _ = riccati_step(sys, P)
-        rho = ms_spectral_radius(sys.A + sys.B @ L, sys.T)
+        stability = mean_square_stability(sys.A + sys.B @ L, sys.T)
+        rho, stabilizing = stability.rho, bool(stability.stable)
     except np.linalg.LinAlgError:
-        L, rho = np.full((sys.M, sys.nu, sys.nx), np.nan), np.inf
+        L, rho, stabilizing = np.full((sys.M, sys.nu, sys.nx), np.nan), np.inf, False
     message = {"converged": f"converged after {it} steps (relative change {delta:.2g} < tol = {tol:.2g})",
                "max_iterations": f"did not converge in {it} steps (relative change {delta:.2g} >= tol = {tol:.2g})",
                "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "
@@ -166,7 +167,8 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
                "linalg_error": f"stopped at step {it}: R_i + B_i^T E_i(P) B_i is singular"}[status]
     if warn and status != "converged":
         warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
-    elif warn and rho >= 1:
-        warnings.warn(f"CARE gains do not stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning, stacklevel=2)
-    return ObservedModeResult(L=L, P=P, rho=rho, stabilizing=bool(rho < 1), converged=status == "converged",
+    elif warn and not stabilizing:
+        warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning,
+                      stacklevel=2)
+    return ObservedModeResult(L=L, P=P, rho=rho, stabilizing=stabilizing, converged=status == "converged",
                               status=status, message=message, iterations=it, seconds=time.perf_counter() - start)
