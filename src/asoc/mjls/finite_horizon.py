@@ -359,7 +359,19 @@ def _bound_to_go(s, F, K, L, Xbar, Xunder, EPbar, EPunder, Eomega, mu, HHt, JJt)
 
 
 def initial_gains(init, st, nx, ny, nu):
-    """Step 1: the initial gain sequence (see :func:`finite_horizon_dynamic_output_feedback`)."""
+    """Step 1: the initial gain sequence (see :func:`finite_horizon_dynamic_output_feedback`).
+
+    ``init``: None (Alg. 3.2's controller), a Generator (uniform random gains), a result
+    with F, K, L or a tuple (F, K, L), constant or per step; returns (F, K, L) per step.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> st = stages(sec373_system(1), 3)
+    >>> F, K, L = initial_gains((np.eye(2), np.ones((2, 1)), np.ones((1, 2))), st, 2, 1, 1)
+    >>> F.shape, K.shape, L.shape
+    ((3, 2, 2), (3, 2, 1), (3, 1, 2))
+    """
     horizon = st.horizon
     if init is None:
         init = dynamic_output_feedback(st.systems[0], warn=False)
