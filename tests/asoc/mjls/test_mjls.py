@@ -128,14 +128,14 @@ def _cycling_system():
 
 @pytest.mark.parametrize("max_iter", [1003, 20000])
 def test_alg31_skips_an_exact_cycle_with_the_same_result(monkeypatch, max_iter):
-    from asoc.mjls import static
+    from asoc.mjls import scaled, static
 
     sys = _cycling_system()
     rec = static._Recursion(sys)
     plain = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False, skip_cycles=False)
     repeats = []
-    repeat = static._ScaledPair.repeat
-    monkeypatch.setattr(static._ScaledPair, "repeat",
+    repeat = scaled.ScaledPair.repeat
+    monkeypatch.setattr(scaled.ScaledPair, "repeat",
                         lambda pair, period, times: (repeats.append(period), repeat(pair, period, times)))
     skipped = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False)
     # one cycle found and skipped (period 4 with this machine's kernels, 6 with OPENBLAS_CORETYPE=Prescott)
