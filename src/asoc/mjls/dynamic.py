@@ -31,8 +31,9 @@ Why Alg. 3.2 may not stop. Its Step 3 asks for unchanged gains, and gains need n
 
 So :func:`dynamic_output_feedback` stops on the bounds (as the author's reference code):
 converged when they stop changing, ``"cycle"`` when they repeat with a period of 2 to
-``mjls.alg32_max_period`` iterations, ``"no_progress"`` when neither change has fallen
-tenfold within ``mjls.alg32_patience`` iterations. The exact design
+``mjls.alg32_max_period`` iterations, ``"no_progress"`` when their changes stop falling
+or fall too slowly to reach tol within ``max_iter``, ``"diverged"`` when they blow up
+(:class:`StoppingRule`, window ``mjls.alg32_patience``). The exact design
 :func:`asoc.mjls.exact_dynamic_output_feedback` minimises the true cost and converges there.
 """
 
