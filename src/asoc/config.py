@@ -102,8 +102,11 @@ _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.auto_switch_iterations": (
         200,
         "Alg. 3.1 with moments='auto' switches from the thesis's iteration to exact moment solves "
-        "when its convergence rate predicts more than this many further iterations. Placeholder "
-        "pending measurement."),
+        "when its convergence rate predicts more than this many further iterations. Measured on the "
+        "Scaling page's family (2 cores, load about 9): n = 16, M = 4, easy (20 iterations): auto "
+        "0.055 s, step 0.063 s, exact 0.46 s; open loop at rho 0.995: step 3.0 s (1,049 "
+        "iterations), exact 2.6 s, auto 1.0 s. n = 64, M = 8, easy: auto as step (CPU 0.62-0.69 s "
+        "against 0.65-0.74 s); rho 0.995: step 221 s (1,629 iterations), exact 13.3 s, auto 15.6 s."),
     "optimize.armijo": (
         1e-4,
         "Sufficient-decrease constant of the backtracking line search of asoc.optimize.bfgs "
