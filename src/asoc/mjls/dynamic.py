@@ -113,8 +113,6 @@ class DynamicOutputFeedbackResult(IterativeResult):
         period of 2 or more iterations), ``"no_progress"`` (the bounds neither settle nor
         repeat), ``"max_iterations"``, ``"diverged"`` (the bounds grew beyond
         ``mjls.divergence_threshold``) or ``"linalg_error"`` (solving (3.51) failed).
-    controller : DynamicOutputFeedback
-        The controller (3.37) for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`.
     iterations : int
     rho : float
         Mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2).
@@ -171,7 +169,8 @@ class DynamicOutputFeedbackResult(IterativeResult):
 
     @property
     def controller(self):
-        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`."""
+        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
+        :func:`asoc.mjls.average_cost`."""
         from .simulate import DynamicOutputFeedback
 
         return DynamicOutputFeedback(self.F, self.K, self.L)

@@ -41,8 +41,6 @@ class ExactDynamicOutputFeedbackResult(IterativeResult):
     ----------
     F, K, L : numpy.ndarray, shapes (nc, nc), (nc, ny), (nu, nc)
         The controller (3.37).
-    controller : DynamicOutputFeedback
-        The same controller for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`.
     converged, status, message
         Why BFGS stopped: ``"converged"`` (the decrease its model predicts is below
         tol * objective, or rho fell below its target), ``"max_iterations"`` or
@@ -79,7 +77,8 @@ class ExactDynamicOutputFeedbackResult(IterativeResult):
 
     @property
     def controller(self):
-        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`."""
+        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
+        :func:`asoc.mjls.average_cost`."""
         from .simulate import DynamicOutputFeedback
 
         return DynamicOutputFeedback(self.F, self.K, self.L)
@@ -95,8 +94,6 @@ class ExactFiniteHorizonResult(IterativeResult):
         The gains of (3.55) per step.
     xhat0 : numpy.ndarray, shape (nc,)
         The controller's initial state E{x_0}.
-    controller : DynamicOutputFeedback
-        The time-variant controller (3.55) for :func:`asoc.mjls.simulate`.
     converged, status, message
         Why L-BFGS stopped (as :class:`ExactDynamicOutputFeedbackResult`).
     iterations : int

@@ -45,8 +45,6 @@ class ObservedModeResult(IterativeResult):
         ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
     iterations : int
     seconds : float
-    controller : ModeDependentGain
-        The gains for :func:`asoc.mjls.simulate`.
 
     Examples
     --------

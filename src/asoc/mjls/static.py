@@ -56,8 +56,6 @@ class StaticOutputFeedbackResult(IterativeResult):
         ``trace_X`` and ``trace_P``: traces of X^i and P^i per iteration, (iterations + 1, M).
     seconds : float
         Wall time of the iteration.
-    controller : StaticGain
-        u = L y for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`.
 
     Examples
     --------
@@ -79,7 +77,7 @@ class StaticOutputFeedbackResult(IterativeResult):
 
     @property
     def controller(self):
-        """u = L y as a :class:`asoc.mjls.StaticGain`."""
+        """u = L y as a :class:`asoc.mjls.StaticGain`, for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`."""
         from .simulate import StaticGain
 
         return StaticGain(self.L)
