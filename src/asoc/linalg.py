@@ -62,8 +62,17 @@ def unpack(z, shapes):
     return out
 
 
-def relative_change(old, new, floor=NORM_FLOOR):
+def relative_change(old, new, floor=NORM_FLOOR, axis=None):
     """||new - old||_F / max(||new||_F, floor): how much an iterate moved, relative to its size.
+
+    Parameters
+    ----------
+    old, new : array_like
+        Iterates; ``old`` may carry leading axes (several old iterates against one new).
+    floor : float
+        Absolute floor of ||new||: a zero iterate converges instead of dividing by zero.
+    axis : int or tuple of int, optional
+        The axes the norms run over (default: all, returning a float); the others are kept.
 
     Examples
     --------
@@ -71,7 +80,16 @@ def relative_change(old, new, floor=NORM_FLOOR):
     0.099504
     >>> relative_change(np.zeros(2), np.zeros(2))
     0.0
+
+    Two old iterates against one new, each row its own norm:
+
+    >>> relative_change(np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([[1.0, 0.0], [0.0, 2.0]]), axis=-1)
+    array([0. , 0.5])
     """
-    d = np.ravel(new) - np.ravel(old)
-    n = np.ravel(new)
-    return float(np.sqrt(np.vdot(d, d)) / max(np.sqrt(np.vdot(n, n)), floor))
+    if axis is None:
+        d = np.ravel(new) - np.ravel(old)
+        n = np.ravel(new)
+        return float(np.sqrt(np.vdot(d, d)) / max(np.sqrt(np.vdot(n, n)), floor))
+    new = np.asarray(new)
+    d = new - np.asarray(old)
+    return np.sqrt((d * d).sum(axis=axis)) / np.maximum(np.sqrt((new * new).sum(axis=axis)), floor)

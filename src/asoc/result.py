@@ -17,6 +17,7 @@ STATUS_CODES = {
     "infeasible": "the problem has no solution (e.g. infeasible LMIs)",
     "inaccurate": "the solver stopped short of its accuracy and its answer could not be verified",
     "no_progress": "the iteration stopped making progress before the stopping criterion",
+    "cycle": "the iterates repeat with a period of two or more iterations instead of converging",
 }
 
 

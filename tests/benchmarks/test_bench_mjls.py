@@ -8,13 +8,15 @@ from asoc.mjls import static_output_feedback
 from asoc.mjls.baselines import time_variant_feedback
 from asoc.mjls.comparison import median_costs, table_3_2_designs
 from asoc.mjls.dynamic import dynamic_output_feedback
-from asoc.mjls.examples import SEC354_X0, SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system, sec373_system
+from asoc.mjls.examples import (SEC354_X0, SEC373_COV0, SEC373_MEAN0, SEC373_MU0, networked_loop, sec354_system,
+                                sec373_system)
+from asoc.mjls.exact import exact_dynamic_output_feedback
 from asoc.mjls.finite_horizon import finite_horizon_dynamic_output_feedback
 from asoc.mjls.simulate import DynamicOutputFeedback, StaticGain, simulate
 from asoc_companion.timing import alternating_medians
 
 
-@pytest.mark.parametrize("moments", ["step", "exact"])
+@pytest.mark.parametrize("moments", ["auto", "step", "exact"])
 @pytest.mark.parametrize("t", [1, 2])
 def test_alg31_per_gain(benchmark, t, moments):
     """Alg. 3.1, Sec. 3.5.4 output feedback (one gain)."""
@@ -67,6 +69,20 @@ def test_alg32(benchmark):
     """Alg. 3.2 on the Sec. 3.7.3 example (T[1])."""
     benchmark.extra_info["target_s"] = 0.05
     benchmark.pedantic(dynamic_output_feedback, args=(sec373_system(1),), rounds=5)
+
+
+def test_alg32_networked_loop(benchmark):
+    """Alg. 3.2 on the networked loop of issue 26: it stops on its 2-cycle (before: 10,000 iterations)."""
+    r = benchmark.pedantic(dynamic_output_feedback, args=(networked_loop(),), kwargs={"warn": False}, rounds=5)
+    assert r.status == "cycle"
+    benchmark.extra_info.update(target_s=0.2, iterations=r.iterations)
+
+
+def test_exact_design_networked_loop(benchmark):
+    """exact_dynamic_output_feedback on the networked loop of issue 26 (3 states, 2 modes), from its default start."""
+    r = benchmark.pedantic(exact_dynamic_output_feedback, args=(networked_loop(),), rounds=5)
+    assert r.converged
+    benchmark.extra_info.update(target_s=0.2, iterations=r.iterations)
 
 
 def test_alg33_horizon_100(benchmark):

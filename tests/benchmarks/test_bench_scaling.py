@@ -1,4 +1,4 @@
-"""Scaling targets of issue 17: the Chapter 3 algorithms at up to 64 states and 8 modes.
+"""Scaling targets of issues 17 and 26: the Chapter 3 algorithms at up to 100 states and 100 modes.
 
 Run: ``PYTHONPATH=$PWD/src .venv/bin/python -m pytest tests/benchmarks/test_bench_scaling.py
 --benchmark-only -p no:cacheprovider``. Each benchmark puts its target in
@@ -6,7 +6,8 @@ Run: ``PYTHONPATH=$PWD/src .venv/bin/python -m pytest tests/benchmarks/test_benc
 ``extra_info["ratio"]`` and ``extra_info["target_ratio"]``. A missed target is reported, not
 asserted: timings depend on the machine and its load. The systems come from
 :func:`asoc_companion.scaling.scaling_system` (mode matrices of spectral norm 0.95,
-Dirichlet rows of T) with fixed seeds.
+Dirichlet rows of T) with fixed seeds. Every benchmark runs its algorithm to the documented
+stopping rule; a per-iteration figure says so in its name.
 """
 
 import time
@@ -18,8 +19,7 @@ import pytest
 
 from asoc.mjls import (StaticGain, dynamic_output_feedback, exact_dynamic_output_feedback,
                        ms_spectral_radius, simulate, static_output_feedback)
-from asoc.mjls.exact import averaged_lqg
-from asoc_companion.scaling import scaling_system
+from asoc_companion.scaling import published_size_system, scaling_system
 from asoc_companion.timing import fitted_exponent, time_call
 from asoc.mjls.operators import ms_operator
 from asoc.mjls.spectral import spectral_radius
@@ -58,36 +58,60 @@ def test_alg31_exact_n64_m8(benchmark):
 
 
 def test_alg32_n32_m8(benchmark):
-    """n = 32, M = 8: Alg. 3.2 under 20 s.
+    """n = 32, M = 8: Alg. 3.2 to its stopping rule under 20 s.
 
-    On this family Alg. 3.2 does not converge (it settles into a 2-cycle of stabilising
-    controllers, see the Scaling page), and one iteration solves (3.51), n^2 + 2 n ny = 1280
-    unknowns: matrix-free by conjugate gradients (``dynamic.MATRIX_FREE_MIN_UNKNOWNS``; the
-    dense lstsq took about 15 s per iteration, 296 s in all). It is timed for 20 iterations;
-    the target is the issue's for a whole run, so a time above it means the target is missed.
-    """
+    On this family Alg. 3.2 does not converge: its bounds wander (the ill-posed (3.51), see
+    :mod:`asoc.mjls.dynamic`), and the run stops with status "no_progress". One iteration
+    solves (3.51), n^2 + 2 n ny = 1280 unknowns, matrix-free by conjugate gradients."""
     s = system(32, 8)
+    r = benchmark.pedantic(lambda: dynamic_output_feedback(s, warn=False), rounds=1, iterations=1)
+    benchmark.extra_info.update(target_s=20.0, iterations=r.iterations, status=r.status)
+
+
+@pytest.mark.parametrize("n, M, target", [(16, 4, 2.0), (32, 8, 20.0), (32, 16, 60.0)])
+def test_exact_dynamic_output_feedback(benchmark, n, M, target):
+    """exact_dynamic_output_feedback from its default start (a bounded Alg. 3.2 run or the
+    averaged LQG compensator) to convergence: 2 s at n = 16, M = 4; 20 s at n = 32, M = 8;
+    60 s at n = 32, M = 16 (64 augmented states, M n^2 = 65,536 at M = 16)."""
+    s = system(n, M)
+    r = benchmark.pedantic(lambda: exact_dynamic_output_feedback(s), rounds=1, iterations=1)
+    assert r.converged and r.stabilizing
+    benchmark.extra_info.update(target_s=target, iterations=r.iterations)
+
+
+@pytest.fixture(scope="module")
+def published():
+    """n = 100, M = 100, nu = ny = 12, open-loop rho 0.99 (the largest MJLS in public code we found)."""
+    return published_size_system(np.random.default_rng(26))
+
+
+def test_alg31_n100_m100(benchmark, published):
+    """n = 100, M = 100: Alg. 3.1 (moments="auto") to its stopping rule under 30 s."""
+    r = benchmark.pedantic(lambda: static_output_feedback(published, warn=False), rounds=1, iterations=1)
+    benchmark.extra_info.update(target_s=30.0, iterations=r.iterations, status=r.status)
+
+
+def test_ms_spectral_radius_n100_m100(benchmark, published):
+    """n = 100, M = 100: rho of the open loop under 10 s (M n^2 = 1e6)."""
+    rho = benchmark.pedantic(lambda: ms_spectral_radius(published.A, published.T), rounds=1, iterations=1)
+    assert rho == pytest.approx(0.99, rel=1e-8)
+    benchmark.extra_info.update(target_s=10.0)
+
+
+def test_monte_carlo_n100_m100(benchmark, published):
+    """n = 100, M = 100: 1,000 runs x 100 steps under 30 s and 4 GB (peak traced by tracemalloc)."""
+    gain = StaticGain(np.zeros((published.nu, published.ny)))
 
     def run():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            return dynamic_output_feedback(s, max_iter=20)
-    r = benchmark.pedantic(run, rounds=1, iterations=1)
-    assert r.iterations == 20
-    benchmark.extra_info.update(target_s=20.0, iterations=r.iterations, converged=r.converged)
-
-
-def test_exact_dynamic_output_feedback_n16_m4(benchmark):
-    """n = 16, M = 4: exact_dynamic_output_feedback under 60 s; 32 augmented states, M n^2 = 4096.
-
-    Started from the LQG compensator of the mode-averaged system (the default start, Alg.
-    3.2's controller, does not converge on this family; the zero controller is a stationary
-    point of the cost, where BFGS stops at once)."""
-    s = system(16, 4)
-    start = averaged_lqg(s, 16)
-    r = benchmark.pedantic(lambda: exact_dynamic_output_feedback(s, init=start), rounds=1, iterations=1)
-    assert r.converged and r.stabilizing
-    benchmark.extra_info.update(target_s=60.0, iterations=r.iterations)
+        tracemalloc.start()
+        out = simulate(published, gain, np.zeros(published.nx), 100, 1000, np.random.default_rng(0))
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        return out, peak
+    r, peak = benchmark.pedantic(run, rounds=1, iterations=1)
+    assert r.cost.shape == (1000,) and np.all(np.isfinite(r.cost))
+    assert peak < 4e9
+    benchmark.extra_info.update(target_s=30.0, peak_gb=peak / 1e9, target_gb=4.0)
 
 
 def test_monte_carlo_n64_m8(benchmark):
@@ -119,8 +143,8 @@ def test_exponent_ms_spectral_radius_m8(benchmark):
                                 seconds=dict(zip(map(str, sizes), seconds)))
 
 
-def test_exponent_alg31_exact_m4(benchmark):
-    """Fitted exponent of Alg. 3.1 (moments="exact") against n = 16..64 at M = 4 (target <= 3).
+def test_exponent_alg31_exact_per_iteration_m4(benchmark):
+    """Fitted exponent of Alg. 3.1's time per iteration (moments="exact") against n = 16..64 at M = 4 (target <= 3).
 
     Per iteration: the number of iterations depends on the system, not on the method; from
     n = 16 on, both phases run matrix-free (at n = 8, M n^2 = 256 is on the dense side)."""

@@ -1,26 +1,66 @@
-"""Chapter 3: Markov jump linear systems (MJLS) without mode observation.
+"""Markov jump linear systems whose mode the controller does not observe (Chapter 3).
 
-The model (3.7): x_{k+1} = A_theta x_k + B_theta u_k + H_theta w_k, y_k = C_theta x_k (+ J_theta v_k),
-with a Markov chain theta_k (transition matrix T) that the controller does not observe.
+The model: x_{k+1} = A_i x_k + B_i u_k + H_i w_k, y_k = C_i x_k + J_i v_k while the mode
+theta_k = i, a Markov chain with transition matrix T. By task:
 
-Modules: ``system`` (the model), ``operators`` (the second-moment operator of Cor. 3.2 and the
-closed loops), ``spectral`` (Cor. 3.2: rho with a certified bracket, the verdict), ``certificate`` (its
-Collatz-Wielandt bounds),
-``lyapunov`` (coupled Lyapunov equations), ``moments`` (Prop. 3.7, 3.14),
-``static`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12), ``dynamic`` (Alg. 3.2), ``finite_horizon``
-(Alg. 3.3), ``observed`` and ``optimal_observed`` (the mode-observing optimum [38] for
-state feedback and for output feedback), ``baselines`` ([52], [163], [165]),
-``intractability`` (Sec. 3.4), ``exact`` (exact-cost optimisation of (3.37) and (3.55),
-not in the thesis), ``simulate`` (Monte Carlo), ``examples`` (the thesis's
-examples), ``comparison`` (Table 3.2).
+Build a system
+    :class:`MJLS` (matrices per mode), :meth:`MJLS.from_statespace` (python-control
+    StateSpace objects, weights optional), :func:`random_mjls`; the thesis's examples and a
+    networked loop in :mod:`asoc.mjls.examples`.
+Analyse
+    :func:`ms_spectral_radius` (mean-square stable iff < 1), :func:`mean_square_stability`
+    (a certified bracket of the spectral radius and its verdict), :func:`closed_loop`,
+    :func:`second_moments`, :func:`steady_state_second_moment`.
+Design a static gain u = L y
+    :func:`static_output_feedback` (with ``moments="auto"`` it picks the faster of two
+    exact iterations), :func:`static_output_lmi` (a stabilising gain from LMIs).
+Design a dynamic controller x^+ = F x^ + K y, u = L x^
+    :func:`exact_dynamic_output_feedback` (smallest exact cost; the one to use),
+    :func:`dynamic_output_feedback` (the thesis's Alg. 3.2, which minimises a bound and may
+    stop on a cycle), :func:`min_radius_dynamic_output_feedback` (most stable), and for a
+    finite horizon :func:`finite_horizon_dynamic_output_feedback`,
+    :func:`exact_finite_horizon_dynamic_output_feedback`.
+Simulate
+    :func:`simulate` (Monte Carlo) takes any design result or :class:`Controller`.
+Compare
+    :func:`average_cost` (exact), :func:`finite_horizon_cost`, :mod:`asoc.mjls.comparison`
+    (Table 3.2's Monte Carlo comparison), :func:`mode_observed_lqg` (the mode-observing
+    optimum, a lower bound).
+
+Every design returns a result with ``.controller``, ``.cost``, ``.stabilizing``, ``.status``
+and ``.message``. Example, a loop that loses input packets:
+
+>>> import numpy as np
+>>> from asoc.mjls.examples import networked_loop
+>>> sys = networked_loop()
+>>> round(ms_spectral_radius(sys.A, sys.T), 3)
+0.811
+>>> static = static_output_feedback(sys)
+>>> dynamic = exact_dynamic_output_feedback(sys)
+>>> static.status, dynamic.status, bool(dynamic.cost < static.cost)
+('converged', 'converged', True)
+>>> runs = simulate(sys, dynamic, np.zeros(3), 100, 500, np.random.default_rng(0))
+>>> bool(abs(runs.average_cost.mean() - dynamic.cost) < 0.1 * dynamic.cost)
+True
+
+The thesis's numbers. Modules: ``system`` (the model (3.7)), ``operators`` (the
+second-moment operator and the closed loops), ``spectral`` and ``certificate`` (Cor. 3.2: rho
+with a certified bracket, the verdict), ``lyapunov`` (coupled Lyapunov equations),
+``moments`` (Prop. 3.7, 3.14), ``static`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12),
+``bound``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26, (3.49)-(3.51)),
+``finite_horizon`` (Alg. 3.3), ``observed`` and ``optimal_observed`` (the mode-observing
+optimum [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
+``gradients`` and ``exact`` (exact-cost optimisation of (3.37) and (3.55), not in the
+thesis), ``simulate`` (Monte Carlo), ``examples`` (the thesis's examples), ``comparison``
+(Table 3.2).
 """
 
+from .comparison import average_cost
 from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
                       steady_state_cost)
-from .exact import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, MinRadiusResult,
-                    average_cost_and_gradient, exact_dynamic_output_feedback,
-                    exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
-                    radius_and_gradient)
+from .exact import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, exact_dynamic_output_feedback,
+                    exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback)
+from .gradients import average_cost_and_gradient, radius_and_gradient
 from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback)
 from .lmi import LMIResult, static_output_lmi
@@ -32,7 +72,7 @@ from .simulate import (Controller, DynamicOutputFeedback, ModeDependentGain, Sim
                        StaticGain, TimeVariantGain, simulate)
 from .operators import closed_loop, ms_operator
 from .spectral import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
-from .static import StaticOutputFeedbackResult, gain_from_moments, static_output_feedback
+from .static import StaticOutputFeedbackResult, gain_from_moments, static_cost, static_output_feedback
 from .system import MJLS, predecessor_sum, successor_average, stationary_distribution
 
 __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator", "ms_spectral_radius",
@@ -47,4 +87,4 @@ __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribut
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
            "min_radius_dynamic_output_feedback", "radius_and_gradient", "ExactDynamicOutputFeedbackResult",
-           "ExactFiniteHorizonResult", "MinRadiusResult", "random_mjls"]
+           "ExactFiniteHorizonResult", "random_mjls", "average_cost", "static_cost"]

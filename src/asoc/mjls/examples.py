@@ -1,4 +1,4 @@
-"""The numerical examples of Chapter 3, with the thesis's parameters."""
+"""The numerical examples of Chapter 3, with the thesis's parameters, and the networked loop of issue 26."""
 
 import numpy as np
 
@@ -79,3 +79,29 @@ def sec373_system(T: int = 1) -> MJLS:
     choice(T, "T", tuple(SEC373_T))
     return MJLS(A=SEC354_A, B=SEC354_B, C=SEC373_C, H=0.2 * np.eye(2), Q=np.eye(2), R=np.eye(1),
                 T=SEC373_T[T], J=0.1 * np.ones((1, 1)))
+
+
+# Not in the thesis: a networked loop whose input packets are lost (issue 26).
+NETWORKED_A = np.array([[0.24, 0.58, 0.23], [-0.92, 0.64, 0.32], [-0.38, 0.41, 0.26]])
+NETWORKED_B = np.array([[0.03], [0.55], [-0.74]])
+NETWORKED_C = np.array([[-0.16, -0.48, 0.6]])
+NETWORKED_T = np.array([[0.9, 0.1], [0.6, 0.4]])
+
+
+def networked_loop() -> MJLS:
+    """A 3-state plant controlled over a network that loses input packets; not in the thesis.
+
+    Mode 1: the packet arrives (B = NETWORKED_B); mode 2: it is lost (B = 0). A lost packet is
+    followed by another with probability 0.4, a delivered one by a loss with probability 0.1
+    (T = [[0.9, 0.1], [0.6, 0.4]]). y = C x without measurement noise, H = 0.1 I, Q = I, R = 1;
+    A has spectral radius 0.90. Alg. 3.2 settles into a 2-cycle on it
+    (:mod:`asoc.mjls.dynamic`).
+
+    Examples
+    --------
+    >>> sys = networked_loop()
+    >>> sys.M, sys.nx, sys.B[1].ravel().tolist(), sys.mu_inf.round(3).tolist()
+    (2, 3, [0.0, 0.0, 0.0], [0.857, 0.143])
+    """
+    return MJLS(A=NETWORKED_A, B=[NETWORKED_B, np.zeros_like(NETWORKED_B)], C=NETWORKED_C, H=0.1 * np.eye(3), Q=np.eye(3),
+                R=np.eye(1), T=NETWORKED_T)

@@ -24,12 +24,15 @@ from functools import cached_property
 
 import numpy as np
 
-from .dynamic import (METHODS, _T, bound_costate_step, bound_moment_step, dynamic_output_feedback,
-                      gains_from_bounds, noise_covariances)
+from ..linalg import transpose
 from ..progress import progress_bar
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
+from .bound import bound_costate_step, bound_moment_step
+from .dynamic import dynamic_output_feedback
 from .moments import second_moment_step
+from .operators import noise_covariances
+from .optimality import METHODS, gains_from_bounds
 from .system import MJLS, successor_average
 
 
@@ -65,7 +68,7 @@ class FiniteHorizonResult(IterativeResult):
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
     >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
-    >>> res.status, res.Xbar.shape, res.controller().time_variant
+    >>> res.status, res.Xbar.shape, res.controller.time_variant
     ('converged', (6, 2, 2, 2), True)
     """
 
@@ -83,8 +86,9 @@ class FiniteHorizonResult(IterativeResult):
     rejected: int = 0
     seconds: float = 0.0
 
+    @property
     def controller(self):
-        """The controller (3.55) for :func:`asoc.mjls.simulate`."""
+        """The controller (3.55) as a time-variant :class:`asoc.mjls.DynamicOutputFeedback`."""
         return time_variant_controller(self)
 
 
@@ -248,7 +252,7 @@ def augmented_initial_moment(mean0, cov0, mu0, xhat0):
     X0 = np.zeros((M, nx + nc, nx + nc))
     X0[:, :nx, :nx] = cov0 + np.einsum("ia,ib->iab", mean0, mean0)
     X0[:, :nx, nx:] = np.einsum("ia,b->iab", mean0, xhat0)
-    X0[:, nx:, :nx] = _T(X0[:, :nx, nx:])
+    X0[:, nx:, :nx] = transpose(X0[:, :nx, nx:])
     X0[:, nx:, nx:] = np.outer(xhat0, xhat0)
     return mu0[:, None, None] * X0
 
@@ -354,8 +358,20 @@ def _bound_to_go(s, F, K, L, Xbar, Xunder, EPbar, EPunder, Eomega, mu, HHt, JJt)
     return Pbar, Punder, omega, J
 
 
-def _initial_gains(init, st, nx, ny, nu):
-    """Step 1: the initial gain sequence (see :func:`finite_horizon_dynamic_output_feedback`)."""
+def initial_gains(init, st, nx, ny, nu):
+    """Step 1: the initial gain sequence (see :func:`finite_horizon_dynamic_output_feedback`).
+
+    ``init``: None (Alg. 3.2's controller), a Generator (uniform random gains), a result
+    with F, K, L or a tuple (F, K, L), constant or per step; returns (F, K, L) per step.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> st = stages(sec373_system(1), 3)
+    >>> F, K, L = initial_gains((np.eye(2), np.ones((2, 1)), np.ones((1, 2))), st, 2, 1, 1)
+    >>> F.shape, K.shape, L.shape
+    ((3, 2, 2), (3, 2, 1), (3, 1, 2))
+    """
     horizon = st.horizon
     if init is None:
         init = dynamic_output_feedback(st.systems[0], warn=False)
@@ -455,7 +471,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     choice(method, "method", METHODS)
     safeguard, warn, progress = (boolean(v, n) for v, n in ((safeguard, "safeguard"), (warn, "warn"),
                                                              (progress, "progress")))
-    F, K, L = _initial_gains(init, st, nx, ny, nu)
+    F, K, L = initial_gains(init, st, nx, ny, nu)
     xhat0, Xbar0, Xunder0 = initial_bounds(mean0, cov0, mu0)
     mu = mode_distributions(st, mu0)
     Xbar = np.empty((K_ + 1, M, nx, nx))

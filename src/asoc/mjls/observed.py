@@ -21,7 +21,7 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, integer, real_scalar
-from .spectral import ms_spectral_radius
+from .spectral import mean_square_stability
 from .system import check_system
 
 DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as Alg. 3.2's bounds)
@@ -39,7 +39,12 @@ class ObservedModeResult(IterativeResult):
         Solution of the coupled algebraic Riccati equations.
     rho : float
         Mean-square spectral radius of the closed loop (Cor. 3.2).
-    stabilizing : bool
+    stabilizing : bool or None
+        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
+        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
+        (undecided).
+    rho_bracket : tuple of float
+        (rho_lower, rho_upper), the certified bracket of rho.
     converged, status, message
         Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
         ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
@@ -57,9 +62,18 @@ class ObservedModeResult(IterativeResult):
     L: np.ndarray
     P: np.ndarray
     rho: float
-    stabilizing: bool
+    rho_bracket: tuple = (np.nan, np.nan)
+    stabilizing: bool | None
     iterations: int
     seconds: float
+
+    @property
+    def controller(self):
+        """u = L_theta x as a :class:`asoc.mjls.ModeDependentGain` (it observes the mode; the
+        state is the output of the systems this design is for, C = I)."""
+        from .simulate import ModeDependentGain
+
+        return ModeDependentGain(self.L)
 
 
 def riccati_step(sys, P):
@@ -146,9 +160,10 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
             break
     try:
         L, _ = riccati_step(sys, P)
-        rho = ms_spectral_radius(sys.A + sys.B @ L, sys.T)
+        stability = mean_square_stability(sys.A + sys.B @ L, sys.T)
+        rho, stabilizing, bracket = stability.rho, stability.stabilizing, stability.bracket
     except np.linalg.LinAlgError:
-        L, rho = np.full((sys.M, sys.nu, sys.nx), np.nan), np.inf
+        L, rho, stabilizing, bracket = np.full((sys.M, sys.nu, sys.nx), np.nan), np.inf, False, (np.inf, np.inf)
     message = {"converged": f"converged after {it} steps (relative change {delta:.2g} < tol = {tol:.2g})",
                "max_iterations": f"did not converge in {it} steps (relative change {delta:.2g} >= tol = {tol:.2g})",
                "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "
@@ -156,7 +171,8 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
                "linalg_error": f"stopped at step {it}: R_i + B_i^T E_i(P) B_i is singular"}[status]
     if warn and status != "converged":
         warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
-    elif warn and rho >= 1:
-        warnings.warn(f"CARE gains do not stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning, stacklevel=2)
-    return ObservedModeResult(L=L, P=P, rho=rho, stabilizing=bool(rho < 1), converged=status == "converged",
+    elif warn and not stabilizing:
+        warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning,
+                      stacklevel=2)
+    return ObservedModeResult(L=L, P=P, rho=rho, rho_bracket=bracket, stabilizing=stabilizing, converged=status == "converged",
                               status=status, message=message, iterations=it, seconds=time.perf_counter() - start)

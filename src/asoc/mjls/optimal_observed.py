@@ -34,9 +34,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .finite_horizon import (_T, augmented_cost, augmented_initial_moment, check_initial_state,
-                             mode_distributions, stages)
+from ..linalg import transpose
 from ..validation import real_array
+from .finite_horizon import (augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions,
+                             stages)
 from .simulate import Controller
 from .system import check_system
 
@@ -151,10 +152,10 @@ def control_riccati(st):
     for k in range(K_ - 1, -1, -1):
         s = st.systems[k]
         EX = s.successor_average(X[k + 1])
-        BtEX = _T(s.B) @ EX
+        BtEX = transpose(s.B) @ EX
         F[k] = -np.linalg.solve(s.R + BtEX @ s.B, BtEX @ s.A)
-        Xk = s.Q + _T(s.A) @ EX @ (s.A + s.B @ F[k])
-        X[k] = 0.5 * (Xk + _T(Xk))
+        Xk = s.Q + transpose(s.A) @ EX @ (s.A + s.B @ F[k])
+        X[k] = 0.5 * (Xk + transpose(Xk))
     return F, X
 
 
@@ -178,11 +179,11 @@ def markov_jump_filter(st, Y0, mu):
     Y[0] = Y0
     for k, s in enumerate(st.systems):
         CY = s.C @ Y[k]
-        Sigma = CY @ _T(s.C) + mu[k][:, None, None] * st.JJt[k]
-        Mf[k] = s.A @ _T(CY) @ np.linalg.pinv(Sigma, hermitian=True)
-        inner = s.A @ Y[k] @ _T(s.A) - Mf[k] @ CY @ _T(s.A) + mu[k][:, None, None] * st.HHt[k]
+        Sigma = CY @ transpose(s.C) + mu[k][:, None, None] * st.JJt[k]
+        Mf[k] = s.A @ transpose(CY) @ np.linalg.pinv(Sigma, hermitian=True)
+        inner = s.A @ Y[k] @ transpose(s.A) - Mf[k] @ CY @ transpose(s.A) + mu[k][:, None, None] * st.HHt[k]
         Yn = s.predecessor_sum(inner)
-        Y[k + 1] = 0.5 * (Yn + _T(Yn))
+        Y[k + 1] = 0.5 * (Yn + transpose(Yn))
     return Mf, Y
 
 
@@ -249,9 +250,9 @@ def _closed_loop_cost(st, F, Mf, mean0, cov0, mu0, xhat0):
         A[:, :nx, :nx], A[:, :nx, nx:] = s.A, BF
         A[:, nx:, :nx], A[:, nx:, nx:] = MC, s.A + BF - MC
         HH = np.zeros_like(A)
-        HH[:, :nx, :nx], HH[:, nx:, nx:] = st.HHt[k], Mf[k] @ st.JJt[k] @ _T(Mf[k])
+        HH[:, :nx, :nx], HH[:, nx:, nx:] = st.HHt[k], Mf[k] @ st.JJt[k] @ transpose(Mf[k])
         Q = np.zeros_like(A)
-        Q[:, :nx, :nx], Q[:, nx:, nx:] = s.Q, _T(F[k]) @ s.R @ F[k]
+        Q[:, :nx, :nx], Q[:, nx:, nx:] = s.Q, transpose(F[k]) @ s.R @ F[k]
         Acl.append(A), HHcl.append(HH), Qcl.append(Q)
     Q_final = np.zeros_like(Acl[0])
     Q_final[:, :nx, :nx] = st.Q_final

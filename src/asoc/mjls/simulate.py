@@ -51,6 +51,24 @@ class Controller:
         """Raise a ValueError when the controller does not fit ``sys`` (default: accept)."""
 
 
+def as_controller(controller, name="controller"):
+    """The Controller itself, or the ``.controller`` of a design result; else a TypeError.
+
+    Examples
+    --------
+    >>> from asoc.mjls import static_output_feedback
+    >>> from asoc.mjls.examples import sec354_system
+    >>> as_controller(static_output_feedback(sec354_system(1))).L.round(4)
+    array([[-0.635]])
+    """
+    if not isinstance(controller, Controller) and isinstance(getattr(controller, "controller", None), Controller):
+        controller = controller.controller
+    if not isinstance(controller, Controller):
+        raise TypeError(f"{name}: expected an asoc.mjls.Controller (e.g. StaticGain) or a design result "
+                        f"with .controller, found {type(controller).__name__}")
+    return controller
+
+
 def _fit(array, name, shape, sys):
     if array.shape != shape:
         raise ValueError(f"{name}: expected shape {shape} for the system (M={sys.M}, nx={sys.nx}, "
@@ -324,8 +342,10 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     Parameters
     ----------
     sys : MJLS
-    controller : Controller
-        E.g. :class:`StaticGain`, :class:`DynamicOutputFeedback`, :class:`ModeDependentGain`.
+    controller : Controller or a design result
+        E.g. :class:`StaticGain`, :class:`DynamicOutputFeedback`, :class:`ModeDependentGain`,
+        or the result of a design (``static_output_feedback(sys)``, ...), whose
+        ``.controller`` is used.
     x0 : array_like, (nx,) or (M, nx)
         Initial state, or per-mode means of a Gaussian mixture (Sec. 3.7).
     horizon : int
@@ -371,9 +391,7 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     ((200,), True)
     """
     check_system(sys)
-    if not isinstance(controller, Controller):
-        raise TypeError(f"controller: expected an asoc.mjls.Controller (e.g. StaticGain), "
-                        f"found {type(controller).__name__}")
+    controller = as_controller(controller)
     controller.check(sys)
     x0 = real_array(x0, "x0")
     if x0.shape not in ((sys.nx,), (sys.M, sys.nx)):

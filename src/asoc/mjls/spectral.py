@@ -86,6 +86,22 @@ class MeanSquareStability:
         """True (certified stable), False (certified unstable) or None (undecided)."""
         return {Verdict.STABLE: True, Verdict.UNSTABLE: False, Verdict.UNDECIDED: None}[self.verdict]
 
+    @property
+    def bracket(self) -> tuple[float, float]:
+        """(rho_lower, rho_upper), the certified bracket of rho."""
+        return (self.rho_lower, self.rho_upper)
+
+    def sentence(self) -> str:
+        """rho, its certified bracket and the verdict in words, for messages.
+
+        Examples
+        --------
+        >>> mean_square_stability(np.array([[[1.0]]]), np.eye(1)).sentence()
+        'rho = 1.0000, certified in [1, 1]: undecided'
+        """
+        return (f"rho = {self.rho:.4f}, certified in [{self.rho_lower:.6g}, {self.rho_upper:.6g}]: "
+                f"{self.verdict.value}")
+
 
 def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
     """Spectral radius rho of the second-moment operator (Cor. 3.2): mean-square stable iff rho < 1.

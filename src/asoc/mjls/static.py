@@ -1,4 +1,18 @@
-"""Static output feedback u_k = L y_k without mode observation (Sec. 3.5.3, Alg. 3.1)."""
+"""Static output feedback u_k = L y_k without mode observation (Sec. 3.5.3, Alg. 3.1).
+
+Measurement noise. The thesis's model (3.7) for Alg. 3.1 has y = C x; with the noise of
+Sec. 3.6, y = C x + J v (v standard normal), u = L y gives
+
+    x_{k+1} = (A_i + B_i L C_i) x_k + B_i L J_i v_k + H_i w_k,
+
+so the second-moment recursion (3.35) gains the term B_i L J_i J_i^T L^T B_i^T mu_i next to
+H_i H_i^T mu_i, and the stage cost E{u^T R u 1(theta = i)} = tr[R_i L (C_i X_i C_i^T +
+mu_i J_i J_i^T) L^T] the term tr[R_i L J_i J_i^T L^T] mu_i. The costate (3.33) does not
+change (the noise enters neither A_cl nor the weights). Setting the derivative of the
+Lagrangian over L to zero, the term of the noise adds R_i L mu_i J_i J_i^T and
+B_i^T E_i(P) B_i L mu_i J_i J_i^T, so in (3.31) and (3.34) C_i X_i C_i^T becomes
+C_i X_i C_i^T + mu_i J_i J_i^T. With J = 0 (J = None) nothing changes.
+"""
 
 import math
 import time
@@ -9,13 +23,13 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
-from .moments import h2_cost, steady_state_second_moment
+from .. import config
+from ..linalg import relative_change, transpose
 from .lyapunov import coupled_lyapunov_solver
-from .operators import closed_loop
-from .spectral import ms_spectral_radius, spectral_radius
+from .operators import closed_loop, gain_matrix, noise_covariances
+from .spectral import mean_square_stability, spectral_radius
+from .scaled import Cycle, ScaledPair
 from .system import check_system, predecessor_sum, successor_average
-
-GAIN_FLOOR = 1e-12     # absolute floor of the gain's norm in its relative change (a zero gain converges)
 
 
 @dataclass(kw_only=True)
@@ -33,8 +47,12 @@ class StaticOutputFeedbackResult(IterativeResult):
     iterations : int
     rho : float
         Mean-square spectral radius of the closed loop (Cor. 3.2).
-    stabilizing : bool
-        rho < 1.
+    stabilizing : bool or None
+        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
+        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
+        (undecided).
+    rho_bracket : tuple of float
+        (rho_lower, rho_upper), the certified bracket of rho.
     cost : float
         H2 cost (Prop. 3.7) of L; inf when not stabilizing.
     X, P : numpy.ndarray, shape (M, nx, nx)
@@ -48,23 +66,34 @@ class StaticOutputFeedbackResult(IterativeResult):
     --------
     >>> from asoc.mjls.examples import sec354_system
     >>> res = static_output_feedback(sec354_system(1), max_iter=3, warn=False)
-    >>> res.converged, res.status, res.iterations
-    (False, 'max_iterations', 3)
+    >>> res.converged, res.status, res.iterations, type(res.controller).__name__
+    (False, 'max_iterations', 3, 'StaticGain')
     """
 
     L: np.ndarray
     iterations: int
     rho: float
-    stabilizing: bool
+    rho_bracket: tuple = (np.nan, np.nan)
+    stabilizing: bool | None
     cost: float
     X: np.ndarray
     P: np.ndarray
     history: dict = field(repr=False)
     seconds: float = 0.0
 
+    @property
+    def controller(self):
+        """u = L y as a :class:`asoc.mjls.StaticGain`, for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`."""
+        from .simulate import StaticGain
 
-def gain_from_moments(sys, X, P, method="vec", R=None):
+        return StaticGain(self.L)
+
+
+def gain_from_moments(sys, X, P, method="vec"):
     """L solving (3.31) for given X^i, P^i: Prop. 3.18 (``"vec"``) or its SDP (``"sdp"``).
+
+    With measurement noise J, C_i X_i C_i^T is C_i X_i C_i^T + mu_inf,i J_i J_i^T (module
+    docstring).
 
     Parameters
     ----------
@@ -73,8 +102,6 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
         Second moments and multipliers.
     method : {"vec", "sdp"}
         Solve the vectorised linear equation (3.34) or the SDP of Prop. 3.18.
-    R : numpy.ndarray, shape (M, nu, nu), optional
-        Overrides sys.R (used by Alg. 3.1's scaled iteration).
 
     Returns
     -------
@@ -100,12 +127,10 @@ def gain_from_moments(sys, X, P, method="vec", R=None):
     check_system(sys)
     X = semidefinite(real_array(X, "X", shape=(sys.M, sys.nx, sys.nx)), "X")
     P = semidefinite(real_array(P, "P", shape=(sys.M, sys.nx, sys.nx)), "P")
-    if R is not None:
-        R = real_array(R, "R", shape=(sys.M, sys.nu, sys.nu))
     choice(method, "method", ("vec", "sdp"))
     EP = successor_average(sys.T, P)
-    S = (sys.R if R is None else R) + np.swapaxes(sys.B, 1, 2) @ EP @ sys.B                     # (M, nu, nu)
-    W = sys.C @ X @ np.swapaxes(sys.C, 1, 2)                                # (M, ny, ny)
+    S = sys.R + transpose(sys.B) @ EP @ sys.B                     # (M, nu, nu)
+    W = sys.C @ X @ transpose(sys.C) + sys.mu_inf[:, None, None] * noise_covariances(sys)[1]   # (M, ny, ny)
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
     if method == "sdp":
         return _gain_sdp(S, W, N)
@@ -138,20 +163,33 @@ class _Recursion:
         self.A, self.B, self.C, self.Bt, self.Ct = sys.A, sys.B, sys.C, swap(sys.B), swap(sys.C)
         self.Q, self.R, self.T, self.Tt = sys.Q, sys.R, sys.T, np.ascontiguousarray(sys.T.T)
         self.muHHt = sys.mu_inf[:, None, None] * (sys.H @ swap(sys.H))
+        self.muJJt = None if sys.J is None else sys.mu_inf[:, None, None] * (sys.J @ swap(sys.J))
         self.nu, self.ny = sys.nu, sys.ny
         self.scalar_gain = sys.nu == sys.ny == 1
 
-    def gain(self, Xs, EP, cP):
-        """(3.34) with R scaled by cP = 1 / s_P."""
+    def terms(self, Xs, EP, cX, cP):
+        """S_i = R_i cP + B_i^T E_i(P) B_i, W_i = C_i Xs_i C_i^T + cX mu_i J_i J_i^T and
+        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables."""
         BtEP = self.Bt @ EP
         S = cP * self.R + BtEP @ self.B
         XCt = Xs @ self.Ct
-        W = self.C @ XCt
-        N = (BtEP @ self.A @ XCt).sum(axis=0)
+        W = self.C @ XCt if self.muJJt is None else self.C @ XCt + cX * self.muJJt
+        return S, W, (BtEP @ self.A @ XCt).sum(axis=0)
+
+    def gain(self, Xs, EP, cX, cP):
+        """(3.34) with R scaled by cP = 1 / s_P and the measurement noise by cX = 1 / s_X."""
+        S, W, N = self.terms(Xs, EP, cX, cP)
         if self.scalar_gain:
             return -N / (W * S).sum()
         lhs = np.einsum("iab,icd->acbd", W, S).reshape(self.ny * self.nu, -1)
         return -np.linalg.solve(lhs, N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
+
+    def noise(self, L):
+        """mu_i (H_i H_i^T + B_i L J_i J_i^T L^T B_i^T): the constant term of (3.35) for the gain L."""
+        if self.muJJt is None:
+            return self.muHHt
+        BL = self.B @ L
+        return self.muHHt + BL @ self.muJJt @ transpose(BL)
 
     def moments(self, L, Xs, EP, cX, cP, out):
         """(3.35) into out[0] (next X, constant term scaled by cX = 1 / s_X) and out[1] (next P, by cP).
@@ -170,87 +208,9 @@ class _Recursion:
             LC = L @ self.C
             LtRL = LC.swapaxes(1, 2) @ self.R @ LC
         Aclt = Acl.swapaxes(1, 2)
-        Y = Acl @ Xs @ Aclt + cX * self.muHHt
+        Y = Acl @ Xs @ Aclt + cX * self.noise(L)
         np.matmul(self.Tt, Y.reshape(len(Y), -1), out=out[0].reshape(len(Y), -1))
         np.add(Aclt @ EP @ Acl, cP * (self.Q + LtRL), out=out[1])
-
-
-class _ScaledPair:
-    """The iterates of Alg. 3.1 in scaled variables, X^i = s_X Xs and P^i = s_P Ps, as one stack
-    [Xs, Ps] of shape (2, M, nx, nx).
-
-    Keeps the log scales, the directions Xs / ||Xs||_F and Ps / ||Ps||_F of Step 4's test and
-    the diagonals of every iterate (the trace histories), so that each new pair is scaled,
-    checked and normalised once; ``next`` receives the unscaled pair of (3.35).
-    """
-
-    def __init__(self, init, M, n):
-        self.stack = np.broadcast_to(init * np.eye(n), (2, M, n, n)).copy()
-        self.log_scales = np.zeros((2, 1, 1, 1))
-        self.next = np.empty_like(self.stack)
-        self._magnitudes = np.empty_like(self.stack)
-        self._units = _unit(self.stack[0]), _unit(self.stack[1])
-        self._diagonals = [self.stack.diagonal(0, 2, 3).copy()]
-        self._logs = [self.log_scales]
-
-    def largest_entries(self):
-        """max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a NaN."""
-        return np.abs(self.next, out=self._magnitudes).max(axis=(1, 2, 3), keepdims=True)
-
-    def accept(self, scales):
-        """Make ``next / scales`` the current pair; return the changes of the directions of X and P."""
-        self.stack = self.next / scales
-        self.log_scales = self.log_scales + np.log(scales)
-        self._diagonals.append(self.stack.diagonal(0, 2, 3).copy())
-        self._logs.append(self.log_scales)
-        units = _unit(self.stack[0]), _unit(self.stack[1])
-        change_X, change_P = units[0] - self._units[0], units[1] - self._units[1]
-        self._units = units
-        return math.sqrt(change_X.dot(change_X)), math.sqrt(change_P.dot(change_P))
-
-    def repeat(self, period, times):
-        """Extend the histories by ``times`` repetitions of their last ``period`` iterates."""
-        self._diagonals.extend(self._diagonals[-period:] * times)
-        self._logs.extend(self._logs[-period:] * times)
-
-    def unscaled(self):
-        """X^i and P^i."""
-        return np.exp(self.log_scales) * self.stack
-
-    def traces(self):
-        """tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
-        traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(axis=3)
-        return traces[:, 0], traces[:, 1]
-
-
-class _Cycle:
-    """Detects an exact cycle of the iteration's state (Brent's method: the state is compared
-    with a checkpoint that moves to the current state after 1, 2, 4, ... steps).
-
-    A step of the scaled iteration is a function of the state (L, Xs, Ps, log scales) alone.
-    When the state after step ``it`` equals, bit for bit, the state after an earlier step,
-    the iteration repeats that period forever: it cannot converge (no step of the period
-    did), and ``max_iter`` is reached with the iterates, changes and histories of the
-    period. Non-stabilising gains can make the rounded iterates cycle in this way.
-    """
-
-    def __init__(self):
-        self.state, self.step, self.window = None, 0, 1
-
-    def period(self, it, L, pair):
-        """The period if the state after step ``it`` repeats the checkpoint's, else None."""
-        if self.state is not None and L.flat[0] == self.state[0].flat[0] and all(
-                a.tobytes() == b.tobytes() for a, b in zip((L, pair.stack, pair.log_scales), self.state)):
-            return it - self.step
-        if it - self.step == self.window:
-            self.state, self.step, self.window = (L, pair.stack, pair.log_scales), it, 2 * self.window
-        return None
-
-
-def _unit(S):
-    """S / ||S||_F as a flat vector."""
-    flat = S.ravel()
-    return flat / math.sqrt(flat.dot(flat))
 
 
 def _finite(L):
@@ -258,21 +218,24 @@ def _finite(L):
     return math.isfinite(L[0, 0]) if L.size == 1 else bool(np.isfinite(L).all())
 
 
-MOMENTS = ("step", "exact")
+MOMENTS = ("auto", "step", "exact")
 
 
 def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, skip_cycles=True):
     """The thesis's iteration (3.34)-(3.35) in scaled variables (see static_output_feedback).
 
-    With ``until_stabilizing`` it also stops at the first stabilising gain. With
-    ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`_Cycle`) is skipped to
+    ``until_stabilizing``: False, "each" (stop at the first stabilising gain, moments="exact")
+    or "slow" (moments="auto": stop at a stabilising gain once :class:`_Rate` predicts more
+    than ``mjls.auto_switch_iterations`` further iterations). With
+    ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`asoc.mjls.scaled.Cycle`) is skipped to
     ``max_iter`` in whole periods: the same result as iterating through them. Returns a dict
     with L, the unscaled X, P, converged, iterations, stabilized and the trace histories.
     """
     M = sys.M
-    pair = _ScaledPair(init, M, sys.nx)
-    cycle = _Cycle() if skip_cycles and method == "vec" else None
+    pair = ScaledPair(init, M, sys.nx)
+    cycle = Cycle() if skip_cycles and method == "vec" else None
     stabilized = False
+    rate = _Rate(tol)
     status, change = "max_iterations", np.inf
     L = np.zeros((sys.nu, sys.ny))
     T = sys.T
@@ -284,9 +247,9 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
         EP = (T @ Ps.reshape(M, -1)).reshape(Ps.shape)
         try:
             if method == "vec":
-                L_new = rec.gain(Xs, EP, cP)
+                L_new = rec.gain(Xs, EP, cX, cP)
             else:
-                L_new = gain_from_moments(sys, Xs, Ps, "sdp", R=sys.R * cP)
+                L_new = _gain_sdp(*rec.terms(Xs, EP, cX, cP))
         except np.linalg.LinAlgError:
             status = "linalg_error"
             break
@@ -296,14 +259,15 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
         if not (math.isfinite(sX) and math.isfinite(sP) and _finite(L_new)):
             status = "diverged"
             break
-        change = max(_relative_change(L, L_new), *pair.accept(scales))
+        change = max(relative_change(L, L_new), *pair.accept(scales))
         L = L_new
         if it > 1 and change < tol:
             status = "converged"
             break
-        if until_stabilizing and spectral_radius(closed_loop(sys, L, check=False), sys.T) < 1:
-            stabilized = True
-            break
+        if until_stabilizing == "each" or (until_stabilizing == "slow" and rate.slow(it, change)):
+            if spectral_radius(closed_loop(sys, L, check=False), sys.T) < 1:
+                stabilized = True
+                break
         period = cycle.period(it, L, pair) if cycle is not None else None
         if period is not None:                          # skip whole periods: the same state after them
             times = (max_iter - it) // period
@@ -316,6 +280,30 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
                 trace_X=trace_X, trace_P=trace_P)
 
 
+class _Rate:
+    """When the thesis's iteration is slow: its change falls by a rate r per iteration,
+    estimated over the last ``window`` iterations; it is slow when log(tol / change) / log r,
+    the iterations still to go, exceeds ``mjls.auto_switch_iterations``. Checked after
+    ``window`` iterations, then at doubling intervals (each check may cost a spectral radius)."""
+
+    window = 10
+
+    def __init__(self, tol):
+        self.tol, self.changes, self.next_check = tol, [], self.window
+        self.threshold = config.defaults["mjls.auto_switch_iterations"]
+
+    def slow(self, it, change):
+        self.changes.append(change)
+        if it < self.next_check or len(self.changes) <= self.window:
+            return False
+        self.next_check = 2 * it
+        first, last = self.changes[-self.window - 1], self.changes[-1]
+        if not (0 < last < first):
+            return True                                 # not contracting: try the exact moments
+        remaining = np.log(self.tol / last) / np.log(last / first) * self.window
+        return remaining > self.threshold
+
+
 def _exact_iteration(sys, rec, L, tol, max_iter, method):
     """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
 
@@ -323,10 +311,13 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl (:func:`asoc.mjls.lyapunov.coupled_lyapunov_solver`:
     one LU factorisation of size M nx^2 for both when small, else BiCGSTAB on the operator).
     Returns the same dict as :func:`_step_iteration`; ``stabilized`` is False when an iterate
-    does not stabilise (the moments have no solution then).
+    does not stabilise (the moments have no solution then). Each gain is first checked by the
+    coupled Lyapunov certificate (:func:`_certified`: P_i > 0 solving P = L*(P) + W with
+    W_i > 0 proves mean-square stability, Costa, Fragoso and Marques 2005, Thm. 3.9), and only
+    where it does not apply by the spectral radius (at n = 100, M = 100 one radius costs
+    about 40 Lyapunov-operator products).
     """
     M = sys.M
-    rhs_X = predecessor_sum(sys.T, rec.muHHt)
     trace_X, trace_P = [], []
     stabilized = True
     status, change = "max_iterations", np.inf
@@ -334,22 +325,24 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
     it = 0
     for it in range(1, max_iter + 1):
         Acl = closed_loop(sys, L, check=False)
-        if not spectral_radius(Acl, sys.T) < 1:
-            stabilized, status = False, "diverged"
-            break
         solve = coupled_lyapunov_solver(Acl, sys.T)
         LC = L @ sys.C
-        X = solve(rhs_X).X
-        P = solve(sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC, adjoint=True).X
+        weight = sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
+        P_solution = solve(weight, adjoint=True)
+        if not (_certified(P_solution, weight) or spectral_radius(Acl, sys.T) < 1):
+            stabilized, status = False, "diverged"
+            break
+        P = P_solution.X
+        X = solve(predecessor_sum(sys.T, rec.noise(L))).X
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
         try:
-            L_new = (rec.gain(X, successor_average(sys.T, P), 1.0) if method == "vec"
-                     else gain_from_moments(sys, X, P, "sdp"))
+            EP = successor_average(sys.T, P)
+            L_new = rec.gain(X, EP, 1.0, 1.0) if method == "vec" else _gain_sdp(*rec.terms(X, EP, 1.0, 1.0))
         except np.linalg.LinAlgError:
             status = "linalg_error"
             break
-        change = _relative_change(L, L_new)
+        change = relative_change(L, L_new)
         L = L_new
         if change < tol:
             status = "converged"
@@ -358,8 +351,21 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
                 trace_X=np.array(trace_X).reshape(-1, M), trace_P=np.array(trace_P).reshape(-1, M))
 
 
+def _certified(solution, weight):
+    """Whether P of ``solution`` (P = L*(P) + weight, solved to its stated residual) and every
+    weight_i are positive definite: then the closed loop is mean-square stable."""
+    if not solution.residual <= 10 * config.defaults["mjls.solve_tolerance"]:
+        return False
+    try:
+        np.linalg.cholesky(weight)
+        np.linalg.cholesky(solution.X)
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.all(np.isfinite(solution.X)))
+
+
 def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True,
-                           moments="step"):
+                           moments="auto"):
     """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
 
     When the gain does not stabilise the MJLS, X^i and P^i grow geometrically while the
@@ -390,8 +396,12 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     warn : bool
         Warn (RuntimeWarning) when the iteration does not converge, or converges to a gain
         that does not stabilise.
-    moments : {"step", "exact"}
-        ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
+    moments : {"auto", "step", "exact"}
+        ``"auto"`` (default): the thesis's iteration, switching to ``"exact"`` at a
+        stabilising gain once the rate of its last 10 changes predicts more than
+        ``config.defaults["mjls.auto_switch_iterations"]`` further iterations (checked after
+        10 iterations, then at doubling intervals). An easy system converges before the
+        switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
         update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
         thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with
         the exact solution of the two moment equations (3.32)-(3.33) for the current gain
@@ -431,7 +441,7 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     warn = boolean(warn, "warn")
     start = time.perf_counter()
     rec = _Recursion(sys)
-    run = _step_iteration(sys, rec, tol, max_iter, init, method, moments == "exact")
+    run = _step_iteration(sys, rec, tol, max_iter, init, method, {"auto": "slow", "exact": "each"}.get(moments, False))
     if run["stabilized"]:
         exact = _exact_iteration(sys, rec, run["L"], tol, max_iter - run["iterations"], method)
         if exact["stabilized"]:
@@ -443,20 +453,18 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
             run = _step_iteration(sys, rec, tol, max_iter, init, method, False)
     seconds = time.perf_counter() - start
     L = run["L"]
-    HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
-    Acl = closed_loop(sys, L, check=False)
-    rho = ms_spectral_radius(Acl, sys.T)
-    stabilizing = bool(rho < 1)
-    cost = h2_cost(sys, L, steady_state_second_moment(Acl, HHt, sys.T, sys.mu_inf)) if stabilizing else np.inf
+    cost, _, stability = _static_cost(sys, L)
+    rho, stabilizing = stability.rho, stability.stabilizing
     status, message = run["status"], _message(run, tol)
     if warn and status != "converged":
         warnings.warn(f"Algorithm 3.1 {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
-        warnings.warn(f"Algorithm 3.1 converged, but the gain does not stabilise the MJLS in the "
-                      f"mean-square sense (rho = {rho:.4f} >= 1, Cor. 3.2)", RuntimeWarning, stacklevel=2)
+        warnings.warn(f"Algorithm 3.1 converged, but the gain is not certified to stabilise the MJLS in the "
+                      f"mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=2)
     history = {"trace_X": run["trace_X"], "trace_P": run["trace_P"]}
     return StaticOutputFeedbackResult(L=L, converged=status == "converged", status=status,
-                                      message=message, iterations=run["iterations"], rho=rho, stabilizing=stabilizing, cost=cost, X=run["X"],
+                                      message=message, iterations=run["iterations"], rho=rho, rho_bracket=stability.bracket,
+                                      stabilizing=stabilizing, cost=cost, X=run["X"],
                                       P=run["P"], history=history, seconds=seconds)
 
 
@@ -471,9 +479,57 @@ def _message(run, tol):
             "linalg_error": f"stopped at iteration {it}: the gain equation (3.34) is singular"}[run["status"]]
 
 
-def _relative_change(old, new):
-    """||new - old||_F / max(||new||_F, GAIN_FLOOR): the relative change of the gain L (Step 4 of
-    Alg. 3.1; the floor lets a zero gain converge)."""
-    a, b = old.ravel(), new.ravel()
-    difference = b - a
-    return math.sqrt(difference.dot(difference)) / max(math.sqrt(b.dot(b)), GAIN_FLOOR)
+def static_cost(sys, L):
+    """The average cost (3.9) of u = L y (Prop. 3.7), with the measurement noise J of Sec. 3.6.
+
+    sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + mu_i tr[R_i L J_i J_i^T L^T], with X the
+    stationary second moment of (3.32) with the noise term mu_i (H_i H_i^T + B_i L J_i J_i^T
+    L^T B_i^T) (module docstring); with J = None, Prop. 3.7 as it stands.
+
+    Parameters
+    ----------
+    sys : MJLS
+    L : array_like, shape (nu, ny)
+
+    Returns
+    -------
+    cost : float
+        inf unless the closed loop is certified mean-square stable.
+    X : numpy.ndarray, shape (M, nx, nx), or None
+        The stationary second moments (None when not stable).
+    stability : MeanSquareStability
+        rho of Cor. 3.2 and its verdict (:func:`asoc.mjls.operators.mean_square_stability`).
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``sys`` is not an MJLS, or ``L`` not a finite real (nu, ny) array.
+
+    Examples
+    --------
+    Noise on the measurement raises the cost of a gain:
+
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> noisy = sys.replace(J=0.5 * np.ones((1, 1)))
+    >>> round(static_cost(sys, [[-0.4]])[0], 4), round(static_cost(noisy, [[-0.4]])[0], 4)
+    (0.7999, 1.7781)
+    """
+
+    check_system(sys)
+    return _static_cost(sys, gain_matrix(L, "L", sys.nu, sys.ny))
+
+
+def _static_cost(sys, L):
+    Acl = closed_loop(sys, L, check=False)
+    stability = mean_square_stability(Acl, sys.T)
+    if not stability.stable:
+        return np.inf, None, stability
+    noise = _Recursion(sys).noise(L)
+    X = coupled_lyapunov_solver(Acl, sys.T)(predecessor_sum(sys.T, noise)).X
+    LC = L @ sys.C
+    cost = np.einsum("iab,iba->", sys.Q + transpose(LC) @ sys.R @ LC, X)
+    if sys.J is not None:
+        LJ = L @ sys.J
+        cost += np.einsum("i,iab,iba->", sys.mu_inf, sys.R, LJ @ transpose(LJ))
+    return float(cost), X, stability

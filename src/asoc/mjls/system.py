@@ -351,12 +351,14 @@ class MJLS:
         return MJLS(**fields)
 
     @classmethod
-    def from_statespace(cls, systems, T, *, Q, R, H, J=None, dt=None, mu_inf=None) -> "MJLS":
+    def from_statespace(cls, systems, T, *, Q=None, R=None, H=None, J=None, dt=None, mu_inf=None) -> "MJLS":
         """The MJLS (3.7) whose mode i is the discrete-time ``control.StateSpace`` ``systems[i]``.
 
         The model (3.7) has no feedthrough (y = C x + J v), so every D must be zero: a
         nonzero D is rejected. The noise and cost matrices are not part of a StateSpace and
-        are given as keywords, as in :class:`MJLS`.
+        are given as keywords, as in :class:`MJLS`; for an analysis (stability, simulation
+        without a design) they may be left out and default to Q = I, R = I and H = I: unit
+        weights on every state and input, unit process noise on every state.
 
         Parameters
         ----------
@@ -364,7 +366,9 @@ class MJLS:
             M discrete-time systems (A_i, B_i, C_i, D_i = 0) of equal sizes and sampling time.
         T : array_like, shape (M, M)
             Transition matrix.
-        Q, R, H, J, mu_inf
+        Q, R, H : array_like, optional
+            As for :class:`MJLS`; default the identity of size nx, nu, nx.
+        J, mu_inf
             As for :class:`MJLS`.
         dt : float, optional
             The sampling time the systems must have; default: theirs.
@@ -394,6 +398,13 @@ class MJLS:
         ...                            H=[[0.1]])
         >>> sys.M, sys.dt, float(sys.A[0, 0, 0])
         (2, 0.1, 1.2)
+
+        For a stability check the weights may be left out:
+
+        >>> from asoc.mjls import ms_spectral_radius
+        >>> plain = MJLS.from_statespace(modes, [[0.9, 0.1], [0.3, 0.7]])
+        >>> plain.Q.ravel().tolist(), round(ms_spectral_radius(plain.A, plain.T), 4)
+        ([1.0, 1.0], 1.3056)
         """
         control = _import_control()
         T = stochastic_matrix(T, "T")
@@ -424,9 +435,11 @@ class MJLS:
             if np.any(np.asarray(s.D) != 0):
                 raise ValueError(f"systems[{i}]: expected D = 0 (the MJLS (3.7) has no feedthrough), "
                                  f"found max |D| = {np.abs(s.D).max():.3g}")
+        nx, nu, _ = sizes[0]
         return cls(A=[np.asarray(s.A, float) for s in systems], B=[np.asarray(s.B, float) for s in systems],
-                   C=[np.asarray(s.C, float) for s in systems], H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf,
-                   dt=found)
+                   C=[np.asarray(s.C, float) for s in systems], H=np.eye(nx) if H is None else H,
+                   Q=np.eye(nx) if Q is None else Q, R=np.eye(nu) if R is None else R, T=T, J=J,
+                   mu_inf=mu_inf, dt=found)
 
     def to_statespace(self, dt=None) -> list:
         """The M modes as discrete-time ``control.StateSpace`` (A_i, B_i, C_i, 0).

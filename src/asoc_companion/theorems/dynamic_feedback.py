@@ -14,7 +14,7 @@ from scipy.linalg import block_diag
 from asoc.linalg import sym, transpose
 from asoc.mjls import average_cost_and_gradient, dynamic_output_feedback, ms_spectral_radius, predecessor_sum
 from asoc.mjls import steady_state_cost, successor_average
-from asoc.mjls.dynamic import augmented_closed_loop, noise_covariances
+from asoc.mjls.operators import augmented_closed_loop, noise_covariances
 from asoc.mjls.finite_horizon import augmented_initial_moment
 from asoc.mjls.operators import ms_operator
 

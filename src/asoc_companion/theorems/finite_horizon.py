@@ -6,8 +6,9 @@ import numpy as np
 
 from asoc.linalg import transpose
 from asoc.mjls import finite_horizon_cost, finite_horizon_dynamic_output_feedback, successor_average
-from asoc.mjls.dynamic import (augmented_closed_loop, bound_costate_step, bound_moment_step, noise_covariances,
-                               optimality_system)
+from asoc.mjls.bound import bound_costate_step, bound_moment_step
+from asoc.mjls.operators import augmented_closed_loop, noise_covariances
+from asoc.mjls.optimality import optimality_system
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 
 from .dynamic_feedback import loop_step, quadratic_form

@@ -211,12 +211,12 @@ def decide_3_19(sys, max_iter=20000):
     L_best, rho_best = best_scalar_gain(sys)
     if not rho_best < 1:
         return outcome("not_applicable", sys, min_rho_over_L=rho_best, best_L=L_best)
-    run = static_output_feedback(sys, max_iter=max_iter, warn=False)
+    run = static_output_feedback(sys, max_iter=max_iter, warn=False, moments="step")
     numbers = dict(min_rho_over_L=rho_best, best_L=L_best, margin=1 - rho_best, alg_L=float(run.L[0, 0]),
                    alg_rho=run.rho, alg_converged=run.converged, alg_iterations=run.iterations)
     if not (run.converged and run.stabilizing):
         return outcome("fails", sys, **numbers)
-    other = static_output_feedback(sys, init=1.0, max_iter=max_iter, warn=False)
+    other = static_output_feedback(sys, init=1.0, max_iter=max_iter, warn=False, moments="step")
     same = other.converged and abs(other.L[0, 0] - run.L[0, 0]) <= 1e-6 * (1 + abs(run.L[0, 0]))
     return outcome(verdict(same), sys, alg_L_from_identity=float(other.L[0, 0]), **numbers)
 

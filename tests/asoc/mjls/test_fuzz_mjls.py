@@ -85,6 +85,8 @@ CALLS = {
     "simulate": (mjls.simulate, dict(sys=SYS, controller=mjls.StaticGain([[-0.5]]), x0=[1.0, 0.0], horizon=3,
                                      n_runs=4, rng=np.random.default_rng(0), mode0=None, mu0=SYS.mu_inf,
                                      x0_cov=np.eye(2), trajectories=False, progress=False)),
+    "average_cost": (mjls.average_cost, dict(sys=SYS, controller=mjls.StaticGain([[-0.5]]))),
+    "static_cost": (mjls.static_cost, dict(sys=SYS, L=[[-0.5]])),
     "StaticGain": (mjls.StaticGain, dict(L=[[-0.5]])),
     "ModeDependentGain": (mjls.ModeDependentGain, dict(L=np.zeros((2, 1, 1)))),
     "TimeVariantGain": (mjls.TimeVariantGain, dict(L=np.zeros((3, 1, 1)))),

@@ -128,14 +128,14 @@ def _cycling_system():
 
 @pytest.mark.parametrize("max_iter", [1003, 20000])
 def test_alg31_skips_an_exact_cycle_with_the_same_result(monkeypatch, max_iter):
-    from asoc.mjls import static
+    from asoc.mjls import scaled, static
 
     sys = _cycling_system()
     rec = static._Recursion(sys)
     plain = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False, skip_cycles=False)
     repeats = []
-    repeat = static._ScaledPair.repeat
-    monkeypatch.setattr(static._ScaledPair, "repeat",
+    repeat = scaled.ScaledPair.repeat
+    monkeypatch.setattr(scaled.ScaledPair, "repeat",
                         lambda pair, period, times: (repeats.append(period), repeat(pair, period, times)))
     skipped = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False)
     # one cycle found and skipped (period 4 with this machine's kernels, 6 with OPENBLAS_CORETYPE=Prescott)
@@ -388,3 +388,67 @@ def test_table_3_2_designs_subset_equals_the_whole_table_and_names_unknown_rows(
         table_3_2_designs(2, [3.0, 0.0], 20, rows=[("state feedback", "LQR")])
     with pytest.raises(TypeError, match="^rows: expected a sequence"):
         table_3_2_designs(2, [3.0, 0.0], 20, rows=None)
+
+
+# --- Alg. 3.1 with measurement noise J (issue 24) --------------------------------------------
+
+def _noisy_system(seed=5):
+    rng = np.random.default_rng(seed)
+    base = random_mjls(rng, M=2, nx=3, nu=1, ny=2)
+    return base.replace(J=0.8 * rng.normal(size=(2, 2, 2)))
+
+
+def _dense_static_cost(sys, L):
+    """The average cost of u = L (C x + J v) from one dense linear solve, written out here:
+    vec X_j = sum_i p_ij [(Acl_i (x) Acl_i) vec X_i + mu_i vec(H_i H_i^T + B_i L J_i J_i^T L^T B_i^T)]."""
+    M, n = sys.M, sys.nx
+    Acl = [sys.A[i] + sys.B[i] @ L @ sys.C[i] for i in range(M)]
+    W = [sys.mu_inf[i] * (sys.H[i] @ sys.H[i].T + sys.B[i] @ L @ sys.J[i] @ sys.J[i].T @ L.T @ sys.B[i].T)
+         for i in range(M)]
+    big = np.zeros((M * n * n, M * n * n))
+    rhs = np.zeros(M * n * n)
+    for j in range(M):
+        for i in range(M):
+            big[j * n * n:(j + 1) * n * n, i * n * n:(i + 1) * n * n] = sys.T[i, j] * np.kron(Acl[i], Acl[i])
+            rhs[j * n * n:(j + 1) * n * n] += sys.T[i, j] * W[i].ravel()
+    X = np.linalg.solve(np.eye(M * n * n) - big, rhs).reshape(M, n, n)
+    return sum(np.trace((sys.Q[i] + sys.C[i].T @ L.T @ sys.R[i] @ L @ sys.C[i]) @ X[i])
+               + sys.mu_inf[i] * np.trace(sys.R[i] @ L @ sys.J[i] @ sys.J[i].T @ L.T) for i in range(M))
+
+
+@pytest.mark.parametrize("moments", ["step", "exact"])
+def test_alg31_includes_the_measurement_noise(moments):
+    """The cost Alg. 3.1 reports for a system with J != 0 is the true one (dense), and its gain is
+    stationary for it: the finite-difference gradient of the true cost vanishes there."""
+    sys = _noisy_system()
+    res = static_output_feedback(sys, moments=moments)
+    assert res.converged and res.stabilizing
+    assert res.cost == pytest.approx(_dense_static_cost(sys, res.L), rel=1e-9)
+    h = 1e-5
+    for index in np.ndindex(res.L.shape):
+        step = np.zeros_like(res.L)
+        step[index] = h
+        slope = (_dense_static_cost(sys, res.L + step) - _dense_static_cost(sys, res.L - step)) / (2 * h)
+        assert abs(slope) < 1e-7 * res.cost                 # measured 9e-10; the gain ignoring J: 1.1
+    ignored = static_output_feedback(sys.replace(J=None), moments=moments)    # the gain that ignores J
+    assert _dense_static_cost(sys, ignored.L) > res.cost * (1 + 1e-2)        # 1.645 against 1.596
+
+
+def test_alg31_cost_with_measurement_noise_agrees_with_monte_carlo():
+    sys = _noisy_system()
+    res = static_output_feedback(sys)
+    horizon, runs = 400, 4000
+    mc = simulate(sys, StaticGain(res.L), np.zeros(sys.nx), horizon, runs, np.random.default_rng(2))
+    # the average over a long horizon from x0 = 0: the transient costs a bias of O(1 / horizon)
+    estimate = mc.average_cost.mean()
+    error = mc.average_cost.std(ddof=1) / np.sqrt(runs)
+    assert abs(estimate - res.cost) < 4 * error + 0.02 * res.cost
+    assert abs(estimate - static_output_feedback(sys.replace(J=None)).cost) > 4 * error   # J matters here
+
+
+def test_alg31_without_measurement_noise_is_unchanged():
+    sys = sec354_system(1)
+    res = static_output_feedback(sys)
+    assert res.cost == pytest.approx(0.5672987307882352, rel=1e-10)          # main's value before J
+    zero = static_output_feedback(sys.replace(J=np.zeros((1, 1))))
+    assert zero.L == pytest.approx(res.L, rel=1e-12) and zero.cost == pytest.approx(res.cost, rel=1e-12)

@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 from scipy.linalg import solve_discrete_are
 
-from asoc.mjls import MJLS, dynamic, second_moments, simulate
-from asoc.mjls.dynamic import (augmented_closed_loop, dynamic_output_feedback, gains_from_bounds,
-                               noise_covariances, steady_state_cost)
+from asoc import config
+from asoc.linalg import pack, unpack
+from asoc.mjls import MJLS, optimality, second_moments, simulate
+from asoc.mjls.dynamic import dynamic_output_feedback, steady_state_cost
+from asoc.mjls.operators import augmented_closed_loop, noise_covariances
+from asoc.mjls.optimality import gains_from_bounds
 from asoc.mjls.finite_horizon import (finite_horizon_cost, finite_horizon_dynamic_output_feedback,
                                       initial_bounds)
 from asoc.mjls.optimal_observed import mode_observed_lqg
@@ -308,24 +311,24 @@ def optimality_args(sys, seed, spread=1.0):
 @pytest.mark.parametrize("seed, M, nx, nu, ny", [(1, 3, 5, 3, 2), (2, 1, 4, 1, 1), (3, 4, 7, 2, 3)])
 def test_matrix_free_operator_equals_dense_matrix(seed, M, nx, nu, ny):
     args = optimality_args(random_system(seed, M=M, nx=nx, nu=nu, ny=ny), seed, spread=3.0)
-    H, rho = dynamic.optimality_system(*args)
-    op = dynamic.OptimalityOperator(*args)
+    H, rho = optimality.optimality_system(*args)
+    op = optimality.OptimalityOperator(*args)
     assert op.size == len(rho) == nx * nx + nx * ny + nu * nx
-    np.testing.assert_array_equal(dynamic.optimality_vector(*args[:5]), rho)
+    np.testing.assert_array_equal(optimality.optimality_vector(*args[:5]), rho)
     for z in np.random.default_rng(seed).standard_normal((3, op.size)):
         Hz = H @ z
         assert np.linalg.norm(op.matvec(z) - Hz) <= 1e-12 * np.linalg.norm(Hz)
-    F, K, L = dynamic.split_gains(z, op.shapes)
+    F, K, L = unpack(z, op.shapes)
     assert [g.shape for g in op.apply(F, K, L)] == [(nx, nx), (nx, ny), (nu, nx)]
-    np.testing.assert_array_equal(dynamic.stack_gains(F, K, L), z)
+    np.testing.assert_array_equal(pack(F, K, L), z)
 
 
 @pytest.mark.parametrize("seed, nx", [(4, 6), (5, 8), (6, 10)])
 def test_matrix_free_solve_agrees_with_lstsq(monkeypatch, seed, nx):
     args = optimality_args(random_system(seed, M=3, nx=nx, nu=2, ny=2), seed)
-    dense = dynamic.solve_gains(*args)
-    monkeypatch.setattr(dynamic, "MATRIX_FREE_MIN_UNKNOWNS", 0)
-    *gains, info = dynamic.solve_gains(*args)
+    dense = optimality.solve_gains(*args)
+    monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
+    *gains, info = optimality.solve_gains(*args)
     assert dense[3].method == "dense" and info.method == "cg" and 0 < info.iterations < 200
     assert info.residual < 1e-11 and info.shift > 0
     for a, b in zip(gains, dense[:3]):
@@ -334,23 +337,23 @@ def test_matrix_free_solve_agrees_with_lstsq(monkeypatch, seed, nx):
 
 def test_switch_point_selects_the_solver(monkeypatch):
     args = optimality_args(random_system(7, M=2, nx=4, nu=1, ny=1), 7)         # 24 unknowns
-    assert dynamic.solve_gains(*args)[3].method == "dense"
-    monkeypatch.setattr(dynamic, "MATRIX_FREE_MIN_UNKNOWNS", 24)
-    assert dynamic.solve_gains(*args)[3].method == "cg"
-    assert dynamic.solve_gains(*args, method="sdp")[3].method == "sdp"        # the SDP stays dense
+    assert optimality.solve_gains(*args)[3].method == "dense"
+    monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 24)
+    assert optimality.solve_gains(*args)[3].method == "cg"
+    assert optimality.solve_gains(*args, method="sdp")[3].method == "sdp"        # the SDP stays dense
 
 
 def test_conjugate_gradients_that_stop_short_raise_with_the_residual():
     args = optimality_args(random_system(8, M=3, nx=6, nu=2, ny=2), 8, spread=3.0)
-    op, P = dynamic.OptimalityOperator(*args), dynamic.KroneckerPreconditioner(*args)
+    op, P = optimality.OptimalityOperator(*args), optimality.KroneckerPreconditioner(*args)
     with pytest.raises(np.linalg.LinAlgError, match=r"relative residual .* > 1e-15 in 2 iterations"):
-        dynamic.solve_optimality_cg(op, dynamic.optimality_vector(*args[:5]), P, tol=1e-15, max_iter=2)
+        optimality.solve_optimality_cg(op, optimality.optimality_vector(*args[:5]), P, tol=1e-15, max_iter=2)
 
 
 def test_matrix_free_failure_stops_alg32_with_a_message(monkeypatch):
     from asoc.mjls.examples import sec373_system
-    monkeypatch.setattr(dynamic, "MATRIX_FREE_MIN_UNKNOWNS", 0)
-    monkeypatch.setattr(dynamic, "CG_MAX_ITER_FACTOR", 1 / 8)            # one iteration for 8 unknowns
+    monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
+    monkeypatch.setitem(config.defaults, "mjls.cg_max_iter_factor", 1 / 8)            # one iteration for 8 unknowns
     with pytest.raises(FloatingPointError, match="first iteration: conjugate gradients"):
         dynamic_output_feedback(sec373_system(1))
 
@@ -360,7 +363,7 @@ def test_matrix_free_alg32_matches_dense_on_the_thesis_example(monkeypatch):
     from asoc.mjls.examples import sec373_system
     sys = sec373_system(1)
     dense = dynamic_output_feedback(sys)
-    monkeypatch.setattr(dynamic, "MATRIX_FREE_MIN_UNKNOWNS", 0)
+    monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
     free = dynamic_output_feedback(sys)
     assert dense.solve.method == "dense" and free.solve.method == "cg"
     assert (free.status, free.iterations) == (dense.status, dense.iterations)
@@ -378,7 +381,7 @@ def test_matrix_free_alg33_matches_dense(monkeypatch, sys3, alg32):
     mean0, cov0, mu0 = initial_state(sys3)
     args = dict(horizon=10, mean0=mean0, cov0=cov0, mu0=mu0, init=alg32)
     dense = finite_horizon_dynamic_output_feedback(sys3, **args)
-    monkeypatch.setattr(dynamic, "MATRIX_FREE_MIN_UNKNOWNS", 0)
+    monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
     free = finite_horizon_dynamic_output_feedback(sys3, **args)
     assert free.converged and free.iterations == dense.iterations
     assert free.cost == pytest.approx(dense.cost, rel=1e-9)
@@ -386,8 +389,67 @@ def test_matrix_free_alg33_matches_dense(monkeypatch, sys3, alg32):
 
 @pytest.mark.parametrize("kwargs, match", [(dict(method="cg"), "method"), (dict(tol=np.nan), "tol")])
 def test_bad_input_is_named_on_the_matrix_free_path(monkeypatch, sys3, kwargs, match):
-    monkeypatch.setattr(dynamic, "MATRIX_FREE_MIN_UNKNOWNS", 0)
+    monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
     with pytest.raises((ValueError, TypeError), match=match):
         dynamic_output_feedback(sys3, **kwargs)
     with pytest.raises(ValueError, match="method"):
         gains_from_bounds(*optimality_args(sys3, 0), method="cg")
+
+
+def _verdicts(sequence, tol=1e-10, max_iter=10_000):
+    """The verdicts of Alg. 3.2's stopping rule on a sequence of (scalar) bound iterates."""
+    from asoc.mjls.dynamic import StoppingRule
+
+    rule = StoppingRule(tol, max_iter)
+    for it, value in enumerate(sequence):
+        verdict = rule.status(it, tuple(np.full((1, 1, 1), v) for v in value))
+        if verdict is not None:
+            return verdict, it, rule
+    return None, len(sequence), rule
+
+
+def test_stopping_rule_tells_a_cycle_from_an_oscillating_convergence():
+    """A 2-cycle is a cycle; a sequence converging like (-0.99)^k (small lag-2 change) is not."""
+    k = np.arange(5000)[:, None]
+    cycle = 1.0 + 0.1 * (-1.0) ** k + 1e-3 * 0.5 ** k * np.ones(4)
+    verdict, it, rule = _verdicts(cycle)
+    assert (verdict, rule.period) == ("cycle", 2) and it < 60
+    oscillating = 1.0 + 0.1 * (-0.99) ** k * np.ones(4)
+    assert _verdicts(oscillating)[0] == "converged"
+
+
+def test_stopping_rule_stops_wandering_and_diverging_sequences_within_a_few_windows():
+    w = config.defaults["mjls.alg32_patience"]
+    wandering = 1.0 + np.random.default_rng(0).random((5000, 4))
+    verdict, it, _ = _verdicts(wandering)
+    assert verdict == "no_progress" and it <= 2 * w + 5
+    growing = 9.0 ** np.arange(200)[:, None] * np.ones(4)
+    verdict, it, _ = _verdicts(growing)
+    assert verdict == "diverged" and it <= 2 * w + 5
+    slow = 1.0 + 0.995 ** np.arange(8000)[:, None] * np.ones(4)    # converges, slowly: not stopped early
+    assert _verdicts(slow)[0] == "converged"
+    assert _verdicts(slow, max_iter=1000)[0] == "no_progress"      # ... unless tol is out of reach
+
+
+def test_alg32_stops_on_the_cycle_of_the_networked_loop_and_names_the_exact_design():
+    from asoc.mjls import exact_dynamic_output_feedback
+    from asoc.mjls.examples import networked_loop
+
+    sys = networked_loop()
+    with pytest.warns(RuntimeWarning, match="cycle of period 2.*exact_dynamic_output_feedback"):
+        r = dynamic_output_feedback(sys)
+    assert (r.status, r.period, r.converged) == ("cycle", 2, False) and r.iterations < 200
+    other = dynamic_output_feedback(sys, max_iter=r.iterations - 1, warn=False)   # the other member
+    assert r.bound <= other.bound
+    assert r.cost == pytest.approx(steady_state_cost(sys, r.F, r.K, r.L)[0], rel=1e-12)
+    exact = exact_dynamic_output_feedback(sys)
+    assert exact.converged and exact.cost < min(r.cost, other.cost)
+
+
+def test_alg32_on_an_unstabilisable_plant_stops_as_diverged_within_a_few_windows():
+    A = 3.0 * np.eye(2)
+    sys = MJLS([A, A], np.zeros((2, 1)), [[1.0, 0.0]], np.eye(2), np.eye(2), np.eye(1), [[0.5, 0.5], [0.5, 0.5]],
+               J=0.1 * np.ones((1, 1)))
+    r = dynamic_output_feedback(sys, warn=False)
+    assert r.status == "diverged" and r.iterations <= 2 * config.defaults["mjls.alg32_patience"] + 5
+    assert "exact_dynamic_output_feedback" in r.message

@@ -9,11 +9,15 @@ from asoc.mjls import (MJLS, dynamic_output_feedback, exact_dynamic_output_feedb
                        exact_finite_horizon_dynamic_output_feedback, finite_horizon_cost,
                        finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
                        radius_and_gradient, static_output_feedback)
-from asoc.mjls.dynamic import augmented_closed_loop, steady_state_cost
+from asoc import config
+from asoc.linalg import pack, unpack
+from asoc.mjls.dynamic import steady_state_cost
 from asoc.mjls.examples import (SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system,
                                 sec373_system)
-from asoc.mjls.exact import (_pack, _unpack, average_cost_and_gradient, closed_loop_radius,
-                             finite_horizon_cost_and_gradient)
+from asoc.mjls.exact import averaged_lqg
+from asoc.mjls.gradients import (average_cost_and_gradient, closed_loop_radius,
+                                 finite_horizon_cost_and_gradient)
+from asoc.mjls.operators import augmented_closed_loop
 from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
 from asoc.mjls import ms_spectral_radius
 from test_mjls_dynamic import initial_state, random_system
@@ -56,10 +60,10 @@ def test_average_cost_gradient_matches_finite_differences(system):
     sys = sec373_system(1) if system == "sec373" else random_system(0)
     r = dynamic_output_feedback(sys)
     shapes = (r.F.shape, r.K.shape, r.L.shape)
-    z = _pack(r.F, r.K, r.L)
+    z = pack(r.F, r.K, r.L)
     cost, grads = average_cost_and_gradient(sys, r.F, r.K, r.L)
-    g = _pack(*grads)
-    err, allowed = fd_check(lambda v: average_cost_and_gradient(sys, *_unpack(v, shapes))[0], z, g, cost)
+    g = pack(*grads)
+    err, allowed = fd_check(lambda v: average_cost_and_gradient(sys, *unpack(v, shapes))[0], z, g, cost)
     assert err <= allowed < 1e-4 * np.abs(g).max()
     assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
 
@@ -73,8 +77,8 @@ def test_radius_gradient_matches_finite_differences(system, scale):
     shapes = (r.F.shape, r.K.shape, r.L.shape)
     rho, grads = radius_and_gradient(sys, r.F, r.K, r.L)
     assert rho == pytest.approx(closed_loop_radius(sys, r.F, r.K, r.L), rel=1e-12)
-    g = _pack(*grads)
-    err, allowed = fd_check(lambda v: radius_and_gradient(sys, *_unpack(v, shapes))[0], _pack(r.F, r.K, r.L),
+    g = pack(*grads)
+    err, allowed = fd_check(lambda v: radius_and_gradient(sys, *unpack(v, shapes))[0], pack(r.F, r.K, r.L),
                             g, rho)
     assert err <= allowed < 1e-4 * np.abs(g).max()
     assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
@@ -86,7 +90,7 @@ def test_min_radius_lowers_rho_and_ends_stationary(alg32_373, sys373):
     assert m.rho == pytest.approx(closed_loop_radius(sys373, m.F, m.K, m.L), rel=1e-12)
     assert np.all(np.diff(m.history["rho"]) <= 0) and m.history["rho"][-1] == m.rho
     assert m.cost == pytest.approx(steady_state_cost(sys373, m.F, m.K, m.L)[0], rel=COST_RTOL)
-    assert np.abs(_pack(*radius_and_gradient(sys373, m.F, m.K, m.L)[1])).max() < 1e-4
+    assert np.abs(pack(*radius_and_gradient(sys373, m.F, m.K, m.L)[1])).max() < 1e-4
 
 
 @pytest.mark.parametrize("kwargs, match", [(dict(max_iter=0), "max_iter"), (dict(nc=0), "nc"),
@@ -119,9 +123,9 @@ def test_finite_horizon_gradient_matches_finite_differences(sys373):
     assert cost == pytest.approx(finite_horizon_cost(sys373, F, K, L, SEC373_MEAN0[1], SEC373_COV0,
                                                      SEC373_MU0), rel=1e-12)
     shapes = (F.shape, K.shape, L.shape)
-    g = _pack(*grads)
-    err, allowed = fd_check(lambda v: finite_horizon_cost_and_gradient(st, *_unpack(v, shapes), X0, mu)[0],
-                            _pack(F, K, L), g, cost)
+    g = pack(*grads)
+    err, allowed = fd_check(lambda v: finite_horizon_cost_and_gradient(st, *unpack(v, shapes), X0, mu)[0],
+                            pack(F, K, L), g, cost)
     assert err <= allowed < 1e-4 * np.abs(g).max()
 
 
@@ -130,7 +134,11 @@ def test_exact_optimum_improves_alg32_on_sec373(alg32_373, sys373):
     assert e.converged and e.stabilizing
     assert e.cost < alg32_373.cost * (1 - 1e-3)        # the bound's optimum is not the exact one
     assert e.cost == pytest.approx(steady_state_cost(sys373, e.F, e.K, e.L)[0], rel=1e-12)
-    assert e.history["cost"][0] == pytest.approx(alg32_373.cost, rel=1e-12)
+    bounded = dynamic_output_feedback(sys373, max_iter=config.defaults["mjls.exact_warm_start_iterations"],
+                                      warn=False)
+    starts = [average_cost_and_gradient(sys373, *gains)[0]
+              for gains in ((bounded.F, bounded.K, bounded.L), averaged_lqg(sys373, 2))]
+    assert e.history["cost"][0] == pytest.approx(min(starts), rel=1e-12)   # the better default start
     assert np.all(np.diff(e.history["cost"]) <= 4 * EPS * e.history["cost"][1:])
 
 
@@ -260,13 +268,18 @@ def test_alg31_exact_moments_reach_the_same_fixed_point(system):
         sys = sec354_system(2, "state")
     else:
         sys = sec354_system(int(system[-1]))
-    a = static_output_feedback(sys)
+    a = static_output_feedback(sys, moments="step")
     b = static_output_feedback(sys, moments="exact")
-    assert a.converged and b.converged and a.stabilizing and b.stabilizing
-    assert np.abs(a.L - b.L).max() <= 1e-8
+    c = static_output_feedback(sys)                  # moments="auto"
+    assert a.converged and b.converged and c.converged and a.stabilizing and b.stabilizing
+    assert np.abs(a.L - b.L).max() <= 1e-8 and np.abs(a.L - c.L).max() <= 1e-8
     assert b.cost == pytest.approx(a.cost, rel=1e-8)
     if system == "T2":
         assert b.iterations < a.iterations / 10      # the thesis's iteration contracts slowly here
+        assert c.iterations < a.iterations / 10      # ... and "auto" switches to the exact moments
+    if system == "T1":
+        assert c.iterations == a.iterations          # an easy system: "auto" is the thesis's iteration
+        np.testing.assert_array_equal(c.history["trace_X"], a.history["trace_X"])
 
 
 def test_alg31_exact_moments_fall_back_where_no_gain_stabilises():
@@ -290,3 +303,15 @@ def test_exact_results_do_not_depend_on_warnings_state(sys373):
         a = exact_dynamic_output_feedback(sys373)
         b = exact_dynamic_output_feedback(sys373)
     assert np.array_equal(a.F, b.F) and a.cost == b.cost
+
+
+def test_the_lyapunov_certificate_of_the_exact_iteration_rejects_an_unstable_loop():
+    """A positive definite solution P of P = L*(P) + W with W > 0 certifies mean-square stability;
+    an unstable loop (rho 1.44 > 1) gives an indefinite P and no certificate."""
+    from asoc.mjls.operators import coupled_lyapunov_solver
+    from asoc.mjls.static import _certified
+
+    T, W = np.array([[1.0]]), np.ones((1, 1, 1))
+    assert _certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), W)
+    assert not _certified(coupled_lyapunov_solver(np.array([[[1.2]]]), T)(W, adjoint=True), W)
+    assert not _certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), np.zeros((1, 1, 1)))

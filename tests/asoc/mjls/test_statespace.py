@@ -96,3 +96,24 @@ def test_asoc_imports_without_python_control():
             "except ImportError as e:\n    print('ImportError', e)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.startswith("ImportError python-control is needed")
+
+
+def test_the_engineers_path_from_statespace_to_simulation_without_weights():
+    """Issue 26: Q, R, H default to identities; every design result carries a controller that
+    simulate and average_cost accept, and the Monte Carlo cost agrees with the exact one."""
+    from asoc.mjls import average_cost, dynamic_output_feedback, exact_dynamic_output_feedback, simulate
+
+    plain = MJLS.from_statespace(_modes(0.1), T)
+    assert np.array_equal(plain.Q, np.broadcast_to(np.eye(2), (2, 2, 2)))
+    assert np.array_equal(plain.R, np.ones((2, 1, 1))) and np.array_equal(plain.H, plain.Q)
+    designs = [static_output_feedback(plain, warn=False), dynamic_output_feedback(plain, warn=False),
+               exact_dynamic_output_feedback(plain, warn=False)]
+    for res in designs:
+        if not res.stabilizing:
+            assert average_cost(plain, res) == np.inf
+            continue
+        assert average_cost(plain, res) == pytest.approx(res.cost, rel=1e-9)
+        mc = simulate(plain, res, np.zeros(2), 200, 2000, np.random.default_rng(0))
+        assert mc.average_cost.mean() == pytest.approx(res.cost, rel=0.1)
+    with pytest.raises(TypeError, match="controller: expected an asoc.mjls.Controller"):
+        simulate(plain, designs[0].L, np.zeros(2), 5, 5, np.random.default_rng(0))

@@ -1,0 +1,185 @@
+"""A quasi-Newton minimiser for functions that are infinite outside their domain.
+
+:func:`bfgs` minimises a smooth function z -> (f, grad f) by BFGS (dense inverse Hessian) or
+L-BFGS (the last few curvature pairs), with a backtracking Armijo line search that rejects
+steps out of the domain (f = inf) like any other step that does not decrease f. The
+exact-cost designs of :mod:`asoc.mjls.exact` use it on the mean-square stabilising set, where
+the cost is finite; nothing in it is specific to them.
+
+Nocedal and Wright, Numerical Optimization, 2nd ed., 2006: Alg. 6.1 (BFGS), Alg. 7.4
+(two-loop recursion), Alg. 3.1 (backtracking).
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from . import config
+from .progress import progress_bar
+from .validation import boolean, integer, real_array, real_scalar
+
+#: Why :func:`bfgs` stopped, by status code (codes of :data:`asoc.result.STATUS_CODES`).
+BFGS_STATUS = {"converged": "the decrease the quasi-Newton model predicts fell below tol * |f|",
+               "max_iterations": "the iteration limit was reached",
+               "no_progress": "the line search found no decrease even along the gradient"}
+
+
+class BFGSResult(NamedTuple):
+    """What :func:`bfgs` returns (a tuple: ``z, f, status, iterations, history = bfgs(...)``).
+
+    Attributes
+    ----------
+    z : numpy.ndarray
+        The last accepted point.
+    f : float
+        The function value there.
+    status : str
+        A key of :data:`BFGS_STATUS`.
+    iterations : int
+    history : numpy.ndarray
+        f at the start and after each accepted step.
+    """
+
+    z: np.ndarray
+    f: float
+    status: str
+    iterations: int
+    history: np.ndarray
+
+
+class _InverseHessian:
+    """The BFGS inverse-Hessian approximation: dense, or limited-memory (the last ``memory``
+    pairs, two-loop recursion) for many variables; empty means a scaled identity."""
+
+    def __init__(self, n, memory):
+        self.n, self.memory = n, memory
+        self.reset()
+
+    def reset(self):
+        self.pairs, self.dense, self.scale = [], None, None
+
+    @property
+    def empty(self):
+        return self.scale is None
+
+    def apply(self, g):
+        if self.empty:
+            return g / max(1.0, float(np.linalg.norm(g)))
+        if self.memory is None:
+            return self.dense @ g
+        q, alphas = g.copy(), []
+        for s, y, r in reversed(self.pairs):
+            alphas.append(r * float(s @ q))
+            q -= alphas[-1] * y
+        q *= self.scale
+        for (s, y, r), a in zip(self.pairs, reversed(alphas)):
+            q += (a - r * float(y @ q)) * s
+        return q
+
+    def update(self, s, y):
+        sy = float(s @ y)
+        if not sy > 1e-12 * np.linalg.norm(s) * np.linalg.norm(y):
+            return                                     # curvature condition fails: skip
+        if self.memory is not None:
+            self.scale = sy / float(y @ y)
+            self.pairs = (self.pairs + [(s, y, 1.0 / sy)])[-self.memory:]
+            return
+        if self.empty:
+            self.scale = sy / float(y @ y)
+            self.dense = self.scale * np.eye(self.n)
+        Hy = self.dense @ y                            # rank-2 update as one product
+        a = (1.0 + float(y @ Hy) / sy) / sy
+        self.dense += np.column_stack([s, Hy]) @ np.column_stack([a * s - Hy / sy, -s / sy]).T
+
+
+def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=None, target=-np.inf):
+    """Minimise ``fun`` (z -> (f, grad); f = inf outside the domain) by BFGS or L-BFGS.
+
+    The line search backtracks from the full quasi-Newton step until the Armijo condition
+    holds (constant ``config.defaults["optimize.armijo"]``, up to rounding of f), giving up
+    below the step ``config.defaults["optimize.min_step"]``; a step out of the domain
+    (f = inf) is rejected like any other. The iteration stops (converged) when the decrease
+    the quasi-Newton model predicts, g^T H^-1 g / 2, is below ``tol * |f|``, or once
+    f <= ``target``.
+
+    Parameters
+    ----------
+    fun : callable
+        z -> (f, gradient); f is a float (inf outside the domain), the gradient an array
+        like z (ignored where f is inf).
+    z0 : array_like, 1-D
+        The start; f(z0) must be finite.
+    tol : float
+        Relative tolerance of the predicted decrease.
+    max_iter : int
+        Iteration limit.
+    progress : bool
+        Show a tqdm bar over iterations.
+    desc : str
+        Label of the bar.
+    memory : int, optional
+        None for dense BFGS, else L-BFGS keeping that many pairs.
+    target : float
+        Stop as soon as f <= target.
+
+    Returns
+    -------
+    BFGSResult
+        (z, f, status, iterations, history); status a key of :data:`BFGS_STATUS`.
+
+    Raises
+    ------
+    ValueError
+        If ``z0`` is outside the domain (f infinite) or not a finite vector, ``tol`` is
+        not positive, or ``max_iter`` or ``memory`` is below 1.
+
+    Examples
+    --------
+    >>> fun = lambda z: ((z[0] - 1) ** 2 + 10 * (z[1] - z[0] ** 2) ** 2,
+    ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2), 20 * (z[1] - z[0] ** 2)]))
+    >>> z, f, status, iterations, history = bfgs(fun, [-1.0, 1.0], 1e-14, 200)
+    >>> status, z.round(4)
+    ('converged', array([1., 1.]))
+    """
+    z0 = real_array(z0, "z0", ndim=1)
+    tol = real_scalar(tol, "tol", low=0, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=1)
+    progress = boolean(progress, "progress")
+    if memory is not None:
+        memory = integer(memory, "memory", minimum=1)
+    return _bfgs(fun, z0, tol, max_iter, progress, desc, memory, target)
+
+
+def _bfgs(fun, z, tol, max_iter, progress, desc, memory, target):
+    armijo, min_step = config.defaults["optimize.armijo"], config.defaults["optimize.min_step"]
+    f, g = fun(z)
+    if not np.isfinite(f):
+        raise ValueError("z0: the start is outside the domain (the function is infinite there)")
+    Hinv = _InverseHessian(z.size, memory)
+    history = [f]
+    status = "max_iterations"
+    it = 0
+    for it in progress_bar(range(1, max_iter + 1), progress, desc=desc, leave=False):
+        fresh = Hinv.empty
+        d = -Hinv.apply(g)
+        slope = float(g @ d)
+        if -0.5 * slope <= tol * abs(f) or f <= target:
+            status = "converged"
+            break
+        t = 1.0
+        while t >= min_step:
+            z_new = z + t * d
+            f_new, g_new = fun(z_new)
+            if f_new <= f + armijo * t * slope + 4 * np.finfo(float).eps * abs(f):
+                break
+            t *= 0.5
+        else:
+            if fresh:                                  # no descent even along -g: stop
+                status = "no_progress"
+                break
+            Hinv.reset()                               # restart from a scaled gradient step
+            continue
+        Hinv.update(z_new - z, g_new - g)
+        z, f, g = z_new, f_new, g_new
+        history.append(f)
+    return BFGSResult(z, f, status, it, np.array(history))
