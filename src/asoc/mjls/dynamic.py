@@ -383,7 +383,8 @@ def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
     if warn and status != "converged":
         warnings.warn(f"Algorithm 3.2 {message}", RuntimeWarning, stacklevel=3)
     elif warn and not stabilizing:
-        warnings.warn(f"Algorithm 3.2 converged, but the controller is not certified to stabilise the MJLS "
+        verb = "does not stabilise" if stabilizing is False else "is not certified to stabilise"
+        warnings.warn(f"Algorithm 3.2 converged, but the controller {verb} the MJLS "
                       f"in the mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=3)
     history = {f"trace_{k}": run["traces"][:, j] for j, k in enumerate(("Xbar", "Xunder", "Pbar", "Punder"))}
     return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=status == "converged", status=status,

@@ -459,7 +459,8 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
     if warn and status != "converged":
         warnings.warn(f"Algorithm 3.1 {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
-        warnings.warn(f"Algorithm 3.1 converged, but the gain is not certified to stabilise the MJLS in the "
+        verb = "does not stabilise" if stabilizing is False else "is not certified to stabilise"
+        warnings.warn(f"Algorithm 3.1 converged, but the gain {verb} the MJLS in the "
                       f"mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=2)
     history = {"trace_X": run["trace_X"], "trace_P": run["trace_P"]}
     return StaticOutputFeedbackResult(L=L, converged=status == "converged", status=status,

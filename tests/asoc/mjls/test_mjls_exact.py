@@ -308,7 +308,7 @@ def test_exact_results_do_not_depend_on_warnings_state(sys373):
 def test_the_lyapunov_certificate_of_the_exact_iteration_rejects_an_unstable_loop():
     """A positive definite solution P of P = L*(P) + W with W > 0 certifies mean-square stability;
     an unstable loop (rho 1.44 > 1) gives an indefinite P and no certificate."""
-    from asoc.mjls.operators import coupled_lyapunov_solver
+    from asoc.mjls.lyapunov import coupled_lyapunov_solver
     from asoc.mjls.static import _certified
 
     T, W = np.array([[1.0]]), np.ones((1, 1, 1))
