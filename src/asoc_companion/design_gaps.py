@@ -1,4 +1,4 @@
-"""What Algs. 3.2 and 3.3 cost a user: the gap to the exact-cost designs (issue 23, item 5).
+"""What Algs. 3.2 and 3.3 cost a user: the gap to the exact-cost designs (the findings page).
 
 Alg. 3.2 returns a fixed point of (3.45)-(3.49), the stationarity conditions of the approximate
 Hamiltonian (A.7); Alg. 3.3 minimises the expansion (B.4) step by step with the safeguard on

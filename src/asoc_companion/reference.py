@@ -15,7 +15,7 @@ Each notebook has its own file (so work on one section does not touch another's)
 ``note``     the reason for a deviation, the reading chosen, what was tried.
 
 Tolerances follow from the accuracy of the quantity, never from one machine's agreement
-(another CPU's BLAS kernels move the last digits; DESIGN.md, "Portability"). The YAML
+(another CPU's BLAS kernels move the last digits; the architecture page, "Portability"). The YAML
 states each derivation next to the number; the rules are:
 
 - ``tol`` of a printed number: half a unit of its last printed decimal (5e-5 for four

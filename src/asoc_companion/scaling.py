@@ -1,4 +1,4 @@
-"""The random family of the scaling study (issue 17; the Scaling page, ``make bench``).
+"""The random family of the scaling study (the Scaling page, ``make bench``).
 
 :func:`scaling_system` draws the family the targets are stated on: mode matrices of spectral
 norm 0.95 (so the open loop is mean-square stable: rho <= max_i ||A_i||^2 < 1), Dirichlet
@@ -10,7 +10,7 @@ import numpy as np
 from asoc.mjls import MJLS, ms_spectral_radius
 
 
-#: The largest published MJLS size (issue 26): states, modes, inputs = outputs, open-loop rho.
+#: The largest MJLS size in public code (a policy-gradient study in C++): states, modes, inputs = outputs, open-loop rho.
 PUBLISHED_SIZE = {"n": 100, "M": 100, "inputs": 12, "radius": 0.99}
 
 

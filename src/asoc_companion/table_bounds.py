@@ -1,4 +1,4 @@
-"""Certified evidence that Tables 3.2 and 3.3 cannot come from their printed settings (issue 23, item 7).
+"""Certified evidence that Tables 3.2 and 3.3 cannot come from their printed settings (the findings page).
 
 Table 3.3 prints *medians* of J/K, so an expected-cost bound says nothing about them by itself.
 The argument here is per sample: for one realisation of (x_0, theta_0..K-1, w_0..K-1), every

@@ -1,4 +1,4 @@
-"""The numerical examples of Chapter 3, with the thesis's parameters, and the networked loop of issue 26."""
+"""The numerical examples of Chapter 3, with the thesis's parameters, and a networked loop that loses input packets (not in the thesis)."""
 
 import numpy as np
 
@@ -81,7 +81,7 @@ def sec373_system(T: int = 1) -> MJLS:
                 T=SEC373_T[T], J=0.1 * np.ones((1, 1)))
 
 
-# Not in the thesis: a networked loop whose input packets are lost (issue 26).
+# Not in the thesis: a networked loop whose input packets are lost (the engineer's example of asoc.mjls).
 NETWORKED_A = np.array([[0.24, 0.58, 0.23], [-0.92, 0.64, 0.32], [-0.38, 0.41, 0.26]])
 NETWORKED_B = np.array([[0.03], [0.55], [-0.74]])
 NETWORKED_C = np.array([[-0.16, -0.48, 0.6]])

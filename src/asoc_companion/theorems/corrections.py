@@ -1,4 +1,4 @@
-"""Why the failing statements fail, and what holds instead (issue 23, items 3-4).
+"""Why the failing statements fail, and what holds instead (the findings and Theorems pages).
 
 :func:`correction_records` returns, for each statement that the theorems study finds failing
 ("2_6_3_kernels", "3_19", "3_26", "3_27", "3_31", "3_32", "3_33"), a record
