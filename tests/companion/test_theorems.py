@@ -248,3 +248,14 @@ def test_the_study_keeps_the_house_rules():
 
     circles = sorted(name for name in graph if reaches(name, name))
     assert not circles, circles
+
+
+def test_certificate_skips_a_resolvent_shift_that_hits_an_eigenvalue():
+    """Instance 16 of Thm. 3.12 (seed 2017) has a one-mode closed loop for which a shift r of the
+    bracket's resolvent solve r X - L(X) = I is an eigenvalue of L; the solve is singular there and
+    that shift must be skipped, not reported as a checker error."""
+    from asoc_companion.theorems.engine import run_instance
+
+    out = run_instance("statement_3_12", 2017, 16)
+    assert not isinstance(out, tuple), out
+    assert out.verdict == "holds"

@@ -211,9 +211,12 @@ def _resolvent_stacks(A, T, rho):
         r = max(rho, 1e-300) * (1 + gap)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            if K is None:
-                X = scipy.linalg.solve_discrete_lyapunov(A[0] / np.sqrt(r), np.eye(n) / r)[None]
-            else:
-                X = scipy.linalg.solve(r * np.eye(M * n * n) - K, eye.ravel()).reshape(M, n, n)
+            try:
+                if K is None:
+                    X = scipy.linalg.solve_discrete_lyapunov(A[0] / np.sqrt(r), np.eye(n) / r)[None]
+                else:
+                    X = scipy.linalg.solve(r * np.eye(M * n * n) - K, eye.ravel()).reshape(M, n, n)
+            except np.linalg.LinAlgError:                   # r is an eigenvalue of L: no bound from it
+                continue
         if np.all(np.isfinite(X)):
             yield sym(X)

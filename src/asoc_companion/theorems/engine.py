@@ -87,6 +87,7 @@ class StatementResult:
     seconds: float = 0.0
     mutant: dict | None = None
     corrected: dict | None = None
+    diagnosis: str | None = None
 
     def record(self) -> dict:
         """The recorded value: counts, failing indices, the statement's summary, its mutant and timing."""
@@ -99,6 +100,8 @@ class StatementResult:
             record["mutant"] = self.mutant
         if self.corrected is not None:
             record["corrected"] = self.corrected
+        if self.diagnosis is not None:
+            record["diagnosis"] = self.diagnosis
         return record
 
 
@@ -119,6 +122,7 @@ def _tally(key, n, results, seconds):
     if summarise is not None:
         res.summary = summarise(outcomes)
         res.corrected = res.summary.pop("corrected", None)        # a corrected reading checked beside the claim
+        res.diagnosis = res.summary.pop("diagnosis", None)        # why a failing claim fails
     return res
 
 
