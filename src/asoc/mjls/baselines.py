@@ -27,8 +27,8 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, integer, probability_vector, real_array, real_scalar, semidefinite
-from .lmi import EPS, check_solver, lmi_result, performance_output
-from .spectral import ms_spectral_radius
+from .lmi import EPS, certificate, check_solver, lmi_result, performance_output, solve_quietly
+from .spectral import mean_square_stability
 from .system import check_system
 
 
@@ -91,14 +91,13 @@ def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):
         cons += [0.5 * (lmi1 + lmi1.T) >> eps * np.eye(2 * nx + nu),
                  0.5 * (lmi2 + lmi2.T) >> eps * np.eye(2 * nx), Y[i] >> eps * np.eye(nx)]
     prob = cp.Problem(cp.Minimize(sum(cp.trace(Wi) for Wi in W)), cons)
-    try:
-        prob.solve(solver=solver)
-    except cp.SolverError as err:
-        return lmi_result(f"solver error: {err}")
-    if prob.status != cp.OPTIMAL:
-        return lmi_result(prob.status)
+    status = solve_quietly(prob, solver)
+    if G.value is None or F.value is None:
+        return lmi_result(status)
     K = F.value @ np.linalg.inv(G.value)
-    return lmi_result(prob.status, K, float(prob.value), ms_spectral_radius(sys.A + sys.B @ K, sys.T))
+    margin, equality_residual = certificate(cons)
+    return lmi_result(status, K, float(prob.value), margin=margin, equality_residual=equality_residual, eps=eps,
+                      stability=mean_square_stability(sys.A + sys.B @ K, sys.T, check=False))
 
 
 @dataclass(kw_only=True)

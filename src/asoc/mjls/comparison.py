@@ -138,8 +138,8 @@ def _observed_mode_38(sys, T, x0, horizon):
 def _h2_lmi_52(sys, T, x0, horizon):
     start = time.perf_counter()
     r = do_val_h2_state_feedback(sys)
-    if not r.feasible:
-        raise RuntimeError(f"[52] LMI infeasible for T[{T}]: {r.message}")
+    if not (r.feasible and r.stabilizing):
+        raise RuntimeError(f"[52] LMI gives no certified stabilising gain for T[{T}]: {r.message}")
     return Design(sys, StaticGain(r.L), time.perf_counter() - start)
 
 

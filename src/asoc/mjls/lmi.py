@@ -24,7 +24,7 @@ from .. import config
 from ..linalg import sym
 from ..result import IterativeResult
 from ..validation import boolean, real_scalar
-from .spectral import ms_spectral_radius
+from .spectral import mean_square_stability
 from .system import check_system
 
 EPS = 1e-6
@@ -55,8 +55,11 @@ class LMIResult(IterativeResult):
         The solver's own status string (e.g. "optimal", "infeasible").
     rho : float
         Mean-square spectral radius of the closed loop with L (nan without a gain).
-    stabilizing : bool
-        rho < 1 (False without a gain).
+    stabilizing : bool or None
+        The gain's certified verdict (:func:`asoc.mjls.mean_square_stability`): True, False, or
+        None when the bracket of rho straddles 1 (False without a gain).
+    rho_bracket : tuple of float
+        (rho_lower, rho_upper), the certified bracket of rho.
     margin : float
         Smallest eigenvalue over the constraints, each minus its imposed floor (>= -eps/2 for a
         certificate; nan when the solver returned no matrices).
@@ -79,7 +82,8 @@ class LMIResult(IterativeResult):
     bound: float
     solver_status: str
     rho: float = np.nan
-    stabilizing: bool = False
+    rho_bracket: tuple = (np.nan, np.nan)
+    stabilizing: bool | None = False
     margin: float = np.nan
     equality_residual: float = np.nan
     variables: dict = field(default_factory=dict)
@@ -110,10 +114,12 @@ def certificate(constraints):
 
 
 def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, equality_residual=np.nan,
-               eps=EPS, variables=None):
+               eps=EPS, variables=None, stability=None):
     """The LMIResult of a solve: feasible iff the matrices satisfy the constraints (``margin >= -eps/2``,
     ``equality_residual <= config.defaults["mjls.lmi_equality_rtol"]``); rho reported on its own.
-    Without a margin (nan), the solver's status "optimal" stands for the certificate.
+    Without a margin (nan), the solver's status "optimal" stands for the certificate. With
+    ``stability`` (the gain's :func:`asoc.mjls.mean_square_stability`), rho, its certified bracket
+    and ``stabilizing`` (True, False or None for undecided) come from it; else from ``rho`` as given.
 
     Examples
     --------
@@ -125,21 +131,24 @@ def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, e
     >>> miss.feasible, miss.status, miss.L is None
     (False, 'inaccurate', True)
     """
+    if stability is not None:
+        rho = stability.rho
     common = dict(solver_status=solver_status, rho=rho, margin=margin, equality_residual=equality_residual,
-                  variables=variables or {})
+                  variables=variables or {},
+                  rho_bracket=stability.bracket if stability is not None else (rho, rho))
     verified = (L is not None and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
                 and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
     if not verified:
         status, message = _not_feasible(solver_status, L, margin, equality_residual, eps)
         return LMIResult(feasible=False, L=None, bound=np.inf, converged=False, status=status, message=message,
                          **common)
-    stabilizing = bool(rho < 1)
+    stabilizing = stability.stabilizing if stability is not None else bool(rho < 1)
     text = f"the LMIs hold (margin {margin:.1e} >= {-eps / 2:.1e})" if not np.isnan(margin) else \
         f"the solver reports {solver_status!r}"
     if stabilizing:
         message = f"{text}; the gain gives rho = {rho:.4f} (mean-square stabilising)"
     else:
-        message = (f"{text}, but the recovered gain does not stabilise (rho = {rho:.4f} >= 1), which the theorem "
+        message = (f"{text}, but the recovered gain is not certified to stabilise (rho = {rho:.4f}), which the theorem "
                    f"excludes: a numerical failure of the gain's recovery, or a counterexample")
     return LMIResult(feasible=True, L=L, bound=bound, stabilizing=stabilizing, converged=True, status="converged",
                      message=message, **common)
@@ -256,7 +265,8 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
     closed = sys.A + sys.B @ (gains if mode_observed else gains[0]) @ sys.C
     variables = {name: [v.value for v in group] for name, group in (("F", F), ("G", G), ("M", Mv), ("W", W), ("Y", Y))}
     return lmi_result(status, gains if mode_observed else gains[0], float(prob.value),
-                      ms_spectral_radius(closed, sys.T), margin, residual, eps, variables)
+                      margin=margin, equality_residual=residual, eps=eps, variables=variables,
+                      stability=mean_square_stability(closed, sys.T, check=False))
 
 
 def solve_quietly(prob, solver):

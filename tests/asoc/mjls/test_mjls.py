@@ -181,6 +181,19 @@ def test_lmi_state_feedback_gain_stabilises_and_bounds_the_h2_cost():
     assert observed.feasible and observed.L.shape == (2, 1, 2) and observed.bound <= res.bound + 1e-6
 
 
+def test_lmi_and_baseline_gains_carry_the_certified_bracket():
+    """The stability verdict of an LMI gain follows the certified bracket of rho, as every design's."""
+    from asoc.mjls import mean_square_stability
+    from asoc.mjls.baselines import do_val_h2_state_feedback
+
+    for sys, design in ((sec354_system(1, "state"), static_output_lmi), (sec354_system(2, "state"), do_val_h2_state_feedback)):
+        res = design(sys)
+        truth = mean_square_stability(closed_loop(sys, res.L), sys.T)      # C = I: state feedback
+        lower, upper = res.rho_bracket
+        assert lower <= res.rho <= upper and upper - lower < 1e-6
+        assert res.stabilizing is truth.stabilizing is True and abs(res.rho - truth.rho) < 1e-9
+
+
 def test_do_val_gain_stabilises_and_bounds_its_cost():
     sys = sec354_system(2, "state")
     res = do_val_h2_state_feedback(sys)
