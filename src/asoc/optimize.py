@@ -27,17 +27,9 @@ BFGS_STATUS = {"converged": "the decrease the quasi-Newton model predicts fell b
 class BFGSResult(NamedTuple):
     """What :func:`bfgs` returns (a tuple: ``z, f, status, iterations, history = bfgs(...)``).
 
-    Attributes
-    ----------
-    z : numpy.ndarray
-        The last accepted point.
-    f : float
-        The function value there.
-    status : str
-        A key of :data:`BFGS_STATUS`.
-    iterations : int
-    history : numpy.ndarray
-        f at the start and after each accepted step.
+    ``z`` is the last accepted point, ``f`` the function value there, ``status`` a key of
+    :data:`BFGS_STATUS`, ``iterations`` the number of accepted steps and ``history`` the function
+    value at the start and after each accepted step.
     """
 
     z: np.ndarray

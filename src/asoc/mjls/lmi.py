@@ -64,7 +64,7 @@ class LMIResult(IterativeResult):
         Smallest eigenvalue over the constraints, each minus its imposed floor (>= -eps/2 for a
         certificate; nan when the solver returned no matrices).
     equality_residual : float
-        Largest |M C_i - C_i G| relative to the entries' size (nan without matrices).
+        Largest ``|M C_i - C_i G|`` relative to the entries' size (nan without matrices).
     variables : dict
         The solver's matrices by name (e.g. "F", "G", "M", "W", "Y", each a list over gains or
         modes), empty when it returned none: the certificate, to re-check or to reuse.

@@ -202,9 +202,9 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     cone-preserving maps; Costa, Fragoso and Marques, Discrete-Time Markov Jump Linear Systems,
     2005, Ch. 3, for the second-moment operator). With the Cholesky factor X_j = C_j C_j^T, alpha
     and beta are the extreme eigenvalues of C_j^{-1} L(X)_j C_j^{-T} over j. The rounding of L(X)
-    (|dL(X)_j| <= gamma sum_i p_ij |A_i| |X_i| |A_i|^T, Higham 2002, Sec. 3.5), of the Cholesky
+    (``|dL(X)_j| <= gamma sum_i p_ij |A_i| |X_i| |A_i|^T``, Higham 2002, Sec. 3.5), of the Cholesky
     factor and of the symmetric eigenvalues (backward stable, Higham Ch. 10; Weyl's inequality)
-    moves alpha and beta by at most, to first order,
+    moves alpha and beta by at most, to first order::
 
         margin_j = g (sum_i p_ij ||A_i||_F^2 ||X_i||_F + ||L(X)_j||_F
                    + max(|alpha_j|, |beta_j|) ||X_j||_F) / lambda_min(X_j),
@@ -212,7 +212,7 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     with g = 10 (2 n + M) eps and lambda_min(X_j) >= 1 / ||C_j^{-1}||_F^2 (for the pencil reduced by
     a Cholesky factor, Golub and Van Loan, Matrix Computations, 4th ed., Sec. 8.7.2); the bracket
     is widened by it. Where the estimate comes from dense eigenvalues, the lower end is also
-    |lambda| - 10 s ||E|| (the eigenvalue's condition number s = 1 / |w^H v| and the backward
+    ``|lambda| - 10 s ||E||`` (the eigenvalue's condition number ``s = 1 / |w^H v|`` and the backward
     error ||E|| <= 10 N eps ||K||_F of the QR algorithm, first order), which is tight where the
     Perron stack is singular. This is a first-order bound with a safety factor of 10, not interval arithmetic. The
     bracket is tight where the Perron stack is positive definite; where it is singular (e.g.
