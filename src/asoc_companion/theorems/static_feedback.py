@@ -200,9 +200,10 @@ def check_3_18(rng, mutant=False):
 
 def check_3_19(rng, mutant=False):
     """Thm. 3.19: SOF-stabilisable (grid over scalar L) -> Alg. 3.1 converges to a stabilising,
-    unique solution (same limit from X = P = 1e-4 I and from X = P = I).
+    unique solution (same limit from X = P = 1e-4 I and from X = P = I), on the thesis's model (3.7),
+    which has no measurement noise (J = None; Alg. 3.1 with J is the library's generalisation).
     Mutant: Alg. 3.1 stopped after 3 iterations."""
-    sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable", "sparse_T"))
+    sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable", "sparse_T")).replace(J=None)
     return decide_3_19(sys, max_iter=3 if mutant else 20000)
 
 
