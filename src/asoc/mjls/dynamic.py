@@ -200,6 +200,15 @@ class StoppingRule:
     - ``"no_progress"`` when the smallest change (over p) of the last w iterations is not
       below that of the w before, or when the rate between the two windows predicts that
       tol would not be reached before ``max_iter``.
+
+    Examples
+    --------
+    Bounds that alternate between two values are a cycle of period 2:
+
+    >>> rule = StoppingRule(tol=1e-10, max_iter=100)
+    >>> a, b = np.ones((4, 1, 1, 1)), 2 * np.ones((4, 1, 1, 1))
+    >>> [rule.status(it, x) for it, x in enumerate((a, b, a), start=1)], rule.period
+    ([None, None, 'cycle'], 2)
     """
 
     def __init__(self, tol, max_iter):

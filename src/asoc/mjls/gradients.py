@@ -21,7 +21,19 @@ from .spectral import perron_pair, spectral_radius
 from .system import predecessor_sum, successor_average
 
 def closed_loop_gradient(sys, G):
-    """The gradient over (F, K, L) of a function of A~ (3.39) alone, from G_i = d/dA~_i."""
+    """The gradient over (F, K, L) of a function of A~ (3.39) alone, from G_i = d/dA~_i.
+
+    A~_i has F in its lower right block, K C_i in its lower left and B_i L in its upper right,
+    so the chain rule sums those blocks of G_i over the modes.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> gF, gK, gL = closed_loop_gradient(sys, np.ones((sys.M, 2 * sys.nx, 2 * sys.nx)))
+    >>> gF.shape, gK.shape, gL.shape
+    ((2, 2), (2, 1), (1, 2))
+    """
     nx = sys.nx
     gF = G[:, nx:, nx:].sum(axis=0)
     gK = (G[:, nx:, :nx] @ transpose(sys.C)).sum(axis=0)
@@ -108,6 +120,13 @@ def average_cost_and_gradient(sys, F, K, L):
     return cost, gain_gradient(sys, K, L, At, X, successor_average(sys.T, P), noise_covariances(sys)[1], mu)
 
 def positive_definite(Y):
+    """True when every matrix of the stack ``Y`` has a Cholesky factor (is positive definite).
+
+    Examples
+    --------
+    >>> positive_definite(np.eye(2)[None]), positive_definite(-np.eye(2)[None])
+    (True, False)
+    """
     try:
         np.linalg.cholesky(Y)
     except np.linalg.LinAlgError:

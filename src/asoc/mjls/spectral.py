@@ -63,6 +63,12 @@ class MeanSquareStability:
     method : str
         How the estimate was obtained: "single_mode", "dense", "arnoldi", "arnoldi+dense" or
         "power".
+
+    Examples
+    --------
+    >>> s = mean_square_stability(np.array([[[0.5]]]), np.eye(1))
+    >>> round(s.rho, 6), s.stabilizing, s.rho_lower <= s.rho <= s.rho_upper
+    (0.25, True, True)
     """
 
     rho: float
