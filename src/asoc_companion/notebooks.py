@@ -32,6 +32,7 @@ import shutil
 import signal
 import sys
 import tempfile
+import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -264,8 +265,33 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
             raise RuntimeError(f"{info.path.name}: the executed notebook is incomplete ({problems}); nothing moved")
         commit(stage, output_dir, staged, target)
     finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        remove_stage(stage)
     return target
+
+
+def remove_stage(stage: Path, attempts: int = 5):
+    """Remove a run's staging folder, with SIGINT and SIGTERM held off until it is gone.
+
+    An interrupt that arrives while the folder is being removed would otherwise stop the
+    removal half-way; a kernel that is still shutting down may write one last file into the
+    folder after it was emptied, so the removal is repeated until the folder is gone.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> stage = Path(tempfile.mkdtemp()) / "sec3_2-x"
+    >>> (stage / "values").mkdir(parents=True)
+    >>> _ = (stage / "values" / "sec3_2.json").write_text("{}")
+    >>> remove_stage(stage)
+    >>> stage.exists()
+    False
+    """
+    with signals_held():
+        for _ in range(attempts):
+            shutil.rmtree(stage, ignore_errors=True)
+            if not stage.exists():
+                return
+            time.sleep(0.1)
 
 
 @contextmanager
