@@ -49,7 +49,7 @@ from ..linalg import relative_change
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_scalar
 from .bound import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
-from .moments import steady_state_second_moment
+from .moments import certified_second_moment
 from .operators import augmented_closed_loop, noise_covariances
 from .spectral import mean_square_stability
 from .optimality import METHODS, GainSolve, solve_gains
@@ -91,13 +91,29 @@ def steady_state_cost(sys, F, K, L):
     >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1)
     (True, True)
     """
+    cost, X, stability = certified_steady_state_cost(sys, F, K, L)
+    return cost, X, stability.rho
+
+
+def certified_steady_state_cost(sys, F, K, L):
+    """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place of
+    its rho, for callers that report the bracket too: one spectral radius per controller.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> r = dynamic_output_feedback(sys)
+    >>> cost, X, stability = certified_steady_state_cost(sys, r.F, r.K, r.L)
+    >>> round(cost, 3) == round(r.cost, 3), stability.stabilizing, stability.bracket == r.rho_bracket
+    (True, True, True)
+    """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
     stability = mean_square_stability(At, sys.T)
-    rho = stability.rho
     if not stability.stable:
-        return np.inf, None, rho
-    X = steady_state_second_moment(At, HHt_cl, sys.T, sys.mu_inf)
-    return float(np.einsum("iab,iba->", Qt, X)), X, rho
+        return np.inf, None, stability
+    X = certified_second_moment(At, HHt_cl, sys.T, sys.mu_inf, stability)
+    return float(np.einsum("iab,iba->", Qt, X)), X, stability
 
 
 @dataclass(kw_only=True)
@@ -385,8 +401,8 @@ def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
         raise FloatingPointError(f"Algorithm 3.2: {'(3.51) could not be solved' if status == 'linalg_error' else 'the bounds diverged'} "
                                  f"in the first iteration{': ' + failure if failure else ''}")
     bound, (F, K, L), (Xbar, Xunder, Pbar, Punder), solve = run["best"]
-    cost, _, rho = steady_state_cost(sys, F, K, L)
-    stability = mean_square_stability(augmented_closed_loop(sys, F, K, L)[0], sys.T)
+    cost, _, stability = certified_steady_state_cost(sys, F, K, L)
+    rho = stability.rho
     stabilizing = stability.stabilizing
     message = _message(status, it, stopping, tol, rho, failure, solve, run["worst_residual"])
     if warn and status != "converged":

@@ -173,7 +173,20 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     numpy.linalg.LinAlgError: no stationary second moment: the closed loop is not certified mean-square stable (rho = 1 in [1, 1], undecided; Cor. 3.2)
     """
     Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
-    stability = mean_square_stability(Acl, T, check=False)
+    return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False))
+
+
+def certified_second_moment(Acl, HHt, T, mu_inf, stability):
+    """:func:`steady_state_second_moment` for validated float arrays whose certificate ``stability``
+    (:func:`asoc.mjls.mean_square_stability` of (Acl, T)) the caller already has: one spectral
+    radius per closed loop, not one per use.
+
+    Examples
+    --------
+    >>> A, T = np.array([[[0.5]]]), np.array([[1.0]])
+    >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), mean_square_stability(A, T)).round(4)
+    array([[[1.3333]]])
+    """
     if not stability.stable:
         raise np.linalg.LinAlgError(
             f"no stationary second moment: the closed loop is not certified mean-square stable (rho = "
