@@ -32,10 +32,6 @@ def terminate(signum, frame):
     raise KeyboardInterrupt(f"signal {signum}")
 
 
-# one BLAS/OpenMP thread per notebook when notebooks run side by side (no oversubscription)
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
-
-
 def run_one(info, fidelity, output_dir=None, overrides=None, progress_bar=None):
     """Run ``info``; return the executed notebook's path and the wall time in seconds."""
     start = time.perf_counter()
@@ -53,12 +49,9 @@ def run_and_record(info, fidelity, progress_bar=None):
     manifest.update_manifest(info, nbs.harness_parameters(info, fidelity, out), out, seconds=seconds)
 
 
-def _worker_init(root, single_thread):
+def _worker_init(root):
     signal.signal(signal.SIGTERM, terminate)      # clean up the staging folder and the kernel
     os.environ[paths.ENV_VAR] = str(root)
-    if single_thread:
-        for name in THREAD_VARIABLES:
-            os.environ[name] = "1"
 
 
 def _worker_run(name, fidelity):
@@ -107,11 +100,11 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
                 print(f"{info.path.name}: FAILED: {type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}",
                       flush=True)
         return 1 if failed else 0
-    print(f"running {len(todo)} notebook(s), {jobs} at a time (one BLAS thread each)", flush=True)
+    print(f"running {len(todo)} notebook(s), {jobs} at a time", flush=True)
     done = set()
     context = get_context("spawn")
     with ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_init,
-                             initargs=(paths.project().root, True)) as pool:
+                             initargs=(paths.project().root,)) as pool:
         try:
             _schedule(pool, todo, waits, jobs, fidelity, done, failed)
         except KeyboardInterrupt:

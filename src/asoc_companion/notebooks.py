@@ -47,6 +47,10 @@ KERNEL_ARGUMENTS = ["--IPKernelApp.log_level=ERROR"]
 """The kernel's own log shows errors only: its start-up warning that the local kernel talks
 over TCP without encryption is noise on the command line (a notebook's warnings are cell
 outputs, not this log)."""
+#: Every kernel computes with one BLAS/OpenMP thread, whoever starts it (``make book``, which runs
+#: notebooks side by side, or ``run``/``figure`` alone): a multi-threaded BLAS sums in another order,
+#: and an iterative fit that stops unconverged (Sec. 2.6's OMAT GPs) ends 7-20 % elsewhere.
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
 
 
 @dataclass(frozen=True)
@@ -253,11 +257,12 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
         staged.parent.mkdir(parents=True)
         staged_parameters = harness_parameters(info, fidelity, stage, overrides)
         shown = harness_parameters(info, fidelity, output_dir, overrides)
-        papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
-                                   parameters=staged_parameters,
-                                   progress_bar=sys.stderr.isatty() if progress_bar is None else progress_bar,
-                                   log_output=log_output, kernel_name="python3",
-                                   extra_arguments=KERNEL_ARGUMENTS)
+        with one_blas_thread():
+            papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
+                                       parameters=staged_parameters,
+                                       progress_bar=sys.stderr.isatty() if progress_bar is None else progress_bar,
+                                       log_output=log_output, kernel_name="python3",
+                                       extra_arguments=KERNEL_ARGUMENTS)
         normalise(staged, shown_parameters=shown, output_path=target,
                   replace={str(stage): shown["output_dir"], staged_parameters["output_dir"]: shown["output_dir"]})
         problems = incomplete_notebook(staged)
@@ -292,6 +297,31 @@ def remove_stage(stage: Path, attempts: int = 5):
             if not stage.exists():
                 return
             time.sleep(0.1)
+
+
+@contextmanager
+def one_blas_thread():
+    """Set :data:`THREAD_VARIABLES` to 1 for the kernels started inside; restore them after.
+
+    Examples
+    --------
+    >>> before = os.environ.get("OPENBLAS_NUM_THREADS")
+    >>> with one_blas_thread():
+    ...     os.environ["OPENBLAS_NUM_THREADS"]
+    '1'
+    >>> os.environ.get("OPENBLAS_NUM_THREADS") == before
+    True
+    """
+    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 @contextmanager

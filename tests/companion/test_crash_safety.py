@@ -182,3 +182,20 @@ def test_reproduce_reruns_incomplete_outputs_although_hashes_agree(tmp_path, mon
     (project.figures / "values" / "secX_8.json").write_text('{"notebook": "secX_8", "val')
     assert cli.main(["reproduce", "--jobs", "1"]) == 0 and ran == ["secX_8"] * 4
     assert json.loads((project.figures / "values" / "secX_8.json").read_text())["values"] == {"a": 1, "b": 2}
+
+
+@pytest.mark.notebook
+def test_every_kernel_computes_with_one_blas_thread(tmp_path, monkeypatch):
+    """A run alone gives the numbers of a run beside others: the kernel has one BLAS thread, even
+    when the caller's environment asks for more."""
+    project = _project(tmp_path, monkeypatch)
+    monkeypatch.setenv("PYTHONPATH", str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    info = _notebook(project.book, "secX_7", [
+        "import os\nimport asoc_companion as repro\nrepro.setup('secX_7', fidelity=fidelity, output_dir=output_dir)",
+        "repro.record('threads', [os.environ.get(name) for name in ('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS')])"])
+    nbs.run(info, "full", progress_bar=False)
+    recorded = json.loads((project.figures / "values" / "secX_7.json").read_text())["values"]
+    assert recorded["threads"] == ["1", "1"]
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "2" and "OMP_NUM_THREADS" not in os.environ
