@@ -167,7 +167,7 @@ def test_statements_table_escapes_claims_and_links_counterexample_and_finding():
 
     keys = ["statement_3_26", "statement_3_30"]
     results = run_study(2, seed=1, only=keys, n_jobs=1, progress=False, mutants=2)
-    records = {key: res.record() for key, res in results.items()}
+    records = {key: res.recorded_value() for key, res in results.items()}
     records["statement_3_26"]["no_correction"] = "tried <b>"
     lemma = Statement("statement_3_0", "Lemma 3.0", "a | b", "nothing", not_checkable="a definition")
     rows = [st for st in STATEMENTS if st.key in keys] + [lemma]
@@ -194,7 +194,7 @@ def test_dask_localcluster_gives_the_local_results():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         remote = run_study(8, seed=3, only=CHEAP, scheduler=client, progress=False)
-    strip = lambda r: {k: {f: v for f, v in res.record().items() if f != "seconds"} for k, res in r.items()}
+    strip = lambda r: {k: {f: v for f, v in res.recorded_value().items() if f != "seconds"} for k, res in r.items()}
     assert strip(local) == strip(remote)
     assert {k: res.failures for k, res in local.items()} == {k: res.failures for k, res in remote.items()}
 
@@ -210,7 +210,7 @@ def test_ci_fidelity_study_runs_every_statement_and_catches_every_mutant():
     for key, res in results.items():
         assert res.errors == 0, (key, res.error_messages)
         assert res.holds + res.fails + res.not_applicable == res.instances
-        record = res.record()["mutant"]
+        record = res.recorded_value()["mutant"]
         assert record["fails"] > 0 and "errors" not in record, (key, record)
         assert record["description"] == next(st.mutant for st in STATEMENTS if st.key == key)
     assert results["statement_3_26"].fails == results["statement_3_26"].instances

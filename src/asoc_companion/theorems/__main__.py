@@ -39,7 +39,7 @@ def main(argv=None) -> int:
         parser.error(f"--mutants: expected an integer >= 0, found {args.mutants}")
     results = run_study(count, seed=args.seed, only=args.only, n_jobs=args.jobs, scheduler=args.scheduler,
                         mutants=args.mutants or None)
-    recorded = {key: res.record() for key, res in results.items()}
+    recorded = {key: res.recorded_value() for key, res in results.items()}
     for key, value in recorded.items():
         print(f"{key:24s} {verdict_text(value):42s} mutant: {mutant_text(value):22s} failing: {value['failing'][:8]}")
     print(f"{len(recorded)} statements in {time.perf_counter() - start:.1f} s")

@@ -89,7 +89,7 @@ class StatementResult:
     corrected: dict | None = None
     diagnosis: str | None = None
 
-    def record(self) -> dict:
+    def recorded_value(self) -> dict:
         """The recorded value: counts, failing indices, the statement's summary, its mutant and timing."""
         counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable, "errors": self.errors}
         record = {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds,

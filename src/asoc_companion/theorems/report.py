@@ -108,7 +108,7 @@ def statements_table(statements, records, findings) -> str:
     verdict, whether the check caught its mutant, the corrected statement and its verdict (when the
     record has ``corrected`` or ``no_correction``), and links to the counterexample on the page and to
     the finding (``findings`` maps a statement key to an anchor of findings.html). ``records`` maps a key
-    to its recorded value (``StatementResult.record()``). HTML, not Markdown: claims contain ``|`` and the
+    to its recorded value (``StatementResult.recorded_value()``). HTML, not Markdown: claims contain ``|`` and the
     links must leave the page.
 
     Examples
