@@ -95,11 +95,14 @@ def machine_sentence(record: dict) -> str:
     Examples
     --------
     >>> print(machine_sentence({"machine": {"cpu": "AMD EPYC", "cores": 2, "octave": "7.3.0", "numpy": "2.1.0",
-    ...     "blas": "scipy-openblas 0.3.27", "python": "3.11.7", "date": "2026-11-25"},
+    ...     "blas": "scipy-openblas 0.3.27", "python": "3.11.7", "date": "2026-11-25",
+    ...     "load_average_1min": [0.2, 1.1]},
     ...     "author_code": {"commit": "94a92e9d"}}))
-    Measured on 2026-11-25 on one AMD EPYC machine with 2 cores: the author's code (commit 94a92e9) under Octave 7.3.0; this library under Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27.
+    Measured on 2026-11-25 on one AMD EPYC machine with 2 cores (1-minute load average 0.2 before, 1.1 after): the author's code (commit 94a92e9) under Octave 7.3.0; this library under Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27.
     """
     m = record["machine"]
-    return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores: the author's code "
+    load = m.get("load_average_1min")
+    load = f" (1-minute load average {load[0]:g} before, {load[1]:g} after)" if load else ""
+    return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores{load}: the author's code "
             f"(commit {record['author_code']['commit'][:7]}) under Octave {m['octave']}; this library under "
             f"Python {m['python']}, NumPy {m['numpy']} with {m['blas']}.")
