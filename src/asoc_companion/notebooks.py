@@ -55,9 +55,8 @@ class NotebookInfo:
 
     Examples
     --------
-    >>> info = NotebookInfo("sec3_5", Path("book/sec3_5.ipynb"), "Sec. 3.5", ("3.4", "3.5"), ("3.2",))
-    >>> info.path.name, info.figures
-    ('sec3_5.ipynb', ('3.4', '3.5'))
+    >>> NotebookInfo("sec3_5", Path("book/sec3_5.ipynb"), "Sec. 3.5", ("3.4", "3.5"), ("3.2",)).figures
+    ('3.4', '3.5')
     """
 
     name: str
@@ -72,9 +71,7 @@ def notebooks(book=None) -> dict:
 
     Examples
     --------
-    Sections first, then the other pages (of the book of the checkout this runs in):
-
-    >>> names = list(notebooks())
+    >>> names = list(notebooks())                        # the book of the checkout this runs in
     >>> names.index("sec3_6") < names.index("findings") < names.index("your_system")
     True
     """
@@ -89,13 +86,7 @@ def notebooks(book=None) -> dict:
 
 
 def find(kind: str, number: str, book=None) -> NotebookInfo:
-    """The notebook that regenerates figure or table ``number``.
-
-    Examples
-    --------
-    >>> find("figure", "3.2").name
-    'sec3_2'
-    """
+    """The notebook that regenerates figure or table ``number``."""
     for info in notebooks(book).values():
         if number in (info.figures if kind == "figure" else info.tables):
             return info
@@ -134,13 +125,7 @@ def build_order(infos) -> list:
 
 
 def by_name(name: str, book=None) -> NotebookInfo:
-    """The notebook called ``name`` (e.g. "sec3_5", "findings").
-
-    Examples
-    --------
-    >>> by_name("sec3_2").path.name
-    'sec3_2.ipynb'
-    """
+    """The notebook called ``name`` (e.g. "sec3_5", "findings")."""
     found = notebooks(book)
     if name not in found:
         raise ValueError(f"notebook {name!r} is not a notebook of the book; known: {', '.join(found)}")
@@ -152,9 +137,8 @@ def parameter_specs(info: NotebookInfo) -> dict:
 
     Examples
     --------
-    >>> specs = parameter_specs(by_name("sec3_2"))
-    >>> specs["fidelity"]["name"], "output_dir" in specs
-    ('fidelity', True)
+    >>> parameter_specs(by_name("sec3_2"))["output_dir"]["name"]
+    'output_dir'
     """
     import papermill
 
@@ -162,24 +146,12 @@ def parameter_specs(info: NotebookInfo) -> dict:
 
 
 def default_parameters(info: NotebookInfo) -> dict:
-    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's inspection).
-
-    Examples
-    --------
-    >>> {"fidelity", "output_dir"} <= set(default_parameters(by_name("sec3_2")))
-    True
-    """
+    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's inspection)."""
     return {name: spec["default"] for name, spec in parameter_specs(info).items()}
 
 
 def parse_value(text: str):
-    """A ``-p name value`` value, typed as papermill's command line does: bool, None, int, float or str.
-
-    Examples
-    --------
-    >>> [parse_value(text) for text in ("True", "None", "3", "0.5", "sec3_5")]
-    [True, None, 3, 0.5, 'sec3_5']
-    """
+    """A ``-p name value`` value, typed as papermill's command line does: bool, None, int, float or str."""
     if text in ("True", "False"):
         return text == "True"
     if text == "None":
@@ -263,8 +235,6 @@ def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
 
     Examples
     --------
-    >>> check_overrides(by_name("sec3_2"), {"steps": 10})
-    {'steps': 10}
     >>> check_overrides(by_name("sec3_2"), {"nosuch": 1})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
@@ -329,8 +299,6 @@ def executed_path(info: NotebookInfo, fidelity: str, output_dir, overrides=None)
 
     Examples
     --------
-    A default full run replaces the notebook in ``book/``; a ci run writes beside its values:
-
     >>> info, project = by_name("sec3_2"), paths.project()
     >>> executed_path(info, "full", project.figures) == info.path, executed_path(info, "ci", project.ci_output).parts[-5:]
     (True, ('book', '_build', 'ci', 'notebooks', 'sec3_2.ipynb'))
@@ -408,7 +376,6 @@ def signals_held():
 
     Examples
     --------
-    >>> import signal
     >>> with signals_held():
     ...     held = signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
     >>> held, signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
@@ -443,11 +410,10 @@ def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook
     Examples
     --------
     >>> with tempfile.TemporaryDirectory() as stage, tempfile.TemporaryDirectory() as out:
-    ...     for name in ("fig_own_1.png", "values/demo.json", "notebooks/demo.ipynb"):
-    ...         _ = atomic_write_bytes(Path(stage) / name, b"{}")
-    ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "demo.ipynb", Path(out) / "demo.ipynb")
+    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png", "values/a.json", "notebooks/a.ipynb")]
+    ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "a.ipynb", Path(out) / "a.ipynb")
     ...     print(sorted(p.relative_to(out).as_posix() for p in Path(out).rglob("*.*")), list(Path(stage).rglob("*.*")))
-    ['demo.ipynb', 'fig_own_1.png', 'values/demo.json'] []
+    ['a.ipynb', 'a.png', 'values/a.json'] []
     """
     files = [p for p in stage.rglob("*") if p.is_file() and p != staged_notebook
              and not p.name.endswith(".tmp")]
@@ -477,14 +443,12 @@ def normalise(path: Path, shown_parameters=None, output_path=None, replace=None)
 
     Examples
     --------
-    Papermill's times go, its paths become relative to the checkout, split printed text is merged:
-
     >>> from nbformat import read, write, v4
     >>> outputs = [v4.new_output("stream", name="stdout", text=text) for text in ("1\n", "2\n")]
     >>> meta = {"papermill": {"start_time": "2026-01-01T00:00", "input_path": str(paths.project().book / "a.ipynb")}}
+    >>> cells = [v4.new_code_cell("print(1); print(2)", outputs=outputs)]
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     write(v4.new_notebook(cells=[v4.new_code_cell("print(1); print(2)", outputs=outputs)], metadata=meta),
-    ...           Path(folder) / "a.ipynb")
+    ...     write(v4.new_notebook(cells=cells, metadata=meta), Path(folder) / "a.ipynb")
     ...     normalise(Path(folder) / "a.ipynb")
     ...     nb = read(Path(folder) / "a.ipynb", as_version=4)
     >>> nb.metadata.papermill, [out.text for out in nb.cells[0].outputs]
