@@ -28,8 +28,18 @@ class BFGSResult(NamedTuple):
     """What :func:`bfgs` returns (a tuple: ``z, f, status, iterations, history = bfgs(...)``).
 
     ``z`` is the last accepted point, ``f`` the function value there, ``status`` a key of
-    :data:`BFGS_STATUS`, ``iterations`` the number of accepted steps and ``history`` the function
-    value at the start and after each accepted step.
+    :data:`BFGS_STATUS`, ``iterations`` the number of passes of the iteration (at most ``max_iter``;
+    a pass that ends in a stop test or a line-search restart counts too) and ``history`` the function
+    value at the start and after each accepted step (``len(history) - 1`` accepted steps).
+
+    Examples
+    --------
+    >>> result = bfgs(lambda z: (float((z[0] - 3) ** 2), 2 * (z - 3)), [0.0])
+    >>> result.status, result.z.round(9), result.history.round(9)
+    ('converged', array([3.]), array([9., 4., 0.]))
+    >>> z, f, status, iterations, history = result
+    >>> round(f, 9), iterations, len(history) - 1
+    (0.0, 3, 2)
     """
 
     z: np.ndarray

@@ -6,5 +6,13 @@ from tqdm import tqdm
 
 
 def progress_bar(iterable=None, enabled=True, **kwargs):
-    """``tqdm(iterable, **kwargs)`` when ``enabled`` and stderr is a terminal, else silent."""
+    """``tqdm(iterable, **kwargs)`` when ``enabled`` and stderr is a terminal, else silent.
+
+    Examples
+    --------
+    The bar (on a terminal only) goes to stderr; the items pass through unchanged:
+
+    >>> list(progress_bar(range(3), desc="runs"))
+    [0, 1, 2]
+    """
     return tqdm(iterable, disable=None if enabled else True, **kwargs)

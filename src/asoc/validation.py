@@ -111,7 +111,18 @@ def real_array(value, name: str, *, shape=None, ndim=None, finite=True) -> np.nd
 
 
 def symmetric(array, name: str) -> np.ndarray:
-    """A stack of symmetric matrices (last two axes), within a relative rounding tolerance."""
+    """A stack of symmetric matrices (last two axes), within a relative rounding tolerance.
+
+    Examples
+    --------
+    >>> symmetric(np.array([[2.0, 1.0], [1.0, 3.0]]), "Q")
+    array([[2., 1.],
+           [1., 3.]])
+    >>> symmetric(np.array([[2.0, 1.0], [0.0, 3.0]]), "Q")
+    Traceback (most recent call last):
+    ...
+    ValueError: Q: expected a symmetric matrix, found asymmetry 1
+    """
     asym = np.abs(array - np.swapaxes(array, -1, -2)).max(initial=0.0)
     if asym > SYMMETRY_RTOL * max(1.0, np.abs(array).max(initial=0.0)):
         raise ValueError(f"{name}: expected a symmetric matrix, found asymmetry {asym:.3g}")
@@ -166,7 +177,18 @@ def probability_vector(value, name: str, size: int | None = None) -> np.ndarray:
 
 
 def generator(rng, name: str = "rng") -> np.random.Generator:
-    """A seeded ``numpy.random.Generator`` (every random draw in asoc comes from one)."""
+    """A seeded ``numpy.random.Generator`` (every random draw in asoc comes from one).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> generator(rng) is rng
+    True
+    >>> generator(1)
+    Traceback (most recent call last):
+    ...
+    TypeError: rng: expected a numpy.random.Generator (np.random.default_rng(seed)), found int
+    """
     if not isinstance(rng, np.random.Generator):
         raise TypeError(f"{name}: expected a numpy.random.Generator (np.random.default_rng(seed)), "
                         f"found {type(rng).__name__}")

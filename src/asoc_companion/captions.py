@@ -17,12 +17,32 @@ CLAIMS_NAME = "figure_claims.yaml"
 
 
 def claims_path():
-    """``tests/reference/figure_claims.yaml`` of the project."""
+    """``tests/reference/figure_claims.yaml`` of the project.
+
+    Examples
+    --------
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
+    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    ...     print(claims_path().relative_to(folder).as_posix())
+    tests/reference/figure_claims.yaml
+    """
     return paths.project().reference.parent / CLAIMS_NAME
 
 
 def load_claims(path=None) -> dict:
-    """``{figure number: {"where", "claim", "keys"}}`` from the registry, validated."""
+    """``{figure number: {"where", "claim", "keys"}}`` from the registry, validated.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "figure_claims.yaml"
+    ...     _ = path.write_text("own.1: {where: p. 1, claim: The loop is stable., keys: [sec_demo.rho]}")
+    ...     print(load_claims(path))
+    {'own.1': {'where': 'p. 1', 'claim': 'The loop is stable.', 'keys': ['sec_demo.rho']}}
+    """
     with open(path or claims_path()) as handle:
         raw = yaml.load(handle, Loader=SAFE_LOADER) or {}
     for number, spec in raw.items():
@@ -33,7 +53,15 @@ def load_claims(path=None) -> dict:
 
 
 def verdict(keys, reference, values) -> str:
-    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is absent."""
+    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is absent.
+
+    Examples
+    --------
+    >>> from asoc_companion.reference import Entry
+    >>> reference = {"sec_demo.rho": Entry("sec_demo.rho", where="p. 1", kind="deterministic", thesis=0.25, tol=5e-5)}
+    >>> verdict(["sec_demo.rho"], reference, {"sec_demo.rho": 0.25}), verdict(["sec_demo.rho"], reference, {})
+    ('reproduced', 'missing')
+    """
     statuses = [status(reference[k], values.get(k)) for k in keys]
     for st in ("missing", "deviates"):
         if st in statuses:
@@ -42,7 +70,20 @@ def verdict(keys, reference, values) -> str:
 
 
 def caption_markdown(number: str, claims=None, reference=None, values=None) -> str:
-    """The caption of figure ``number``: the thesis's claim and, in one line, whether ours shows it."""
+    """The caption of figure ``number``: the thesis's claim and, in one line, whether ours shows it.
+
+    Examples
+    --------
+    >>> from asoc_companion.reference import Entry
+    >>> rho = Entry("sec_demo.rho", where="p. 1", kind="deterministic", thesis=0.25, tol=5e-5)
+    >>> claims = {"own.1": {"where": "p. 1", "claim": "The loop is stable.", "keys": [rho.key]}}
+    >>> print(caption_markdown("own.1", claims, {rho.key: rho}, {rho.key: 0.2500001}), end="")
+    :::{container} asoc-caption
+    **Fig. own.1, the thesis** (p. 1): “The loop is stable.”
+    <BLANKLINE>
+    **Ours:** {bdg-success}`shows it` checks reproduced: 1 of 1 (`rho`; {ref}`ledger <ledger-sec_demo>`).
+    :::
+    """
     claims = claims if claims is not None else load_claims()
     reference = reference if reference is not None else load_reference()
     if number not in claims:
@@ -69,7 +110,26 @@ STATUS_WORDS = {"deviates": "does not show it", "missing": "not computed"}
 
 
 def figure_caption(number: str):
-    """Markdown for a notebook cell: the caption of figure ``number`` from the current values."""
+    """Markdown for a notebook cell: the caption of figure ``number`` from the current values.
+
+    Examples
+    --------
+    In a temporary checkout with a claim on figure own.1, its reference entry and a committed value:
+
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> from asoc_companion.session import Recorder
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     root = pathlib.Path(folder)
+    ...     (root / "book").mkdir(); (root / "tests/reference/thesis_values").mkdir(parents=True)
+    ...     _ = (root / "book" / "_toc.yml").write_text("")
+    ...     _ = (root / "tests/reference/figure_claims.yaml").write_text(
+    ...         "own.1: {where: p. 1, claim: The loop is stable., keys: [sec_demo.rho]}")
+    ...     _ = (root / "tests/reference/thesis_values/sec_demo.yaml").write_text(
+    ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5}")
+    ...     _ = Recorder("sec_demo", "full", root / "figures").record("rho", 0.2502)
+    ...     print(figure_caption("own.1").data.splitlines()[3])
+    **Ours:** {bdg-warning}`does not show it` checks reproduced: 0 of 1 (`rho`; {ref}`ledger <ledger-sec_demo>`).
+    """
     from IPython.display import Markdown
 
     from .session import current_values
@@ -94,6 +154,21 @@ def insert_caption_cells(path, with_output=False) -> list:
     The cell goes right after the cell that saves the figure (after its Markdown caption, if
     one follows). Other cells are left untouched; ``with_output`` stores the caption rendered
     from the committed values (what executing the new cell gives). Returns the numbers added.
+
+    Examples
+    --------
+    >>> import nbformat, pathlib, tempfile
+    >>> nb = nbformat.v4.new_notebook(metadata={"asoc": {"figures": ["own.1"]}})
+    >>> nb.cells = [nbformat.v4.new_code_cell('save_figure(fig, "own.1")'),
+    ...             nbformat.v4.new_markdown_cell("**Figure own.1.** The closed loop."),
+    ...             nbformat.v4.new_markdown_cell("## Next section")]
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "demo.ipynb"
+    ...     nbformat.write(nb, path)
+    ...     print(insert_caption_cells(path), insert_caption_cells(path))
+    ...     print([cell.source for cell in nbformat.read(path, as_version=4).cells][2])
+    ['own.1'] []
+    repro.figure_caption("own.1")
     """
     import re
 

@@ -27,7 +27,17 @@ def _draw(rng):
 
 def infinite_horizon_gap(rng):
     """Relative gap of Alg. 3.2's controller to the exact-cost design started from it (None if Alg. 3.2
-    does not converge to a stabilising controller)."""
+    does not converge to a stabilising controller).
+
+    Examples
+    --------
+    The exact-cost design improves on Alg. 3.2 by a small fraction; on the second system Alg. 3.2
+    diverges (the closed loop's rho is about 5), so there is no gap to report:
+
+    >>> gap = infinite_horizon_gap(np.random.default_rng(0))
+    >>> 0 <= gap < 0.01, infinite_horizon_gap(np.random.default_rng(1))
+    (True, None)
+    """
     sys = _draw(rng)
     run = dynamic_output_feedback(sys, max_iter=3000, warn=False)
     if not (run.converged and run.stabilizing):
@@ -38,7 +48,14 @@ def infinite_horizon_gap(rng):
 
 def finite_horizon_gap(rng, horizon=20):
     """Relative gap of Alg. 3.3's controller (random Gaussian-mixture x_0) to the exact-cost design
-    started from it."""
+    started from it.
+
+    Examples
+    --------
+    >>> gap = finite_horizon_gap(np.random.default_rng(0), horizon=5)
+    >>> 0 <= gap < 0.01
+    True
+    """
     sys = _draw(rng)
     mu0 = rng.dirichlet(np.ones(sys.M))
     mean0, cov0 = rng.standard_normal((sys.M, sys.nx)), random_spd_stack(rng, sys.M, sys.nx, 0.2)
@@ -79,5 +96,11 @@ def design_gaps(seed_sequence, n_systems, horizon=20, progress=False):
 
 
 def quantiles(gaps, probabilities=(0.0, 0.25, 0.5, 0.75, 0.9, 1.0)):
-    """The gaps' quantiles (min, quartiles, 90 %, max)."""
+    """The gaps' quantiles (min, quartiles, 90 %, max).
+
+    Examples
+    --------
+    >>> quantiles([0.0, 0.1, 0.2, 0.3, 0.4])
+    [0.0, 0.1, 0.2, 0.3, 0.36, 0.4]
+    """
     return [float(q) for q in np.quantile(np.asarray(gaps), probabilities)]

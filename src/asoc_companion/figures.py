@@ -48,6 +48,13 @@ def apply_style():
     Returns
     -------
     None
+
+    Examples
+    --------
+    >>> with matplotlib.rc_context():                 # leaves the global style as it was
+    ...     apply_style()
+    ...     print(matplotlib.rcParams["savefig.dpi"], matplotlib.rcParams["axes.grid"])
+    150.0 True
     """
     matplotlib.rcParams.update(STYLE)
 
@@ -56,7 +63,17 @@ NUMBER = re.compile(r"(\d+)\.(\d+)|own\.(\d+)")
 
 
 def file_stem(kind: str, number: str) -> str:
-    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other numbers."""
+    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other numbers.
+
+    Examples
+    --------
+    >>> file_stem("fig", "3.4"), file_stem("table", "own.1")
+    ('fig3_4', 'table_own_1')
+    >>> file_stem("fig", "A.1")
+    Traceback (most recent call last):
+    ...
+    ValueError: number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis), found 'A.1'
+    """
     match = NUMBER.fullmatch(str(number))
     if match is None:
         raise ValueError(f"number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis), "
@@ -84,6 +101,17 @@ def save_figure(fig, number: str, output_dir):
     ------
     ValueError
         If ``number`` does not look like "3.4" or "own.1".
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from matplotlib.figure import Figure
+    >>> fig = Figure()
+    >>> _ = fig.add_subplot().plot([0, 1], [1, 0])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = save_figure(fig, "own.1", folder)
+    ...     print(png.name, sorted(p.name for p in Path(folder).iterdir()))
+    fig_own_1.png ['fig_own_1.pdf', 'fig_own_1.png']
     """
     out = Path(output_dir)
     stem = file_stem("fig", number)
@@ -113,6 +141,14 @@ def markdown_table(header, rows) -> str:
     ------
     TypeError
         If ``rows`` is not an iterable of iterables.
+
+    Examples
+    --------
+    >>> print(markdown_table(["k", "rho"], [[0, 0.25], [1, 0.5]]), end="")
+    | k | rho |
+    |---|---|
+    | 0 | 0.25 |
+    | 1 | 0.5 |
     """
     lines = ["| " + " | ".join(map(str, header)) + " |",
              "|" + "|".join("---" for _ in header) + "|"]
@@ -144,6 +180,18 @@ def save_table(number: str, header, rows, output_dir) -> str:
     ValueError
         If ``number`` does not look like "3.2" or "own.1", or a row has a different number of cells than
         ``header``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     print(save_table("3.2", ["k", "rho"], [[0, 0.25]], folder), end="")
+    ...     print((Path(folder) / "table3_2.csv").read_text(), end="")
+    | k | rho |
+    |---|---|
+    | 0 | 0.25 |
+    k,rho
+    0,0.25
     """
     if any(len(row) != len(header) for row in rows):
         raise ValueError("rows: every row needs as many cells as header")
@@ -160,5 +208,13 @@ def save_table(number: str, header, rows, output_dir) -> str:
 
 
 def close(fig):
-    """Close ``fig`` after it has been shown and saved."""
+    """Close ``fig`` after it has been shown and saved.
+
+    Examples
+    --------
+    >>> fig = plt.figure()
+    >>> close(fig)
+    >>> plt.fignum_exists(fig.number)
+    False
+    """
     plt.close(fig)

@@ -37,6 +37,13 @@ def imported_names(code: str, package: str | None = None) -> set:
     ------
     SyntaxError
         If ``code`` does not parse.
+
+    Examples
+    --------
+    >>> sorted(imported_names("import numpy as np; from asoc.mjls import MJLS"))
+    ['asoc.mjls', 'asoc.mjls.MJLS', 'numpy']
+    >>> sorted(imported_names("from .operators import sym", package="asoc.mjls"))
+    ['asoc.mjls.operators', 'asoc.mjls.operators.sym']
     """
     names = set()
     for node in ast.walk(ast.parse(code)):
@@ -62,7 +69,19 @@ def _file_imports(path: str, mtime_ns: int, size: int, package: str) -> frozense
 
 
 def module_file(name: str, src) -> Path | None:
-    """The file of module ``name`` under ``src`` (``a/b.py`` or ``a/b/__init__.py``), or None."""
+    """The file of module ``name`` under ``src`` (``a/b.py`` or ``a/b/__init__.py``), or None.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as src:
+    ...     (Path(src) / "pkg" / "sub").mkdir(parents=True)
+    ...     for name in ("pkg/__init__.py", "pkg/a.py", "pkg/sub/__init__.py"):
+    ...         _ = (Path(src) / name).write_text("")
+    ...     print([module_file(m, src).relative_to(src).as_posix() for m in ("pkg.a", "pkg.sub")],
+    ...           module_file("pkg.missing", src))
+    ['pkg/a.py', 'pkg/sub/__init__.py'] None
+    """
     base = Path(src).joinpath(*name.split("."))
     for candidate in (base.with_suffix(".py"), base / "__init__.py"):
         if candidate.is_file():
@@ -72,7 +91,22 @@ def module_file(name: str, src) -> Path | None:
 
 def closure(names, src, exclude=()) -> dict:
     """``{module name: file}`` of the modules under ``src`` that importing ``names`` runs
-    (modules in ``exclude`` are neither listed nor followed)."""
+    (modules in ``exclude`` are neither listed nor followed).
+
+    Examples
+    --------
+    ``pkg.a`` imports ``pkg.b`` relatively; importing ``pkg.a`` runs ``pkg/__init__.py`` too, and
+    ``numpy`` lies outside ``src``:
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as src:
+    ...     (Path(src) / "pkg").mkdir()
+    ...     _ = (Path(src) / "pkg" / "__init__.py").write_text("")
+    ...     _ = (Path(src) / "pkg" / "a.py").write_text("import numpy; from . import b")
+    ...     _ = (Path(src) / "pkg" / "b.py").write_text("")
+    ...     print(sorted(closure(["pkg.a"], src)), sorted(closure(["pkg.a"], src, exclude=("pkg.b",))))
+    ['pkg', 'pkg.a', 'pkg.b'] ['pkg', 'pkg.a']
+    """
     src = Path(src)
     found, todo = {}, list(names)
     while todo:
@@ -96,6 +130,23 @@ def notebook_modules(path, src, exclude=()) -> dict:
     """``{module name: file}`` of the project modules the notebook at ``path`` imports, transitively.
 
     A cell that does not parse makes the whole of ``src`` count (a conservative answer).
+
+    Examples
+    --------
+    A notebook whose code cell imports ``pkg.a`` (magics are skipped, markdown cells ignored):
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as src:
+    ...     (Path(src) / "pkg").mkdir()
+    ...     for name in ("__init__.py", "a.py", "b.py"):
+    ...         _ = (Path(src) / "pkg" / name).write_text("")
+    ...     cells = [{"cell_type": "code", "source": "%matplotlib inline"},
+    ...              {"cell_type": "code", "source": ["import pkg.a"]},
+    ...              {"cell_type": "markdown", "source": "import pkg.b"}]
+    ...     notebook = Path(src) / "demo.ipynb"
+    ...     _ = notebook.write_text(json.dumps({"cells": cells, "metadata": {}}))
+    ...     print(sorted(notebook_modules(notebook, src)))
+    ['pkg', 'pkg.a']
     """
     names = set()
     for code in _code_of_notebook(path):

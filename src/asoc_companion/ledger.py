@@ -33,12 +33,27 @@ _SENTENCE = re.compile(r"(?<=[.:;])\s+")
 
 
 def badge(st: str, text: str | None = None) -> str:
-    """A sphinx-design badge for status ``st`` (``reproduced``, ``deviates``, ``new``, ``missing``)."""
+    """A sphinx-design badge for status ``st`` (``reproduced``, ``deviates``, ``new``, ``missing``).
+
+    Examples
+    --------
+    >>> badge("deviates"), badge("reproduced", "shows it")
+    ('{bdg-warning}`deviates`', '{bdg-success}`shows it`')
+    """
     return f"{{bdg-{BADGE[st]}}}`{text or STATUS_TEXT[st]}`"
 
 
 def decimals(entry) -> int | None:
-    """Decimals the thesis prints ``entry`` with: from its rounding tolerance, else from the printed number."""
+    """Decimals the thesis prints ``entry`` with: from its rounding tolerance, else from the printed number.
+
+    Examples
+    --------
+    >>> from asoc_companion.reference import Entry
+    >>> decimals(Entry("demo.rho", where="an example", kind="deterministic", thesis=0.2503, tol=5e-5))
+    4
+    >>> decimals(Entry("demo.costs", where="an example", kind="measured", thesis=[1.25, 3.5]))
+    2
+    """
     if entry.tol:
         return max(0, math.ceil(-math.log10(2 * entry.tol) - 1e-9))
     numbers = [v for v in _flat(entry.thesis) if isinstance(v, (int, float)) and not isinstance(v, bool)]
@@ -84,7 +99,17 @@ def _tolerance(entry, ours, places) -> str:
 
 
 def ledger_rows(reference=None, values=None):
-    """One dict per reference entry: key, notebook, where, claim, thesis, ours, ours_long, tolerance, status, note."""
+    """One dict per reference entry: key, notebook, where, claim, thesis, ours, ours_long, tolerance, status, note.
+
+    Examples
+    --------
+    >>> from asoc_companion.reference import Entry
+    >>> reference = {"demo.rho": Entry("demo.rho", where="p. 1", kind="deterministic", thesis=0.25, tol=5e-5,
+    ...                                note="Spectral radius {{demo.rho:.3f}}.")}
+    >>> [row] = ledger_rows(reference, {"demo.rho": 0.2500001})
+    >>> row["thesis"], row["ours"], row["tolerance"], row["status"], row["note"]
+    ('0.2500', '0.250000', '± 5e-05', 'reproduced', 'Spectral radius 0.250.')
+    """
     reference = reference if reference is not None else load_reference()
     values = values if values is not None else load_all_values()
     rows = []
@@ -124,6 +149,15 @@ def note_groups(rows):
     Rows with the same note form one group; consecutive groups whose notes begin or end with
     the same sentences (together at least ``SHARED_PREFIX`` characters) share that text,
     printed once, and keep only the sentences in which they differ.
+
+    Examples
+    --------
+    Rows with the same note form one group, printed once:
+
+    >>> rows = [{"name": "a", "note": "Too few runs."}, {"name": "b", "note": "Too few runs."},
+    ...         {"name": "c", "note": "Another reading."}]
+    >>> [(head, [[r["name"] for r in members] for _, members in parts]) for head, _, parts in note_groups(rows)]
+    [('Too few runs.', [['a', 'b']]), ('Another reading.', [['c']])]
     """
     by_note = {}
     for row in rows:
@@ -176,7 +210,13 @@ def _common_fields(members):
 # --- links to the notebook cells that compute a value ---------------------------------------------
 
 def heading_anchor(heading: str) -> str:
-    """The HTML id Sphinx gives a Markdown heading (docutils ``make_id`` of its text)."""
+    """The HTML id Sphinx gives a Markdown heading (docutils ``make_id`` of its text).
+
+    Examples
+    --------
+    >>> heading_anchor("## Sec. 3.5: the $T_1$ `chain`")
+    'sec-3-5-the-t-1-chain'
+    """
     text = re.sub(r"^#+\s*", "", heading.strip())
     text = re.sub(r"[`*]", "", text).replace("$", "")
     return make_id(text)
@@ -192,7 +232,19 @@ def _records(source: str, name: str) -> bool:
 
 
 def section_links(notebook_path, names) -> dict:
-    """``{name: "<page>.html#<id>"}``: the heading above the code cell that records each name."""
+    """``{name: "<page>.html#<id>"}``: the heading above the code cell that records each name.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> cells = [{"cell_type": "markdown", "source": "## Spectral radius"},
+    ...          {"cell_type": "code", "source": ["rho = 0.25; ", 'record("rho", rho)']}]
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "demo.ipynb"
+    ...     _ = path.write_text(json.dumps({"cells": cells, "metadata": {}}))
+    ...     print(section_links(path, ["rho", "gain"]))
+    {'rho': 'demo.html#spectral-radius', 'gain': 'demo.html'}
+    """
     cells = json.loads(notebook_path.read_text())["cells"]
     page = notebook_path.stem + ".html"
     links, heading = {}, None
@@ -211,7 +263,13 @@ def section_links(notebook_path, names) -> dict:
 # --- the page --------------------------------------------------------------------------------------
 
 def counts(rows) -> dict:
-    """``{status: number of rows}``."""
+    """``{status: number of rows}``.
+
+    Examples
+    --------
+    >>> counts([{"status": "reproduced"}, {"status": "deviates"}, {"status": "reproduced"}])
+    {'reproduced': 2, 'deviates': 1}
+    """
     out = {}
     for row in rows:
         out[row["status"]] = out.get(row["status"], 0) + 1
@@ -259,7 +317,13 @@ def _notebook_section(notebook, info, mine) -> str:
 
 
 def ledger_label(notebook: str) -> str:
-    """The MyST label of a notebook's section on the ledger page."""
+    """The MyST label of a notebook's section on the ledger page.
+
+    Examples
+    --------
+    >>> ledger_label("sec3_5")
+    'ledger-sec3_5'
+    """
     return f"ledger-{notebook}"
 
 
@@ -281,6 +345,24 @@ def ledger_markdown(reference=None, values=None) -> str:
     ------
     KeyError
         If a note names a value that is not recorded (see :func:`fill`).
+
+    Examples
+    --------
+    In a temporary checkout without notebooks (the section is titled by its name):
+
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> from asoc_companion.reference import Entry
+    >>> rho = Entry("sec_demo.rho", where="p. 1", kind="deterministic", thesis=0.25, tol=5e-5, note="Too coarse.")
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
+    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    ...     text = ledger_markdown({rho.key: rho}, {rho.key: 0.2502})
+    >>> for line in text.splitlines():
+    ...     if line.startswith(("# ", "## ", "| `")):
+    ...         print(line)
+    # Reproduction ledger
+    ## sec_demo
+    | `rho` | {bdg-warning}`deviates` | 0.2500 | 0.250200 | ± 5e-05 | {ref}`1 <ledger-sec_demo-n1>` |
     """
     rows = ledger_rows(reference, values)
     parts = ["# Reproduction ledger\n\n"
@@ -377,7 +459,18 @@ def _join(items) -> str:
 
 def summary_markdown(rows=None) -> str:
     """The intro's summary: per thesis section the counts of reproduced / deviating / not
-    printed values, linked, their total, and what is counted (:func:`totals_markdown`)."""
+    printed values, linked, their total, and what is counted (:func:`totals_markdown`).
+
+    Examples
+    --------
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> rows = [{"notebook": "sec_demo", "status": "reproduced"}, {"notebook": "sec_demo", "status": "deviates"}]
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
+    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    ...     print(summary_markdown(rows).splitlines()[2])
+    | sec_demo | {bdg-success}`1` | {bdg-warning}`1` | 0 | {ref}`ledger <ledger-sec_demo>` |
+    """
     rows = rows if rows is not None else ledger_rows()
     table = []
     sections = _thesis_sections(rows)
@@ -391,7 +484,18 @@ def summary_markdown(rows=None) -> str:
 
 
 def findings_markdown(path=None) -> str:
-    """The intro's list of findings: one link per section of ``book/findings.ipynb``, with its kind."""
+    r"""The intro's list of findings: one link per section of ``book/findings.ipynb``, with its kind.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> source = "(finding-cb)=\n## The mCvMd constant\n\n**Kind:** {bdg-warning}`error in the thesis`\n"
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "findings.ipynb"
+    ...     _ = path.write_text(json.dumps({"cells": [{"cell_type": "markdown", "source": source}]}))
+    ...     print(findings_markdown(path), end="")
+    - {ref}`finding-cb` {bdg-warning}`error in the thesis`
+    """
     path = path or paths.project().book / "findings.ipynb"
     if not path.exists():
         return ""                      # a book without a findings page lists none
@@ -406,14 +510,41 @@ def _replace_block(text, marks, content):
 
 
 def intro_markdown(text, rows=None) -> str:
-    """``text`` (the intro) with its generated verdict, summary and findings list refreshed."""
+    r"""``text`` (the intro) with its generated verdict, summary and findings list refreshed.
+
+    Examples
+    --------
+    The text between the markers is replaced, the rest kept (a checkout without findings page):
+
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> intro = "\n".join(["# Intro", SUMMARY[0], "OLD SUMMARY", SUMMARY[1], FINDINGS[0], FINDINGS[1], "The end."])
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
+    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    ...     text = intro_markdown(intro, [{"notebook": "sec_demo", "status": "reproduced"}])
+    >>> "OLD SUMMARY" in text, text.splitlines()[0], text.splitlines()[-1], text.count("| sec_demo |")
+    (False, '# Intro', 'The end.', 1)
+    """
     rows = rows if rows is not None else ledger_rows()
     text = _replace_block(_replace_block(text, SUMMARY, summary_markdown(rows)), FINDINGS, findings_markdown())
     return _replace_block(text, VERDICT, verdict_markdown(rows) + "\n") if VERDICT[0] in text else text
 
 
 def write_summary(intro=None, rows=None) -> str:
-    """Refresh the generated blocks of ``book/intro.md``; return the new text."""
+    r"""Refresh the generated blocks of ``book/intro.md``; return the new text.
+
+    Examples
+    --------
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
+    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    ...     intro = pathlib.Path(folder) / "book" / "intro.md"
+    ...     _ = intro.write_text("\n".join(["# Intro", SUMMARY[0], SUMMARY[1], FINDINGS[0], FINDINGS[1]]))
+    ...     new = write_summary(intro, [{"notebook": "sec_demo", "status": "deviates"}])
+    ...     print(new == intro.read_text(), "| sec_demo | 0 | {bdg-warning}`1` | 0 |" in new)
+    True True
+    """
     path = intro or paths.project().book / "intro.md"
     new = intro_markdown(path.read_text(), rows)
     atomic_write_text(path, new)
@@ -438,6 +569,24 @@ def write_ledger(path=None) -> str:
         If a note names a value that is not recorded (see :func:`fill`).
     OSError
         If the file cannot be written (the previous file is kept: atomic write).
+
+    Examples
+    --------
+    A temporary checkout whose reference expects ``sec_demo.rho`` = 0.25 and whose values hold 0.2500001:
+
+    >>> import os, pathlib, tempfile, unittest.mock
+    >>> from asoc_companion.session import Recorder
+    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
+    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    ...     (pathlib.Path(folder) / "tests/reference/thesis_values").mkdir(parents=True)
+    ...     _ = (pathlib.Path(folder) / "tests/reference/thesis_values/sec_demo.yaml").write_text(
+    ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5, note: Fine.}")
+    ...     _ = Recorder("sec_demo", "full", pathlib.Path(folder) / "figures").record("rho", 0.2500001)
+    ...     text = write_ledger(pathlib.Path(folder) / "book" / "ledger.md")
+    ...     written = text == (pathlib.Path(folder) / "book" / "ledger.md").read_text()
+    >>> written, [line for line in text.splitlines() if line.startswith("| `")]
+    (True, ['| `rho` | {bdg-success}`reproduced` | 0.2500 | 0.250000 | ± 5e-05 | {ref}`1 <ledger-sec_demo-n1>` |'])
     """
     text = ledger_markdown()
     atomic_write_text(path or paths.project().book / "ledger.md", text)

@@ -33,7 +33,25 @@ def _sha256(data: bytes) -> str:
 
 
 def source_hash(path) -> str:
-    """Hash of a notebook's cell types and sources and its ``asoc`` metadata (outputs ignored)."""
+    """Hash of a notebook's cell types and sources and its ``asoc`` metadata (outputs ignored).
+
+    Examples
+    --------
+    Outputs and execution counts do not change the hash; an edited source does:
+
+    >>> import tempfile
+    >>> def notebook(source, outputs):
+    ...     cell = {"cell_type": "code", "source": source, "outputs": outputs, "metadata": {}}
+    ...     return json.dumps({"cells": [cell], "metadata": {"asoc": {"title": "Demo"}}})
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "demo.ipynb"
+    ...     hashes = []
+    ...     for text in (notebook("x = 1", []), notebook("x = 1", ["1"]), notebook("x = 2", [])):
+    ...         _ = path.write_text(text)
+    ...         hashes.append(source_hash(path))
+    >>> hashes[0] == hashes[1], hashes[0] == hashes[2], len(hashes[0])
+    (True, False, 64)
+    """
     nb = json.loads(Path(path).read_text())
     cells = [[c["cell_type"], "".join(c["source"]) if isinstance(c["source"], list) else c["source"]]
              for c in nb["cells"] if "injected-parameters" not in c.get("metadata", {}).get("tags", [])]
@@ -41,7 +59,21 @@ def source_hash(path) -> str:
 
 
 def tree_hash(folder) -> str:
-    """Hash of every file below ``folder`` (relative paths and contents; caches skipped)."""
+    """Hash of every file below ``folder`` (relative paths and contents; caches skipped).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = (Path(folder) / "a.py").write_text("x = 1")
+    ...     first = tree_hash(folder)
+    ...     (Path(folder) / "__pycache__").mkdir()
+    ...     _ = (Path(folder) / "__pycache__" / "a.pyc").write_bytes(b"cache")
+    ...     cached = tree_hash(folder)
+    ...     _ = (Path(folder) / "a.py").write_text("x = 2")
+    ...     print(first == cached, first == tree_hash(folder))
+    True False
+    """
     folder = Path(folder)
     files = sorted(p for p in folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts
                    and p.suffix != ".pyc" and not p.name.endswith(".tmp"))
@@ -58,14 +90,38 @@ HARNESS_ONLY = ("asoc_companion.__main__", "asoc_companion.build", "asoc_compani
 
 def module_hashes(notebook_path, src=None) -> dict:
     """``{path relative to src: hash}`` of the modules the notebook imports, directly or
-    transitively (the harness's own modules, :data:`HARNESS_ONLY`, excepted)."""
+    transitively (the harness's own modules, :data:`HARNESS_ONLY`, excepted).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     src = Path(folder) / "src"
+    ...     (src / "pkg").mkdir(parents=True)
+    ...     for name in ("__init__.py", "a.py", "b.py"):
+    ...         _ = (src / "pkg" / name).write_text("")
+    ...     cells = [{"cell_type": "code", "source": "import pkg.a", "metadata": {}}]
+    ...     _ = (Path(folder) / "demo.ipynb").write_text(json.dumps({"cells": cells, "metadata": {}}))
+    ...     print(sorted(module_hashes(Path(folder) / "demo.ipynb", src)))
+    ['pkg/__init__.py', 'pkg/a.py']
+    """
     src = Path(src or paths.project().src)
     files = notebook_modules(notebook_path, src, exclude=HARNESS_ONLY).values()
     return {p.relative_to(src).as_posix(): _sha256(p.read_bytes()) for p in sorted(files)}
 
 
 def dependencies(path) -> list:
-    """Names of the notebooks whose recorded values the notebook reads (``metadata.asoc.depends``)."""
+    """Names of the notebooks whose recorded values the notebook reads (``metadata.asoc.depends``).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "findings.ipynb"
+    ...     _ = path.write_text(json.dumps({"cells": [], "metadata": {"asoc": {"depends": ["sec3_5"]}}}))
+    ...     print(dependencies(path))
+    ['sec3_5']
+    """
     depends = json.loads(Path(path).read_text())["metadata"].get("asoc", {}).get("depends", [])
     if isinstance(depends, str) or not all(isinstance(d, str) for d in depends):
         raise ValueError(f"{Path(path).name}: metadata.asoc.depends must be a list of notebook names, "
@@ -74,7 +130,29 @@ def dependencies(path) -> list:
 
 
 def entry(info, parameters: dict, output_dir) -> dict:
-    """The input hashes of ``info``'s notebook run with ``parameters`` into ``output_dir``."""
+    """The input hashes of ``info``'s notebook run with ``parameters`` into ``output_dir``.
+
+    Examples
+    --------
+    In a temporary checkout with a notebook ``demo`` that imports ``pkg``:
+
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> from asoc_companion.notebooks import NotebookInfo
+    >>> with (tempfile.TemporaryDirectory() as folder,
+    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
+    ...     root = Path(folder)
+    ...     for sub in ("book", "figures", "src/pkg"):
+    ...         (root / sub).mkdir(parents=True)
+    ...     for name in ("book/_toc.yml", "src/pkg/__init__.py", "environment.txt"):
+    ...         _ = (root / name).write_text("")
+    ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
+    ...     _ = (root / "book" / "demo.ipynb").write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
+    ...     hashes = entry(NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ()),
+    ...                    {"fidelity": "ci"}, root / "out")
+    >>> sorted(hashes), list(hashes["modules"]), hashes["depends"]
+    (['depends', 'environment', 'modules', 'parameters', 'source'], ['pkg/__init__.py'], {})
+    """
     depends = {}
     for name in dependencies(info.path):
         values = values_path(name, output_dir)
@@ -88,12 +166,28 @@ def entry(info, parameters: dict, output_dir) -> dict:
 
 
 def manifest_path(output_dir) -> Path:
-    """Where the manifest of runs into ``output_dir`` lives."""
+    """Where the manifest of runs into ``output_dir`` lives.
+
+    Examples
+    --------
+    >>> manifest_path("/tmp/run").as_posix()
+    '/tmp/run/values/manifest.json'
+    """
     return Path(output_dir) / "values" / MANIFEST_NAME
 
 
 def load_manifest(output_dir) -> dict:
-    """``{notebook: entry}`` of the runs recorded in ``output_dir`` (``{}`` if none)."""
+    """``{notebook: entry}`` of the runs recorded in ``output_dir`` (``{}`` if none).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     empty = load_manifest(folder)
+    ...     _ = atomic_write_json(manifest_path(folder), {"sec3_5": {"seconds": 4.0}})
+    ...     print(empty, load_manifest(folder))
+    {} {'sec3_5': {'seconds': 4.0}}
+    """
     path = manifest_path(output_dir)
     if not path.exists():
         return {}
@@ -105,7 +199,19 @@ def load_manifest(output_dir) -> dict:
 
 def incomplete_notebook(path) -> str:
     """Why the executed notebook at ``path`` is incomplete ("" if it is not): a code cell never
-    executed, or papermill's record of an exception."""
+    executed, or papermill's record of an exception.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> cells = [{"cell_type": "code", "source": "x = 1", "execution_count": 1},
+    ...          {"cell_type": "code", "source": "y = 2", "execution_count": None}]
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "demo.ipynb"
+    ...     _ = path.write_text(json.dumps({"cells": cells, "metadata": {}}))
+    ...     print(incomplete_notebook(path))
+    code cells [1] were not executed
+    """
     nb = json.loads(Path(path).read_text())
     if nb.get("metadata", {}).get("papermill", {}).get("exception"):
         return "papermill recorded an exception"
@@ -119,6 +225,22 @@ def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
 
     The values file must exist and parse and hold every key the reference expects of the
     notebook; the executed notebook (``executed``, if given) must have every code cell executed.
+
+    Examples
+    --------
+    The reference expects ``demo.rho`` and ``demo.gain``; the run recorded only ``rho``:
+
+    >>> import tempfile
+    >>> from asoc_companion.notebooks import NotebookInfo
+    >>> from asoc_companion.reference import Entry
+    >>> from asoc_companion.session import Recorder
+    >>> reference = {f"demo.{k}": Entry(f"demo.{k}", where="an example", kind="measured") for k in ("rho", "gain")}
+    >>> info = NotebookInfo("demo", Path("demo.ipynb"), "Demo", (), ())
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     before = incomplete_outputs(info, folder, reference=reference)
+    ...     _ = Recorder("demo", "ci", folder).record("rho", 0.25)
+    ...     print(before, incomplete_outputs(info, folder, reference=reference))
+    ['no values file'] ['values missing: gain']
     """
     from .reference import load_reference
 
@@ -161,7 +283,37 @@ def last_seconds(output_dir) -> dict:
 
 
 def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
-    """What changed since ``info`` was last run into ``output_dir``, or what its outputs lack (empty: up to date)."""
+    """What changed since ``info`` was last run into ``output_dir``, or what its outputs lack (empty: up to date).
+
+    Examples
+    --------
+    In a temporary checkout with a notebook ``demo`` that imports ``pkg``: never run, then up to
+    date after a recorded run, then out of date once ``pkg`` is edited:
+
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> from asoc_companion.notebooks import NotebookInfo
+    >>> from asoc_companion.session import Recorder
+    >>> with (tempfile.TemporaryDirectory() as folder,
+    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
+    ...     root, out = Path(folder), Path(folder) / "out"
+    ...     for sub in ("book", "figures", "src/pkg", "tests/reference/thesis_values"):
+    ...         (root / sub).mkdir(parents=True)
+    ...     for name in ("book/_toc.yml", "src/pkg/__init__.py", "environment.txt"):
+    ...         _ = (root / name).write_text("")
+    ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
+    ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
+    ...     _ = info.path.write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
+    ...     print(changed_inputs(info, {"fidelity": "ci"}, out))
+    ...     _ = Recorder("demo", "ci", out).record("rho", 0.25)
+    ...     _ = update_manifest(info, {"fidelity": "ci"}, out)
+    ...     print(changed_inputs(info, {"fidelity": "ci"}, out))
+    ...     _ = (root / "src" / "pkg" / "__init__.py").write_text("x = 1")
+    ...     print(changed_inputs(info, {"fidelity": "ci"}, out))
+    ['never run']
+    []
+    ['modules (pkg/__init__.py)']
+    """
     old = load_manifest(output_dir).get(info.name)
     if old is None:
         return ["never run"]
@@ -185,6 +337,23 @@ def update_manifest(info, parameters: dict, output_dir, seconds=None) -> dict:
 
     ``seconds``, the run's wall time, is kept beside the hashes (not compared by
     :func:`changed_inputs`): the parallel build starts the longest notebooks first.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> from asoc_companion.notebooks import NotebookInfo
+    >>> with (tempfile.TemporaryDirectory() as folder,
+    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
+    ...     root, out = Path(folder), Path(folder) / "out"
+    ...     for sub in ("book", "figures"):
+    ...         (root / sub).mkdir()
+    ...     _ = (root / "book" / "_toc.yml").write_text("")
+    ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
+    ...     _ = info.path.write_text(json.dumps({"cells": [], "metadata": {"asoc": {}}}))
+    ...     recorded = update_manifest(info, {"fidelity": "ci"}, out, seconds=12.34)
+    ...     print(recorded["seconds"], list(load_manifest(out)), recorded["environment"])
+    12.3 ['demo'] None
     """
     manifest = load_manifest(output_dir)
     manifest[info.name] = entry(info, parameters, output_dir)

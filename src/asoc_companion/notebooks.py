@@ -55,6 +55,14 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 
 @dataclass(frozen=True)
 class NotebookInfo:
+    """A notebook of the book: its name, file, title and the thesis figures and tables it regenerates.
+
+    Examples
+    --------
+    >>> NotebookInfo("sec3_5", Path("book/sec3_5.ipynb"), "Sec. 3.5", ("3.4", "3.5"), ("3.2",)).figures
+    ('3.4', '3.5')
+    """
+
     name: str
     path: Path
     title: str
@@ -63,7 +71,14 @@ class NotebookInfo:
 
 
 def notebooks(book=None) -> dict:
-    """``{name: NotebookInfo}`` for every notebook with ``asoc`` metadata, in thesis order (sections, then others)."""
+    """``{name: NotebookInfo}`` for every notebook with ``asoc`` metadata, in thesis order (sections, then others).
+
+    Examples
+    --------
+    >>> names = list(notebooks())                        # the book of the checkout this runs in
+    >>> names.index("sec3_6") < names.index("findings") < names.index("your_system")
+    True
+    """
     found = {}
     for path in sorted(Path(book or paths.project().book).glob("*.ipynb")):
         meta = json.loads(path.read_text())["metadata"].get("asoc")
@@ -84,7 +99,14 @@ def find(kind: str, number: str, book=None) -> NotebookInfo:
 
 
 def build_order(infos) -> list:
-    """``infos`` ordered so that every notebook runs after the notebooks it depends on."""
+    """``infos`` ordered so that every notebook runs after the notebooks it depends on.
+
+    Examples
+    --------
+    >>> order = [info.name for info in build_order(notebooks().values())]
+    >>> order.index("findings") > order.index("sec3_5")          # findings quotes sec3_5's values
+    True
+    """
     infos = {info.name: info for info in infos}
     ordered, done = [], set()
 
@@ -115,7 +137,13 @@ def by_name(name: str, book=None) -> NotebookInfo:
 
 
 def parameter_specs(info: NotebookInfo) -> dict:
-    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (``default`` is source text)."""
+    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (``default`` is source text).
+
+    Examples
+    --------
+    >>> parameter_specs(by_name("sec3_2"))["output_dir"]["name"]
+    'output_dir'
+    """
     import papermill
 
     return dict(papermill.inspect_notebook(str(info.path)))
@@ -155,6 +183,15 @@ def check_value(name: str, value, default_source: str, notebook: str):
     range follows the names: an int parameter called ``seed...`` takes a non-negative int;
     every other int parameter whose default is positive is a count (Monte Carlo runs, steps,
     grid points, iterations) and takes a positive int.
+
+    Examples
+    --------
+    >>> check_value("runs", 50, "100", "demo.ipynb"), check_value("noise", 1, "0.5", "demo.ipynb")
+    (50, 1.0)
+    >>> check_value("runs", 0, "100", "demo.ipynb")
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter runs of demo.ipynb (default 100) is a count: it takes an integer >= 1, found 0
     """
     default = _default_value(default_source)
     where = f"parameter {name} of {notebook} (default {default_source})"
@@ -183,6 +220,11 @@ def parse_overrides(info: NotebookInfo, pairs) -> dict:
     ValueError
         A name given twice, a name that is not a parameter (the message lists the valid
         ones), or a value of the wrong type or range (:func:`check_value`).
+
+    Examples
+    --------
+    >>> parse_overrides(by_name("sec3_2"), [("steps", "10")])
+    {'steps': 10}
     """
     overrides = {}
     for name, text in pairs or ():
@@ -193,7 +235,15 @@ def parse_overrides(info: NotebookInfo, pairs) -> dict:
 
 
 def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
-    """``overrides`` if every name is a parameter of the notebook with a value of its type and range."""
+    """``overrides`` if every name is a parameter of the notebook with a value of its type and range.
+
+    Examples
+    --------
+    >>> check_overrides(by_name("sec3_2"), {"nosuch": 1})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: parameters: 'nosuch' is not a parameter of sec3_2.ipynb; valid names: ...
+    """
     specs = parameter_specs(info)
     valid = [name for name in specs if name not in HARNESS_PARAMETERS]
     checked = {}
@@ -208,20 +258,39 @@ def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
 
 
 def run_folder(info: NotebookInfo, fidelity: str, overrides: dict) -> Path:
-    """``book/_build/runs/<notebook>-<hash of parameters and fidelity>`` for a run with overrides."""
+    """``book/_build/runs/<notebook>-<hash of parameters and fidelity>`` for a run with overrides.
+
+    Examples
+    --------
+    >>> run_folder(by_name("sec3_2"), "ci", {"steps": 10}).relative_to(paths.project().root).as_posix()
+    'book/_build/runs/sec3_2-6bc049f579'
+    """
     key = json.dumps({"fidelity": fidelity, **overrides}, sort_keys=True).encode()
     return paths.project().runs / f"{info.name}-{hashlib.sha256(key).hexdigest()[:10]}"
 
 
 def harness_parameters(info: NotebookInfo, fidelity: str, output_dir, overrides=None) -> dict:
-    """The parameters papermill injects: fidelity, ``output_dir`` relative to the notebook, overrides."""
+    """The parameters papermill injects: fidelity, ``output_dir`` relative to the notebook, overrides.
+
+    Examples
+    --------
+    >>> info = NotebookInfo("demo", Path("/checkout/book/demo.ipynb"), "Demo", (), ())
+    >>> harness_parameters(info, "ci", "/checkout/book/_build/ci", {"runs": 10})
+    {'fidelity': 'ci', 'output_dir': '_build/ci', 'runs': 10}
+    """
     # a relative output_dir keeps machine paths out of the committed notebooks
     out = os.path.relpath(Path(output_dir).resolve(), info.path.parent.resolve())
     return {"fidelity": fidelity, "output_dir": out, **(overrides or {})}
 
 
 def default_output_dir(fidelity: str) -> Path:
-    """``figures/`` at full fidelity, ``book/_build/ci/`` at ci fidelity (ValueError for others)."""
+    """``figures/`` at full fidelity, ``book/_build/ci/`` at ci fidelity (ValueError for others).
+
+    Examples
+    --------
+    >>> [default_output_dir(f).relative_to(paths.project().root).as_posix() for f in ("full", "ci")]
+    ['figures', 'book/_build/ci']
+    """
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity must be one of {FIDELITIES}, found {fidelity!r}")
     project = paths.project()
@@ -230,7 +299,14 @@ def default_output_dir(fidelity: str) -> Path:
 
 def executed_path(info: NotebookInfo, fidelity: str, output_dir, overrides=None) -> Path:
     """Where a run's executed notebook goes: the notebook itself for a default full run into
-    ``figures/``, else ``<output_dir>/notebooks/<notebook>.ipynb``."""
+    ``figures/``, else ``<output_dir>/notebooks/<notebook>.ipynb``.
+
+    Examples
+    --------
+    >>> info, project = by_name("sec3_2"), paths.project()
+    >>> executed_path(info, "full", project.figures) == info.path, executed_path(info, "ci", project.ci_output).parts[-5:]
+    (True, ('book', '_build', 'ci', 'notebooks', 'sec3_2.ipynb'))
+    """
     in_place = (fidelity == "full" and Path(output_dir).resolve() == paths.project().figures.resolve()
                 and not overrides)
     return info.path if in_place else Path(output_dir) / "notebooks" / info.path.name
@@ -326,7 +402,15 @@ def one_blas_thread():
 
 @contextmanager
 def signals_held():
-    """Hold off SIGINT and SIGTERM (delivered on exit) while files move into place."""
+    """Hold off SIGINT and SIGTERM (delivered on exit) while files move into place.
+
+    Examples
+    --------
+    >>> with signals_held():
+    ...     held = signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    >>> held, signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    (True, False)
+    """
     held = {signal.SIGINT, signal.SIGTERM}
     try:
         old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
@@ -351,7 +435,16 @@ def _move(source: Path, target: Path):
 
 def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook: Path):
     """Move a finished run's files from ``stage`` into ``output_dir``: figures and tables, then
-    values, then the executed notebook (the caller writes the manifest entry last)."""
+    values, then the executed notebook (the caller writes the manifest entry last).
+
+    Examples
+    --------
+    >>> with tempfile.TemporaryDirectory() as stage, tempfile.TemporaryDirectory() as out:
+    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png", "values/a.json", "notebooks/a.ipynb")]
+    ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "a.ipynb", Path(out) / "a.ipynb")
+    ...     print(sorted(p.relative_to(out).as_posix() for p in Path(out).rglob("*.*")), list(Path(stage).rglob("*.*")))
+    ['a.ipynb', 'a.png', 'values/a.json'] []
+    """
     files = [p for p in stage.rglob("*") if p.is_file() and p != staged_notebook
              and not p.name.endswith(".tmp")]
     files.sort(key=lambda p: (p.parent.name == "values", str(p)))
@@ -366,7 +459,7 @@ KERNEL_CELL_FILE = re.compile(r"\S*ipykernel_\d+[/\\]\d+\.py")   # a warning's s
 
 
 def normalise(path: Path, shown_parameters=None, output_path=None, replace=None):
-    """Make an executed notebook reproducible byte for byte.
+    r"""Make an executed notebook reproducible byte for byte.
 
     Stores papermill's input/output paths relative to the project (no machine paths) and
     drops what changes on every run: papermill's start/end times and durations (notebook
@@ -377,6 +470,19 @@ def normalise(path: Path, shown_parameters=None, output_path=None, replace=None)
     A staged run is shown as the run it stands for: ``shown_parameters`` replace the injected
     ones, ``output_path`` papermill's output path, and ``replace`` ({staging path: output
     folder}) rewrites printed text.
+
+    Examples
+    --------
+    >>> from nbformat import read, write, v4
+    >>> outputs = [v4.new_output("stream", name="stdout", text=text) for text in ("1\n", "2\n")]
+    >>> meta = {"papermill": {"start_time": "2026-01-01T00:00", "input_path": str(paths.project().book / "a.ipynb")}}
+    >>> cells = [v4.new_code_cell("print(1); print(2)", outputs=outputs)]
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     write(v4.new_notebook(cells=cells, metadata=meta), Path(folder) / "a.ipynb")
+    ...     normalise(Path(folder) / "a.ipynb")
+    ...     nb = read(Path(folder) / "a.ipynb", as_version=4)
+    >>> nb.metadata.papermill, [out.text for out in nb.cells[0].outputs]
+    ({'input_path': 'book/a.ipynb'}, ['1\n2\n'])
     """
     import nbformat
     from papermill.translators import translate_parameters
@@ -452,6 +558,13 @@ def parameters_reaching(info: NotebookInfo, kind: str, number: str) -> set:
     mutation in that cell may carry it anywhere the cell touches; imported modules carry
     nothing). The figure depends on what reaches the cells that save it. If no cell saves it
     by its literal number, every parameter is returned.
+
+    Examples
+    --------
+    Fig. 3.2 shows trajectories of ``steps`` steps along a mode sequence drawn with ``seed``:
+
+    >>> sorted(parameters_reaching(by_name("sec3_2"), "figure", "3.2"))
+    ['seed', 'steps']
     """
     import nbformat
 

@@ -25,7 +25,14 @@ MARKERS = (Path("book") / "_toc.yml", Path("figures"))
 
 @dataclass(frozen=True)
 class Project:
-    """The folders of one checkout of the companion."""
+    """The folders of one checkout of the companion.
+
+    Examples
+    --------
+    >>> p = Project(Path("/checkout"))
+    >>> p.book.as_posix(), p.reference.as_posix(), p.staging.as_posix()
+    ('/checkout/book', '/checkout/tests/reference/thesis_values', '/checkout/book/_build/staging')
+    """
 
     root: Path
 
@@ -65,7 +72,17 @@ class Project:
 
 
 def is_project(folder) -> bool:
-    """Whether ``folder`` holds ``book/_toc.yml`` and ``figures/``."""
+    """Whether ``folder`` holds ``book/_toc.yml`` and ``figures/``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     before = is_project(folder)
+    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch(); (Path(folder) / "figures").mkdir()
+    ...     print(before, is_project(folder))
+    False True
+    """
     return all((Path(folder) / marker).exists() for marker in MARKERS)
 
 
@@ -85,6 +102,23 @@ def find_root(start=None) -> Path:
     ------
     RuntimeError
         If the variable names a folder that is not a project, or no project is found.
+
+    Examples
+    --------
+    A checkout's root is found from a folder inside it (here with ``$ASOC_COMPANION_ROOT`` unset):
+
+    >>> import tempfile
+    >>> from unittest import mock
+    >>> with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ, {ENV_VAR: ""}):
+    ...     root = Path(folder).resolve()
+    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch(); (root / "figures").mkdir()
+    ...     print(find_root(root / "book") == root)
+    True
+    >>> with mock.patch.dict(os.environ, {ENV_VAR: "/"}):
+    ...     find_root()
+    Traceback (most recent call last):
+    ...
+    RuntimeError: ASOC_COMPANION_ROOT='/' is not a checkout of the companion (expected book/_toc.yml and figures/ in it)
     """
     configured = os.environ.get(ENV_VAR)
     if configured:
@@ -102,7 +136,13 @@ def find_root(start=None) -> Path:
 
 
 def project(root=None) -> Project:
-    """The :class:`Project` at ``root`` (default :func:`find_root`)."""
+    """The :class:`Project` at ``root`` (default :func:`find_root`).
+
+    Examples
+    --------
+    >>> project("/checkout").figures.as_posix()
+    '/checkout/figures'
+    """
     return Project(Path(root).resolve() if root is not None else find_root())
 
 

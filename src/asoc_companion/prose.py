@@ -23,7 +23,18 @@ _STEP = re.compile(r"\.?([A-Za-z0-9_-]+)|\[(-?\d+)\]")
 
 
 def lookup(path: str, values: dict, notebook: str | None = None):
-    """The value at ``path`` in ``values`` (``{"<notebook>.<key>": value}``)."""
+    """The value at ``path`` in ``values`` (``{"<notebook>.<key>": value}``).
+
+    Examples
+    --------
+    >>> values = {"sec3_5.rho": 0.25, "sec2_5.cost": {"median": 1.5, "ci": [1.25, 1.75]}}
+    >>> lookup("sec2_5.cost.ci[0]", values), lookup("rho", values, notebook="sec3_5")
+    (1.25, 0.25)
+    >>> lookup("sec3_5.gain", values)
+    Traceback (most recent call last):
+    ...
+    KeyError: '{{sec3_5.gain}}: sec3_5.gain is not recorded'
+    """
     steps = [name or int(index) for name, index in _STEP.findall(path)]
     if any(k.startswith(f"{steps[0]}.") for k in values) and len(steps) > 1:
         key, rest = f"{steps[0]}.{steps[1]}", steps[2:]
@@ -43,7 +54,13 @@ def lookup(path: str, values: dict, notebook: str | None = None):
 
 
 def format_value(value, spec: str = "") -> str:
-    """``value`` formatted with ``spec`` (Monte Carlo records as ``m [lo, hi]``)."""
+    """``value`` formatted with ``spec`` (Monte Carlo records as ``m [lo, hi]``).
+
+    Examples
+    --------
+    >>> format_value({"median": 1.5, "ci": [1.25, 1.75]}, ".2f"), format_value(True), format_value([0.5, 1], ".1f")
+    ('1.50 [1.25, 1.75]', 'yes', '[0.5, 1.0]')
+    """
     if isinstance(value, dict):
         if "ci" in value and ("median" in value or "value" in value):
             lo, hi = value["ci"]
@@ -77,12 +94,25 @@ def fill(text: str, values: dict, notebook: str | None = None) -> str:
     ------
     KeyError
         If a placeholder names a value that is not recorded.
+
+    Examples
+    --------
+    >>> fill("rho = {{sec3_5.rho:.3f}}, stable: {{stable}}", {"sec3_5.rho": 0.25, "sec3_5.stable": True}, "sec3_5")
+    'rho = 0.250, stable: yes'
     """
     return PLACEHOLDER.sub(lambda m: format_value(lookup(m.group(1), values, notebook), m.group(2) or ""), text)
 
 
 def thesis_values(reference=None) -> dict:
-    """The printed values of the reference entries, keyed ``thesis_<notebook>.<key>``."""
+    """The printed values of the reference entries, keyed ``thesis_<notebook>.<key>``.
+
+    Examples
+    --------
+    >>> from asoc_companion.reference import Entry
+    >>> entry = Entry("demo.rho", where="an example", kind="deterministic", thesis=0.25, tol=5e-5)
+    >>> thesis_values({entry.key: entry})
+    {'thesis_demo.rho': 0.25}
+    """
     from .reference import load_reference
 
     reference = reference if reference is not None else load_reference()
@@ -107,6 +137,28 @@ def prose(text: str):
     ------
     KeyError
         If a placeholder names a value that is not recorded.
+
+    Examples
+    --------
+    In a temporary checkout whose reference gives the thesis's ``demo.rho``, a run of ``demo``
+    records its own ``rho`` and quotes both (the active recorder, the style and the variable are
+    restored afterwards):
+
+    >>> import os, tempfile, matplotlib
+    >>> from pathlib import Path
+    >>> from unittest import mock
+    >>> from asoc_companion import session
+    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    ...       matplotlib.rc_context(), mock.patch.dict(os.environ, {"ASOC_COMPANION_ROOT": folder})):
+    ...     root = Path(folder)
+    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch(); (root / "figures").mkdir()
+    ...     (root / "tests" / "reference" / "thesis_values").mkdir(parents=True)
+    ...     _ = (root / "tests" / "reference" / "thesis_values" / "demo.yaml").write_text(
+    ...         "demo.rho: {where: an example, kind: deterministic, thesis: 0.25, tol: 5.0e-5}")
+    ...     _ = session.setup("demo", "ci", root / "staging")
+    ...     _ = session.record("rho", 0.2500001)
+    ...     print(prose("rho = {{rho:.4f}} (thesis: {{thesis_demo.rho}})").data)
+    rho = 0.2500 (thesis: 0.25)
     """
     from IPython.display import Markdown
 

@@ -51,6 +51,15 @@ EXPECT = ("reproduced", "deviates", "new")
 
 @dataclass(frozen=True)
 class Entry:
+    """One reference entry ``<notebook>.<name>``; the fields are described in the module docstring.
+
+    Examples
+    --------
+    >>> entry = Entry("sec3_5.rho_open_T1", where="an example", kind="deterministic", thesis=0.25, tol=5e-5)
+    >>> entry.notebook, entry.name, entry.expect
+    ('sec3_5', 'rho_open_T1', 'reproduced')
+    """
+
     key: str
     where: str
     kind: str
@@ -87,6 +96,22 @@ def load_reference(path=None) -> dict:
     ValueError
         If a key appears twice, sits in the wrong file, is not ``<notebook>.<name>``, or an
         entry has an unknown kind or expect, or a deterministic entry has no ``tol``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = (Path(folder) / "demo.yaml").write_text(
+    ...         "demo.rho: {where: an example, kind: deterministic, thesis: 0.25, tol: 5.0e-5}")
+    ...     reference = load_reference(folder)
+    >>> reference["demo.rho"].thesis, reference["demo.rho"].tol
+    (0.25, 5e-05)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = (Path(folder) / "demo.yaml").write_text("demo.rho: {where: an example, kind: deterministic}")
+    ...     load_reference(folder)
+    Traceback (most recent call last):
+    ...
+    ValueError: reference demo.rho: a deterministic value needs tol
     """
     path = Path(path or paths.project().reference)
     raw = {}
@@ -137,6 +162,18 @@ def status(entry: Entry, ours) -> str:
     ------
     KeyError
         If a Monte Carlo or claim value lacks ``ci`` or ``holds``.
+
+    Examples
+    --------
+    A deterministic value agrees to ``tol``; a Monte Carlo one when the thesis's value lies in
+    our interval (widened by ``tol``):
+
+    >>> rho = Entry("demo.rho", where="an example", kind="deterministic", thesis=0.25, tol=5e-5)
+    >>> status(rho, 0.25003), status(rho, 0.2501), status(rho, None)
+    ('reproduced', 'deviates', 'missing')
+    >>> cost = Entry("demo.cost", where="an example", kind="monte_carlo", thesis=10.0, tol=0.05)
+    >>> status(cost, {"median": 10.4, "ci": [9.98, 10.9]}), status(cost, {"median": 10.4, "ci": [10.1, 10.9]})
+    ('reproduced', 'deviates')
     """
     if ours is None:
         return "missing"
@@ -165,6 +202,16 @@ def monte_carlo_rtol(ours_ci, ours_full, z: float = Z_MONTE_CARLO):
     ``z`` combined standard errors, each taken from its record's 95% interval
     (half-width / 1.96): ``z sqrt(se_ci^2 + se_full^2) / |full|``. None when a record
     carries no interval.
+
+    Examples
+    --------
+    Standard errors 2 / 3.92 and 1 / 3.92 from the two 95% intervals, four of them combined,
+    relative to the full estimate 10:
+
+    >>> round(monte_carlo_rtol({"median": 10.0, "ci": [9.0, 11.0]}, {"median": 10.0, "ci": [9.5, 10.5]}), 4)
+    0.2282
+    >>> print(monte_carlo_rtol(10.0, {"median": 10.0, "ci": [9.5, 10.5]}))
+    None
     """
     if not all(isinstance(r, dict) and "ci" in r for r in (ours_ci, ours_full)):
         return None
@@ -178,6 +225,15 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
     Deterministic values must agree to ``tol`` at any fidelity; Monte Carlo values to
     ``ci_rtol`` (relative); claims must give the same verdict unless ``ci_rtol`` is null
     (claims that only make sense at full fidelity); measured values to ``ci_rtol``.
+
+    Examples
+    --------
+    >>> rho = Entry("demo.rho", where="an example", kind="deterministic", thesis=0.25, tol=5e-5)
+    >>> agrees_with_full(rho, 0.25001, 0.25)
+    (True, '|ci - full| = 1e-05, tol 5e-05')
+    >>> cost = Entry("demo.cost", where="an example", kind="monte_carlo", thesis=10.0, ci_rtol=0.02)
+    >>> agrees_with_full(cost, {"median": 10.4, "ci": [9.4, 11.4]}, {"median": 10.0, "ci": [9.5, 10.5]})
+    (False, 'relative |ci - full| = 0.04, ci_rtol 0.02')
     """
     if entry.kind == "deterministic":
         diff = _max_abs_diff(ours_ci, ours_full)

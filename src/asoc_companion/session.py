@@ -34,6 +34,19 @@ class Recorder:
     ------
     ValueError
         If ``fidelity`` is unknown or ``notebook`` is not a plain name.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from asoc_companion.values import load_values
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     recorder = Recorder("demo", "ci", folder)
+    ...     print(recorder.record("rho", 0.25), recorder.qualified_values(), load_values("demo", folder))
+    0.25 {'demo.rho': 0.25} {'rho': 0.25}
+    >>> Recorder("sec3.5")
+    Traceback (most recent call last):
+    ...
+    ValueError: notebook must be a plain name such as 'sec3_5', found 'sec3.5'
     """
 
     def __init__(self, notebook: str, fidelity: str = "full", output_dir=None):
@@ -106,6 +119,20 @@ def setup(notebook: str, fidelity: str = "full", output_dir=None) -> Path:
     ------
     ValueError
         If ``fidelity`` is unknown or ``notebook`` is not a plain name.
+
+    Examples
+    --------
+    The examples of this module set the active recorder only inside ``mock.patch.object`` and the
+    style only inside ``matplotlib.rc_context``, so both are restored afterwards:
+
+    >>> import tempfile, matplotlib
+    >>> from unittest import mock
+    >>> import asoc_companion.session as session
+    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    ...       matplotlib.rc_context()):
+    ...     out = setup("demo", "ci", folder)
+    ...     print(out == Path(folder), active().notebook, [p.name for p in (out / "values").iterdir()])
+    True demo ['demo.json']
     """
     global _active
     recorder = Recorder(notebook, fidelity, output_dir)
@@ -122,6 +149,19 @@ def active(required: bool = True) -> Recorder | None:
     ------
     RuntimeError
         If ``required`` and :func:`setup` has not been called.
+
+    Examples
+    --------
+    >>> from unittest import mock
+    >>> import asoc_companion.session as session
+    >>> with mock.patch.object(session, "_active", None):
+    ...     print(active(required=False))
+    None
+    >>> with mock.patch.object(session, "_active", None):
+    ...     active()
+    Traceback (most recent call last):
+    ...
+    RuntimeError: call asoc_companion.setup(notebook, fidelity, output_dir) first
     """
     if _active is None and required:
         raise RuntimeError("call asoc_companion.setup(notebook, fidelity, output_dir) first")
@@ -129,22 +169,82 @@ def active(required: bool = True) -> Recorder | None:
 
 
 def record(key: str, value):
-    """Record ``value`` under ``key`` with the active recorder; return ``value`` (see :meth:`Recorder.record`)."""
+    """Record ``value`` under ``key`` with the active recorder; return ``value`` (see :meth:`Recorder.record`).
+
+    Examples
+    --------
+    >>> import tempfile, matplotlib
+    >>> from unittest import mock
+    >>> import asoc_companion.session as session
+    >>> from asoc_companion.values import load_values
+    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    ...       matplotlib.rc_context()):
+    ...     _ = setup("demo", "ci", folder)
+    ...     print(record("rho", 0.25), load_values("demo", folder))
+    0.25 {'rho': 0.25}
+    """
     return active().record(key, value)
 
 
 def save_figure(fig, number: str, output_dir=None) -> Path:
-    """Save ``fig`` as ``fig<number>.png`` and ``.pdf`` into ``output_dir`` (default: the active run's folder)."""
+    """Save ``fig`` as ``fig<number>.png`` and ``.pdf`` into ``output_dir`` (default: the active run's folder).
+
+    Examples
+    --------
+    >>> import tempfile, matplotlib
+    >>> from unittest import mock
+    >>> from matplotlib.figure import Figure
+    >>> import asoc_companion.session as session
+    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    ...       matplotlib.rc_context()):
+    ...     _ = setup("demo", "ci", folder)
+    ...     print(save_figure(Figure(), "own.1").name)
+    fig_own_1.png
+    """
     return figures.save_figure(fig, number, output_dir or active().output_dir)
 
 
 def save_table(number: str, header, rows, output_dir=None) -> str:
-    """Save a table as ``table<number>.csv`` and ``.md`` (default folder: the active run's); return the Markdown."""
+    """Save a table as ``table<number>.csv`` and ``.md`` (default folder: the active run's); return the Markdown.
+
+    Examples
+    --------
+    >>> import tempfile, matplotlib
+    >>> from unittest import mock
+    >>> import asoc_companion.session as session
+    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    ...       matplotlib.rc_context()):
+    ...     _ = setup("demo", "ci", folder)
+    ...     print(save_table("own.1", ["k", "rho"], [[0, 0.25]]), end="")
+    | k | rho |
+    |---|---|
+    | 0 | 0.25 |
+    """
     return figures.save_table(number, header, rows, output_dir or active().output_dir)
 
 
 def current_values() -> dict:
-    """The committed values with the active run's values on top, ``{"<notebook>.<key>": value}``."""
+    """The committed values with the active run's values on top, ``{"<notebook>.<key>": value}``.
+
+    Examples
+    --------
+    In a temporary checkout whose ``figures/values`` holds a committed ``sec0.a``, a run of
+    ``demo`` in a staging folder adds its own values on top:
+
+    >>> import os, tempfile, matplotlib
+    >>> from unittest import mock
+    >>> import asoc_companion.session as session
+    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    ...       matplotlib.rc_context()):
+    ...     root = Path(folder)
+    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch()
+    ...     _ = Recorder("sec0", "full", root / "figures").record("a", 1)
+    ...     with mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
+    ...         _ = setup("demo", "ci", root / "staging")
+    ...         _ = record("b", 2)
+    ...         print(current_values())
+    {'sec0.a': 1, 'demo.b': 2}
+    """
     from .values import load_all_values
 
     values = load_all_values()

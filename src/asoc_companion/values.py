@@ -16,16 +16,53 @@ MANIFEST_NAME = "manifest.json"
 
 
 class CorruptValuesError(ValueError):
-    """A values file that cannot be read; the message names it and how to regenerate it."""
+    """A values file that cannot be read; the message names it and how to regenerate it.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "values" / "demo.json"
+    ...     path.parent.mkdir()
+    ...     _ = path.write_text('{"values": ')
+    ...     try:
+    ...         read_values_file(path)
+    ...     except CorruptValuesError as err:
+    ...         print(isinstance(err, ValueError), "regenerate it with `python -m asoc_companion run demo`" in str(err))
+    True True
+    """
 
 
 def values_path(notebook: str, output_dir=None) -> Path:
-    """Path of the JSON file holding ``notebook``'s recorded values (default folder ``figures/``)."""
+    """Path of the JSON file holding ``notebook``'s recorded values (default folder ``figures/``).
+
+    Examples
+    --------
+    >>> values_path("sec3_5", "/tmp/run").as_posix()
+    '/tmp/run/values/sec3_5.json'
+    """
     return Path(output_dir or paths.project().figures) / "values" / f"{notebook}.json"
 
 
 def regenerate_command(notebook: str, output_dir=None) -> str:
-    """The command line that rewrites ``notebook``'s values in ``output_dir``."""
+    """The command line that rewrites ``notebook``'s values in ``output_dir``.
+
+    Examples
+    --------
+    >>> regenerate_command("sec3_5", "/tmp/run")
+    'python -m asoc_companion run sec3_5'
+
+    The ci output folder of a checkout (here a temporary one) asks for ``--fidelity ci``:
+
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> with (tempfile.TemporaryDirectory() as folder,
+    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
+    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch()
+    ...     (Path(folder) / "figures").mkdir()
+    ...     print(regenerate_command("sec3_5", Path(folder) / "book" / "_build" / "ci"))
+    python -m asoc_companion run sec3_5 --fidelity ci
+    """
     command = f"python -m asoc_companion run {notebook}"
     try:
         ci = Path(output_dir).resolve() == paths.project().ci_output.resolve() if output_dir else False
@@ -61,6 +98,15 @@ def read_values_file(path) -> dict:
     CorruptValuesError
         If the file is not valid JSON or lacks ``values``; the message names the file and
         the command that regenerates it.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "demo.json"
+    ...     _ = path.write_text('{"notebook": "demo", "fidelity": "ci", "values": {"rho": 0.25}}')
+    ...     print(read_values_file(path))
+    {'notebook': 'demo', 'fidelity': 'ci', 'values': {'rho': 0.25}}
     """
     path = Path(path)
     try:
@@ -89,6 +135,15 @@ def load_values(notebook: str, output_dir=None) -> dict:
     ------
     CorruptValuesError
         If the values file is not valid JSON (a ``ValueError`` naming the file).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from asoc_companion.session import Recorder
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = Recorder("demo", "ci", folder).record("rho", 0.25)
+    ...     print(load_values("demo", folder), load_values("not_run", folder))
+    {'rho': 0.25} {}
     """
     path = values_path(notebook, output_dir)
     if not path.exists():
@@ -112,6 +167,16 @@ def load_all_values(output_dir=None) -> dict:
     ------
     CorruptValuesError
         If a values file is not valid JSON (a ``ValueError`` naming the file).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from asoc_companion.session import Recorder
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = Recorder("sec0", "ci", folder).record("a", 1)
+    ...     _ = Recorder("sec1", "ci", folder).record("b", [0.5, 0.75])
+    ...     print(load_all_values(folder))
+    {'sec0.a': 1, 'sec1.b': [0.5, 0.75]}
     """
     folder = Path(output_dir or paths.project().figures) / "values"
     out = {}

@@ -38,7 +38,22 @@ class QuadraticExpansion:
 
 
 def derivatives(g, x, grad=None, hess=None):
-    """Gradient and Hessian of scalar ``g`` at ``x``: analytic if given, else numdifftools [46]."""
+    """Gradient and Hessian of scalar ``g`` at ``x``: analytic if given, else numdifftools [46].
+
+    Examples
+    --------
+    g(x) = x_0^2 + 3 x_0 x_1 has gradient (2 x_0 + 3 x_1, 3 x_0) and Hessian [[2, 3], [3, 0]];
+    numdifftools finds them to rounding, analytic derivatives are used as given:
+
+    >>> g = lambda x: x[0] ** 2 + 3 * x[0] * x[1]
+    >>> G, H = derivatives(g, [1.0, 2.0])
+    >>> G.round(6) + 0.0, H.round(6) + 0.0                   # + 0.0: a rounded -0.0 prints as 0.
+    (array([8., 3.]), array([[2., 3.],
+           [3., 0.]]))
+    >>> derivatives(g, [1.0, 2.0], grad=lambda x: [2 * x[0] + 3 * x[1], 3 * x[0]],
+    ...             hess=lambda x: [[2.0, 3.0], [3.0, 0.0]])[0]
+    array([8., 3.])
+    """
     import numdifftools as nd
     x = np.atleast_1d(np.asarray(x, dtype=float))
     G = np.atleast_1d(grad(x)) if grad is not None else np.atleast_1d(nd.Gradient(g)(x))

@@ -40,7 +40,15 @@ from .operators import costate_map, kronecker_stack, linear_operator, mode_stack
 
 
 class Verdict(enum.Enum):
-    """Mean-square stability verdict of Cor. 3.2 from the certified bracket of rho."""
+    """Mean-square stability verdict of Cor. 3.2 from the certified bracket of rho.
+
+    Examples
+    --------
+    >>> Verdict("stable") is Verdict.STABLE
+    True
+    >>> mean_square_stability(np.array([[[2.0]]]), np.eye(1)).verdict
+    <Verdict.UNSTABLE: 'unstable'>
+    """
 
     STABLE = "stable"
     UNSTABLE = "unstable"
