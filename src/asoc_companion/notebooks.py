@@ -12,7 +12,7 @@ renders the executed file) and its results in ``figures/``; ``ci`` fidelity writ
 Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes
 into a fresh staging folder ``book/_build/staging/<notebook>-<random>/``; only when
 papermill finishes without error are its figures, tables, values and executed notebook
-moved into place (``os.replace``, signals held off meanwhile); the caller writes the
+moved into place (:mod:`asoc_companion.staging`: ``os.replace``, signals held off); the caller writes the
 manifest entry last. An interrupted or failed run leaves every tracked file as it was, and
 its staging folder is removed.
 
@@ -22,24 +22,19 @@ computation gives a byte-identical file.
 """
 
 import ast
-import errno
 import hashlib
 import json
 import math
 import os
 import re
-import shutil
-import signal
 import sys
 import tempfile
-import time
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 from . import paths
-from .io import atomic_write_bytes
 from .manifest import dependencies, incomplete_notebook
+from .staging import commit, one_blas_thread, remove_stage
 from .values import FIDELITIES
 
 HARNESS_PARAMETERS = ("fidelity", "output_dir")   # set by the harness, not by -p
@@ -47,11 +42,6 @@ KERNEL_ARGUMENTS = ["--IPKernelApp.log_level=ERROR"]
 """The kernel's own log shows errors only: its start-up warning that the local kernel talks
 over TCP without encryption is noise on the command line (a notebook's warnings are cell
 outputs, not this log)."""
-#: Every kernel computes with one BLAS/OpenMP thread, whoever starts it (``make book``, which runs
-#: notebooks side by side, or ``run``/``figure`` alone): a multi-threaded BLAS sums in another order,
-#: and an iterative fit that stops unconverged (Sec. 2.6's OMAT GPs) ends 7-20 % elsewhere.
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
-
 
 @dataclass(frozen=True)
 class NotebookInfo:
@@ -90,7 +80,13 @@ def notebooks(book=None) -> dict:
 
 
 def find(kind: str, number: str, book=None) -> NotebookInfo:
-    """The notebook that regenerates figure or table ``number``."""
+    """The notebook that regenerates figure or table ``number``.
+
+    Examples
+    --------
+    >>> find("figure", "3.2").name
+    'sec3_2'
+    """
     for info in notebooks(book).values():
         if number in (info.figures if kind == "figure" else info.tables):
             return info
@@ -129,7 +125,13 @@ def build_order(infos) -> list:
 
 
 def by_name(name: str, book=None) -> NotebookInfo:
-    """The notebook called ``name`` (e.g. "sec3_5", "findings")."""
+    """The notebook called ``name`` (e.g. "sec3_5", "findings").
+
+    Examples
+    --------
+    >>> by_name("sec3_2").path.name
+    'sec3_2.ipynb'
+    """
     found = notebooks(book)
     if name not in found:
         raise ValueError(f"notebook {name!r} is not a notebook of the book; known: {', '.join(found)}")
@@ -150,12 +152,24 @@ def parameter_specs(info: NotebookInfo) -> dict:
 
 
 def default_parameters(info: NotebookInfo) -> dict:
-    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's inspection)."""
+    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's inspection).
+
+    Examples
+    --------
+    >>> {"fidelity", "output_dir"} <= set(default_parameters(by_name("sec3_2")))
+    True
+    """
     return {name: spec["default"] for name, spec in parameter_specs(info).items()}
 
 
 def parse_value(text: str):
-    """A ``-p name value`` value, typed as papermill's command line does: bool, None, int, float or str."""
+    """A ``-p name value`` value, typed as papermill's command line does: bool, None, int, float or str.
+
+    Examples
+    --------
+    >>> [parse_value(text) for text in ("True", "None", "3", "0.5", "sec3_5")]
+    [True, None, 3, 0.5, 'sec3_5']
+    """
     if text in ("True", "False"):
         return text == "True"
     if text == "None":
@@ -348,110 +362,6 @@ def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=
     finally:
         remove_stage(stage)
     return target
-
-
-def remove_stage(stage: Path, attempts: int = 5):
-    """Remove a run's staging folder, with SIGINT and SIGTERM held off until it is gone.
-
-    An interrupt that arrives while the folder is being removed would otherwise stop the
-    removal half-way; a kernel that is still shutting down may write one last file into the
-    folder after it was emptied, so the removal is repeated until the folder is gone.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> stage = Path(tempfile.mkdtemp()) / "sec3_2-x"
-    >>> (stage / "values").mkdir(parents=True)
-    >>> _ = (stage / "values" / "sec3_2.json").write_text("{}")
-    >>> remove_stage(stage)
-    >>> stage.exists()
-    False
-    """
-    with signals_held():
-        for _ in range(attempts):
-            shutil.rmtree(stage, ignore_errors=True)
-            if not stage.exists():
-                return
-            time.sleep(0.1)
-
-
-@contextmanager
-def one_blas_thread():
-    """Set :data:`THREAD_VARIABLES` to 1 for the kernels started inside; restore them after.
-
-    Examples
-    --------
-    >>> before = os.environ.get("OPENBLAS_NUM_THREADS")
-    >>> with one_blas_thread():
-    ...     os.environ["OPENBLAS_NUM_THREADS"]
-    '1'
-    >>> os.environ.get("OPENBLAS_NUM_THREADS") == before
-    True
-    """
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
-    os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
-    try:
-        yield
-    finally:
-        for name, value in saved.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
-
-
-@contextmanager
-def signals_held():
-    """Hold off SIGINT and SIGTERM (delivered on exit) while files move into place.
-
-    Examples
-    --------
-    >>> with signals_held():
-    ...     held = signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
-    >>> held, signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
-    (True, False)
-    """
-    held = {signal.SIGINT, signal.SIGTERM}
-    try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    except (AttributeError, ValueError, OSError):       # no POSIX signal masks here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-def _move(source: Path, target: Path):
-    target.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        os.replace(source, target)
-    except OSError as err:
-        if err.errno != errno.EXDEV:
-            raise
-        atomic_write_bytes(target, source.read_bytes())       # another file system: copy, then rename
-
-
-def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook: Path):
-    """Move a finished run's files from ``stage`` into ``output_dir``: figures and tables, then
-    values, then the executed notebook (the caller writes the manifest entry last).
-
-    Examples
-    --------
-    >>> with tempfile.TemporaryDirectory() as stage, tempfile.TemporaryDirectory() as out:
-    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png", "values/a.json", "notebooks/a.ipynb")]
-    ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "a.ipynb", Path(out) / "a.ipynb")
-    ...     print(sorted(p.relative_to(out).as_posix() for p in Path(out).rglob("*.*")), list(Path(stage).rglob("*.*")))
-    ['a.ipynb', 'a.png', 'values/a.json'] []
-    """
-    files = [p for p in stage.rglob("*") if p.is_file() and p != staged_notebook
-             and not p.name.endswith(".tmp")]
-    files.sort(key=lambda p: (p.parent.name == "values", str(p)))
-    with signals_held():
-        for source in files:
-            _move(source, Path(output_dir) / source.relative_to(stage))
-        _move(staged_notebook, Path(target_notebook))
 
 
 PAPERMILL_TIMES = ("start_time", "end_time", "duration")
