@@ -21,11 +21,8 @@ def claims_path():
 
     Examples
     --------
-    >>> import os, pathlib, tempfile, unittest.mock
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
-    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
-    ...     print(claims_path().relative_to(folder).as_posix())
+    >>> with paths.scratch_project() as root:
+    ...     print(claims_path().relative_to(root).as_posix())
     tests/reference/figure_claims.yaml
     """
     return paths.project().reference.parent / CLAIMS_NAME
@@ -116,12 +113,8 @@ def figure_caption(number: str):
     --------
     In a temporary checkout with a claim on figure own.1, its reference entry and a committed value:
 
-    >>> import os, pathlib, tempfile, unittest.mock
     >>> from asoc_companion.session import Recorder
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     root = pathlib.Path(folder)
-    ...     (root / "book").mkdir(); (root / "tests/reference/thesis_values").mkdir(parents=True)
-    ...     _ = (root / "book" / "_toc.yml").write_text("")
+    >>> with paths.scratch_project() as root:
     ...     _ = (root / "tests/reference/figure_claims.yaml").write_text(
     ...         "own.1: {where: p. 1, claim: The loop is stable., keys: [sec_demo.rho]}")
     ...     _ = (root / "tests/reference/thesis_values/sec_demo.yaml").write_text(

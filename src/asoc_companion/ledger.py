@@ -350,12 +350,9 @@ def ledger_markdown(reference=None, values=None) -> str:
     --------
     In a temporary checkout without notebooks (the section is titled by its name):
 
-    >>> import os, pathlib, tempfile, unittest.mock
     >>> from asoc_companion.reference import Entry
     >>> rho = Entry("sec_demo.rho", where="p. 1", kind="deterministic", thesis=0.25, tol=5e-5, note="Too coarse.")
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
-    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    >>> with paths.scratch_project() as root:
     ...     text = ledger_markdown({rho.key: rho}, {rho.key: 0.2502})
     >>> for line in text.splitlines():
     ...     if line.startswith(("# ", "## ", "| `")):
@@ -463,11 +460,8 @@ def summary_markdown(rows=None) -> str:
 
     Examples
     --------
-    >>> import os, pathlib, tempfile, unittest.mock
     >>> rows = [{"notebook": "sec_demo", "status": "reproduced"}, {"notebook": "sec_demo", "status": "deviates"}]
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
-    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    >>> with paths.scratch_project() as root:
     ...     print(summary_markdown(rows).splitlines()[2])
     | sec_demo | {bdg-success}`1` | {bdg-warning}`1` | 0 | {ref}`ledger <ledger-sec_demo>` |
     """
@@ -516,11 +510,8 @@ def intro_markdown(text, rows=None) -> str:
     --------
     The text between the markers is replaced, the rest kept (a checkout without findings page):
 
-    >>> import os, pathlib, tempfile, unittest.mock
     >>> intro = "\n".join(["# Intro", SUMMARY[0], "OLD SUMMARY", SUMMARY[1], FINDINGS[0], FINDINGS[1], "The end."])
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
-    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
+    >>> with paths.scratch_project() as root:
     ...     text = intro_markdown(intro, [{"notebook": "sec_demo", "status": "reproduced"}])
     >>> "OLD SUMMARY" in text, text.splitlines()[0], text.splitlines()[-1], text.count("| sec_demo |")
     (False, '# Intro', 'The end.', 1)
@@ -535,11 +526,8 @@ def write_summary(intro=None, rows=None) -> str:
 
     Examples
     --------
-    >>> import os, pathlib, tempfile, unittest.mock
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
-    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
-    ...     intro = pathlib.Path(folder) / "book" / "intro.md"
+    >>> with paths.scratch_project() as root:
+    ...     intro = root / "book" / "intro.md"
     ...     _ = intro.write_text("\n".join(["# Intro", SUMMARY[0], SUMMARY[1], FINDINGS[0], FINDINGS[1]]))
     ...     new = write_summary(intro, [{"notebook": "sec_demo", "status": "deviates"}])
     ...     print(new == intro.read_text(), "| sec_demo | 0 | {bdg-warning}`1` | 0 |" in new)
@@ -574,17 +562,13 @@ def write_ledger(path=None) -> str:
     --------
     A temporary checkout whose reference expects ``sec_demo.rho`` = 0.25 and whose values hold 0.2500001:
 
-    >>> import os, pathlib, tempfile, unittest.mock
     >>> from asoc_companion.session import Recorder
-    >>> with tempfile.TemporaryDirectory() as folder, unittest.mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...     (pathlib.Path(folder) / "book").mkdir(); (pathlib.Path(folder) / "figures").mkdir()
-    ...     _ = (pathlib.Path(folder) / "book" / "_toc.yml").write_text("")
-    ...     (pathlib.Path(folder) / "tests/reference/thesis_values").mkdir(parents=True)
-    ...     _ = (pathlib.Path(folder) / "tests/reference/thesis_values/sec_demo.yaml").write_text(
+    >>> with paths.scratch_project() as root:
+    ...     _ = (paths.project().reference / "sec_demo.yaml").write_text(
     ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5, note: Fine.}")
-    ...     _ = Recorder("sec_demo", "full", pathlib.Path(folder) / "figures").record("rho", 0.2500001)
-    ...     text = write_ledger(pathlib.Path(folder) / "book" / "ledger.md")
-    ...     written = text == (pathlib.Path(folder) / "book" / "ledger.md").read_text()
+    ...     _ = Recorder("sec_demo", "full", root / "figures").record("rho", 0.2500001)
+    ...     text = write_ledger(root / "book" / "ledger.md")
+    ...     written = text == (root / "book" / "ledger.md").read_text()
     >>> written, [line for line in text.splitlines() if line.startswith("| `")]
     (True, ['| `rho` | {bdg-success}`reproduced` | 0.2500 | 0.250000 | ± 5e-05 | {ref}`1 <ledger-sec_demo-n1>` |'])
     """

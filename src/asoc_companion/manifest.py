@@ -136,15 +136,10 @@ def entry(info, parameters: dict, output_dir) -> dict:
     --------
     In a temporary checkout with a notebook ``demo`` that imports ``pkg``:
 
-    >>> import os, tempfile
-    >>> from unittest import mock
     >>> from asoc_companion.notebooks import NotebookInfo
-    >>> with (tempfile.TemporaryDirectory() as folder,
-    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
-    ...     root = Path(folder)
-    ...     for sub in ("book", "figures", "src/pkg"):
-    ...         (root / sub).mkdir(parents=True)
-    ...     for name in ("book/_toc.yml", "src/pkg/__init__.py", "environment.txt"):
+    >>> with paths.scratch_project() as root:
+    ...     (root / "src/pkg").mkdir(parents=True)
+    ...     for name in ("src/pkg/__init__.py", "environment.txt"):
     ...         _ = (root / name).write_text("")
     ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
     ...     _ = (root / "book" / "demo.ipynb").write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
@@ -290,16 +285,12 @@ def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
     In a temporary checkout with a notebook ``demo`` that imports ``pkg``: never run, then up to
     date after a recorded run, then out of date once ``pkg`` is edited:
 
-    >>> import os, tempfile
-    >>> from unittest import mock
     >>> from asoc_companion.notebooks import NotebookInfo
     >>> from asoc_companion.session import Recorder
-    >>> with (tempfile.TemporaryDirectory() as folder,
-    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
-    ...     root, out = Path(folder), Path(folder) / "out"
-    ...     for sub in ("book", "figures", "src/pkg", "tests/reference/thesis_values"):
-    ...         (root / sub).mkdir(parents=True)
-    ...     for name in ("book/_toc.yml", "src/pkg/__init__.py", "environment.txt"):
+    >>> with paths.scratch_project() as root:
+    ...     out = root / "out"
+    ...     (root / "src/pkg").mkdir(parents=True)
+    ...     for name in ("src/pkg/__init__.py", "environment.txt"):
     ...         _ = (root / name).write_text("")
     ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
@@ -340,15 +331,9 @@ def update_manifest(info, parameters: dict, output_dir, seconds=None) -> dict:
 
     Examples
     --------
-    >>> import os, tempfile
-    >>> from unittest import mock
     >>> from asoc_companion.notebooks import NotebookInfo
-    >>> with (tempfile.TemporaryDirectory() as folder,
-    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
-    ...     root, out = Path(folder), Path(folder) / "out"
-    ...     for sub in ("book", "figures"):
-    ...         (root / sub).mkdir()
-    ...     _ = (root / "book" / "_toc.yml").write_text("")
+    >>> with paths.scratch_project() as root:
+    ...     out = root / "out"
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
     ...     _ = info.path.write_text(json.dumps({"cells": [], "metadata": {"asoc": {}}}))
     ...     recorded = update_manifest(info, {"fidelity": "ci"}, out, seconds=12.34)

@@ -16,8 +16,11 @@ message saying how to point at a checkout.
 """
 
 import os
+import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from unittest import mock
 
 ENV_VAR = "ASOC_COMPANION_ROOT"
 MARKERS = (Path("book") / "_toc.yml", Path("figures"))
@@ -144,6 +147,30 @@ def project(root=None) -> Project:
     '/checkout/figures'
     """
     return Project(Path(root).resolve() if root is not None else find_root())
+
+
+@contextmanager
+def scratch_project():
+    """An empty project in a temporary folder (``book/_toc.yml``, ``figures/``, the reference folder),
+    made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root, removes it after.
+
+    For Examples and experiments that write into a project without touching the checkout.
+
+    Examples
+    --------
+    >>> with scratch_project() as root:
+    ...     print(project().root == root, project().reference.relative_to(root).as_posix())
+    True tests/reference/thesis_values
+    >>> root.exists()
+    False
+    """
+    with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ, {ENV_VAR: folder}):
+        root = Path(folder).resolve()
+        (root / "book").mkdir()
+        (root / "book" / "_toc.yml").write_text("")
+        for sub in ("figures", project(root).reference.relative_to(root)):
+            (root / sub).mkdir(parents=True)
+        yield root
 
 
 _NAMES = {"ROOT": "root", "BOOK": "book", "FIGURES": "figures", "REFERENCE": "reference",

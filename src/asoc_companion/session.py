@@ -231,18 +231,15 @@ def current_values() -> dict:
     In a temporary checkout whose ``figures/values`` holds a committed ``sec0.a``, a run of
     ``demo`` in a staging folder adds its own values on top:
 
-    >>> import os, tempfile, matplotlib
+    >>> import matplotlib
     >>> from unittest import mock
     >>> import asoc_companion.session as session
-    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
+    >>> with (paths.scratch_project() as root, mock.patch.object(session, "_active", None),
     ...       matplotlib.rc_context()):
-    ...     root = Path(folder)
-    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch()
     ...     _ = Recorder("sec0", "full", root / "figures").record("a", 1)
-    ...     with mock.patch.dict(os.environ, {paths.ENV_VAR: folder}):
-    ...         _ = setup("demo", "ci", root / "staging")
-    ...         _ = record("b", 2)
-    ...         print(current_values())
+    ...     _ = setup("demo", "ci", root / "staging")
+    ...     _ = record("b", 2)
+    ...     print(current_values())
     {'sec0.a': 1, 'demo.b': 2}
     """
     from .values import load_all_values

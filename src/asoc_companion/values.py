@@ -54,13 +54,8 @@ def regenerate_command(notebook: str, output_dir=None) -> str:
 
     The ci output folder of a checkout (here a temporary one) asks for ``--fidelity ci``:
 
-    >>> import os, tempfile
-    >>> from unittest import mock
-    >>> with (tempfile.TemporaryDirectory() as folder,
-    ...       mock.patch.dict(os.environ, {paths.ENV_VAR: folder})):
-    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch()
-    ...     (Path(folder) / "figures").mkdir()
-    ...     print(regenerate_command("sec3_5", Path(folder) / "book" / "_build" / "ci"))
+    >>> with paths.scratch_project() as root:
+    ...     print(regenerate_command("sec3_5", root / "book" / "_build" / "ci"))
     python -m asoc_companion run sec3_5 --fidelity ci
     """
     command = f"python -m asoc_companion run {notebook}"
