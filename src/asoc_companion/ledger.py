@@ -405,14 +405,17 @@ def totals_markdown(rows=None) -> str:
     checks: {bdg-success}`1 reproduced`; they also record 1 number the thesis does not print
     ({bdg-muted}`1 not printed`). With the companion's own pages, the ledger holds 3 entries:
     {bdg-success}`1 reproduced` {bdg-muted}`2 not printed`.
+    >>> print(totals_markdown(rows[1:]).split(";")[0])
+    **What is counted.** The thesis's numerical sections print no number that this companion checks
     """
     rows = rows if rows is not None else ledger_rows()
     sections = counts(_thesis_sections(rows))
     printed = sections.get("reproduced", 0) + sections.get("deviates", 0)
     added = sections.get("new", 0)
-    return (f"**What is counted.** The thesis's numerical sections print {printed} "
-            f"number{'s' * (printed != 1)} that this companion checks: "
-            f"{_counts_badges({k: sections.get(k, 0) for k in ('reproduced', 'deviates')})}; "
+    checked = (f"{printed} number{'s' * (printed != 1)} that this companion checks: "
+               f"{_counts_badges({k: sections.get(k, 0) for k in ('reproduced', 'deviates')})}" if printed
+               else "no number that this companion checks")
+    return (f"**What is counted.** The thesis's numerical sections print {checked}; "
             f"they also record {added} number{'s' * (added != 1)} the thesis does not print "
             f"({badge('new', f'{added} not printed')}). With the companion's own pages, the ledger holds "
             f"{len(rows)} entries: {_counts_badges(counts(rows))}.")
