@@ -88,7 +88,7 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         1000,
         "Iterations for the non-Perron part of the resolvent stack that tightens the upper bound of "
         "rho where the Perron stack is singular (asoc.mjls.certificate.deflated_resolvent_bounds): they "
-        "contract at |lambda_2| / rho; Alg. 3.2's closed loop at n = 32, M = 8 needs 45 (0.012 s)."),
+        "contract at the second-largest eigenvalue modulus over rho; Alg. 3.2's closed loop at n = 32, M = 8 needs 45 (0.012 s)."),
     "mjls.bracket_warn_rtol": (
         1e-4,
         "ms_spectral_radius warns when the certified bracket of rho is relatively wider than "

@@ -203,7 +203,7 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     With the Perron pair (rho, X) and the left Perron stack P, Z = c X + Z_c with
     c = <P, I> / ((r - rho) <P, X>) in closed form, and Z_c the solution of rho Z_c - L(Z_c) = B on
     B = I - (<P, I> / <P, X>) X, which has no Perron component: the iteration Z_c <- (B + L(Z_c)) / rho
-    contracts at |lambda_2| / rho. Z > 0 even where X is singular (a Perron stack that does not reach
+    contracts at ``|lambda_2| / rho``. Z > 0 even where X is singular (a Perron stack that does not reach
     every direction, e.g. an unexcited controller block), where the Collatz-Wielandt bounds at X, or at
     X shifted by a multiple of I, stay wide. Z is only a candidate: its bounds are computed from L(Z)
     with the (sharp) rounding margin, so an inexact Z_c costs tightness, never validity. The gaps
