@@ -144,18 +144,10 @@ def prose(text: str):
     records its own ``rho`` and quotes both (the active recorder, the style and the variable are
     restored afterwards):
 
-    >>> import os, tempfile, matplotlib
-    >>> from pathlib import Path
-    >>> from unittest import mock
-    >>> from asoc_companion import session
-    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
-    ...       matplotlib.rc_context(), mock.patch.dict(os.environ, {"ASOC_COMPANION_ROOT": folder})):
-    ...     root = Path(folder)
-    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch(); (root / "figures").mkdir()
-    ...     (root / "tests" / "reference" / "thesis_values").mkdir(parents=True)
-    ...     _ = (root / "tests" / "reference" / "thesis_values" / "demo.yaml").write_text(
+    >>> from asoc_companion import paths, session
+    >>> with paths.scratch_project() as root, session.scratch_run(output_dir=root / "staging"):
+    ...     _ = (paths.project().reference / "demo.yaml").write_text(
     ...         "demo.rho: {where: an example, kind: deterministic, thesis: 0.25, tol: 5.0e-5}")
-    ...     _ = session.setup("demo", "ci", root / "staging")
     ...     _ = session.record("rho", 0.2500001)
     ...     print(prose("rho = {{rho:.4f}} (thesis: {{thesis_demo.rho}})").data)
     rho = 0.2500 (thesis: 0.25)

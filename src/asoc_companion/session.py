@@ -12,6 +12,8 @@ place only when the run succeeds (:mod:`asoc_companion.notebooks`), so writing e
 touches committed files.
 """
 
+import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from . import figures, paths
@@ -122,16 +124,12 @@ def setup(notebook: str, fidelity: str = "full", output_dir=None) -> Path:
 
     Examples
     --------
-    The examples of this module set the active recorder only inside ``mock.patch.object`` and the
-    style only inside ``matplotlib.rc_context``, so both are restored afterwards:
+    The examples of this module run inside :func:`scratch_run`, which restores the active recorder
+    and the style afterwards:
 
-    >>> import tempfile, matplotlib
-    >>> from unittest import mock
-    >>> import asoc_companion.session as session
-    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
-    ...       matplotlib.rc_context()):
+    >>> with scratch_run() as folder:
     ...     out = setup("demo", "ci", folder)
-    ...     print(out == Path(folder), active().notebook, [p.name for p in (out / "values").iterdir()])
+    ...     print(out == folder, active().notebook, [p.name for p in (out / "values").iterdir()])
     True demo ['demo.json']
     """
     global _active
@@ -140,6 +138,33 @@ def setup(notebook: str, fidelity: str = "full", output_dir=None) -> Path:
     recorder.write()
     _active = recorder
     return recorder.output_dir
+
+
+@contextmanager
+def scratch_run(notebook: str = "demo", output_dir=None):
+    """A throwaway run of ``notebook`` at ci fidelity: :func:`setup` into ``output_dir`` (default a
+    temporary folder, removed after); yields the output folder. The recorder that was active before
+    and the plotting style are restored after the block. For Examples and experiments outside a
+    notebook.
+
+    Examples
+    --------
+    >>> before = active(required=False)
+    >>> with scratch_run() as out:
+    ...     print(active().notebook, record("rho", 0.25), [p.name for p in (out / "values").iterdir()])
+    demo 0.25 ['demo.json']
+    >>> active(required=False) is before
+    True
+    """
+    import matplotlib
+
+    global _active
+    previous = _active
+    try:
+        with tempfile.TemporaryDirectory() as folder, matplotlib.rc_context():
+            yield setup(notebook, "ci", output_dir or folder)
+    finally:
+        _active = previous
 
 
 def active(required: bool = True) -> Recorder | None:
@@ -173,13 +198,8 @@ def record(key: str, value):
 
     Examples
     --------
-    >>> import tempfile, matplotlib
-    >>> from unittest import mock
-    >>> import asoc_companion.session as session
     >>> from asoc_companion.values import load_values
-    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
-    ...       matplotlib.rc_context()):
-    ...     _ = setup("demo", "ci", folder)
+    >>> with scratch_run() as folder:
     ...     print(record("rho", 0.25), load_values("demo", folder))
     0.25 {'rho': 0.25}
     """
@@ -191,13 +211,8 @@ def save_figure(fig, number: str, output_dir=None) -> Path:
 
     Examples
     --------
-    >>> import tempfile, matplotlib
-    >>> from unittest import mock
     >>> from matplotlib.figure import Figure
-    >>> import asoc_companion.session as session
-    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
-    ...       matplotlib.rc_context()):
-    ...     _ = setup("demo", "ci", folder)
+    >>> with scratch_run():
     ...     print(save_figure(Figure(), "own.1").name)
     fig_own_1.png
     """
@@ -209,12 +224,7 @@ def save_table(number: str, header, rows, output_dir=None) -> str:
 
     Examples
     --------
-    >>> import tempfile, matplotlib
-    >>> from unittest import mock
-    >>> import asoc_companion.session as session
-    >>> with (tempfile.TemporaryDirectory() as folder, mock.patch.object(session, "_active", None),
-    ...       matplotlib.rc_context()):
-    ...     _ = setup("demo", "ci", folder)
+    >>> with scratch_run():
     ...     print(save_table("own.1", ["k", "rho"], [[0, 0.25]]), end="")
     | k | rho |
     |---|---|
@@ -231,15 +241,11 @@ def current_values() -> dict:
     In a temporary checkout whose ``figures/values`` holds a committed ``sec0.a``, a run of
     ``demo`` in a staging folder adds its own values on top:
 
-    >>> import matplotlib
-    >>> from unittest import mock
-    >>> import asoc_companion.session as session
-    >>> with (paths.scratch_project() as root, mock.patch.object(session, "_active", None),
-    ...       matplotlib.rc_context()):
+    >>> with paths.scratch_project() as root:
     ...     _ = Recorder("sec0", "full", root / "figures").record("a", 1)
-    ...     _ = setup("demo", "ci", root / "staging")
-    ...     _ = record("b", 2)
-    ...     print(current_values())
+    ...     with scratch_run(output_dir=root / "staging"):
+    ...         _ = record("b", 2)
+    ...         print(current_values())
     {'sec0.a': 1, 'demo.b': 2}
     """
     from .values import load_all_values
