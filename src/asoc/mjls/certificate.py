@@ -208,6 +208,7 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     X shifted by a multiple of I, stay wide. Z is only a candidate: its bounds are computed from L(Z)
     with the (sharp) rounding margin, so an inexact Z_c costs tightness, never validity. The gaps
     r / rho - 1 go down while the upper bound improves (the margin grows like 1 / (r - rho)).
+    Arguments are not validated (the caller, :func:`asoc.mjls.mean_square_stability`, has).
 
     Examples
     --------
@@ -220,10 +221,8 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     >>> bool(0.81 <= bracket.upper < 0.81 * (1 + 1e-5))
     True
     """
-    M, n, _ = X.shape
-    identity = np.broadcast_to(np.eye(n), (M, n, n))
-    weight = float(np.einsum("iab,iab->", P, identity) / np.einsum("iab,iab->", P, X))
-    B = identity - weight * X
+    weight = float(np.einsum("iab,iab->", P, bracket.identity) / np.einsum("iab,iab->", P, X))
+    B = bracket.identity - weight * X
     Z_c = B / rho
     for _ in range(config.defaults["mjls.deflated_resolvent_steps"]):
         Z_next = (B + second_moment_map(bracket.A, bracket.T, Z_c)) / rho

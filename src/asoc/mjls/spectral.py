@@ -233,8 +233,9 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     left Perron stack P gives a residual lower bound and an upper bound at approximate resolvent
     solutions r Z - L(Z) = I with r just above rho, built around the Perron stack
     (:func:`asoc.mjls.certificate.deflated_resolvent_bounds`): Z > 0 even where the Perron stack is
-    singular, as in the augmented closed loop of Alg. 3.2 at n = 32, M = 8 (relative width 8.8e-4
-    from the Perron stack, 2.1e-5 with Z). This is a first-order bound with a safety factor of 10,
+    singular, as in the augmented closed loop of Alg. 3.2 at n = 32, M = 8, whose bracket from the
+    Perron stack alone is wider than ``mjls.bracket_warn_rtol`` and with Z narrower
+    (tests/asoc/mjls/test_certified.py). This is a first-order bound with a safety factor of 10,
     not interval arithmetic. The bracket is tight where the Perron stack is positive definite or its
     resolvent candidates are; where neither holds (e.g. defective spectra) the bracket can stay
     wide, and the verdict is then undecided rather than wrong.
