@@ -6,7 +6,7 @@ from ..linalg import transpose
 from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
 from .lyapunov import solve_coupled_lyapunov
 from .operators import gain_matrix, second_moment_map
-from .spectral import mean_square_stability
+from .spectral import MeanSquareStability, mean_square_stability
 from .system import check_system, predecessor_sum
 
 
@@ -173,20 +173,36 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     numpy.linalg.LinAlgError: no stationary second moment: the closed loop is not certified mean-square stable (rho = 1 in [1, 1], undecided; Cor. 3.2)
     """
     Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
-    return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False))
+    return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False), check=False)
 
 
-def certified_second_moment(Acl, HHt, T, mu_inf, stability):
-    """:func:`steady_state_second_moment` for validated float arrays whose certificate ``stability``
-    (:func:`asoc.mjls.mean_square_stability` of (Acl, T)) the caller already has: one spectral
-    radius per closed loop, not one per use.
+def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
+    """:func:`steady_state_second_moment` with the certificate ``stability`` (:func:`asoc.mjls.mean_square_stability`
+    of (Acl, T)) that the caller already has: one spectral radius per closed loop, not one per use.
+
+    Raises
+    ------
+    TypeError
+        If ``stability`` is not a MeanSquareStability; the arrays as :func:`steady_state_second_moment`
+        (``check=False``: float arrays of consistent shapes, not validated).
+    numpy.linalg.LinAlgError
+        As :func:`steady_state_second_moment`.
 
     Examples
     --------
     >>> A, T = np.array([[[0.5]]]), np.array([[1.0]])
     >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), mean_square_stability(A, T)).round(4)
     array([[[1.3333]]])
+    >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), 0.25)
+    Traceback (most recent call last):
+    ...
+    TypeError: stability: expected the MeanSquareStability of (Acl, T), found float
     """
+    if check:
+        Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
+        if not isinstance(stability, MeanSquareStability):
+            raise TypeError(f"stability: expected the MeanSquareStability of (Acl, T), found "
+                            f"{type(stability).__name__}")
     if not stability.stable:
         raise np.linalg.LinAlgError(
             f"no stationary second moment: the closed loop is not certified mean-square stable (rho = "
