@@ -14,6 +14,7 @@ system from the recorded seed, so this library's Alg. 3.1 can be compared with t
 """
 
 import json
+from collections import Counter
 
 import numpy as np
 
@@ -27,8 +28,27 @@ REFERENCE_FILE = ("tests", "reference", "author_code_octave.json")
 
 
 def load_reference(root=None) -> dict:
-    """The recorded side-by-side measurements (``tests/reference/author_code_octave.json``)."""
+    """The recorded side-by-side measurements (``tests/reference/author_code_octave.json``).
+
+    Examples
+    --------
+    The file of the checkout this runs in:
+
+    >>> record = load_reference()
+    >>> record["author_code"]["repository"], {case["kind"] for case in record["cases"]} == {"alg31", "rho"}
+    ('https://github.com/Mxttak/MJLS', True)
+    """
     return json.loads(paths.project(root).root.joinpath(*REFERENCE_FILE).read_text())
+
+
+def _require(mapping, keys, name):
+    """``mapping`` if it is a dict with ``keys``, else a TypeError or ValueError naming ``name``."""
+    if not isinstance(mapping, dict):
+        raise TypeError(f"{name}: expected a dict as in {'/'.join(REFERENCE_FILE)}, found {type(mapping).__name__}")
+    missing = [key for key in keys if key not in mapping]
+    if missing:
+        raise ValueError(f"{name}: missing {', '.join(missing)} (see {'/'.join(REFERENCE_FILE)})")
+    return mapping
 
 
 def reference_system(record: dict, case: dict) -> MJLS:
@@ -40,7 +60,13 @@ def reference_system(record: dict, case: dict) -> MJLS:
     >>> s = reference_system(record, {"n": 4, "M": 2, "radius": 0.9, "spawn": 1})
     >>> s.nx, s.M, s.J is None
     (4, 2, True)
+    >>> reference_system(record, {"n": 4, "M": 2})
+    Traceback (most recent call last):
+    ...
+    ValueError: case: missing radius, spawn (see tests/reference/author_code_octave.json)
     """
+    _require(record, ("seed", "cases_count"), "record")
+    _require(case, ("n", "M", "radius", "spawn"), "case")
     rng = np.random.default_rng(np.random.SeedSequence(record["seed"]).spawn(record["cases_count"])[case["spawn"]])
     s = scaling_system(rng, case["n"], case["M"], radius=case["radius"])
     return MJLS(s.A, s.B, s.C, s.H, s.Q, s.R, s.T)
@@ -72,10 +98,12 @@ def comparison_table(record: dict):
     >>> rows[0]
     ['Alg. 3.1, n = 4, M = 2, open-loop rho 0.5', '1.5 s', '0.010 s (5)', '0.020 s (9)', '0.030 s (3)', '2e-07', '150x']
     """
+    _require(record, ("cases",), "record")
     header = ["case", "author's code (Octave)", "this library: auto (iterations)", "step", "exact",
               "gain vs author's (relative)", "speed-up of the default"]
     rows = []
-    for case in record["cases"]:
+    for i, case in enumerate(record["cases"]):
+        _require(case, ("kind", "n", "M", "open_loop_rho", "octave_seconds", "library_seconds"), f"record['cases'][{i}]")
         lib, octave = case["library_seconds"], case["octave_seconds"]
         if case["kind"] == "alg31":
             its = case["library_iterations"]
@@ -97,12 +125,16 @@ def machine_sentence(record: dict) -> str:
     >>> print(machine_sentence({"machine": {"cpu": "AMD EPYC", "cores": 2, "octave": "7.3.0", "numpy": "2.1.0",
     ...     "blas": "scipy-openblas 0.3.27", "python": "3.11.7", "date": "2026-11-25",
     ...     "load_average_1min": [0.2, 1.1]},
-    ...     "author_code": {"commit": "94a92e9d"}}))
-    Measured on 2026-11-25 on one AMD EPYC machine with 2 cores (1-minute load average 0.2 before, 1.1 after): the author's code (commit 94a92e9) under Octave 7.3.0; this library under Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27.
+    ...     "author_code": {"commit": "94a92e9d"}, "cases": [{"repetitions": 3}, {"repetitions": 1}]}))
+    Measured on 2026-11-25 on one AMD EPYC machine with 2 cores (1-minute load average 0.2 before, 1.1 after): the author's code (commit 94a92e9) under Octave 7.3.0; this library under Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27. Each time is the best of its case's runs: 3 for 1 case, 1 for 1 case.
     """
-    m = record["machine"]
+    m = _require(_require(record, ("machine", "author_code"), "record")["machine"],
+                 ("date", "cpu", "cores", "octave", "python", "numpy", "blas"), "record['machine']")
     load = m.get("load_average_1min")
     load = f" (1-minute load average {load[0]:g} before, {load[1]:g} after)" if load else ""
+    runs = Counter(case["repetitions"] for case in record.get("cases", []) if "repetitions" in case)
+    runs = ("" if not runs else " Each time is the best of its case's runs: " + ", ".join(
+        f"{r} for {k} case{'s' * (k != 1)}" for r, k in sorted(runs.items(), reverse=True)) + ".")
     return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores{load}: the author's code "
             f"(commit {record['author_code']['commit'][:7]}) under Octave {m['octave']}; this library under "
-            f"Python {m['python']}, NumPy {m['numpy']} with {m['blas']}.")
+            f"Python {m['python']}, NumPy {m['numpy']} with {m['blas']}.{runs}")
