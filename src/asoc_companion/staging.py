@@ -16,7 +16,7 @@ from .io import atomic_write_bytes
 
 #: Every kernel computes with one BLAS/OpenMP thread, whoever starts it (``make book``, which runs
 #: notebooks side by side, or ``run``/``figure`` alone): a multi-threaded BLAS sums in another order,
-#: and an iterative fit that stops unconverged (Sec. 2.6's OMAT GPs) ends 7-20 % elsewhere.
+#: and an iterative fit that stops unconverged (Sec. 2.6's OMAT GPs) ends elsewhere.
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
 
 
