@@ -22,6 +22,9 @@ Examples
 import contextlib
 from collections.abc import Iterator
 
+__all__ = ["defaults", "DESCRIPTIONS", "set_defaults", "reset_defaults", "option_context"]
+
+
 #: Each tunable: (shipped value, why it has that value). Subpackages add their entries here.
 _REGISTRY: dict[str, tuple[object, str]] = {
     "mjls.rank_rtol": (
@@ -84,6 +87,10 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         "Steps of the shifted cone power method where it is the only method (ARPACK failed "
         "above the dense fallback size): the bracket it reaches is reported, undecided if it "
         "straddles 1."),
+    "mjls.power_tol": (
+        1e-13,
+        "The shifted power method for the left Perron stack stops when an iterate, scaled to unit "
+        "largest entry, changes by at most this: a few hundred units of rounding of an entry of order 1."),
     "mjls.deflated_resolvent_steps": (
         1000,
         "Iterations for the non-Perron part of the resolvent stack that tightens the upper bound of "

@@ -6,6 +6,9 @@ Stacks of matrices have shape ``(..., n, m)``; every helper works on the last tw
 
 import numpy as np
 
+__all__ = ["NORM_FLOOR", "transpose", "sym", "pack", "unpack", "relative_change"]
+
+
 #: Absolute floor of a norm in :func:`relative_change`: a zero iterate converges instead of
 #: dividing by zero.
 NORM_FLOOR = 1e-12

@@ -3,7 +3,7 @@
 :func:`bfgs` minimises a smooth function z -> (f, grad f) by BFGS (dense inverse Hessian) or
 L-BFGS (the last few curvature pairs), with a backtracking Armijo line search that rejects
 steps out of the domain (f = inf) like any other step that does not decrease f. The
-exact-cost designs of :mod:`asoc.mjls.exact` use it on the mean-square stabilising set, where
+exact-cost designs of :mod:`asoc.mjls.exact_cost_design` use it on the mean-square stabilising set, where
 the cost is finite; nothing in it is specific to them.
 
 Nocedal and Wright, Numerical Optimization, 2nd ed., 2006: Alg. 6.1 (BFGS), Alg. 7.4
@@ -17,6 +17,9 @@ import numpy as np
 from . import config
 from .progress import progress_bar
 from .validation import boolean, integer, real_array, real_scalar
+
+__all__ = ["BFGS_STATUS", "BFGSResult", "bfgs"]
+
 
 #: Why :func:`bfgs` stopped, by status code (codes of :data:`asoc.result.STATUS_CODES`).
 BFGS_STATUS = {"converged": "the decrease the quasi-Newton model predicts fell below tol * |f|",

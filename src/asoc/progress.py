@@ -4,6 +4,8 @@ every refresh of the bar)."""
 
 from tqdm import tqdm
 
+__all__ = ["progress_bar"]
+
 
 def progress_bar(iterable=None, enabled=True, **kwargs):
     """``tqdm(iterable, **kwargs)`` when ``enabled`` and stderr is a terminal, else silent.

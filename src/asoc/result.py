@@ -8,6 +8,9 @@ results subclass :class:`IterativeResult` and add only the fields they fill.
 
 from dataclasses import dataclass
 
+__all__ = ["STATUS_CODES", "IterativeResult"]
+
+
 #: The reasons an iterative algorithm stops, and what each means.
 STATUS_CODES = {
     "converged": "the stopping criterion was met within its tolerance",

@@ -2,6 +2,8 @@
 
 import numpy as np
 
+__all__ = ["bootstrap_ci", "bootstrap_median_ci", "settling_iteration"]
+
 
 def _check_samples(samples, level):
     """The samples as a flat float array; ValueError on empty/non-finite samples or a bad level."""

@@ -11,6 +11,12 @@ import numbers
 
 import numpy as np
 
+__all__ = ["SYMMETRY_RTOL", "WEIGHT_ATOL", "integer", "real_scalar", "real_array", "symmetric",
+           "semidefinite", "probability_vector", "generator", "instance", "function",
+           "stochastic_matrix", "choice", "boolean", "covariance", "vector", "weights_or_equal",
+           "probability_rows"]
+
+
 SYMMETRY_RTOL = 1e-9
 WEIGHT_ATOL = 1e-8
 

@@ -96,7 +96,7 @@ def _ledger(fidelity):
 
 def _write_if_changed(path, text, remark=""):
     from .build import rel as _rel
-    from .io import atomic_write_text
+    from .atomic_files import atomic_write_text
 
     if path.exists() and path.read_text() == text:
         print(f"{_rel(path)}: up to date")

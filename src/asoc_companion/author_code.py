@@ -23,6 +23,10 @@ from asoc.mjls import MJLS
 from . import paths
 from .scaling import scaling_system
 
+__all__ = ["REFERENCE_FILE", "load_reference", "reference_system", "comparison_table",
+           "machine_sentence"]
+
+
 #: The recorded measurements, under the project root.
 REFERENCE_FILE = ("tests", "reference", "author_code_octave.json")
 

@@ -33,6 +33,12 @@ from pathlib import Path
 
 from . import paths
 
+__all__ = ["MATHJAX_BUNDLE", "MATHJAX_FONTS", "API_BLOCK", "LAYOUT_MARKER", "mathjax_source",
+           "install_mathjax", "unused_script", "THEBE_BODY", "THESIS", "LATEX_ELEMENTS",
+           "title_page", "SUMMARY_WIDTH", "module_summary", "layout_tree", "public_names",
+           "attribute_docs", "documented", "api_markdown", "setup", "prepare"]
+
+
 MATHJAX_BUNDLE = "tex-chtml-full.js"
 """The MathJax 3 combined component served: TeX input with every extension (nothing is
 loaded on demand, e.g. ``\\boldsymbol``), CommonHTML output, the menu."""

@@ -18,6 +18,8 @@ from multiprocessing import get_context
 from . import manifest, paths
 from . import notebooks as nbs
 
+__all__ = ["rel", "terminate", "run_one", "run_and_record", "reproduce", "longest_first"]
+
 
 def rel(path) -> str:
     """``path`` relative to the project root when inside it."""

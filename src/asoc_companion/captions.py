@@ -13,6 +13,10 @@ from . import paths
 from .ledger import badge, ledger_label
 from .reference import SAFE_LOADER, load_reference, status
 
+__all__ = ["CLAIMS_NAME", "claims_path", "load_claims", "verdict", "caption_markdown",
+           "STATUS_WORDS", "figure_caption", "insert_caption_cells"]
+
+
 CLAIMS_NAME = "figure_claims.yaml"
 
 
@@ -113,7 +117,7 @@ def figure_caption(number: str):
     --------
     In a temporary checkout with a claim on figure own.1, its reference entry and a committed value:
 
-    >>> from asoc_companion.session import Recorder
+    >>> from asoc_companion.recorder import Recorder
     >>> with paths.scratch_project() as root:
     ...     _ = (root / "tests/reference/figure_claims.yaml").write_text(
     ...         "own.1: {where: p. 1, claim: The loop is stable., keys: [sec_demo.rho]}")
@@ -125,7 +129,7 @@ def figure_caption(number: str):
     """
     from IPython.display import Markdown
 
-    from .session import current_values
+    from .recorder import current_values
 
     return Markdown(caption_markdown(str(number), values=current_values()))
 
@@ -192,4 +196,3 @@ def insert_caption_cells(path, with_output=False) -> list:
     return added
 
 
-__all__ = ["load_claims", "verdict", "caption_markdown", "figure_caption", "insert_caption_cells"]

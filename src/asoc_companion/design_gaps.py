@@ -16,6 +16,8 @@ from asoc.progress import progress_bar
 
 from .theorems.instances import draw_system, random_spd_stack
 
+__all__ = ["infinite_horizon_gap", "finite_horizon_gap", "design_gaps", "quantiles"]
+
 
 def _draw(rng):
     """A small system with two modes (M = 1 is plain LQG, where Alg. 3.2 is optimal)."""

@@ -13,7 +13,11 @@ from pathlib import Path
 import matplotlib
 import matplotlib.pyplot as plt
 
-from .io import atomic_write_bytes, atomic_write_text
+from .atomic_files import atomic_write_bytes, atomic_write_text
+
+__all__ = ["STYLE", "SAVE_METADATA", "apply_style", "NUMBER", "file_stem", "save_figure",
+           "markdown_table", "save_table", "close"]
+
 
 STYLE = {
     "figure.figsize": (6.4, 4.0),

@@ -14,6 +14,8 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
+__all__ = ["imported_names", "module_file", "closure", "notebook_modules"]
+
 
 def _code_of_notebook(path) -> list:
     """The sources of a notebook's code cells, IPython magics and shell lines removed."""

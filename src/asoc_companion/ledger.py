@@ -14,12 +14,19 @@ import re
 from docutils.nodes import make_id
 
 from .figures import markdown_table
-from .io import atomic_write_text
+from .atomic_files import atomic_write_text
 from .notebooks import notebooks
 from . import paths
 from .prose import fill
 from .reference import load_reference, status
 from .values import load_all_values
+
+__all__ = ["STATUS_TEXT", "BADGE", "SHORT", "SHARED_PREFIX", "SUMMARY", "FINDINGS", "VERDICT",
+           "badge", "decimals", "ledger_rows", "note_groups", "FIELDS", "heading_anchor",
+           "section_links", "counts", "ledger_label", "ledger_markdown", "totals_markdown",
+           "verdict_markdown", "summary_markdown", "findings_markdown", "intro_markdown",
+           "write_summary", "write_ledger"]
+
 
 STATUS_TEXT = {"reproduced": "reproduced", "deviates": "deviates", "new": "not printed", "missing": "missing"}
 BADGE = {"reproduced": "success", "deviates": "warning", "new": "muted", "missing": "danger"}
@@ -565,7 +572,7 @@ def write_ledger(path=None) -> str:
     --------
     A temporary checkout whose reference expects ``sec_demo.rho`` = 0.25 and whose values hold 0.2500001:
 
-    >>> from asoc_companion.session import Recorder
+    >>> from asoc_companion.recorder import Recorder
     >>> with paths.scratch_project() as root:
     ...     _ = (paths.project().reference / "sec_demo.yaml").write_text(
     ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5, note: Fine.}")
@@ -582,6 +589,3 @@ def write_ledger(path=None) -> str:
     return text
 
 
-__all__ = ["badge", "decimals", "ledger_rows", "note_groups", "section_links", "heading_anchor",
-           "ledger_markdown", "totals_markdown", "verdict_markdown", "summary_markdown", "findings_markdown", "intro_markdown", "write_summary",
-           "write_ledger"]

@@ -24,8 +24,12 @@ from pathlib import Path
 
 from . import paths
 from .imports import notebook_modules
-from .io import atomic_write_json
+from .atomic_files import atomic_write_json
 from .values import MANIFEST_NAME, CorruptValuesError, read_values_file, values_path
+
+__all__ = ["source_hash", "tree_hash", "HARNESS_ONLY", "module_hashes", "dependencies", "entry",
+           "manifest_path", "load_manifest", "incomplete_notebook", "incomplete_outputs",
+           "last_seconds", "changed_inputs", "update_manifest"]
 
 
 def _sha256(data: bytes) -> str:
@@ -228,7 +232,7 @@ def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
     >>> import tempfile
     >>> from asoc_companion.notebooks import NotebookInfo
     >>> from asoc_companion.reference import Entry
-    >>> from asoc_companion.session import Recorder
+    >>> from asoc_companion.recorder import Recorder
     >>> reference = {f"demo.{k}": Entry(f"demo.{k}", where="an example", kind="measured") for k in ("rho", "gain")}
     >>> info = NotebookInfo("demo", Path("demo.ipynb"), "Demo", (), ())
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -286,7 +290,7 @@ def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
     date after a recorded run, then out of date once ``pkg`` is edited:
 
     >>> from asoc_companion.notebooks import NotebookInfo
-    >>> from asoc_companion.session import Recorder
+    >>> from asoc_companion.recorder import Recorder
     >>> with paths.scratch_project() as root:
     ...     out = root / "out"
     ...     (root / "src/pkg").mkdir(parents=True)

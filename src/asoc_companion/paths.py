@@ -22,6 +22,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from unittest import mock
 
+__all__ = ["ENV_VAR", "MARKERS", "Project", "is_project", "find_root", "project", "scratch_project"]
+
+
 ENV_VAR = "ASOC_COMPANION_ROOT"
 MARKERS = (Path("book") / "_toc.yml", Path("figures"))
 

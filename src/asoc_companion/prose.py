@@ -18,6 +18,9 @@ An unknown path raises ``KeyError`` naming it: a number is never typed in its pl
 
 import re
 
+__all__ = ["PLACEHOLDER", "lookup", "format_value", "fill", "thesis_values", "prose"]
+
+
 PLACEHOLDER = re.compile(r"\{\{\s*([A-Za-z_][\w.\[\]-]*?)\s*(?::\s*([^{}]*?))?\s*\}\}")
 _STEP = re.compile(r"\.?([A-Za-z0-9_-]+)|\[(-?\d+)\]")
 
@@ -144,21 +147,20 @@ def prose(text: str):
     records its own ``rho`` and quotes both (the active recorder, the style and the variable are
     restored afterwards):
 
-    >>> from asoc_companion import paths, session
-    >>> with paths.scratch_project() as root, session.scratch_run(output_dir=root / "staging"):
+    >>> from asoc_companion import paths, recorder
+    >>> with paths.scratch_project() as root, recorder.scratch_run(output_dir=root / "staging"):
     ...     _ = (paths.project().reference / "demo.yaml").write_text(
     ...         "demo.rho: {where: an example, kind: deterministic, thesis: 0.25, tol: 5.0e-5}")
-    ...     _ = session.record("rho", 0.2500001)
+    ...     _ = recorder.record("rho", 0.2500001)
     ...     print(prose("rho = {{rho:.4f}} (thesis: {{thesis_demo.rho}})").data)
     rho = 0.2500 (thesis: 0.25)
     """
     from IPython.display import Markdown
 
-    from .session import active, current_values
+    from .recorder import active, current_values
 
     recorder = active(required=False)
     values = {**thesis_values(), **current_values()}
     return Markdown(fill(text, values, recorder.notebook if recorder else None))
 
 
-__all__ = ["fill", "format_value", "lookup", "prose", "thesis_values"]

@@ -43,6 +43,10 @@ import yaml
 
 from . import paths
 
+__all__ = ["SAFE_LOADER", "KINDS", "EXPECT", "Entry", "load_reference", "status", "Z_MONTE_CARLO",
+           "monte_carlo_rtol", "agrees_with_full"]
+
+
 # libyaml's safe loader when PyYAML has it (the same documents, ten times faster), else PyYAML's own
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 KINDS = ("deterministic", "monte_carlo", "claim", "measured")

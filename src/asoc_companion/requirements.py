@@ -8,6 +8,9 @@ standard library, so it works in a library-only installation.
 
 from importlib.util import find_spec
 
+__all__ = ["COMPANION_MODULES", "INSTALL_HINT", "missing_requirements"]
+
+
 COMPANION_MODULES = ("yaml", "matplotlib", "nbformat", "papermill", "IPython")
 """Modules of the ``companion`` extra that the companion imports when it starts."""
 

@@ -12,7 +12,10 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from .io import atomic_write_bytes
+from .atomic_files import atomic_write_bytes
+
+__all__ = ["THREAD_VARIABLES", "remove_stage", "one_blas_thread", "signals_held", "commit"]
+
 
 #: Every kernel computes with one BLAS/OpenMP thread, whoever starts it (``make book``, which runs
 #: notebooks side by side, or ``run``/``figure`` alone): a multi-threaded BLAS sums in another order,

@@ -19,6 +19,11 @@ import scipy.stats
 
 from asoc.mjls import successor_average
 
+__all__ = ["CONFIDENCE_TAIL", "clairvoyant_costs", "clairvoyant_minimum", "median_lower_bound",
+           "table_3_3_bounds", "closed_loop_cost_to_go", "transient_gap", "noise_weight",
+           "monte_carlo_gap"]
+
+
 CONFIDENCE_TAIL = 1e-6     # P(the lower bound exceeds the true median) <= this
 
 

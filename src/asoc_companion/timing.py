@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 
+__all__ = ["median_seconds", "alternating_medians", "time_call", "fitted_exponent"]
+
 
 def median_seconds(fn, repeat: int = 15) -> float:
     """Median wall time of ``repeat`` calls of ``fn()``.

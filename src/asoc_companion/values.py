@@ -1,6 +1,6 @@
 """The values files ``<output_dir>/values/<notebook>.json``: where they are, reading them.
 
-Writing happens through a :class:`asoc_companion.session.Recorder`. A values file that is not
+Writing happens through a :class:`asoc_companion.recorder.Recorder`. A values file that is not
 valid JSON (a truncated write from an old version, a bad merge) is reported with its path and
 the command that regenerates it (:class:`CorruptValuesError`), never as a bare
 ``JSONDecodeError``.
@@ -10,6 +10,10 @@ import json
 from pathlib import Path
 
 from . import paths
+
+__all__ = ["FIDELITIES", "MANIFEST_NAME", "CorruptValuesError", "values_path", "regenerate_command",
+           "read_values_file", "load_values", "load_all_values"]
+
 
 FIDELITIES = ("full", "ci")
 MANIFEST_NAME = "manifest.json"
@@ -134,7 +138,7 @@ def load_values(notebook: str, output_dir=None) -> dict:
     Examples
     --------
     >>> import tempfile
-    >>> from asoc_companion.session import Recorder
+    >>> from asoc_companion.recorder import Recorder
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     _ = Recorder("demo", "ci", folder).record("rho", 0.25)
     ...     print(load_values("demo", folder), load_values("not_run", folder))
@@ -166,7 +170,7 @@ def load_all_values(output_dir=None) -> dict:
     Examples
     --------
     >>> import tempfile
-    >>> from asoc_companion.session import Recorder
+    >>> from asoc_companion.recorder import Recorder
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     _ = Recorder("sec0", "ci", folder).record("a", 1)
     ...     _ = Recorder("sec1", "ci", folder).record("b", [0.5, 0.75])

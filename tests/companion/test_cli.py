@@ -13,7 +13,7 @@ import pytest
 from asoc_companion import __main__ as cli
 from asoc_companion import manifest
 from asoc_companion import notebooks as nbs
-from asoc_companion.io import atomic_write_json
+from asoc_companion.atomic_files import atomic_write_json
 from asoc_companion.paths import ROOT
 
 

@@ -16,7 +16,7 @@ from asoc_companion import __main__ as cli
 from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
 from asoc_companion.imports import closure, imported_names
-from asoc_companion.io import atomic_write_json
+from asoc_companion.atomic_files import atomic_write_json
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 
@@ -28,7 +28,7 @@ MODULES = {
     "asoc/mjls/system.py": "from ..stats import median\n\nclass MJLS:\n    pass\n",
     "asoc/stats.py": "def median(x):\n    return x\n",
     "asoc_companion/__init__.py": "from .session import record\nfrom asoc.stats import median\n",
-    "asoc_companion/session.py": "def record(key, value):\n    return value\n",
+    "asoc_companion/recorder.py": "def record(key, value):\n    return value\n",
     "asoc_companion/manifest.py": "def entry():\n    pass\n",
 }
 
@@ -89,7 +89,7 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
         manifest.update_manifest(info, nbs.harness_parameters(info, "full", out), out)
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": []}
     entry = manifest.load_manifest(out)["sec3_2"]["modules"]
-    assert "asoc/mjls/system.py" in entry and "asoc_companion/session.py" in entry
+    assert "asoc/mjls/system.py" in entry and "asoc_companion/recorder.py" in entry
     assert not [p for p in entry if p.startswith("asoc/gp")] and "asoc_companion/manifest.py" not in entry
 
     (project.src / "asoc" / "gp" / "kernels.py").write_text(MODULES["asoc/gp/kernels.py"] + "# edited\n")
@@ -102,7 +102,7 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     (project.src / "asoc_companion" / "manifest.py").write_text("def entry():\n    return 1\n")
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": ["depends"]}
     (project.src / "asoc_companion" / "session.py").write_text("def record(key, value):\n    return 2 * value\n")
-    assert all(any("asoc_companion/session.py" in c for c in changed) for changed in _entries(project).values())
+    assert all(any("asoc_companion/recorder.py" in c for c in changed) for changed in _entries(project).values())
 
 
 def test_every_notebook_of_the_book_hashes_its_own_import_closure():

@@ -11,7 +11,7 @@ import pytest  # noqa: E402
 
 import asoc_companion as repro  # noqa: E402
 from asoc_companion.__main__ import main  # noqa: E402
-from asoc_companion.io import atomic_write_text  # noqa: E402
+from asoc_companion.atomic_files import atomic_write_text  # noqa: E402
 from asoc_companion.reference import Entry, agrees_with_full, status  # noqa: E402
 
 

@@ -162,7 +162,7 @@ def test_verdict_text():
 
 
 def test_statements_table_escapes_claims_and_links_counterexample_and_finding():
-    from asoc_companion.theorems.core import Statement
+    from asoc_companion.theorems.statement import Statement
     from asoc_companion.theorems.report import statements_table
 
     keys = ["statement_3_26", "statement_3_30"]

@@ -6,6 +6,8 @@ from .. import validation as check
 from .filters import checked_estimate, solve_or_pinv
 from .models import NonlinearModel
 
+__all__ = ["ekf_predict", "ekf_gain", "ekf_step"]
+
 
 def _numeric_jacobians(model, x, u, w, v):
     import numdifftools as nd

@@ -18,6 +18,12 @@ import numpy as np
 from .. import validation
 from .models import NonlinearModel
 
+__all__ = ["KAPPA", "BeliefFilter", "FILTER_METHODS", "DiracMixture", "checked_estimate",
+           "covariance_root", "sigma_points", "points_around", "unscented_weights",
+           "weighted_moments", "weighted_covariance", "solve_or_pinv", "conditional_covariance",
+           "next_estimate_covariance"]
+
+
 KAPPA = 0.5  # sample scaling of the toolbox's UKF: w_0 = kappa / (n + kappa)
 
 

@@ -14,6 +14,9 @@ from .. import validation as check
 from ..result import IterativeResult
 from .stage import Expansion, StageProblem, Value
 
+__all__ = ["improved_policy_value", "affine_policy_value", "policy_step", "LineSearch",
+           "line_search"]
+
 
 def _expansion(exp, name="exp"):
     """An Expansion whose R~_k is positive definite (Assumption 2.3), and its tilde terms."""

@@ -11,6 +11,9 @@ import numpy as np
 
 from .. import validation as check
 
+__all__ = ["GaussianNoise", "NonlinearModel", "QuadraticCost", "cost_for", "LandmarkExample",
+           "landmark_example", "linear_gaussian_model"]
+
 
 @dataclass(frozen=True)
 class GaussianNoise:

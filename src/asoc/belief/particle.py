@@ -8,6 +8,8 @@ from .. import validation as check
 from .filters import KAPPA, DiracMixture, next_estimate_covariance, sigma_points
 from .models import GaussianNoise, NonlinearModel
 
+__all__ = ["ParticleFilter"]
+
 
 class ParticleFilter:
     """Bootstrap particle filter [6]: the estimate is a :class:`DiracMixture` of particles.

@@ -9,6 +9,8 @@ from .filters import KAPPA
 from .models import NonlinearModel
 from .ukf import UKF
 
+__all__ = ["AffinePolicy", "policy_for", "MeanAffineController"]
+
 
 @dataclass(frozen=True)
 class AffinePolicy:

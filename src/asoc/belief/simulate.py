@@ -13,6 +13,8 @@ import numpy as np
 from .. import validation as check
 from .models import GaussianNoise, NonlinearModel, cost_for
 
+__all__ = ["Noise", "draw_noise", "ClosedLoop", "simulate"]
+
 
 @dataclass(frozen=True)
 class Noise:

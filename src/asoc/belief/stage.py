@@ -16,6 +16,10 @@ from .models import NonlinearModel, QuadraticCost, cost_for
 from .taylor import QuadraticExpansion, statistical_taylor_expansion
 from .ukf import UKF
 
+__all__ = ["COVARIANCE_HESSIANS", "filter_for", "Value", "terminal_value", "Expansion",
+           "StageProblem"]
+
+
 COVARIANCE_HESSIANS = ("psd", "exact", "shift")
 
 

@@ -21,6 +21,8 @@ from .policy import AffinePolicy, MeanAffineController
 from .simulate import simulate
 from .trajectory import optimize_belief_trajectory
 
+__all__ = ["Sweep", "distribution", "perturbation_sweep"]
+
 
 @dataclass(frozen=True)
 class Sweep:

@@ -8,6 +8,9 @@ import numpy as np
 from .. import validation as check
 from .filters import DiracMixture, sigma_points
 
+__all__ = ["QuadraticExpansion", "derivatives", "statistical_taylor_expansion",
+           "sigma_point_linearizations", "statistical_taylor_linearization_error"]
+
 
 @dataclass(frozen=True)
 class QuadraticExpansion:

@@ -16,6 +16,8 @@ from .filters import (KAPPA, DiracMixture, checked_estimate, conditional_covaria
                       points_around, sigma_points, unscented_weights, weighted_covariance, weighted_moments)
 from .models import NonlinearModel
 
+__all__ = ["UKF"]
+
 
 def _cholesky(cov):
     """Lower Cholesky factor of a covariance or a batch; LinAlgError unless positive definite.

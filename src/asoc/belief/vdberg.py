@@ -34,6 +34,9 @@ from .ekf import ekf_gain, ekf_predict, ekf_step
 from .filters import checked_estimate
 from .models import NonlinearModel, cost_for
 
+__all__ = ["belief_vector", "belief_mean_and_root", "BeliefDynamics", "BeliefILQGResult",
+           "belief_ilqg", "BeliefAffineController"]
+
 
 def _tril_indices(n):
     """Lower-triangle entries stacked column by column (i >= j)."""

@@ -14,7 +14,11 @@ from scipy.special import xlogy
 
 from .. import validation as check
 from ..progress import progress_bar
-from . import validate as v
+from . import mixture_checks as v
+
+__all__ = ["EULER_GAMMA", "DEFAULT_B_MAX", "mcvmd_constant", "mcvmd", "mcvmd_matrix", "lcd_dirac",
+           "lcd_gaussian", "mcvmd_quadrature"]
+
 
 EULER_GAMMA = float(np.euler_gamma)
 #: The "large constant" b_max of the mCvMd's kernel widths (Sec. 2.6.3, item 5).

@@ -12,7 +12,10 @@ from scipy import integrate
 from scipy.special import xlogy
 
 from .. import validation as check
-from . import validate as v
+from . import mixture_checks as v
+
+__all__ = ["lq_distance", "hellinger", "hellinger_gaussian", "hellinger_gaussian_matrix",
+           "jensen_shannon", "lq_distance_matrix", "hellinger_matrix", "jensen_shannon_matrix"]
 
 
 def _quad(f, lower, upper):

@@ -4,6 +4,10 @@ import numpy as np
 
 from .. import validation as check
 
+__all__ = ["MU_RANGE", "VAR_RANGE", "quadratic_function", "modified_rosenbrock",
+           "training_gaussians", "evaluation_grid", "error_metrics"]
+
+
 MU_RANGE = (-5.0, 5.0)           #: range of the means, Sec. 2.6.4
 VAR_RANGE = (0.1**2, 2.0**2)     #: range of the variances, Sec. 2.6.4
 

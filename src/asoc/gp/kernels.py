@@ -11,7 +11,11 @@ from scipy.special import gamma as gamma_fn
 from scipy.special import kv
 
 from .. import validation
-from . import validate as v
+from . import mixture_checks as v
+
+__all__ = ["squared_exponential", "matern", "exponential", "gamma_exponential",
+           "rational_quadratic", "TABLE_2_1", "COVARIANCES", "bilinear_product",
+           "mean_kernel_dirac", "mean_kernel_gaussian"]
 
 
 def squared_exponential(delta, l: float, check: bool = True):

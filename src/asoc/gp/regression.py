@@ -34,8 +34,11 @@ from scipy.optimize import minimize
 from .. import config
 from .. import validation as check
 from ..result import IterativeResult
-from . import validate as v
+from . import mixture_checks as v
 from .kernels import COVARIANCES, mean_kernel_dirac
+
+__all__ = ["PARAMS", "FitResult", "DistributionGP", "MeanKernelGP", "EXP_ZERO_BELOW"]
+
 
 PARAMS = ("alpha", "l", "sigma_n")
 

@@ -23,8 +23,11 @@ from scipy.stats import norm
 from .. import config
 from .. import validation as check
 from ..result import IterativeResult
-from . import validate as v
+from . import mixture_checks as v
 from .cramer_von_mises import DEFAULT_B_MAX
+
+__all__ = ["gradient_tolerance", "DiracApproximation", "mcvmd_standard_normal_dirac",
+           "standard_normal_dirac_approximation", "gaussian_dirac_mixtures"]
 
 
 def gradient_tolerance(b_max: float) -> float:

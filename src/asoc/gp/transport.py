@@ -11,7 +11,10 @@ from scipy.optimize import linear_sum_assignment
 
 from .. import validation as check
 from ..progress import progress_bar
-from . import validate as v
+from . import mixture_checks as v
+
+__all__ = ["wasserstein_gaussian", "wasserstein_gaussian_matrix", "omat", "omat_matrix", "ospa",
+           "ospa_matrix"]
 
 
 def _sqrtm_psd(C):

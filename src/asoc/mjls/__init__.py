@@ -23,7 +23,7 @@ Design a dynamic controller x^+ = F x^ + K y, u = L x^
 Simulate
     :func:`simulate` (Monte Carlo) takes any design result or :class:`Controller`.
 Compare
-    :func:`average_cost` (exact), :func:`finite_horizon_cost`, :mod:`asoc.mjls.comparison`
+    :func:`average_cost` (exact), :func:`finite_horizon_cost`, :mod:`asoc.mjls.monte_carlo_comparison`
     (Table 3.2's Monte Carlo comparison), :func:`mode_observed_lqg` (the mode-observing
     optimum, a lower bound).
 
@@ -43,35 +43,37 @@ and ``.message``. Example, a loop that loses input packets:
 >>> bool(abs(runs.average_cost.mean() - dynamic.cost) < 0.1 * dynamic.cost)
 True
 
-The thesis's numbers. Modules: ``system`` (the model (3.7)), ``operators`` (the
-second-moment operator and the closed loops), ``spectral`` and ``certificate`` (Cor. 3.2: rho
-with a certified bracket, the verdict), ``lyapunov`` (coupled Lyapunov equations),
-``moments`` (Prop. 3.7, 3.14), ``static`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12),
-``bound``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26, (3.49)-(3.51)),
-``finite_horizon`` (Alg. 3.3), ``observed`` and ``optimal_observed`` (the mode-observing
-optimum [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
-``gradients`` and ``exact`` (exact-cost optimisation of (3.37) and (3.55), not in the
-thesis), ``simulate`` (Monte Carlo), ``examples`` (the thesis's examples), ``comparison``
-(Table 3.2).
+Modules, by the thesis's numbers: ``system`` (the model (3.7)), ``moment_operator`` (the
+second-moment operator L of (3.29) and its adjoint), ``closed_loops`` ((3.10), (3.39)-(3.40)),
+``stability`` -> ``certificate`` -> ``spectral_estimate`` (Cor. 3.2: the verdict, the certified
+bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations), ``moments``
+(Prop. 3.7, 3.14), ``static`` and ``static_iterates`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12),
+``moment_bounds``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26, (3.49)-(3.51)),
+``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg`` (the
+mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
+``gradients`` and ``exact_cost_design`` (exact-cost optimisation of (3.37) and (3.55), not in the
+thesis), ``costs`` (the exact average cost (3.9)), ``monte_carlo`` (simulation),
+``monte_carlo_comparison`` (Table 3.2), ``examples`` (the thesis's examples), ``random``.
 """
 
-from .comparison import average_cost
+from .costs import average_cost
 from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
                       steady_state_cost)
-from .exact import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, exact_dynamic_output_feedback,
+from .exact_cost_design import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, exact_dynamic_output_feedback,
                     exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback)
 from .gradients import average_cost_and_gradient, radius_and_gradient
 from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
                              finite_horizon_dynamic_output_feedback)
 from .lmi import LMIResult, static_output_lmi
 from .moments import h2_cost, second_moment_step, second_moments, steady_state_second_moment
-from .observed import ObservedModeResult, observed_mode_state_feedback
-from .optimal_observed import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
+from .observed_mode_feedback import ObservedModeResult, observed_mode_state_feedback
+from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
 from .random import random_mjls
-from .simulate import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
+from .monte_carlo import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
                        StaticGain, TimeVariantGain, simulate)
-from .operators import closed_loop, ms_operator
-from .spectral import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
+from .closed_loops import closed_loop
+from .moment_operator import ms_operator
+from .stability import mean_square_stability, MeanSquareStability, ms_spectral_radius, Verdict
 from .static import StaticOutputFeedbackResult, gain_from_moments, static_cost, static_output_feedback
 from .system import MJLS, predecessor_sum, successor_average, stationary_distribution
 

@@ -28,8 +28,10 @@ import numpy as np
 from ..result import IterativeResult
 from ..validation import boolean, integer, probability_vector, real_array, real_scalar, semidefinite
 from .lmi import EPS, certificate, check_solver, lmi_result, performance_output, solve_quietly
-from .spectral import mean_square_stability
+from .stability import mean_square_stability
 from .system import check_system
+
+__all__ = ["do_val_h2_state_feedback", "TimeVariantResult", "time_variant_feedback"]
 
 
 def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):

@@ -3,7 +3,7 @@
 The controller (3.37) is x^_{k+1} = F x^_k + K y_k, u_k = L x^_k with constant F, K, L.
 With it the MJLS (3.36) forms the augmented closed loop (3.39)-(3.40) in x~ = [x; x^].
 Alg. 3.2 does not minimise the true cost (3.42) but the cost of the bounded second moments
-of Prop. 3.26 (:mod:`asoc.mjls.bound`); the gains solve the linear system (3.49) built from
+of Prop. 3.26 (:mod:`asoc.mjls.moment_bounds`); the gains solve the linear system (3.49) built from
 (3.50) (:mod:`asoc.mjls.optimality`). :func:`steady_state_cost` gives the true cost of any
 controller (Prop. 3.24), to set next to the bound.
 
@@ -48,12 +48,15 @@ from .. import config
 from ..linalg import relative_change
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_scalar
-from .bound import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
+from .moment_bounds import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
 from .moments import certified_second_moment
-from .operators import augmented_closed_loop, noise_covariances
-from .spectral import mean_square_stability
+from .closed_loops import augmented_closed_loop, noise_covariances
+from .stability import mean_square_stability
 from .optimality import METHODS, GainSolve, solve_gains
 from .system import check_system, successor_average
+
+__all__ = ["steady_state_cost", "certified_steady_state_cost", "DynamicOutputFeedbackResult",
+           "StoppingRule", "dynamic_output_feedback", "iterate_bounds"]
 
 
 def steady_state_cost(sys, F, K, L):
@@ -71,7 +74,7 @@ def steady_state_cost(sys, F, K, L):
     -------
     cost : float
         inf unless the closed loop is certified mean-square stable (Cor. 3.2,
-        :func:`asoc.mjls.operators.mean_square_stability`).
+        :func:`asoc.mjls.mean_square_stability`).
     X : numpy.ndarray, shape (M, nx + nc, nx + nc), or None
         X~_inf (None when not stable).
     rho : float
@@ -193,7 +196,7 @@ class DynamicOutputFeedbackResult(IterativeResult):
     def controller(self):
         """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
         :func:`asoc.mjls.average_cost`."""
-        from .simulate import DynamicOutputFeedback
+        from .monte_carlo import DynamicOutputFeedback
 
         return DynamicOutputFeedback(self.F, self.K, self.L)
 

@@ -5,6 +5,13 @@ import numpy as np
 from ..validation import choice
 from .system import MJLS
 
+__all__ = ["SEC32_A", "SEC32_T", "SEC32_X0", "SEC34_A", "SEC34_B", "SEC34_G", "SEC34_T", "SEC34_PI",
+           "SEC354_A", "SEC354_B", "SEC354_H", "SEC354_T", "SEC354_C", "SEC354_X0", "sec32_system",
+           "sec354_system", "SEC373_C", "SEC373_T", "SEC373_MU0", "SEC373_MEAN0", "SEC373_COV0",
+           "sec373_system", "NETWORKED_A", "NETWORKED_B", "NETWORKED_C", "NETWORKED_T",
+           "networked_loop"]
+
+
 # Sec. 3.2: two stable modes whose switching makes the MJLS mean-square unstable (Fig. 3.2).
 SEC32_A = np.array([[[0.9, 1.0], [0.0, 0.5]], [[0.9, 0.0], [1.0, 0.5]]])
 SEC32_T = np.array([[0.7, 0.3], [0.4, 0.6]])

@@ -28,12 +28,17 @@ from ..linalg import transpose
 from ..progress import progress_bar
 from ..result import IterativeResult
 from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
-from .bound import bound_costate_step, bound_moment_step
+from .moment_bounds import bound_costate_step, bound_moment_step
 from .dynamic import dynamic_output_feedback
 from .moments import second_moment_step
-from .operators import noise_covariances
+from .closed_loops import noise_covariances
 from .optimality import METHODS, gains_from_bounds
 from .system import MJLS, successor_average
+
+__all__ = ["FiniteHorizonResult", "time_variant_controller", "Stages", "stages",
+           "check_initial_state", "initial_bounds", "mode_distributions",
+           "augmented_initial_moment", "augmented_cost", "finite_horizon_cost", "initial_gains",
+           "finite_horizon_dynamic_output_feedback"]
 
 
 @dataclass(kw_only=True)
@@ -104,7 +109,7 @@ def time_variant_controller(result):
     >>> time_variant_controller(res).xhat0.tolist()
     [5.0, 0.0]
     """
-    from .simulate import DynamicOutputFeedback
+    from .monte_carlo import DynamicOutputFeedback
 
     return DynamicOutputFeedback(result.F, result.K, result.L, xhat0=result.xhat0)
 

@@ -1,6 +1,6 @@
 """Gradients of the exact costs and of the mean-square spectral radius over the gains (3.37), (3.55).
 
-The exact designs of :mod:`asoc.mjls.exact` minimise these functions. With the augmented
+The exact designs of :mod:`asoc.mjls.exact_cost_design` minimise these functions. With the augmented
 closed loop A~_i, W_i = H~_i H~_i^T and Q~_i of (3.39)-(3.40) and Prop. 3.20,
 
     X_j = sum_i p_ij [A~_i X_i A~_i^T + mu_i W_i]   (Prop. 3.23),
@@ -16,9 +16,14 @@ import numpy as np
 
 from ..linalg import transpose
 from .lyapunov import coupled_lyapunov_solver
-from .operators import augmented_closed_loop, noise_covariances
-from .spectral import perron_pair, spectral_radius
+from .closed_loops import augmented_closed_loop, noise_covariances
+from .stability import mean_square_stability, perron_pair
 from .system import predecessor_sum, successor_average
+
+__all__ = ["closed_loop_gradient", "gain_gradient", "average_cost_and_gradient",
+           "positive_definite", "closed_loop_radius", "radius_and_gradient",
+           "finite_horizon_cost_and_gradient"]
+
 
 def closed_loop_gradient(sys, G):
     """The gradient over (F, K, L) of a function of A~ (3.39) alone, from G_i = d/dA~_i.
@@ -144,7 +149,7 @@ def closed_loop_radius(sys, F, K, L):
     >>> round(closed_loop_radius(sys, F, K, L), 4)
     1.3449
     """
-    return spectral_radius(augmented_closed_loop(sys, F, K, L)[0], sys.T)
+    return mean_square_stability(augmented_closed_loop(sys, F, K, L)[0], sys.T, check=False).rho
 
 def radius_and_gradient(sys, F, K, L):
     """Mean-square spectral radius rho (Cor. 3.2) of (3.37) and its gradient over (F, K, L).

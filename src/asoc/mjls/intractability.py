@@ -20,6 +20,10 @@ import numpy as np
 
 from ..validation import choice, integer, probability_vector, real_array, real_scalar, stochastic_matrix
 
+__all__ = ["psi", "expected_cost_two_steps_before_horizon", "hessian", "hessian_min_eigenvalue",
+           "min_curvature_in_u", "nonconvex_radius", "symmetric_representative",
+           "quadratic_fit_residual"]
+
 
 def _scalar_model(a, b, g, T, pi, Q, R):
     """Validated scalar modes a, b (M,), noise gain g > 0, T (M, M), pi (M,), Q >= 0, R > 0."""

@@ -24,8 +24,12 @@ from .. import config
 from ..linalg import sym
 from ..result import IterativeResult
 from ..validation import boolean, real_scalar
-from .spectral import mean_square_stability
+from .stability import mean_square_stability
 from .system import check_system
+
+__all__ = ["EPS", "LMIResult", "certificate", "lmi_result", "performance_output",
+           "static_output_lmi", "solve_quietly", "check_solver"]
+
 
 EPS = 1e-6
 

@@ -20,9 +20,14 @@ import scipy.sparse.linalg
 from .. import config
 from ..linalg import sym
 from ..validation import real_array, stochastic_matrix
-from .operators import costate_map, kronecker_stack, linear_operator, second_moment_map, single_threaded
+from .moment_operator import costate_map, kronecker_stack, linear_operator, second_moment_map
+from ..threads import single_threaded
 from .certificate import certified_upper_bound
-from .spectral import mean_square_stability
+from .stability import mean_square_stability
+
+__all__ = ["ITERATIVE", "LyapunovSolution", "residual", "solve_coupled_lyapunov",
+           "coupled_lyapunov_solver", "radius_and_moments", "radii_and_moments"]
+
 
 #: The iterative methods of :func:`solve_coupled_lyapunov`.
 ITERATIVE = ("bicgstab", "gmres", "fixed_point")

@@ -5,9 +5,13 @@ import numpy as np
 from ..linalg import transpose
 from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
 from .lyapunov import solve_coupled_lyapunov
-from .operators import gain_matrix, second_moment_map
-from .spectral import MeanSquareStability, mean_square_stability
+from .closed_loops import gain_matrix
+from .moment_operator import second_moment_map
+from .stability import mean_square_stability, MeanSquareStability
 from .system import check_system, predecessor_sum
+
+__all__ = ["second_moment_step", "second_moments", "steady_state_second_moment",
+           "certified_second_moment", "h2_cost"]
 
 
 _NO_MOMENT = object()

@@ -17,7 +17,12 @@ import scipy.sparse.linalg
 from .. import config
 from ..linalg import pack, transpose, unpack
 from ..validation import choice
-from .operators import single_threaded
+from ..threads import single_threaded
+
+__all__ = ["METHODS", "gain_shapes", "optimality_vector", "optimality_system", "OptimalityOperator",
+           "nearest_kronecker", "KroneckerPreconditioner", "GainSolve", "solve_optimality_cg",
+           "gains_from_bounds", "solve_gains"]
+
 
 METHODS = ("lstsq", "sdp")
 

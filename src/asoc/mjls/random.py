@@ -10,6 +10,9 @@ import numpy as np
 from ..validation import generator, integer, real_scalar
 from .system import MJLS
 
+__all__ = ["FAMILIES", "RADII", "random_mjls"]
+
+
 FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
 RADII = {"stable": (0.1, 0.95), "unstable": (1.0, 1.5), "sparse_T": (0.1, 1.2), "thesis_like": (0.8, 1.3)}
 

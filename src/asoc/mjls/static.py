@@ -26,10 +26,13 @@ from ..validation import boolean, choice, integer, real_array, real_scalar, semi
 from .. import config
 from ..linalg import relative_change, transpose
 from .lyapunov import coupled_lyapunov_solver
-from .operators import closed_loop, gain_matrix, noise_covariances
-from .spectral import mean_square_stability, spectral_radius
-from .scaled import Cycle, ScaledPair
+from .closed_loops import closed_loop, gain_matrix, noise_covariances
+from .stability import mean_square_stability
+from .static_iterates import Cycle, ScaledPair
 from .system import check_system, predecessor_sum, successor_average
+
+__all__ = ["StaticOutputFeedbackResult", "gain_from_moments", "MOMENTS", "static_output_feedback",
+           "static_cost"]
 
 
 @dataclass(kw_only=True)
@@ -84,7 +87,7 @@ class StaticOutputFeedbackResult(IterativeResult):
     @property
     def controller(self):
         """u = L y as a :class:`asoc.mjls.StaticGain`, for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`."""
-        from .simulate import StaticGain
+        from .monte_carlo import StaticGain
 
         return StaticGain(self.L)
 
@@ -227,7 +230,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
     ``until_stabilizing``: False, "each" (stop at the first stabilising gain, moments="exact")
     or "slow" (moments="auto": stop at a stabilising gain once :class:`_Rate` predicts more
     than ``mjls.auto_switch_iterations`` further iterations). With
-    ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`asoc.mjls.scaled.Cycle`) is skipped to
+    ``skip_cycles`` (method "vec"), an exact cycle of the state (:class:`asoc.mjls.static_iterates.Cycle`) is skipped to
     ``max_iter`` in whole periods: the same result as iterating through them. Returns a dict
     with L, the unscaled X, P, converged, iterations, stabilized and the trace histories.
     """
@@ -265,7 +268,7 @@ def _step_iteration(sys, rec, tol, max_iter, init, method, until_stabilizing, sk
             status = "converged"
             break
         if until_stabilizing == "each" or (until_stabilizing == "slow" and rate.slow(it, change)):
-            if spectral_radius(closed_loop(sys, L, check=False), sys.T) < 1:
+            if mean_square_stability(closed_loop(sys, L, check=False), sys.T, check=False).rho < 1:
                 stabilized = True
                 break
         period = cycle.period(it, L, pair) if cycle is not None else None
@@ -329,7 +332,7 @@ def _exact_iteration(sys, rec, L, tol, max_iter, method):
         LC = L @ sys.C
         weight = sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
         P_solution = solve(weight, adjoint=True)
-        if not (_certified(P_solution, weight) or spectral_radius(Acl, sys.T) < 1):
+        if not (_certified(P_solution, weight) or mean_square_stability(Acl, sys.T, check=False).rho < 1):
             stabilized, status = False, "diverged"
             break
         P = P_solution.X
@@ -499,7 +502,7 @@ def static_cost(sys, L):
     X : numpy.ndarray, shape (M, nx, nx), or None
         The stationary second moments (None when not stable).
     stability : MeanSquareStability
-        rho of Cor. 3.2 and its verdict (:func:`asoc.mjls.operators.mean_square_stability`).
+        rho of Cor. 3.2 and its verdict (:func:`asoc.mjls.mean_square_stability`).
 
     Raises
     ------

@@ -15,6 +15,10 @@ from scipy.sparse.csgraph import connected_components
 
 from ..validation import probability_vector, real_array, real_scalar, semidefinite, stochastic_matrix
 
+__all__ = ["STATIONARY_ATOL", "check_system", "closed_classes", "stationary_distribution",
+           "successor_average", "predecessor_sum", "MJLS"]
+
+
 STATIONARY_ATOL = 1e-8     # |mu T - mu| allowed for a given stationary distribution
 
 

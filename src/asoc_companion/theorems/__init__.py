@@ -2,7 +2,7 @@
 
 from .chapter2 import STATEMENTS as CHAPTER_2
 from .chapter3 import STATEMENTS as CHAPTER_3
-from .core import VERDICTS, Outcome, Statement
+from .statement import VERDICTS, Outcome, Statement
 
 STATEMENTS = [*CHAPTER_2, *CHAPTER_3]
 

@@ -11,7 +11,7 @@ import argparse
 import sys
 import time
 
-from ..io import atomic_write_json
+from ..atomic_files import atomic_write_json
 from .engine import run_study, verdict_text
 from .report import mutant_text
 

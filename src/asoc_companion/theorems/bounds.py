@@ -23,6 +23,12 @@ import numpy as np
 
 from asoc.mjls import predecessor_sum, successor_average
 
+__all__ = ["blocks", "moment_bound", "costate_bound", "costate", "error_blocks_step",
+           "initial_error_blocks", "forward_bound", "optimality_conditions", "split", "step_terms",
+           "noise_term", "bound_3_65", "functional_b4", "difference_3_65_b4",
+           "next_costate_expectations"]
+
+
 _T = lambda S: np.swapaxes(S, -1, -2)
 _tr = lambda A, B: float(np.einsum("iab,iba->", A, B))           # sum_i tr[A_i B_i]
 

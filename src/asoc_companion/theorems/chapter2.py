@@ -21,8 +21,12 @@ claim of Sec. 2.6.3 is checked in :mod:`.kernels`.
 
 import numpy as np
 
-from .core import Outcome, Statement
+from .statement import Outcome, Statement
 from .kernels import check_kernels_sec_2_6_3, random_covariance, summarise_kernels
+
+__all__ = ["EPS", "check_lemma_2_1", "check_theorem_2_4", "expected_cost_of_affine_policy",
+           "lq_tracking_policy", "check_theorem_2_5", "check_proposition_2_7", "STATEMENTS"]
+
 
 EPS = float(np.finfo(float).eps)
 

@@ -25,6 +25,11 @@ from . import bounds
 from .counterexamples import kernel_example, prop_3_26_example, thm_3_19_example, thm_3_31_example
 from .instances import draw_system, random_spd_stack, rescaled
 
+__all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "check_kernels", "check_3_19",
+           "check_3_26", "check_3_27", "check_3_31", "check_3_32", "check_3_33",
+           "correction_records"]
+
+
 STATEMENT_IDS = ("2_6_3_kernels", "3_19", "3_26", "3_27", "3_31", "3_32", "3_33")
 EXPENSIVE = {"3_27": 100, "3_33": 100}     # at most this many instances (Alg. 3.2 / 3.3 runs per instance)
 EIG_TOL = 1e-9                             # smallest eigenvalue of a gap, relative to the matrix scale

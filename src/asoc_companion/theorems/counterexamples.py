@@ -11,6 +11,10 @@ import numpy as np
 
 from asoc import gp
 
+__all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "alg_3_1_one_mode",
+           "thm_3_19_example", "kernel_example"]
+
+
 # ------------------------------------------------------------------ exact 2 x 2 algebra
 
 

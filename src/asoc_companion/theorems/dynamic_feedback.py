@@ -14,14 +14,17 @@ from scipy.linalg import block_diag
 from asoc.linalg import sym, transpose
 from asoc.mjls import average_cost_and_gradient, dynamic_output_feedback, ms_spectral_radius, predecessor_sum
 from asoc.mjls import steady_state_cost, successor_average
-from asoc.mjls.operators import augmented_closed_loop, noise_covariances
+from asoc.mjls.closed_loops import augmented_closed_loop, noise_covariances
 from asoc.mjls.finite_horizon import augmented_initial_moment
-from asoc.mjls.operators import ms_operator
+from asoc.mjls.moment_operator import ms_operator
 
 from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, draw_system, gaussian_mixture, initial_modes,
                         min_eig, norm_scale, outcome, random_spd_stack, rescaled, sample_mixture,
                         stationary_average, trace_sum, verdict, z_scores)
 from .mean_square import moment_map_matrix
+
+__all__ = ["check_3_20", "dynamic_gains", "loop_step", "quadratic_form", "check_3_23", "check_3_24",
+           "augmented_dense", "check_3_25", "check_3_26", "check_3_27"]
 
 
 def check_3_20(rng, mutant=False):

@@ -20,6 +20,10 @@ from asoc.progress import progress_bar
 
 from . import STATEMENTS
 
+__all__ = ["BATCH", "MUTANT_SUFFIX", "instance_seed", "statement", "run_instance",
+           "StatementResult", "run_study", "verdict_text"]
+
+
 BATCH = 25                                 # instances per task: amortises the executor's overhead
 MUTANT_SUFFIX = ":mutant"                  # a mutant's instances draw from the seeds of key + suffix
 

@@ -6,14 +6,17 @@ import numpy as np
 
 from asoc.linalg import transpose
 from asoc.mjls import finite_horizon_cost, finite_horizon_dynamic_output_feedback, successor_average
-from asoc.mjls.bound import bound_costate_step, bound_moment_step
-from asoc.mjls.operators import augmented_closed_loop, noise_covariances
+from asoc.mjls.moment_bounds import bound_costate_step, bound_moment_step
+from asoc.mjls.closed_loops import augmented_closed_loop, noise_covariances
 from asoc.mjls.optimality import optimality_system
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
 
 from .dynamic_feedback import loop_step, quadratic_form
 from .instances import (Z_SCORE, ModeChain, RunModes, draw_system, gaussian_mixture, moment_estimate, outcome,
                         random_spd_stack, sample_mixture, trace_sum, verdict)
+
+__all__ = ["finite_instance", "check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31",
+           "summarise_3_31", "check_3_32", "check_3_33"]
 
 
 def finite_instance(rng, max_states=3, max_modes=3):

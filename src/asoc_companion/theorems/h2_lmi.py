@@ -21,6 +21,9 @@ from .instances import (Z_SCORE, ModeOperator, best_scalar_gain, draw_system, in
                         random_spd_stack, stabilised, stationary_average, trace_sum, verdict)
 from .mean_square import moment_map_radius
 
+__all__ = ["check_3_7", "check_3_10", "check_3_8", "check_3_11", "check_3_9", "decide_3_9",
+           "failure_kind", "check_3_12", "summarise_lmi"]
+
 
 def _stationary_check(rng, mode_dependent, mutant):
     """Props. 3.7 / 3.10: sum_i tr[(D+ELC) X (D+ELC)^T] against the Monte Carlo stationary E{z^T z}.

@@ -15,7 +15,16 @@ import scipy.optimize
 from asoc.linalg import sym, transpose
 from asoc.mjls import closed_loop, ms_spectral_radius, random_mjls
 
-from .core import Outcome
+from .statement import Outcome
+
+__all__ = ["FAMILIES", "Z_SCORE", "draw_system", "size", "system_data", "rescaled", "radius_to",
+           "BOUND_MARGIN", "BOUND_FLOOR", "BOUND_SEEDS", "scalar_closed_loops", "scalar_gain_radii",
+           "radius_lower_bounds", "walk_lower_bounds", "grid_minimum", "best_scalar_gain",
+           "best_gain", "ModeChain", "initial_modes", "RunModes", "ModeOperator", "moment_estimate",
+           "indicator_moment_estimate", "stationary_average", "random_spd", "random_spd_stack",
+           "min_eig", "trace_sum", "verdict", "outcome", "stabilised", "sym_noise",
+           "gaussian_mixture", "sample_mixture", "z_scores", "norm_scale"]
+
 
 FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
 Z_SCORE = 6.0         # Monte Carlo tolerance in standard errors (per compared entry; false alarm ~ 2e-9)

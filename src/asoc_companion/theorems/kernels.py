@@ -30,7 +30,14 @@ from scipy.optimize import minimize_scalar
 
 from asoc import gp
 
-from .core import Outcome
+from .statement import Outcome
+
+__all__ = ["EPS", "BOX", "STOP", "LOG_SCALES", "MOVES", "STALL", "FAMILIES", "COVARIANCE_NAMES",
+           "MUTANT_COVARIANCE", "random_covariance", "covariance", "pair_distance",
+           "distance_matrix", "gram_certificate", "check_kernels_sec_2_6_3",
+           "search_counterexample", "replay_kernel_counterexample", "distance_label",
+           "DISTANCE_LABELS", "summarise_kernels"]
+
 
 EPS = float(np.finfo(float).eps)
 BOX = 5.0                     # positions within +-BOX (the range of the thesis's examples)

@@ -6,10 +6,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_write_json
+from ..atomic_files import atomic_write_json
 from .chapter3 import MARGIN, SHOW
-from .core import Outcome
+from .statement import Outcome
 from .engine import verdict_text
+
+__all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "trim_systems",
+           "load_counterexamples", "margin", "shown_counterexample", "describe", "system_from",
+           "COLUMNS", "math_html", "statements_table", "mutant_text", "corrected_text"]
+
 
 COUNTEREXAMPLES = "theorems_counterexamples.json"
 SYSTEMS_KEPT = 20             # system matrices saved for the 20 smallest counterexamples per statement
@@ -113,7 +118,7 @@ def statements_table(statements, records, findings) -> str:
 
     Examples
     --------
-    >>> from asoc_companion.theorems.core import Statement
+    >>> from asoc_companion.theorems.statement import Statement
     >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing", not_checkable="a definition")
     >>> table = statements_table([lemma], {}, {})
     >>> table.count("<tr>"), "<strong>Lemma 3.0.</strong> \\\\(|x| &gt;= 0\\\\)" in table

@@ -15,12 +15,15 @@ from asoc.linalg import sym, transpose
 from asoc.mjls import (closed_loop, gain_from_moments, h2_cost, predecessor_sum, second_moments,
                        static_output_feedback, steady_state_second_moment, successor_average)
 from asoc.mjls.lyapunov import radii_and_moments, radius_and_moments
-from asoc.mjls.operators import ms_operator
+from asoc.mjls.moment_operator import ms_operator
 
 from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, best_scalar_gain, draw_system,
                         gaussian_mixture, norm_scale, outcome, random_spd_stack, rescaled, sample_mixture,
                         scalar_gain_radii, stabilised, trace_sum, verdict, z_scores)
 from .mean_square import moment_map_matrix
+
+__all__ = ["check_3_14", "check_3_15", "summarise_3_15", "lagrangian_dense", "check_3_16",
+           "check_3_17", "check_3_18", "check_3_19", "decide_3_19", "summarise_3_19"]
 
 
 def check_3_14(rng, mutant=False):

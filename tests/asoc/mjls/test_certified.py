@@ -1,4 +1,4 @@
-"""The certified bracket of rho (asoc.mjls.spectral) on hard spectra, against dense Kronecker eigenvalues
+"""The certified bracket of rho (asoc.mjls.stability) on hard spectra, against dense Kronecker eigenvalues
 (the independent computation at these sizes) and closed forms."""
 
 import numpy as np
@@ -8,7 +8,7 @@ from asoc import config
 from asoc.mjls import MJLS, ms_operator, ms_spectral_radius
 from asoc.mjls.examples import SEC32_A, SEC32_T, SEC354_A, SEC354_T, sec32_system
 from asoc.mjls.certificate import certified_upper_bound
-from asoc.mjls.spectral import Verdict, mean_square_stability
+from asoc.mjls.stability import mean_square_stability, Verdict
 
 
 def dense_rho(A, T):
@@ -188,8 +188,8 @@ def test_singular_perron_stack_gets_a_narrow_bracket_from_the_deflated_resolvent
     deflated resolvent candidates removed (the planted regression) it is wider than that (8.8e-4 measured)."""
     import scipy.sparse.linalg
 
-    from asoc.mjls import spectral
-    from asoc.mjls.operators import linear_operator
+    from asoc.mjls import certificate
+    from asoc.mjls.moment_operator import linear_operator
 
     A, T = _alg32_closed_loop_n32_m8()
     result = mean_square_stability(A, T)
@@ -197,6 +197,6 @@ def test_singular_perron_stack_gets_a_narrow_bracket_from_the_deflated_resolvent
     assert result.rho_upper - result.rho_lower <= width * result.rho_upper, result.bracket
     arpack = abs(scipy.sparse.linalg.eigs(linear_operator(A, T, False), k=1, which="LM", ncv=60, tol=1e-14)[0][0])
     assert_contains(result, arpack, rtol=1e-10)
-    monkeypatch.setattr(spectral, "deflated_resolvent_bounds", lambda *args: None)
+    monkeypatch.setattr(certificate, "deflated_resolvent_bounds", lambda *args: None)
     without = mean_square_stability(A, T)
     assert without.rho_upper - without.rho_lower > width * without.rho_upper

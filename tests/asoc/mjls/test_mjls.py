@@ -14,7 +14,7 @@ from asoc.mjls.baselines import do_val_h2_state_feedback, time_variant_feedback
 from asoc.mjls.examples import sec354_system
 from asoc.mjls.intractability import expected_cost_two_steps_before_horizon
 from asoc.mjls.lmi import static_output_lmi
-from asoc.mjls.observed import observed_mode_state_feedback
+from asoc.mjls.observed_mode_feedback import observed_mode_state_feedback
 
 
 def random_mjls(rng, M=3, nx=3, nu=2, ny=2, scale=0.6):
@@ -128,14 +128,14 @@ def _cycling_system():
 
 @pytest.mark.parametrize("max_iter", [1003, 20000])
 def test_alg31_skips_an_exact_cycle_with_the_same_result(monkeypatch, max_iter):
-    from asoc.mjls import scaled, static
+    from asoc.mjls import static, static_iterates
 
     sys = _cycling_system()
     rec = static._Recursion(sys)
     plain = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False, skip_cycles=False)
     repeats = []
-    repeat = scaled.ScaledPair.repeat
-    monkeypatch.setattr(scaled.ScaledPair, "repeat",
+    repeat = static_iterates.ScaledPair.repeat
+    monkeypatch.setattr(static_iterates.ScaledPair, "repeat",
                         lambda pair, period, times: (repeats.append(period), repeat(pair, period, times)))
     skipped = static._step_iteration(sys, rec, 1e-10, max_iter, 1e-4, "vec", False)
     # one cycle found and skipped (period 4 with this machine's kernels, 6 with OPENBLAS_CORETYPE=Prescott)
@@ -391,7 +391,7 @@ def test_results_say_why_they_stopped():
 
 
 def test_table_3_2_designs_subset_equals_the_whole_table_and_names_unknown_rows():
-    from asoc.mjls.comparison import TABLE_3_2_ROWS, table_3_2_designs
+    from asoc.mjls.monte_carlo_comparison import TABLE_3_2_ROWS, table_3_2_designs
     whole = table_3_2_designs(2, [3.0, 0.0], 20)
     part = table_3_2_designs(2, [3.0, 0.0], 20, rows=[TABLE_3_2_ROWS[4], TABLE_3_2_ROWS[3]])
     assert list(part) == [TABLE_3_2_ROWS[3], TABLE_3_2_ROWS[4]]        # in table order

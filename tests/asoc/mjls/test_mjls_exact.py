@@ -1,4 +1,4 @@
-"""Exact-cost controller design (asoc.mjls.exact) and Alg. 3.1 with exact moment solves."""
+"""Exact-cost controller design (asoc.mjls.exact_cost_design) and Alg. 3.1 with exact moment solves."""
 
 import warnings
 
@@ -14,10 +14,10 @@ from asoc.linalg import pack, unpack
 from asoc.mjls.dynamic import steady_state_cost
 from asoc.mjls.examples import (SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system,
                                 sec373_system)
-from asoc.mjls.exact import averaged_lqg
+from asoc.mjls.exact_cost_design import averaged_lqg
 from asoc.mjls.gradients import (average_cost_and_gradient, closed_loop_radius,
                                  finite_horizon_cost_and_gradient)
-from asoc.mjls.operators import augmented_closed_loop
+from asoc.mjls.closed_loops import augmented_closed_loop
 from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
 from asoc.mjls import ms_spectral_radius
 from test_mjls_dynamic import initial_state, random_system

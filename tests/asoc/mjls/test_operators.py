@@ -1,4 +1,4 @@
-"""Matrix-free second-moment operators (asoc.mjls.operators, spectral, lyapunov) against the dense
+"""Matrix-free second-moment operators (asoc.mjls.moment_operator, stability, lyapunov) against the dense
 Kronecker path."""
 
 import numpy as np
@@ -7,8 +7,8 @@ import pytest
 from asoc import config
 from asoc.mjls import ms_operator, ms_spectral_radius
 from asoc.mjls.lyapunov import coupled_lyapunov_solver, radii_and_moments, radius_and_moments, solve_coupled_lyapunov
-from asoc.mjls.operators import costate_map, second_moment_map
-from asoc.mjls.spectral import Verdict, mean_square_stability, spectral_radius
+from asoc.mjls.moment_operator import costate_map, second_moment_map
+from asoc.mjls.stability import mean_square_stability, Verdict
 from asoc_companion.scaling import scaling_system
 from asoc_companion.timing import fitted_exponent
 
@@ -42,9 +42,9 @@ def test_spectral_radius_methods_agree_with_cor_3_2(n, M, scale):
     s = scaling_system(np.random.default_rng(7 * n + M), n, M)
     A = np.sqrt(scale) * s.A
     dense = float(np.max(np.abs(np.linalg.eigvals(ms_operator(A, s.T)))))
-    assert spectral_radius(A, s.T, "dense") == pytest.approx(dense, rel=1e-12)
-    assert spectral_radius(A, s.T, "arnoldi") == pytest.approx(dense, rel=1e-10)
-    assert spectral_radius(A, s.T, "power") == pytest.approx(dense, rel=1e-8)
+    assert mean_square_stability(A, s.T, method="dense", check=False).rho == pytest.approx(dense, rel=1e-12)
+    assert mean_square_stability(A, s.T, method="arnoldi", check=False).rho == pytest.approx(dense, rel=1e-10)
+    assert mean_square_stability(A, s.T, method="power", check=False).rho == pytest.approx(dense, rel=1e-8)
     assert ms_spectral_radius(A, s.T) == pytest.approx(dense, rel=1e-10)
 
 
@@ -62,7 +62,7 @@ def test_auto_switches_at_the_measured_sizes():
 @pytest.mark.parametrize("adjoint", [False, True])
 def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
     s = scaling_system(np.random.default_rng(5), 5, 3)
-    A = s.A * np.sqrt(0.97 / spectral_radius(s.A, s.T))              # rho = 0.97: slow contraction
+    A = s.A * np.sqrt(0.97 / mean_square_stability(s.A, s.T, check=False).rho)              # rho = 0.97: slow contraction
     W = stack(np.random.default_rng(6), 3, 5)
     sol = solve_coupled_lyapunov(A, s.T, W, adjoint=adjoint, method=method)
     assert sol.residual < 1e-11
@@ -90,11 +90,11 @@ def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
     """One Kronecker matrix for rho and X: the same numbers as spectral_radius and solve_coupled_lyapunov
     (dense sizes; with the switch points at 0, through those functions' matrix-free paths)."""
     s = scaling_system(np.random.default_rng(10), 3, 2)
-    A = s.A * np.sqrt(scale / spectral_radius(s.A, s.T))
+    A = s.A * np.sqrt(scale / mean_square_stability(s.A, s.T, check=False).rho)
     W = stack(np.random.default_rng(11), 2, 3)
     with switch_points(radius=switch, solve=switch):
         rho, X = radius_and_moments(A, s.T, W)
-        assert rho == pytest.approx(spectral_radius(A, s.T), rel=1e-12)
+        assert rho == pytest.approx(mean_square_stability(A, s.T, check=False).rho, rel=1e-12)
         if scale < 1:
             np.testing.assert_allclose(X, solve_coupled_lyapunov(A, s.T, W).X, rtol=1e-9, atol=1e-12)
         else:
@@ -105,12 +105,12 @@ def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
 def test_radii_and_moments_is_each_loop_alone(switch):
     """The stacked fast path: each closed loop's rho and X as from the checked functions."""
     s = scaling_system(np.random.default_rng(12), 3, 3)
-    loops = np.stack([s.A * np.sqrt(scale / spectral_radius(s.A, s.T)) for scale in (0.3, 1.2, 0.9, 2.0)])
+    loops = np.stack([s.A * np.sqrt(scale / mean_square_stability(s.A, s.T, check=False).rho) for scale in (0.3, 1.2, 0.9, 2.0)])
     W = stack(np.random.default_rng(13), 3, 3)
     with switch_points(radius=switch, solve=switch):
         rho, X = radii_and_moments(loops, s.T, W)
         for loop, r, x in zip(loops, rho, X):
-            assert r == pytest.approx(spectral_radius(loop, s.T), rel=1e-12)
+            assert r == pytest.approx(mean_square_stability(loop, s.T, check=False).rho, rel=1e-12)
             if r >= 1:
                 assert x is None
             else:
@@ -120,7 +120,7 @@ def test_radii_and_moments_is_each_loop_alone(switch):
 def test_verdict_is_undecided_within_rounding_of_one():
     T = np.array([[0.3, 0.7], [0.6, 0.4]])
     A = np.stack([np.diag([0.9, 0.2]), np.diag([0.5, 1.1])])
-    rho = spectral_radius(A, T)
+    rho = mean_square_stability(A, T, check=False).rho
     on_boundary = A / np.sqrt(rho)                                    # rho = 1 up to rounding
     assert mean_square_stability(on_boundary, T).verdict is Verdict.UNDECIDED
     assert mean_square_stability(A * np.sqrt(0.99 / rho), T).verdict is Verdict.STABLE

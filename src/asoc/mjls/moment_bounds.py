@@ -15,6 +15,8 @@ from ..linalg import sym, transpose
 from ..validation import generator
 from .system import predecessor_sum
 
+__all__ = ["bound_moment_step", "bound_costate_step", "initial_bounds", "bound_cost"]
+
 
 def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     """One step of the second-moment bounds, (3.45)-(3.46) / (3.66)-(3.67).
@@ -27,7 +29,7 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
-    >>> from asoc.mjls.operators import noise_covariances
+    >>> from asoc.mjls.closed_loops import noise_covariances
     >>> HHt, JJt = noise_covariances(sys)
     >>> Z = np.zeros((2, 2, 2))
     >>> Xbar, Xunder = bound_moment_step(sys, np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)), Z, Z,

@@ -15,7 +15,8 @@ the check catches it.
 from dataclasses import dataclass, field
 from typing import Callable
 
-import numpy as np
+__all__ = ["VERDICTS", "Outcome", "Statement"]
+
 
 VERDICTS = ("holds", "fails", "not_applicable")
 

@@ -38,8 +38,11 @@ from ..linalg import transpose
 from ..validation import real_array
 from .finite_horizon import (augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions,
                              stages)
-from .simulate import Controller
+from .monte_carlo import Controller
 from .system import check_system
+
+__all__ = ["ModeObservedResult", "ModeObservedLQG", "control_riccati", "markov_jump_filter",
+           "mode_observed_lqg"]
 
 
 @dataclass

@@ -21,8 +21,11 @@ import numpy as np
 
 from ..result import IterativeResult
 from ..validation import boolean, integer, real_scalar
-from .spectral import mean_square_stability
+from .stability import mean_square_stability
 from .system import check_system
+
+__all__ = ["DIVERGED", "ObservedModeResult", "riccati_step", "observed_mode_state_feedback"]
+
 
 DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as Alg. 3.2's bounds)
 
@@ -71,7 +74,7 @@ class ObservedModeResult(IterativeResult):
     def controller(self):
         """u = L_theta x as a :class:`asoc.mjls.ModeDependentGain` (it observes the mode; the
         state is the output of the systems this design is for, C = I)."""
-        from .simulate import ModeDependentGain
+        from .monte_carlo import ModeDependentGain
 
         return ModeDependentGain(self.L)
 

@@ -17,8 +17,11 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from . import figures, paths
-from .io import atomic_write_json, to_jsonable
+from .atomic_files import atomic_write_json, to_jsonable
 from .values import FIDELITIES, values_path
+
+__all__ = ["Recorder", "setup", "scratch_run", "active", "record", "save_figure", "save_table",
+           "current_values"]
 
 
 class Recorder:
@@ -178,7 +181,7 @@ def active(required: bool = True) -> Recorder | None:
     Examples
     --------
     >>> from unittest import mock
-    >>> import asoc_companion.session as session
+    >>> import asoc_companion.recorder as session
     >>> with mock.patch.object(session, "_active", None):
     ...     print(active(required=False))
     None

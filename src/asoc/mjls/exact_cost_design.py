@@ -28,9 +28,13 @@ from .finite_horizon import (augmented_initial_moment, check_initial_state, fini
                              time_variant_controller)
 from .gradients import (average_cost_and_gradient, closed_loop_radius, finite_horizon_cost_and_gradient,
                         radius_and_gradient)
-from .operators import augmented_closed_loop
-from .spectral import mean_square_stability
+from .closed_loops import augmented_closed_loop
+from .stability import mean_square_stability
 from .system import check_system
+
+__all__ = ["ExactDynamicOutputFeedbackResult", "ExactFiniteHorizonResult", "averaged_lqg",
+           "min_radius_dynamic_output_feedback", "exact_dynamic_output_feedback",
+           "exact_finite_horizon_dynamic_output_feedback"]
 
 
 @dataclass(kw_only=True)
@@ -85,7 +89,7 @@ class ExactDynamicOutputFeedbackResult(IterativeResult):
     def controller(self):
         """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
         :func:`asoc.mjls.average_cost`."""
-        from .simulate import DynamicOutputFeedback
+        from .monte_carlo import DynamicOutputFeedback
 
         return DynamicOutputFeedback(self.F, self.K, self.L)
 

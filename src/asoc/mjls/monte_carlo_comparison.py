@@ -1,5 +1,6 @@
-"""Comparing controllers: their exact average costs (:func:`average_cost`), and Monte Carlo
-with common random numbers, medians with exact bootstrap intervals (Table 3.2)."""
+"""Table 3.2's Monte Carlo comparison of controllers: the designs of its rows, simulated with
+common random numbers, and medians with exact bootstrap intervals. Exact average costs are in
+:mod:`asoc.mjls.costs`."""
 
 import time
 from dataclasses import dataclass
@@ -11,11 +12,12 @@ from ..stats import bootstrap_median_ci
 from ..validation import boolean, integer, real_scalar
 from .baselines import do_val_h2_state_feedback, time_variant_feedback
 from .examples import sec354_system
-from .observed import observed_mode_state_feedback
-from .dynamic import steady_state_cost
-from .simulate import DynamicOutputFeedback, ModeDependentGain, StaticGain, TimeVariantGain, as_controller, simulate
-from .static import static_cost, static_output_feedback
-from .system import check_system
+from .observed_mode_feedback import observed_mode_state_feedback
+from .monte_carlo import ModeDependentGain, StaticGain, TimeVariantGain, simulate
+from .static import static_output_feedback
+
+__all__ = ["TABLE_3_2_ROWS", "Design", "table_3_2_designs", "median_costs"]
+
 
 TABLE_3_2_ROWS = (
     ("state feedback", "time-invariant optimal with observed mode [38]"),
@@ -25,56 +27,6 @@ TABLE_3_2_ROWS = (
     ("output feedback", "time-variant with non-observed mode [163]"),
     ("output feedback", "proposed"),
 )
-
-
-def average_cost(sys, controller):
-    """The exact average cost (3.9) of a time-invariant controller without mode observation.
-
-    u = L y (:class:`StaticGain`): Prop. 3.7 with the measurement noise J
-    (:func:`asoc.mjls.static.static_cost`); the dynamic controller (3.37)
-    (:class:`DynamicOutputFeedback` with constant F, K, L): Prop. 3.24
-    (:func:`asoc.mjls.dynamic.steady_state_cost`). Its initial state does not enter the
-    average cost.
-
-    Parameters
-    ----------
-    sys : MJLS
-    controller : StaticGain, DynamicOutputFeedback, or a design result with ``.controller``
-
-    Returns
-    -------
-    float
-        inf when the closed loop is not certified mean-square stable.
-
-    Raises
-    ------
-    TypeError
-        If ``sys`` is not an MJLS, or ``controller`` is not one of these (a time-variant or
-        mode-observing controller has no average cost here; use
-        :func:`asoc.mjls.finite_horizon_cost` or :func:`simulate`).
-    ValueError
-        If the controller does not fit the system.
-
-    Examples
-    --------
-    The networked loop: a static gain against the exact dynamic design.
-
-    >>> from asoc.mjls import exact_dynamic_output_feedback, static_output_feedback
-    >>> from asoc.mjls.examples import networked_loop
-    >>> sys = networked_loop()
-    >>> round(average_cost(sys, static_output_feedback(sys)), 4), round(average_cost(sys, exact_dynamic_output_feedback(sys)), 4)
-    (0.1412, 0.1376)
-    """
-    check_system(sys)
-    controller = as_controller(controller)
-    controller.check(sys)
-    if isinstance(controller, StaticGain):
-        return static_cost(sys, controller.L)[0]
-    if isinstance(controller, DynamicOutputFeedback) and not controller.time_variant:
-        return steady_state_cost(sys, controller.F, controller.K, controller.L)[0]
-    raise TypeError(f"controller: expected a StaticGain or a time-invariant DynamicOutputFeedback, found "
-                    f"{type(controller).__name__}{' (time-variant)' if getattr(controller, 'time_variant', False) else ''}; "
-                    f"for a finite horizon use finite_horizon_cost or simulate")
 
 
 @dataclass

@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 
+__all__ = ["ScaledPair", "Cycle"]
+
 
 class ScaledPair:
     """The iterates of Alg. 3.1 in scaled variables, X^i = s_X Xs and P^i = s_P Ps, as one stack

@@ -1,4 +1,4 @@
-"""Second-moment operators of an MJLS on (M, n, n) stacks and the closed loops they act on
+"""The second-moment operator L of an MJLS on (M, n, n) stacks, its adjoint and its matrix
 (Cor. 3.2, Props. 3.7, 3.23).
 
 The mean-square behaviour of x_{k+1} = A_{theta_k} x_k (+ noise) is governed by the linear map
@@ -10,15 +10,16 @@ and by its adjoint (the costate or multiplier recursion of Prop. 3.16)
     L*(P)_i = A_i^T E_i(P) A_i,  E_i(P) = sum_j p_ij P_j.
 
 Applying either costs O(M n^3 + M^2 n^2); their Kronecker matrix (Cor. 3.2) costs
-O((M n^2)^2) memory and O((M n^2)^3) time to factorise. This module holds the maps and their
-matrix; :mod:`asoc.mjls.spectral` the spectral radius with its certified bracket and
-:mod:`asoc.mjls.lyapunov` the coupled Lyapunov solves built on them:
+O((M n^2)^2) memory and O((M n^2)^3) time to factorise. This module holds the maps, their
+matrix and the validation of an open loop (A, T); :mod:`asoc.mjls.stability` the spectral
+radius with its certified bracket and :mod:`asoc.mjls.lyapunov` the coupled Lyapunov solves
+built on them:
 
 - :func:`second_moment_map`, :func:`costate_map`: the maps on stacks;
 - :func:`ms_operator`: their matrix (row-major vec of the stack, one convention for the whole
   library), used for small systems;
-- :func:`closed_loop`, :func:`augmented_closed_loop`, :func:`noise_covariances`: the
-  closed-loop stacks of (3.10) and (3.39)-(3.40).
+- :func:`linear_operator`: the matrix-free map for ARPACK;
+- :func:`mode_stack`: the validated (A, T) of an MJLS or of a stack with its T.
 
 L is a positive map (it keeps the cone of positive semidefinite stacks), so rho(L) is an
 eigenvalue with a positive semidefinite eigenvector (Krein-Rutman; Costa, Fragoso and
@@ -28,28 +29,13 @@ ones. The iterative methods therefore work on symmetrised stacks.
 
 import numpy as np
 import scipy.sparse.linalg
-from threadpoolctl import ThreadpoolController
 
 from ..linalg import sym, transpose
 from ..validation import real_array, stochastic_matrix
-from .system import MJLS, check_system
+from .system import MJLS
 
-_THREADS = ThreadpoolController()
-
-
-def single_threaded():
-    """A context in which BLAS runs on one thread: the iterative methods work on n x n products
-    and vectors of length M n^2, where threads cost more than they gain (10x slower at n = 64,
-    M = 8 on a loaded 2-core machine).
-
-    Examples
-    --------
-    >>> from threadpoolctl import threadpool_info
-    >>> with single_threaded():
-    ...     print({lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"})
-    {1}
-    """
-    return _THREADS.limit(limits=1, user_api="blas")
+__all__ = ["mode_stack", "second_moment_map", "costate_map", "ms_operator", "kronecker_stack",
+           "linear_operator"]
 
 
 def mode_stack(A_stack, T, name="A_stack"):
@@ -202,140 +188,3 @@ def linear_operator(A, T, adjoint=False, shift=0.0, identity=0.0):
         return (identity * X - Y if identity else Y + shift * X).ravel()
 
     return scipy.sparse.linalg.LinearOperator((M * n * n, M * n * n), matvec=matvec, dtype=float)
-
-
-def closed_loop(sys, L, check=True):
-    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L.
-
-    Parameters
-    ----------
-    sys : MJLS
-    L : array_like, shape (nu, ny)
-        Static output-feedback gain u = L y (3.8); a scalar when nu = ny = 1.
-    check : bool
-        Validate ``sys`` and ``L`` (False: an MJLS and a float array with nu * ny entries, for the
-        inner loops of Alg. 3.1).
-
-    Returns
-    -------
-    numpy.ndarray, shape (M, nx, nx)
-
-    Raises
-    ------
-    TypeError
-        If ``sys`` is not an MJLS or ``L`` is not a real array.
-    ValueError
-        If ``L`` does not have shape (nu, ny) or is not finite.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec354_system
-    >>> closed_loop(sec354_system(1, "C=[1 0]"), [[-0.5]])[0].tolist()
-    [[1.2, 1.2], [-0.5, 1.0]]
-    """
-    if check:
-        check_system(sys)
-        L = gain_matrix(L, "L", sys.nu, sys.ny)
-    return sys.A + sys.B @ np.reshape(L, (sys.nu, sys.ny)) @ sys.C
-
-
-def gain_matrix(L, name, nu, ny):
-    """A finite real gain of shape (nu, ny); a scalar or a flat array is accepted when nu = ny = 1.
-
-    Examples
-    --------
-    >>> gain_matrix(-0.5, "L", 1, 1)
-    array([[-0.5]])
-    """
-    L = real_array(L, name)
-    if L.size == 1 and nu == ny == 1:
-        return L.reshape(1, 1)
-    if L.shape != (nu, ny):
-        raise ValueError(f"{name}: expected shape ({nu}, {ny}), found shape {L.shape}")
-    return L
-
-
-def noise_covariances(sys):
-    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny) of (3.36); J = None means noise-free outputs.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> HHt, JJt = noise_covariances(sys)
-    >>> HHt.shape, JJt.ravel().round(4)
-    ((2, 2, 2), array([0.01, 0.01]))
-    """
-    check_system(sys)
-    HHt = sys.H @ transpose(sys.H)
-    JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ transpose(sys.J)
-    return HHt, JJt
-
-
-def check_gains(sys, F, K, L):
-    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
-    Traceback (most recent call last):
-    ...
-    ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys), found shape (1, 3)
-    """
-    check_system(sys)
-    F = np.atleast_2d(real_array(F, "F"))
-    nc = F.shape[0]
-    F = real_array(F, "F", shape=(nc, nc))
-    K, L = np.atleast_2d(real_array(K, "K")), np.atleast_2d(real_array(L, "L"))
-    for name, g, shape in (("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
-        if g.shape != shape:
-            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny = {sys.ny} "
-                             f"from sys), found shape {g.shape}")
-    return F, K, L
-
-
-def augmented_closed_loop(sys, F, K, L):
-    """The augmented closed loop (3.39)-(3.40) and weight of Prop. 3.20 for x~ = [x; x^].
-
-    A~_i = [[A_i, B_i L], [K C_i, F]], H~_i H~_i^T = diag(H_i H_i^T, K J_i J_i^T K^T),
-    Q~_i = diag(Q_i, L^T R_i L).
-
-    Parameters
-    ----------
-    sys : MJLS
-    F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
-        Gains of the controller (3.37).
-
-    Returns
-    -------
-    At, HHt_cl, Qt : numpy.ndarray, each (M, nx + nc, nx + nc)
-
-    Raises
-    ------
-    ValueError
-        If a gain has the wrong shape or non-finite entries.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> At, Wt, Qt = augmented_closed_loop(sys, 0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))
-    >>> At.shape, At[0, 2:, :2].tolist()
-    ((2, 4, 4), [[1.0, 0.0], [1.0, 0.0]])
-    """
-    F, K, L = check_gains(sys, F, K, L)
-    M, nx, nc = sys.M, sys.nx, F.shape[0]
-    HHt, JJt = noise_covariances(sys)
-    At = np.zeros((M, nx + nc, nx + nc))
-    At[:, :nx, :nx] = sys.A
-    At[:, :nx, nx:] = sys.B @ L
-    At[:, nx:, :nx] = K @ sys.C
-    At[:, nx:, nx:] = F
-    HHt_cl = np.zeros_like(At)
-    HHt_cl[:, :nx, :nx] = HHt
-    HHt_cl[:, nx:, nx:] = K @ JJt @ K.T
-    Qt = np.zeros_like(At)
-    Qt[:, :nx, :nx] = sys.Q
-    Qt[:, nx:, nx:] = L.T @ sys.R @ L
-    return At, HHt_cl, Qt

@@ -5,6 +5,10 @@ import numpy as np
 
 from .. import validation as check
 
+__all__ = ["weights", "locations", "same_dimension", "mixture_set", "set_weights", "covariance",
+           "positive", "order", "distances", "widths", "limits", "gaussian_set",
+           "piecewise_constant"]
+
 
 def weights(w, m: int, name: str) -> np.ndarray:
     """Mixture weights of ``m`` components: ``None`` means equal weights.

@@ -16,6 +16,9 @@ from ..progress import progress_bar
 from ..validation import boolean, generator, integer, probability_vector, real_array, semidefinite
 from .system import check_system
 
+__all__ = ["Controller", "as_controller", "StaticGain", "ModeDependentGain", "TimeVariantGain",
+           "DynamicOutputFeedback", "SimulationResult", "GROUPED_MIN_NX", "simulate"]
+
 
 class Controller:
     """Protocol of a controller in :func:`simulate`.

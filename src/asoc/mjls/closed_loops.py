@@ -1,0 +1,154 @@
+"""The closed loops of an MJLS under a static gain (3.10) and a dynamic controller (3.39)-(3.40),
+with the checks of the gains and the noise covariances they need.
+
+- :func:`closed_loop`: A_i + B_i L C_i for u = L y;
+- :func:`augmented_closed_loop`: the augmented loop of Prop. 3.20 for (3.37);
+- :func:`noise_covariances`: H_i H_i^T and J_i J_i^T of (3.36);
+- :func:`gain_matrix`, :func:`check_gains`: validated gains.
+"""
+
+import numpy as np
+
+from ..linalg import transpose
+from ..validation import real_array
+from .system import check_system
+
+__all__ = ["closed_loop", "gain_matrix", "noise_covariances", "check_gains",
+           "augmented_closed_loop"]
+
+
+def closed_loop(sys, L, check=True):
+    """Closed-loop matrices A_i + B_i L C_i of (3.10) for a mode-independent gain L.
+
+    Parameters
+    ----------
+    sys : MJLS
+    L : array_like, shape (nu, ny)
+        Static output-feedback gain u = L y (3.8); a scalar when nu = ny = 1.
+    check : bool
+        Validate ``sys`` and ``L`` (False: an MJLS and a float array with nu * ny entries, for the
+        inner loops of Alg. 3.1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (M, nx, nx)
+
+    Raises
+    ------
+    TypeError
+        If ``sys`` is not an MJLS or ``L`` is not a real array.
+    ValueError
+        If ``L`` does not have shape (nu, ny) or is not finite.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> closed_loop(sec354_system(1, "C=[1 0]"), [[-0.5]])[0].tolist()
+    [[1.2, 1.2], [-0.5, 1.0]]
+    """
+    if check:
+        check_system(sys)
+        L = gain_matrix(L, "L", sys.nu, sys.ny)
+    return sys.A + sys.B @ np.reshape(L, (sys.nu, sys.ny)) @ sys.C
+
+
+def gain_matrix(L, name, nu, ny):
+    """A finite real gain of shape (nu, ny); a scalar or a flat array is accepted when nu = ny = 1.
+
+    Examples
+    --------
+    >>> gain_matrix(-0.5, "L", 1, 1)
+    array([[-0.5]])
+    """
+    L = real_array(L, name)
+    if L.size == 1 and nu == ny == 1:
+        return L.reshape(1, 1)
+    if L.shape != (nu, ny):
+        raise ValueError(f"{name}: expected shape ({nu}, {ny}), found shape {L.shape}")
+    return L
+
+
+def noise_covariances(sys):
+    """H_i H_i^T (M, nx, nx) and J_i J_i^T (M, ny, ny) of (3.36); J = None means noise-free outputs.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> HHt, JJt = noise_covariances(sys)
+    >>> HHt.shape, JJt.ravel().round(4)
+    ((2, 2, 2), array([0.01, 0.01]))
+    """
+    check_system(sys)
+    HHt = sys.H @ transpose(sys.H)
+    JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ transpose(sys.J)
+    return HHt, JJt
+
+
+def check_gains(sys, F, K, L):
+    """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
+    Traceback (most recent call last):
+    ...
+    ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys), found shape (1, 3)
+    """
+    check_system(sys)
+    F = np.atleast_2d(real_array(F, "F"))
+    nc = F.shape[0]
+    F = real_array(F, "F", shape=(nc, nc))
+    K, L = np.atleast_2d(real_array(K, "K")), np.atleast_2d(real_array(L, "L"))
+    for name, g, shape in (("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
+        if g.shape != shape:
+            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny = {sys.ny} "
+                             f"from sys), found shape {g.shape}")
+    return F, K, L
+
+
+def augmented_closed_loop(sys, F, K, L):
+    """The augmented closed loop (3.39)-(3.40) and weight of Prop. 3.20 for x~ = [x; x^].
+
+    A~_i = [[A_i, B_i L], [K C_i, F]], H~_i H~_i^T = diag(H_i H_i^T, K J_i J_i^T K^T),
+    Q~_i = diag(Q_i, L^T R_i L).
+
+    Parameters
+    ----------
+    sys : MJLS
+    F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
+        Gains of the controller (3.37).
+
+    Returns
+    -------
+    At, HHt_cl, Qt : numpy.ndarray, each (M, nx + nc, nx + nc)
+
+    Raises
+    ------
+    ValueError
+        If a gain has the wrong shape or non-finite entries.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec373_system
+    >>> sys = sec373_system(1)
+    >>> At, Wt, Qt = augmented_closed_loop(sys, 0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))
+    >>> At.shape, At[0, 2:, :2].tolist()
+    ((2, 4, 4), [[1.0, 0.0], [1.0, 0.0]])
+    """
+    F, K, L = check_gains(sys, F, K, L)
+    M, nx, nc = sys.M, sys.nx, F.shape[0]
+    HHt, JJt = noise_covariances(sys)
+    At = np.zeros((M, nx + nc, nx + nc))
+    At[:, :nx, :nx] = sys.A
+    At[:, :nx, nx:] = sys.B @ L
+    At[:, nx:, :nx] = K @ sys.C
+    At[:, nx:, nx:] = F
+    HHt_cl = np.zeros_like(At)
+    HHt_cl[:, :nx, :nx] = HHt
+    HHt_cl[:, nx:, nx:] = K @ JJt @ K.T
+    Qt = np.zeros_like(At)
+    Qt[:, :nx, :nx] = sys.Q
+    Qt[:, nx:, nx:] = L.T @ sys.R @ L
+    return At, HHt_cl, Qt
