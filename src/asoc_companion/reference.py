@@ -10,9 +10,13 @@ Each notebook has its own file (so work on one section does not touch another's)
 ``thesis``   the printed value (number, list, or the claim's text); null for ``measured``;
 ``tol``      absolute tolerance (deterministic; rounding of Monte Carlo values);
 ``ci_rtol``  relative tolerance of a ``ci``-fidelity run against our own ``full`` value;
-``expect``   ``reproduced``, ``deviates`` or ``new``: the status the ledger must show, so a
-             change in status is a test failure, not a silent edit;
-``note``     the reason for a deviation, the reading chosen, what was tried.
+``expect``   ``reproduced``, ``deviates``, ``not-resolved`` (a statistical claim whose interval
+             does not decide it) or ``new``: the status the ledger must show, so a change in
+             status is a test failure, not a silent edit;
+``note``     the reason for a deviation, the reading chosen, what was tried;
+``evidence`` on a deviating row, whose fault the deviation is (:mod:`asoc_companion.evidence`):
+             ``kind`` ``thesis-error`` (with ``certificate`` and ``section``), ``unspecified``
+             (with ``readings`` and ``closest``) or ``open`` (with ``tried``).
 
 Tolerances follow from the accuracy of the quantity, never from one machine's agreement
 (another CPU's BLAS kernels move the last digits; the architecture page, "Portability"). The YAML
@@ -42,6 +46,7 @@ import numpy as np
 import yaml
 
 from . import paths
+from .evidence import is_statistic, statistic_status
 
 __all__ = ["SAFE_LOADER", "KINDS", "EXPECT", "Entry", "load_reference", "status", "Z_MONTE_CARLO",
            "monte_carlo_rtol", "agrees_with_full"]
@@ -50,7 +55,7 @@ __all__ = ["SAFE_LOADER", "KINDS", "EXPECT", "Entry", "load_reference", "status"
 # libyaml's safe loader when PyYAML has it (the same documents, ten times faster), else PyYAML's own
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 KINDS = ("deterministic", "monte_carlo", "claim", "measured")
-EXPECT = ("reproduced", "deviates", "new")
+EXPECT = ("reproduced", "deviates", "not-resolved", "new")
 
 
 @dataclass(frozen=True)
@@ -72,6 +77,7 @@ class Entry:
     ci_rtol: float | None = None
     expect: str = "reproduced"
     note: str = ""
+    evidence: dict | None = None
 
     @property
     def notebook(self) -> str:
@@ -184,6 +190,8 @@ def status(entry: Entry, ours) -> str:
     if entry.kind == "measured":
         return "new"
     if entry.kind == "claim":
+        if is_statistic(ours):
+            return statistic_status(ours)
         return "reproduced" if ours["holds"] else "deviates"
     if entry.kind == "deterministic":
         return "reproduced" if _max_abs_diff(ours, entry.thesis) <= entry.tol else "deviates"
@@ -245,7 +253,8 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
     if entry.kind == "claim":
         if entry.ci_rtol is None:
             return True, "claim checked at full fidelity only"
-        return ours_ci["holds"] == ours_full["holds"], f"holds: ci {ours_ci['holds']}, full {ours_full['holds']}"
+        verdicts = [r["verdict"] if is_statistic(r) else r["holds"] for r in (ours_ci, ours_full)]
+        return verdicts[0] == verdicts[1], f"verdict: ci {verdicts[0]}, full {verdicts[1]}"
     a, b = _estimate(ours_ci), _estimate(ours_full)
     if entry.ci_rtol is None:
         return True, "compared at full fidelity only"

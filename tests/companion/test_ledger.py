@@ -121,3 +121,66 @@ def test_caption_follows_the_ledger_status():
     assert "{bdg-warning}`shows it in part`" in part and "1 of 2" in part
     with pytest.raises(ValueError, match="number"):
         caption_markdown("1.1", claims, reference, {})
+
+
+# --- evidence on every deviating row, statistical claims (issue 30) ------------------------------
+
+from asoc_companion.evidence import EVIDENCE_NEEDS, evidence_problems
+
+
+@pytest.mark.parametrize("key", sorted(k for k, e in REFERENCE.items() if e.expect == "deviates"))
+def test_every_deviating_row_has_complete_evidence(key):
+    """Every `expect: deviates` row of every reference file (Secs. 2.5/2.6 included) names whose
+    fault the deviation is, with the entries its kind needs."""
+    assert not evidence_problems(REFERENCE[key]), evidence_problems(REFERENCE[key])
+
+
+def test_the_evidence_check_catches_each_missing_entry():
+    base = dict(key="demo.x", where="p. 1", kind="measured", expect="deviates")
+    assert evidence_problems(Entry(**base)) == ["demo.x: a deviating row needs evidence (a mapping with kind)"]
+    assert "kind must be one of" in evidence_problems(Entry(**base, evidence={"kind": "typo"}))[0]
+    for kind, needs in EVIDENCE_NEEDS.items():
+        complete = {"kind": kind, **{field: ["a reading"] for field in needs}}
+        assert evidence_problems(Entry(**base, evidence=complete)) == []
+        for field in needs:
+            partial = {k: v for k, v in complete.items() if k != field}
+            assert evidence_problems(Entry(**base, evidence=partial)) == [
+                f"demo.x: evidence of kind {kind} needs {field}"]
+
+
+def test_thesis_error_sections_link_to_a_page_of_the_book():
+    pages = set(notebooks())
+    for key, entry in REFERENCE.items():
+        if entry.evidence and entry.evidence.get("kind") == "thesis-error":
+            assert entry.evidence["section"].partition("#")[0] in pages, key
+
+
+def test_the_ledger_shows_the_evidence_kind_beside_deviates_and_totals_by_kind():
+    evidence = {"kind": "thesis-error", "certificate": "bound {{s.bound:.1f}} above the printed value",
+                "section": "findings#finding-demo"}
+    reference = {"s.a": Entry(key="s.a", where="p. 1", kind="deterministic", thesis=1.0, tol=0.01,
+                              expect="deviates", evidence=evidence),
+                 "s.b": Entry(key="s.b", where="p. 2", kind="deterministic", thesis=1.0, tol=0.01,
+                              expect="deviates", evidence={"kind": "open", "tried": "two readings"})}
+    values = {"s.a": 2.0, "s.b": 3.0, "s.bound": 41.25}
+    page = ledger_markdown(reference, values)
+    assert "{bdg-warning}`deviates` {bdg-danger-line}`thesis error`" in page
+    assert "{bdg-warning}`deviates` {bdg-secondary-line}`open`" in page
+    assert "bound 41.2 above the printed value" in page and 'href="findings.html#finding-demo"' in page
+    assert "{bdg-danger-line}`1 thesis error` {bdg-secondary-line}`1 open`" in page
+
+
+def test_a_statistical_claim_shows_n_interval_and_test_and_counts_apart_from_deviates():
+    record = {"verdict": "not resolved", "n": 30, "estimate": 0.012, "ci_low": -0.02, "ci_high": 0.04,
+              "test": "paired sign test"}
+    entry = Entry(key="s.claim", where="p. 3", kind="claim", thesis="A is better", expect="not-resolved")
+    assert status(entry, record) == "not-resolved"
+    assert status(entry, {**record, "verdict": "holds"}) == "reproduced"
+    assert status(entry, {**record, "verdict": "fails"}) == "deviates"
+    [row] = ledger_rows({entry.key: entry}, {entry.key: record})
+    assert row["status"] == "not-resolved" and row["tolerance"] == "[-0.02, 0.04]"
+    assert "n = 30" in row["note"] and "paired sign test" in row["note"]
+    page = ledger_markdown({entry.key: entry}, {entry.key: record})
+    assert "{bdg-info}`1 not resolved`" in page and "deviates`" not in page
+    with pytest.raises(ValueError, match="verdict"):
+        status(entry, {**record, "verdict": "maybe"})
