@@ -90,6 +90,9 @@ def _ledger(fidelity):
     _write_if_changed(path, ledger_markdown(values=values),
                       "" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)")
     intro = project.book / "intro.md"
+    if fidelity == "full":
+        from .mutants import write_ledger_mutants
+        write_ledger_mutants()                      # which claim checks catch their planted variant
     if fidelity == "full" and intro.exists():
         _write_if_changed(intro, intro_markdown(intro.read_text(), ledger_rows(values=values)), " (summary)")
 

@@ -184,3 +184,28 @@ def test_a_statistical_claim_shows_n_interval_and_test_and_counts_apart_from_dev
     assert "{bdg-info}`1 not resolved`" in page and "deviates`" not in page
     with pytest.raises(ValueError, match="verdict"):
         status(entry, {**record, "verdict": "maybe"})
+
+
+# --- every ledger check can fail (issue 30, item 2) -----------------------------------------------
+
+from asoc_companion.mutants import NOT_PLANTED, ledger_mutants, mutants_path
+
+MUTANTS = ledger_mutants(REFERENCE)
+
+
+def test_ledger_mutants_cover_every_claim_and_the_committed_file_is_current():
+    claims = {k for k, e in REFERENCE.items() if e.kind == "claim"}
+    assert set(MUTANTS) == claims
+    assert json.loads(mutants_path().read_text())["values"] == MUTANTS, \
+        "figures/values/ledger_mutants.json is stale: run `python -m asoc_companion ledger`"
+
+
+@pytest.mark.parametrize("key", sorted(k for k, m in MUTANTS.items() if m["description"] != NOT_PLANTED))
+def test_each_planted_variant_is_caught(key):
+    assert MUTANTS[key]["caught"], f"{key}: the check does not catch {MUTANTS[key]['description']}"
+
+
+def test_the_claims_of_secs_3_4_to_3_7_all_have_a_planted_variant():
+    mine = [k for k in MUTANTS if k.split(".")[0] in ("sec3_4", "sec3_5", "sec3_6", "findings")]
+    assert mine and all(MUTANTS[k]["description"] != NOT_PLANTED for k in mine), \
+        [k for k in mine if MUTANTS[k]["description"] == NOT_PLANTED]
