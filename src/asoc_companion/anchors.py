@@ -6,6 +6,7 @@ import re
 
 from docutils.nodes import make_id
 
+
 def heading_anchor(heading: str) -> str:
     """The HTML id Sphinx gives a Markdown heading (docutils ``make_id`` of its text).
 
@@ -25,7 +26,9 @@ def _records(source: str, name: str) -> bool:
     for pattern in re.findall(r'record\(\s*f"([^"]+)"', source):
         if re.fullmatch(re.sub(r"\\\{[^}]*\\\}", ".+", re.escape(pattern)), name):
             return True
-    return any(name.startswith(prefix) for prefix in re.findall(r'record\(\s*"([^"]+_)"\s*\+', source))
+    return any(
+        name.startswith(prefix) for prefix in re.findall(r'record\(\s*"([^"]+_)"\s*\+', source)
+    )
 
 
 def section_links(notebook_path, names) -> dict:

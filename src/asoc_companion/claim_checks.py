@@ -1,4 +1,4 @@
-"""The qualitative claims of Secs. 3.4-3.7 as predicates, each with a planted false variant (issue 30).
+"""The qualitative claims of Secs. 3.4-3.7 as predicates with planted false variants (issue 30).
 
 The notebooks decide a claim by calling the predicate here; :func:`ledger_mutants` feeds each
 predicate its planted false variant (a controller that does not settle, a quadratic cost, a
@@ -28,7 +28,7 @@ from asoc.mjls.intractability import hessian_min_eigenvalue, quadratic_fit_resid
 from asoc.stats import settling_iteration
 
 BANDS = (0.01, 0.02, 0.05, 0.1)
-ROUNDING = 2.5                         # half the spacing of the round counts (multiples of five)
+ROUNDING = 2.5  # half the spacing of the round counts (multiples of five)
 
 
 def settles_about(traces, about):
@@ -47,8 +47,12 @@ def settles_about(traces, about):
     """
     by_band = {band: settling_iteration(traces, band) for band in BANDS}
     low, high = about - ROUNDING, about + ROUNDING
-    return {"holds": any(low <= n <= high for n in by_band.values()), "value": by_band[0.02],
-            "by_band": [by_band[b] for b in BANDS], "window": [low, high]}
+    return {
+        "holds": any(low <= n <= high for n in by_band.values()),
+        "value": by_band[0.02],
+        "by_band": [by_band[b] for b in BANDS],
+        "window": [low, high],
+    }
 
 
 def not_quadratic(X, U, costs, costs_other_quadrature):
@@ -69,7 +73,7 @@ def not_quadratic(X, U, costs, costs_other_quadrature):
     basis = np.stack([np.ones_like(x), x, u, x * x, x * u, u * u], axis=1)
     fitted = (basis @ np.linalg.lstsq(basis, costs.ravel(), rcond=None)[0]).reshape(X.shape)
     rounding = quadratic_fit_residual(X, U, fitted)
-    quadrature = float(np.sqrt(np.mean((costs - costs_other_quadrature) ** 2) / np.mean(costs ** 2)))
+    quadrature = float(np.sqrt(np.mean((costs - costs_other_quadrature) ** 2) / np.mean(costs**2)))
     threshold = 10 * max(rounding, quadrature, np.finfo(float).eps)
     return {"holds": bool(residual > threshold), "value": residual, "threshold": threshold}
 
@@ -81,7 +85,8 @@ def not_convex(J, X, U):
     Examples
     --------
     >>> X, U = np.meshgrid(np.linspace(-1, 1, 11), np.linspace(-1, 1, 11), indexing="ij")
-    >>> not_convex(lambda x, u: x ** 2 - u ** 2, X, U)["holds"], not_convex(lambda x, u: x ** 2 + u ** 2, X, U)["holds"]
+    >>> saddle, bowl = (lambda x, u: x**2 - u**2), (lambda x, u: x**2 + u**2)
+    >>> not_convex(saddle, X, U)["holds"], not_convex(bowl, X, U)["holds"]
     (True, False)
     """
     lam, where = hessian_min_eigenvalue(J, X, U)
@@ -89,7 +94,7 @@ def not_convex(J, X, U):
 
 
 def converged_not_stabilizing(result):
-    """Whether Alg. 3.1 converged to a gain that does not stabilise (``StaticOutputFeedbackResult``)."""
+    """Whether Alg. 3.1 converged to a gain that does not stabilise (its result object)."""
     return {"holds": bool(result.converged and not result.stabilizing), "value": result.rho}
 
 
@@ -121,8 +126,10 @@ def bounded(costs, bounds, rtol=1e-7):
 def lmi_separates(infeasible_case, feasible_case):
     """Whether the LMI check separates: infeasible for the printed outputs and feasible for a
     case where it must be (state feedback, C = I). Arguments: ``LMIResult`` objects."""
-    return {"holds": bool(not infeasible_case.feasible and feasible_case.feasible),
-            "value": f"{infeasible_case.solver_status}; state feedback: {feasible_case.solver_status}"}
+    return {
+        "holds": bool(not infeasible_case.feasible and feasible_case.feasible),
+        "value": f"{infeasible_case.solver_status}; state feedback: {feasible_case.solver_status}",
+    }
 
 
 def ordered(lower, upper):
@@ -156,9 +163,11 @@ def almost_equal_then_slightly_worse(steady, transient, printed_steady, printed_
     The printed Table 3.2 satisfies its own claim; swapping the two controllers does not:
 
     >>> rec = lambda v: {"value": v, "ci": [v, v]}
-    >>> steady, transient = [(1.5623, 1.5611), (1.0539, 1.0351)], [(28.3532, 26.5108), (30.7562, 30.606)]
+    >>> steady = [(1.5623, 1.5611), (1.0539, 1.0351)]
+    >>> transient = [(28.3532, 26.5108), (30.7562, 30.606)]
     >>> as_records = lambda pairs: [(rec(a), rec(b)) for a, b in pairs]
-    >>> almost_equal_then_slightly_worse(as_records(steady), as_records(transient), steady, transient)["holds"]
+    >>> records = as_records(steady), as_records(transient)
+    >>> almost_equal_then_slightly_worse(*records, steady, transient)["holds"]
     True
     >>> swapped = lambda pairs: [(b, a) for a, b in pairs]
     >>> almost_equal_then_slightly_worse(as_records(steady), as_records(swapped(transient)), steady,
@@ -169,12 +178,27 @@ def almost_equal_then_slightly_worse(steady, transient, printed_steady, printed_
     slightly = max(a / b - 1 for a, b in printed_transient)
     steady_ratios = [_ratio_interval(p, r) for p, r in steady]
     transient_ratios = [_ratio_interval(p, r) for p, r in transient]
-    holds = (all(1 - almost <= lo and hi <= 1 + almost for lo, hi in steady_ratios)
-             and all(lo > 1 and hi <= 1 + slightly for lo, hi in transient_ratios))
-    return {"holds": bool(holds), "value": [[float(p["value"] / r["value"]) for p, r in pairs]
-                                            for pairs in (steady, transient)],
-            "almost_equal": almost, "slightly_worse": slightly}
+    holds = all(1 - almost <= lo and hi <= 1 + almost for lo, hi in steady_ratios) and all(
+        lo > 1 and hi <= 1 + slightly for lo, hi in transient_ratios
+    )
+    return {
+        "holds": bool(holds),
+        "value": [
+            [float(p["value"] / r["value"]) for p, r in pairs] for pairs in (steady, transient)
+        ],
+        "almost_equal": almost,
+        "slightly_worse": slightly,
+    }
 
 
-__all__ = ["settles_about", "not_quadratic", "not_convex", "converged_not_stabilizing", "non_increasing",
-           "bounded", "lmi_separates", "ordered", "almost_equal_then_slightly_worse"]
+__all__ = [
+    "settles_about",
+    "not_quadratic",
+    "not_convex",
+    "converged_not_stabilizing",
+    "non_increasing",
+    "bounded",
+    "lmi_separates",
+    "ordered",
+    "almost_equal_then_slightly_worse",
+]

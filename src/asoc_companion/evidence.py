@@ -15,12 +15,16 @@ mapping ``{verdict, n, estimate, ci_low, ci_high, test}``; its verdict ``holds``
 ``not resolved`` gives the ledger status ``reproduced``, ``deviates`` or ``not-resolved``.
 """
 
-from .prose import fill
-
-EVIDENCE_NEEDS = {"thesis-error": ("certificate", "section"), "unspecified": ("readings", "closest"),
-                  "open": ("tried",)}
-EVIDENCE_BADGE = {"thesis-error": ("danger", "thesis error"), "unspecified": ("primary", "unspecified"),
-                  "open": ("secondary", "open")}
+EVIDENCE_NEEDS = {
+    "thesis-error": ("certificate", "section"),
+    "unspecified": ("readings", "closest"),
+    "open": ("tried",),
+}
+EVIDENCE_BADGE = {
+    "thesis-error": ("danger", "thesis error"),
+    "unspecified": ("primary", "unspecified"),
+    "open": ("secondary", "open"),
+}
 STATISTIC_FIELDS = ("verdict", "n", "estimate", "ci_low", "ci_high", "test")
 VERDICT_STATUS = {"holds": "reproduced", "fails": "deviates", "not resolved": "not-resolved"}
 
@@ -54,10 +58,19 @@ def evidence_problems(entry) -> list:
         return [f"{entry.key}: a deviating row needs evidence (a mapping with kind)"]
     kind = evidence.get("kind")
     if kind not in EVIDENCE_NEEDS:
-        return [f"{entry.key}: evidence kind must be one of {tuple(EVIDENCE_NEEDS)}, found {kind!r}"]
-    problems = [f"{entry.key}: evidence of kind {kind} needs {field}"
-                for field in EVIDENCE_NEEDS[kind] if not evidence.get(field)]
-    if kind == "unspecified" and evidence.get("readings") and not isinstance(evidence["readings"], list):
+        return [
+            f"{entry.key}: evidence kind must be one of {tuple(EVIDENCE_NEEDS)}, found {kind!r}"
+        ]
+    problems = [
+        f"{entry.key}: evidence of kind {kind} needs {field}"
+        for field in EVIDENCE_NEEDS[kind]
+        if not evidence.get(field)
+    ]
+    if (
+        kind == "unspecified"
+        and evidence.get("readings")
+        and not isinstance(evidence["readings"], list)
+    ):
         problems.append(f"{entry.key}: evidence readings must be a list")
     return problems
 
@@ -83,18 +96,23 @@ def section_link(section: str) -> str:
     '<a href="findings.html#finding-table32">findings, finding-table32</a>'
     """
     page, _, anchor = section.partition("#")
-    return f'<a href="{page}.html{"#" + anchor if anchor else ""}">{page}{", " + anchor if anchor else ""}</a>'
+    if not anchor:
+        return f'<a href="{page}.html">{page}</a>'
+    return f'<a href="{page}.html#{anchor}">{page}, {anchor}</a>'
 
 
-def evidence_text(evidence, values) -> str:
-    """The evidence as a sentence for the row's note, placeholders filled from ``values``.
+def evidence_text(evidence) -> str:
+    """The evidence as a sentence for the row's note (its ``{{key}}`` placeholders left for
+    :func:`asoc_companion.prose.fill`).
 
     Examples
     --------
-    >>> evidence_text({"kind": "thesis-error", "certificate": "bound {{demo.b:.1f}} > printed.",
-    ...                "section": "findings#finding-demo"}, {"demo.b": 41.25})
-    '*Evidence, thesis error:* bound 41.2 > printed. Computed in <a href="findings.html#finding-demo">findings, finding-demo</a>.'
-    >>> evidence_text({"kind": "unspecified", "readings": ["a", "b"], "closest": "b"}, {})
+    >>> evidence = {"kind": "thesis-error", "certificate": "bound {{demo.b:.1f}} > printed.",
+    ...             "section": "findings#finding-demo"}
+    >>> print(evidence_text(evidence))  # doctest: +NORMALIZE_WHITESPACE
+    *Evidence, thesis error:* bound {{demo.b:.1f}} > printed.
+    Computed in <a href="findings.html#finding-demo">findings, finding-demo</a>.
+    >>> evidence_text({"kind": "unspecified", "readings": ["a", "b"], "closest": "b"})
     '*Evidence, unspecified:* readings tried: a; b. Closest: b.'
     """
     if not evidence:
@@ -102,13 +120,15 @@ def evidence_text(evidence, values) -> str:
     kind = evidence["kind"]
     head = f"*Evidence, {EVIDENCE_BADGE[kind][1]}:*"
     if kind == "thesis-error":
-        body = f"{_sentence(evidence['certificate'])} Computed in {section_link(evidence['section'])}."
+        body = (
+            f"{_sentence(evidence['certificate'])} Computed in {section_link(evidence['section'])}."
+        )
     elif kind == "unspecified":
         readings = "; ".join(str(r).rstrip(".") for r in evidence["readings"])
         body = f"readings tried: {readings}. Closest: {_sentence(evidence['closest'])}"
     else:
         body = _sentence(evidence["tried"])
-    return fill(f"{head} {body}", values)
+    return f"{head} {body}"
 
 
 def _sentence(text) -> str:
@@ -135,7 +155,9 @@ def statistic_status(value) -> str:
         raise ValueError(f"a statistical record needs {STATISTIC_FIELDS}; missing {missing}")
     verdict = str(value["verdict"]).replace("-", " ").replace("_", " ")
     if verdict not in VERDICT_STATUS:
-        raise ValueError(f"verdict must be one of {tuple(VERDICT_STATUS)}, found {value['verdict']!r}")
+        raise ValueError(
+            f"verdict must be one of {tuple(VERDICT_STATUS)}, found {value['verdict']!r}"
+        )
     return VERDICT_STATUS[verdict]
 
 
@@ -157,10 +179,14 @@ def statistic_text(value) -> str:
     --------
     >>> statistic_text({"verdict": "not resolved", "n": 30, "estimate": 0.0123, "ci_low": -0.02,
     ...                 "ci_high": 0.041, "test": "paired sign test"})
-    '*Statistics:* n = 30, estimate 0.0123, 95 % interval [-0.02, 0.041], paired sign test: not resolved.'
+    ... # doctest: +NORMALIZE_WHITESPACE
+    '*Statistics:* n = 30, estimate 0.0123, 95 % interval [-0.02, 0.041], paired sign test:
+    not resolved.'
     """
-    return (f"*Statistics:* n = {value['n']}, estimate {value['estimate']:.3g}, 95 % interval "
-            f"[{value['ci_low']:.3g}, {value['ci_high']:.3g}], {value['test']}: {value['verdict']}.")
+    return (
+        f"*Statistics:* n = {value['n']}, estimate {value['estimate']:.3g}, 95 % interval "
+        f"[{value['ci_low']:.3g}, {value['ci_high']:.3g}], {value['test']}: {value['verdict']}."
+    )
 
 
 def evidence_counts(rows) -> dict:
@@ -168,7 +194,8 @@ def evidence_counts(rows) -> dict:
 
     Examples
     --------
-    >>> evidence_counts([{"status": "deviates", "evidence": "open"}, {"status": "reproduced", "evidence": ""},
+    >>> evidence_counts([{"status": "deviates", "evidence": "open"},
+    ...                  {"status": "reproduced", "evidence": ""},
     ...                  {"status": "deviates", "evidence": "open"}])
     {'open': 2}
     """
@@ -188,8 +215,20 @@ def evidence_badges(rows) -> str:
     '{bdg-danger-line}`1 thesis error`'
     """
     c = evidence_counts(rows)
-    return " ".join(evidence_badge(k, f"{c[k]} {EVIDENCE_BADGE[k][1]}") for k in EVIDENCE_NEEDS if c.get(k))
+    return " ".join(
+        evidence_badge(k, f"{c[k]} {EVIDENCE_BADGE[k][1]}") for k in EVIDENCE_NEEDS if c.get(k)
+    )
 
 
-__all__ = ["EVIDENCE_NEEDS", "evidence_problems", "evidence_badge", "evidence_text", "section_link",
-           "statistic_status", "statistic_text", "is_statistic", "evidence_counts", "evidence_badges"]
+__all__ = [
+    "EVIDENCE_NEEDS",
+    "evidence_problems",
+    "evidence_badge",
+    "evidence_text",
+    "section_link",
+    "statistic_status",
+    "statistic_text",
+    "is_statistic",
+    "evidence_counts",
+    "evidence_badges",
+]

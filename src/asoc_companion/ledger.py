@@ -133,7 +133,7 @@ def ledger_rows(reference=None, values=None):
         places = None if decimals(entry) is None else decimals(entry) + 2
         note = " ".join(t for t in (statistic_text(ours_value) if is_statistic(ours_value) else "",
                                     fill(" ".join(entry.note.split()), values),
-                                    evidence_text(entry.evidence, values)) if t)
+                                    fill(evidence_text(entry.evidence), values)) if t)
         if st != entry.expect and st != "missing":
             note = f"(status changed from expected '{entry.expect}') " + note
         ours = _fmt(ours_value, places)

@@ -17,7 +17,8 @@ from . import paths
 from .io import atomic_write_text
 from .reference import load_reference
 
-NOT_PLANTED = "no planted variant: the notebook does not decide this claim through a predicate of claim_checks"
+NOT_PLANTED = ("no planted variant: the notebook does not decide this claim through a predicate "
+               "of claim_checks")
 
 
 def _slow_traces():
@@ -26,14 +27,17 @@ def _slow_traces():
 
 def _quadratic_grid():
     X, U = np.meshgrid(np.linspace(-5, 5, 101), np.linspace(-5, 5, 101), indexing="ij")
-    quadratic = 3 + 0.5 * X ** 2 + 0.2 * X * U + 1.3 * U ** 2
+    quadratic = 3 + 0.5 * X**2 + 0.2 * X * U + 1.3 * U**2
     return X, U, quadratic, quadratic * (1 + 1e-12)
 
 
 def _lmi_cases():
     from asoc.mjls.examples import sec354_system
     from asoc.mjls.lmi import static_output_lmi
-    return static_output_lmi(sec354_system(1, "state")), static_output_lmi(sec354_system(1, "C=[1 0]"))
+
+    return static_output_lmi(sec354_system(1, "state")), static_output_lmi(
+        sec354_system(1, "C=[1 0]")
+    )
 
 
 def _separation_variant():
@@ -49,50 +53,77 @@ def _feasible_variant():
 def _stabilising_variant():
     from asoc.mjls import static_output_feedback
     from asoc.mjls.examples import sec354_system
-    return checks.converged_not_stabilizing(static_output_feedback(sec354_system(1, "C1=[1 2], C2=[2 1]"),
-                                                                   moments="step"))
+
+    return checks.converged_not_stabilizing(
+        static_output_feedback(sec354_system(1, "C1=[1 2], C2=[2 1]"), moments="step")
+    )
 
 
 def _swapped_163():
-    rec = lambda v: {"value": v, "ci": [v, v]}                     # noqa: E731 (one-line record)
+    rec = lambda v: {"value": v, "ci": [v, v]}  # noqa: E731 (one-line record)
     steady, transient = [(1.0, 1.0), (1.0, 1.0)], [(1.05, 1.0), (1.05, 1.0)]
     as_records = lambda pairs: [(rec(a), rec(b)) for a, b in pairs]  # noqa: E731
-    return checks.almost_equal_then_slightly_worse(as_records(steady), as_records([(b, a) for a, b in transient]),
-                                                   steady, transient)
+    return checks.almost_equal_then_slightly_worse(
+        as_records(steady), as_records([(b, a) for a, b in transient]), steady, transient
+    )
 
 
 def _variants():
     """``{claim key: (description, callable returning the check's record on the variant)}``."""
-    slow = ("traces contracting at rates 0.97 and 0.95, which settle after 75-150 iterations",
-            lambda about: checks.settles_about(_slow_traces(), about))
-    reversed_order = ("the two controllers' medians swapped (a reversed ordering)",
-                      lambda: checks.ordered([2.0, 3.0], [1.0, 2.5]))
+    slow = (
+        "traces contracting at rates 0.97 and 0.95, which settle after 75-150 iterations",
+        lambda about: checks.settles_about(_slow_traces(), about),
+    )
+    reversed_order = (
+        "the two controllers' medians swapped (a reversed ordering)",
+        lambda: checks.ordered([2.0, 3.0], [1.0, 2.5]),
+    )
     out = {
-        "sec3_4.not_quadratic": ("an exactly quadratic cost on the grid of Fig. 3.3, with a 1e-12 "
-                                 "quadrature difference", lambda: checks.not_quadratic(*_quadratic_grid())),
-        "sec3_4.not_convex": ("a convex quadratic cost on the grid of Fig. 3.3",
-                              lambda: checks.not_convex(lambda x, u: x ** 2 + x * u + u ** 2, *_quadratic_grid()[:2])),
+        "sec3_4.not_quadratic": (
+            "an exactly quadratic cost on the grid of Fig. 3.3, with a 1e-12 quadrature difference",
+            lambda: checks.not_quadratic(*_quadratic_grid()),
+        ),
+        "sec3_4.not_convex": (
+            "a convex quadratic cost on the grid of Fig. 3.3",
+            lambda: checks.not_convex(lambda x, u: x**2 + x * u + u**2, *_quadratic_grid()[:2]),
+        ),
         "sec3_5.fig3_4_settling_iterations": (slow[0], lambda: slow[1](15)),
         "sec3_6.alg32_settles_in_about_15_iterations": (slow[0], lambda: slow[1](15)),
         "sec3_6.alg33_converges_in_about_5_iterations": (slow[0], lambda: slow[1](5)),
-        "sec3_6.alg33_bound_non_increasing": ("a bound sequence that rises by 1e-6 once",
-                                              lambda: checks.non_increasing([3.0, 2.0, 2.000002, 1.5])),
-        "sec3_6.bound_prop326_holds": ("the closed-form counterexample of findings: exact cost 2, 'bound' 1.75",
-                                       lambda: checks.bounded([2.0], [1.75])),
+        "sec3_6.alg33_bound_non_increasing": (
+            "a bound sequence that rises by 1e-6 once",
+            lambda: checks.non_increasing([3.0, 2.0, 2.000002, 1.5]),
+        ),
+        "sec3_6.bound_prop326_holds": (
+            "the closed-form counterexample of findings: exact cost 2, 'bound' 1.75",
+            lambda: checks.bounded([2.0], [1.75]),
+        ),
         "sec3_6.time_variant_better_than_time_invariant": reversed_order,
         "sec3_6.optimal_38_best": reversed_order,
-        "sec3_5.proposed_almost_equal_163": ("the printed transient ratio reversed: the proposed controller "
-                                             "better than [163] by 5 %", _swapped_163),
+        "sec3_5.proposed_almost_equal_163": (
+            "the printed transient ratio reversed: the proposed controller "
+            "better than [163] by 5 %",
+            _swapped_163,
+        ),
     }
     out["sec3_6.bound_thm331_holds"] = out["sec3_6.bound_prop326_holds"]
     for t in (1, 2):
-        out[f"sec3_5.lmi_C10_T{t}"] = ("the state-feedback case (C = I, feasible) in place of C = [1 0]",
-                                       _separation_variant)
-        out[f"sec3_5.lmi_C12_T{t}"] = ("C = [1 0], where the LMIs are infeasible", _feasible_variant)
-        out[f"sec3_5.converged_not_stabilizing_C10_T{t}"] = ("Alg. 3.1 on C1 = [1 2], C2 = [2 1], whose gain "
-                                                             "stabilises", _stabilising_variant)
-        out[f"sec3_5.alg31_faster_than_163_T{t}"] = ("Alg. 3.1's time and [163]'s swapped",
-                                                     lambda: checks.ordered([2.0], [1.0]))
+        out[f"sec3_5.lmi_C10_T{t}"] = (
+            "the state-feedback case (C = I, feasible) in place of C = [1 0]",
+            _separation_variant,
+        )
+        out[f"sec3_5.lmi_C12_T{t}"] = (
+            "C = [1 0], where the LMIs are infeasible",
+            _feasible_variant,
+        )
+        out[f"sec3_5.converged_not_stabilizing_C10_T{t}"] = (
+            "Alg. 3.1 on C1 = [1 2], C2 = [2 1], whose gain stabilises",
+            _stabilising_variant,
+        )
+        out[f"sec3_5.alg31_faster_than_163_T{t}"] = (
+            "Alg. 3.1's time and [163]'s swapped",
+            lambda: checks.ordered([2.0], [1.0]),
+        )
     out["findings.lmi_C12_feasible"] = out["sec3_5.lmi_C12_T1"]
     out["findings.lmi_C12_feasible_author_mu"] = out["sec3_5.lmi_C12_T1"]
     return out
@@ -104,9 +135,9 @@ def ledger_mutants(reference=None) -> dict:
     Examples
     --------
     >>> from asoc_companion.reference import Entry
-    >>> claim = Entry("sec3_6.optimal_38_best", where="Table 3.3", kind="claim", thesis="[38] is best")
-    >>> ledger_mutants({claim.key: claim})
-    {'sec3_6.optimal_38_best': {'description': "the two controllers' medians swapped (a reversed ordering)", 'caught': True}}
+    >>> claim = Entry("sec3_6.optimal_38_best", where="Table 3.3", kind="claim", thesis="[38] best")
+    >>> ledger_mutants({claim.key: claim})["sec3_6.optimal_38_best"]["caught"]
+    True
     """
     reference = reference if reference is not None else load_reference()
     variants = _variants()
@@ -129,7 +160,8 @@ def mutants_path():
 
 def write_ledger_mutants(path=None) -> dict:
     """Write :func:`ledger_mutants` to ``figures/values/ledger_mutants.json`` in the layout of a
-    values file (``{"notebook": "ledger_mutants", "values": {claim key: record}}``); return the records.
+    values file (``{"notebook": "ledger_mutants", "values": {claim key: record}}``); return
+    the records.
 
     Examples
     --------
@@ -140,8 +172,11 @@ def write_ledger_mutants(path=None) -> dict:
     True
     """
     mutants = ledger_mutants()
-    atomic_write_text(path or mutants_path(),
-                      json.dumps({"notebook": "ledger_mutants", "values": mutants}, indent=1, sort_keys=True) + "\n")
+    atomic_write_text(
+        path or mutants_path(),
+        json.dumps({"notebook": "ledger_mutants", "values": mutants}, indent=1, sort_keys=True)
+        + "\n",
+    )
     return mutants
 
 
