@@ -1,4 +1,4 @@
-"""The baselines of Table 3.2 against formulations outside their own code (issue 30, item 6).
+"""The baselines of Table 3.2 against formulations outside their own code.
 
 The papers' full texts were not available (the search tool found the abstract of [165], not its
 example's numbers), so each baseline is checked on small instances against an independent

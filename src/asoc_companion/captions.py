@@ -54,7 +54,8 @@ def load_claims(path=None) -> dict:
 
 
 def verdict(keys, reference, values) -> str:
-    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is absent.
+    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is absent,
+    else ``not-resolved`` if a statistical claim among them is not resolved.
 
     Examples
     --------
@@ -64,7 +65,7 @@ def verdict(keys, reference, values) -> str:
     ('reproduced', 'missing')
     """
     statuses = [status(reference[k], values.get(k)) for k in keys]
-    for st in ("missing", "deviates"):
+    for st in ("missing", "deviates", "not-resolved"):
         if st in statuses:
             return st
     return "reproduced"
@@ -107,7 +108,7 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
     return f":::{{container}} asoc-caption\n{head}\n\n{line}\n:::\n"
 
 
-STATUS_WORDS = {"deviates": "does not show it", "missing": "not computed"}
+STATUS_WORDS = {"deviates": "does not show it", "missing": "not computed", "not-resolved": "not resolved"}
 
 
 def figure_caption(number: str):

@@ -1,4 +1,4 @@
-"""The qualitative claims of Secs. 3.4-3.7 as predicates with planted false variants (issue 30).
+"""The qualitative claims of Secs. 3.4-3.7 as predicates with planted false variants.
 
 The notebooks decide a claim by calling the predicate here; :func:`ledger_mutants` feeds each
 predicate its planted false variant (a controller that does not settle, a quadratic cost, a

@@ -1,4 +1,4 @@
-"""Evidence on a deviating ledger row, and claims decided by statistics (issue 30).
+"""Evidence on a deviating ledger row, and claims decided by statistics.
 
 A reference entry with ``expect: deviates`` carries ``evidence:``, a mapping whose ``kind`` says
 whose fault the deviation is and which further entries it needs:

@@ -184,6 +184,8 @@ def test_a_statistical_claim_shows_n_interval_and_test_and_counts_apart_from_dev
     assert "{bdg-info}`1 not resolved`" in page and "deviates`" not in page
     with pytest.raises(ValueError, match="verdict"):
         status(entry, {**record, "verdict": "maybe"})
+    from asoc_companion.captions import verdict
+    assert verdict([entry.key], {entry.key: entry}, {entry.key: record}) == "not-resolved"
 
 
 # --- every ledger check can fail (issue 30, item 2) -----------------------------------------------
