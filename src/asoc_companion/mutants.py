@@ -17,8 +17,10 @@ from . import paths
 from .io import atomic_write_text
 from .reference import load_reference
 
-NOT_PLANTED = ("no planted variant: the notebook does not decide this claim through a predicate "
-               "of claim_checks")
+NOT_PLANTED = (
+    "no planted variant: the notebook does not decide this claim through a predicate "
+    "of claim_checks"
+)
 
 
 def _slow_traces():
@@ -27,8 +29,13 @@ def _slow_traces():
 
 def _quadratic_grid():
     X, U = np.meshgrid(np.linspace(-5, 5, 101), np.linspace(-5, 5, 101), indexing="ij")
-    quadratic = 3 + 0.5 * X**2 + 0.2 * X * U + 1.3 * U**2
-    return X, U, quadratic, quadratic * (1 + 1e-12)
+    return X, U, 3 + 0.5 * X**2 + 0.2 * X * U + 1.3 * U**2
+
+
+def _quadratic_with_quadrature_error(error=1e-9):
+    """A quadratic cost computed with a relative quadrature error ``error`` (an oscillating one)."""
+    X, U, quadratic = _quadratic_grid()
+    return X, U, quadratic * (1 + error * np.cos(3 * X) * np.sin(2 * U)), error
 
 
 def _lmi_cases():
@@ -80,8 +87,8 @@ def _variants():
     )
     out = {
         "sec3_4.not_quadratic": (
-            "an exactly quadratic cost on the grid of Fig. 3.3, with a 1e-12 quadrature difference",
-            lambda: checks.not_quadratic(*_quadratic_grid()),
+            "a quadratic cost on the grid of Fig. 3.3 with a relative quadrature error 1e-9",
+            lambda: checks.not_quadratic(*_quadratic_with_quadrature_error()),
         ),
         "sec3_4.not_convex": (
             "a convex quadratic cost on the grid of Fig. 3.3",
