@@ -6,6 +6,8 @@ import re
 
 from docutils.nodes import make_id
 
+__all__ = ["heading_anchor", "section_links"]
+
 
 def heading_anchor(heading: str) -> str:
     """The HTML id Sphinx gives a Markdown heading (docutils ``make_id`` of its text).
@@ -58,6 +60,3 @@ def section_links(notebook_path, names) -> dict:
                 if name not in links and _records(source, name):
                     links[name] = page + ("#" + heading_anchor(heading) if heading else "")
     return {name: links.get(name, page) for name in names}
-
-
-__all__ = ["heading_anchor", "section_links"]

@@ -23,6 +23,16 @@ import scipy.optimize
 from asoc.mjls import MJLS
 from asoc.mjls.baselines import do_val_h2_state_feedback, time_variant_feedback
 
+__all__ = [
+    "random_instance",
+    "exact_h2_cost",
+    "check_52",
+    "path_cost",
+    "brute_force_optimum",
+    "check_time_variant",
+    "baseline_checks",
+]
+
 GRID = np.linspace(-2.5, 2.5, 11)  # brute-force grid of every gain entry
 POLISHED = 4  # best grid points polished by Nelder-Mead
 MAX_DRAWS = 20  # two-mode draws tried for one with feasible LMIs ([52])
@@ -244,14 +254,3 @@ def baseline_checks(seed_sequence, n_instances=3):
         "165": check_time_variant(rngs[1], state_feedback=True, n_instances=n_instances),
         "163": check_time_variant(rngs[2], state_feedback=False, n_instances=n_instances),
     }
-
-
-__all__ = [
-    "random_instance",
-    "exact_h2_cost",
-    "check_52",
-    "path_cost",
-    "brute_force_optimum",
-    "check_time_variant",
-    "baseline_checks",
-]

@@ -15,6 +15,19 @@ mapping ``{verdict, n, estimate, ci_low, ci_high, test}``; its verdict ``holds``
 ``not resolved`` gives the ledger status ``reproduced``, ``deviates`` or ``not-resolved``.
 """
 
+__all__ = [
+    "EVIDENCE_NEEDS",
+    "evidence_problems",
+    "evidence_badge",
+    "evidence_text",
+    "section_link",
+    "statistic_status",
+    "statistic_text",
+    "is_statistic",
+    "evidence_counts",
+    "evidence_badges",
+]
+
 EVIDENCE_NEEDS = {
     "thesis-error": ("certificate", "section"),
     "unspecified": ("readings", "closest"),
@@ -218,17 +231,3 @@ def evidence_badges(rows) -> str:
     return " ".join(
         evidence_badge(k, f"{c[k]} {EVIDENCE_BADGE[k][1]}") for k in EVIDENCE_NEEDS if c.get(k)
     )
-
-
-__all__ = [
-    "EVIDENCE_NEEDS",
-    "evidence_problems",
-    "evidence_badge",
-    "evidence_text",
-    "section_link",
-    "statistic_status",
-    "statistic_text",
-    "is_statistic",
-    "evidence_counts",
-    "evidence_badges",
-]

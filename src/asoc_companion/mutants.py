@@ -14,8 +14,10 @@ import numpy as np
 
 from . import claim_checks as checks
 from . import paths
-from .io import atomic_write_text
+from .atomic_files import atomic_write_text
 from .reference import load_reference
+
+__all__ = ["ledger_mutants", "mutants_path", "write_ledger_mutants"]
 
 NOT_PLANTED = (
     "no planted variant: the notebook does not decide this claim through a predicate "
@@ -185,6 +187,3 @@ def write_ledger_mutants(path=None) -> dict:
         + "\n",
     )
     return mutants
-
-
-__all__ = ["ledger_mutants", "mutants_path", "write_ledger_mutants"]
