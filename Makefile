@@ -63,8 +63,7 @@ book: figures html
 # The PDF from the committed notebooks (nothing is re-executed), like `make html`
 pdf: venv tex
 	$(PY) -m asoc_companion.book
-	$(VENV)/bin/jupyter-book build book --builder pdflatex --quiet $(if $(ALWAYS),--all)
-	@echo "The PDF is at book/_build/latex/asoc-companion.pdf"
+	$(PY) -m asoc_companion.printing $(if $(ALWAYS),--all)
 
 chromium:
 	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || \

@@ -26,9 +26,14 @@ def bootstrap_ci(samples, rng: np.random.Generator, statistic=np.median, n_boot:
     samples : array_like, shape (N,)
     rng : numpy.random.Generator
         Source of the resampling indices (seeded by the caller).
-    statistic : callable taking ``axis=``; default ``np.median``.
-    n_boot : number of bootstrap resamples.
-    level : confidence level in (0, 1).
+    statistic : callable
+        Taking ``axis=``; default ``np.median``.
+    n_boot : int
+        Number of bootstrap resamples.
+    level : float
+        Confidence level in (0, 1).
+    chunk : int
+        Resamples drawn at once (bounds the memory, not the result).
 
     Returns
     -------

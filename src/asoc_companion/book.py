@@ -31,7 +31,7 @@ from importlib.metadata import version
 from importlib.util import find_spec
 from pathlib import Path
 
-from . import paths
+from . import paths, printing
 
 __all__ = ["MATHJAX_BUNDLE", "MATHJAX_FONTS", "API_BLOCK", "LAYOUT_MARKER", "mathjax_source",
            "install_mathjax", "unused_script", "THEBE_BODY", "THESIS", "LATEX_ELEMENTS",
@@ -142,6 +142,9 @@ LATEX_ELEMENTS = {
     # math keeps TeX's own fonts: fontspec's default moves \mathbf onto the text font, where
     # \mathbf\Sigma has no glyph (a missing character in the PDF)
     "fontenc": r"\usepackage[no-math]{fontspec}",
+    # long API names fit the index's columns in a smaller size, set ragged (Sphinx's advice)
+    "printindex": r"\footnotesize\raggedright\printindex",
+    "preamble": printing.LATEX_PREAMBLE,
 }
 """Sphinx's LaTeX settings for the PDF, besides the title page."""
 
@@ -340,14 +343,35 @@ def _generated_pages(app, env, added, changed, removed):
             and re.search(r"<!-- (api |layout:)", (Path(app.srcdir) / f"{doc}.md").read_text())]
 
 
+THESIS_ABBREVIATIONS = ("Alg.", "App.", "Assm.", "Cor.", "Def.", "Eq.", "Eqs.", "Fig.", "Figs.", "Lem.",
+                        "Prop.", "Props.", "Ref.", "Sec.", "Secs.", "Thm.", "Thms.", "Vol.", "cf.", "ch.",
+                        "resp.", "vs.")
+"""Abbreviations the docstrings use before a number ("Cor. 3.2"): no sentence ends there."""
+
+
+def use_abbreviations():
+    """Teach autosummary's summary-line extraction :data:`THESIS_ABBREVIATIONS`.
+
+    autosummary cuts a docstring's first sentence at the first period followed by a space,
+    except after the abbreviations of its module-level ``WELL_KNOWN_ABBREVIATIONS`` (Sphinx has
+    no setting for them), so a summary such as "The matrix of Cor. 3.2" would stop at "Cor.".
+    """
+    from sphinx.ext import autosummary
+
+    known = autosummary.WELL_KNOWN_ABBREVIATIONS
+    autosummary.WELL_KNOWN_ABBREVIATIONS = known + tuple(a for a in THESIS_ABBREVIATIONS if a not in known)
+
+
 def setup(app):
     """Sphinx entry point."""
+    use_abbreviations()
     app.connect("config-inited", _configure, priority=900)
     app.connect("source-read", _expand_blocks)
     app.connect("env-get-outdated", _generated_pages)
     app.connect("html-page-context", _prune_page_assets, priority=900)
     app.connect("html-page-context", _drop_thebe_config, priority=901)
     app.connect("build-finished", _copy_mathjax)
+    app.connect("doctree-resolved", printing.prune_doctree)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
 
 

@@ -88,11 +88,11 @@ class Recorder:
                                  {"notebook": self.notebook, "fidelity": self.fidelity, "values": self.values})
 
     def save_figure(self, fig, number: str) -> Path:
-        """:func:`asoc_companion.figures.save_figure` into this run's folder."""
+        """:func:`asoc_companion.save_figure` into this run's folder."""
         return figures.save_figure(fig, number, self.output_dir)
 
     def save_table(self, number: str, header, rows) -> str:
-        """:func:`asoc_companion.figures.save_table` into this run's folder."""
+        """:func:`asoc_companion.save_table` into this run's folder."""
         return figures.save_table(number, header, rows, self.output_dir)
 
     def qualified_values(self) -> dict:
@@ -127,7 +127,7 @@ def setup(notebook: str, fidelity: str = "full", output_dir=None) -> Path:
 
     Examples
     --------
-    The examples of this module run inside :func:`scratch_run`, which restores the active recorder
+    The examples of this module run inside ``scratch_run``, which restores the active recorder
     and the style afterwards:
 
     >>> with scratch_run() as folder:

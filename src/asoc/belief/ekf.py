@@ -103,8 +103,10 @@ def ekf_step(model, mean, cov, u, y):
 
     Returns
     -------
-    mean, cov : numpy.ndarray
-        The updated estimate.
+    mean : numpy.ndarray
+        The updated mean.
+    cov : numpy.ndarray
+        The updated covariance.
 
     Raises
     ------

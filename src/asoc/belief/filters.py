@@ -72,7 +72,8 @@ class DiracMixture:
     ----------
     points : array_like, shape (M, n)
         Finite locations, M >= 1, n >= 1.
-    weights : array_like, shape (M,), non-negative, summing to one (None: equal weights).
+    weights : array_like, shape (M,), optional
+        Non-negative, summing to one (None: equal weights).
 
     Raises
     ------

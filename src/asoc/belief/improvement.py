@@ -137,7 +137,10 @@ def policy_step(exp: Expansion, u_bar, eps):
 
     Returns
     -------
-    L, d : numpy.ndarray, (n_u, n_x) and (n_u,)
+    L : numpy.ndarray, (n_u, n_x)
+        The new feedback gain.
+    d : numpy.ndarray, (n_u,)
+        The new feed-forward term.
 
     Raises
     ------

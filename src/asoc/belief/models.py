@@ -22,7 +22,8 @@ class GaussianNoise:
     Parameters
     ----------
     mean : array_like, shape (n,)
-    cov : array_like, shape (n, n), symmetric positive semi-definite.
+    cov : array_like, shape (n, n)
+        Symmetric positive semi-definite.
 
     Raises
     ------
@@ -69,16 +70,20 @@ class NonlinearModel:
 
     Parameters
     ----------
-    a : callable ``a(x, u, w)`` broadcasting over leading axes.
-    h : callable ``h(x, v)`` returning shape ``(..., n_y)``.
+    a : callable
+        ``a(x, u, w)``, broadcasting over leading axes.
+    h : callable
+        ``h(x, v)``, returning shape ``(..., n_y)``.
     w, v : :class:`GaussianNoise` (process and measurement noise; the filters use their
         moments, simulation and particle filters their samplers).
     n_x, n_u : int
         State and input dimensions, >= 1.
-    likelihood : optional ``likelihood(y, x)``, the density p(y | x) (particle filter).
+    likelihood : callable, optional
+        ``likelihood(y, x)``, the density p(y | x) (particle filter).
     jacobians : optional ``jacobians(x, u, w, v)`` returning analytic
         ``(a_x, a_u, a_w, h_x, h_v)`` with shapes broadcasting over leading axes.
-    affine : True if ``a`` is affine in (x, u) for every w, so its second derivatives vanish.
+    affine : bool
+        True if ``a`` is affine in (x, u) for every w, so its second derivatives vanish.
 
     Raises
     ------

@@ -16,10 +16,12 @@ class ParticleFilter:
 
     Parameters
     ----------
-    model : NonlinearModel with a ``likelihood``.
+    model : NonlinearModel
+        A model with a ``likelihood``.
     n_particles : int
         Number of particles M, >= 1.
-    rng : numpy.random.Generator for propagation and resampling.
+    rng : numpy.random.Generator
+        For propagation and resampling.
     resample_threshold : float
         Resample (systematic) when the effective sample size is below this fraction of M,
         in [0, 1].

@@ -25,7 +25,7 @@ COVARIANCE_HESSIANS = ("psd", "exact", "shift")
 
 def filter_for(filt, model, name="filt"):
     """The filter (default: a :class:`~asoc.belief.UKF` of ``model``); raise unless it has the
-    methods of :class:`~asoc.belief.filters.BeliefFilter`.
+    methods of :class:`~asoc.belief.BeliefFilter`.
 
     Examples
     --------
@@ -169,7 +169,7 @@ class StageProblem:
     ----------
     model, cost : NonlinearModel and QuadraticCost
     filt : BeliefFilter
-        Used through :class:`~asoc.belief.filters.BeliefFilter` only (``mixture``, ``covariance_map``).
+        Used through :class:`~asoc.belief.BeliefFilter` only (``mixture``, ``covariance_map``).
     estimate : the filter's estimate p_bar_k (for the UKF a tuple (mean, cov))
     nxt : Value
         V_{k+1} of eq. (2.10).

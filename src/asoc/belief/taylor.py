@@ -194,9 +194,11 @@ def statistical_taylor_linearization_error(x_true=5.7, mean=4.0, var=1.5, readin
 
     Returns
     -------
-    ekf_error, statistical_error : float
-        The error of the linearisation at the mean and of the statistical linearisation
-        ``reading`` (the thesis prints both for Fig. 2.2; see the ledger).
+    ekf_error : float
+        The error of the linearisation at the mean (the thesis prints it for Fig. 2.2; see the
+        ledger).
+    statistical_error : float
+        The error of the statistical linearisation ``reading``.
 
     Raises
     ------

@@ -59,7 +59,7 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
     model : NonlinearModel
     filt : BeliefFilter
         E.g. :class:`~asoc.belief.UKF` or :class:`~asoc.belief.ParticleFilter` (any
-        :class:`~asoc.belief.filters.BeliefFilter`).
+        :class:`~asoc.belief.BeliefFilter`).
     policy : AffinePolicy
     mean0, cov0 : array_like
         Initial estimate, (n_x,) and (n_x, n_x) positive semi-definite.
@@ -155,7 +155,7 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     ----------
     model, cost : NonlinearModel and QuadraticCost
     filt : BeliefFilter
-        Its Dirac mixture is the expansion point (:class:`~asoc.belief.filters.BeliefFilter`).
+        Its Dirac mixture is the expansion point (:class:`~asoc.belief.BeliefFilter`).
     ref : Reference
         The reference trajectory (Alg. 2.1).
     policy : AffinePolicy
@@ -253,22 +253,35 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
 
     Parameters
     ----------
-    model, cost : NonlinearModel and QuadraticCost (its ``K`` is the horizon).
-    mean0, cov0 : the initial estimate p_0^x (Gaussian), (n_x,) and (n_x, n_x) PSD.
-    filt : the filter (default :class:`~asoc.belief.UKF`), a :class:`~asoc.belief.filters.BeliefFilter`; its
-        Dirac mixture is the expansion point.
-    policy : initial AffinePolicy (default L = 0, d = 0).
+    model : NonlinearModel
+        The system.
+    cost : QuadraticCost
+        The cost; its ``K`` is the horizon.
+    mean0, cov0 : array_like, (n_x,) and (n_x, n_x)
+        The initial estimate p_0^x (Gaussian); ``cov0`` positive semidefinite.
+    filt : BeliefFilter, optional
+        The filter (default :class:`~asoc.belief.UKF`); its Dirac mixture is the expansion point.
+    policy : AffinePolicy, optional
+        The initial policy (default L = 0, d = 0).
     max_iterations : int
         Iteration limit, >= 1.
     rtol : float
         Stop when abs(J^[eta+1] - J^[eta]) <= rtol abs(J^[eta]) (Step 9), rtol > 0.
-    n_cost_runs, rng : J^[eta] is the mean cost of ``n_cost_runs`` (>= 1) closed-loop runs whose
-        random draws are the same in every iteration (common random numbers from ``rng``).
-    derivatives : "analytic" (model/cost derivatives where available) or "numdifftools".
-    reference_mode : "nominal" or "sampled" (Alg. 2.1); "sampled" draws from ``rng``.
-    alpha_min : the constant alpha of Alg. 2.3 below which a step is rejected, in (0, 1].
-    covariance_hessian : "psd" (default), "exact" or "shift", see :meth:`StageProblem._covariance_hessian`.
-    covariance_term : False drops 1/2 tr[S_{k+1} C_{k+1}(u)] from phi_k (2.13): no dual effect.
+    n_cost_runs : int
+        J^[eta] is the mean cost of ``n_cost_runs`` (>= 1) closed-loop runs whose random draws
+        are the same in every iteration (common random numbers from ``rng``).
+    rng : numpy.random.Generator
+        The source of those draws (and of the sampled reference).
+    derivatives : {"analytic", "numdifftools"}
+        Model and cost derivatives where available, or numerical ones.
+    reference_mode : {"nominal", "sampled"}
+        The reference of Alg. 2.1; "sampled" draws from ``rng``.
+    alpha_min : float
+        The constant alpha of Alg. 2.3 below which a step is rejected, in (0, 1].
+    covariance_hessian : {"psd", "exact", "shift"}
+        The covariance term's Hessian (default "psd"), see ``StageProblem._covariance_hessian``.
+    covariance_term : bool
+        False drops 1/2 tr[S_{k+1} C_{k+1}(u)] from phi_k (2.13): no dual effect.
     progress : bool
         Show a progress bar.
 

@@ -265,7 +265,7 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     model : NonlinearModel
         EKF Jacobians: analytic if the model gives them.
     cost : QuadraticCost
-        Written in the belief by :class:`_BeliefCost`; its ``K`` is the horizon.
+        Written in the belief by ``_BeliefCost``; its ``K`` is the horizon.
     mean0, cov0 : array_like
         The initial Gaussian belief, (n_x,) and (n_x, n_x) PSD.
     u_init : array_like (K, n_u), optional

@@ -80,7 +80,8 @@ def mcvmd(x, wx, y, wy, b_max: float = DEFAULT_B_MAX) -> float:
         Locations of the first mixture.
     wx : array_like (M,) or None
         Its weights (non-negative, summing to 1); ``None`` for equal weights.
-    y, wy : the second mixture, (L, d) and (L,).
+    y, wy : array_like
+        The second mixture, (L, d) and (L,).
     b_max : float
         Upper limit of the kernel widths, a "large constant".
 

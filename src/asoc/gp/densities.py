@@ -103,10 +103,14 @@ def hellinger_gaussian(m1, C1, m2, C2) -> float:
 
     Parameters
     ----------
-    m1, m2 : array_like, (d,)
-        Means.
-    C1, C2 : array_like, (d, d)
-        Symmetric positive definite covariances.
+    m1 : array_like, (d,)
+        Mean of the first Gaussian.
+    C1 : array_like, (d, d)
+        Its covariance, symmetric positive definite.
+    m2 : array_like, (d,)
+        Mean of the second Gaussian.
+    C2 : array_like, (d, d)
+        Its covariance, symmetric positive definite.
 
     Returns
     -------

@@ -95,7 +95,10 @@ def training_gaussians(n: int, rng: np.random.Generator):
 
     Returns
     -------
-    mu, var : numpy.ndarray, (n,)
+    mu : numpy.ndarray, (n,)
+        The means.
+    var : numpy.ndarray, (n,)
+        The variances.
 
     Raises
     ------
@@ -126,7 +129,10 @@ def evaluation_grid(step: float = 0.1):
 
     Returns
     -------
-    mu_axis, var_axis : numpy.ndarray
+    mu_axis : numpy.ndarray
+        The means.
+    var_axis : numpy.ndarray
+        The variances.
 
     Raises
     ------

@@ -53,7 +53,7 @@ class DiracApproximation(IterativeResult):
     """Result of :func:`standard_normal_dirac_approximation`: the locations and why the minimisation stopped.
 
     ``converged`` when the gradient norm of the squared distance at the optimum is below
-    :func:`gradient_tolerance` (the library's criterion, not the optimiser's status).
+    ``gradient_tolerance`` (the library's criterion, not the optimiser's status).
 
     Examples
     --------
@@ -174,7 +174,7 @@ def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MA
 
     Starts from the midpoint quantiles :math:`\Phi^{-1}((2i - 1) / (2L))` and minimises
     :func:`mcvmd_standard_normal_dirac` over the locations with BFGS (analytic gradient);
-    converged when the gradient norm is below :func:`gradient_tolerance`. Cached per
+    converged when the gradient norm is below ``gradient_tolerance``. Cached per
     (L, b_max). Warns if the minimisation does not converge.
 
     Parameters
@@ -222,8 +222,10 @@ def gaussian_dirac_mixtures(means, variances, L: int = 10, b_max: float = DEFAUL
     Parameters
     ----------
     means, variances : array_like, (N,)
-    L : number of equally weighted components.
-    b_max : upper limit of the mCvMd kernel widths.
+    L : int
+        Number of equally weighted components.
+    b_max : float
+        Upper limit of the mCvMd kernel widths.
 
     Returns
     -------

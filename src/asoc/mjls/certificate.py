@@ -49,7 +49,7 @@ _DEFLATED_GAPS = (1e-3, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7)
 def certified_upper_bound(A, T, X):
     """The Collatz-Wielandt upper bound of rho (Cor. 3.2) at a stack X > 0, with its rounding margin.
 
-    max_j lambda_max(X_j^{-1/2} L(X)_j X_j^{-1/2}) widened as in :func:`mean_square_stability`;
+    max_j lambda_max(X_j^{-1/2} L(X)_j X_j^{-1/2}) widened as in :func:`asoc.mjls.mean_square_stability`;
     inf when X is not positive definite. For the solution of X = L(X) + W with W > 0 it is
     below 1 iff the closed loop is mean-square stable (Thm. 3.1). Arguments are not validated.
 

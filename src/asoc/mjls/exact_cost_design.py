@@ -202,7 +202,7 @@ def _given_gains(sys, init, nc):
 def _starts(sys, init, nc):
     """The candidate starts (packed), best first, their exact costs (3.42) (inf where not
     stabilising) and the shapes of F, K, L: ``init`` when given, else Alg. 3.2's bounded run
-    and the averaged LQG compensator (:func:`averaged_lqg`)."""
+    and the averaged LQG compensator (``averaged_lqg`` in this module)."""
     if init is not None:
         candidates = [_given_gains(sys, init, nc)]
     else:
@@ -281,13 +281,17 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
 
     Parameters
     ----------
-    sys : MJLS (Sec. 3.6).
+    sys : MJLS
+        The system (Sec. 3.6).
     init : start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a
         tuple (F, K, L), or None for the best default start of
         :func:`exact_dynamic_output_feedback`.
-    nc : controller order (default: that of ``init``, else nx).
-    max_iter : BFGS iteration limit (default ``config.defaults["mjls.radius_max_iter"]``).
-    progress : show a tqdm bar over iterations.
+    nc : int, optional
+        Controller order (default: that of ``init``, else nx).
+    max_iter : int, optional
+        BFGS iteration limit (default ``config.defaults["mjls.radius_max_iter"]``).
+    progress : bool
+        Show a tqdm bar over iterations.
 
     Returns
     -------
@@ -332,19 +336,24 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
 
     Parameters
     ----------
-    sys : MJLS with measurement noise J (Sec. 3.6; J = None means y = C x).
+    sys : MJLS
+        With measurement noise J (Sec. 3.6; J = None means y = C x).
     init : start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a tuple
         (F, K, L), or None for the better (in exact cost) of Algorithm 3.2's controller after
         at most ``config.defaults["mjls.exact_warm_start_iterations"]`` iterations and the LQG
-        compensator of the mode-averaged system (:func:`averaged_lqg`). A non-stabilising
+        compensator of the mode-averaged system (``averaged_lqg`` in this module). A non-stabilising
         start is first moved into the stabilising set by minimising the mean-square spectral
         radius (:func:`min_radius_dynamic_output_feedback`).
     nc : controller order (default: that of ``init``, else nx; Alg. 3.2's controller is
         padded with zeros or cut to nc states).
-    tol : stop when the decrease the quasi-Newton model predicts is below tol * cost.
-    max_iter : BFGS iteration limit.
-    warn : warn when no stabilising start is found or the iteration does not converge.
-    progress : show a tqdm bar over iterations.
+    tol : float
+        Stop when the decrease the quasi-Newton model predicts is below tol * cost.
+    max_iter : int
+        BFGS iteration limit.
+    warn : bool
+        Warn when no stabilising start is found or the iteration does not converge.
+    progress : bool
+        Show a tqdm bar over iterations.
 
     Returns
     -------
@@ -401,19 +410,26 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
 
     Parameters
     ----------
-    sys : MJLS, or a sequence of ``horizon`` (or ``horizon + 1``) MJLS (3.54).
-    horizon : int >= 1.
-    mean0, cov0, mu0 : the Gaussian-mixture initial state, as for Alg. 3.3.
+    sys : MJLS or sequence of MJLS
+        One system, or a sequence of ``horizon`` (or ``horizon + 1``) systems (3.54).
+    horizon : int
+        The horizon K >= 1.
+    mean0, cov0, mu0 : array_like
+        The Gaussian-mixture initial state, as for Alg. 3.3.
     init : start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a result
         with F, K, L (e.g. FiniteHorizonResult, DynamicOutputFeedbackResult) or a tuple
         (F, K, L), constant or per step.
-    tol : stop when the decrease the quasi-Newton model predicts is below tol * J_0. The
+    tol : float
+        Stop when the decrease the quasi-Newton model predicts is below tol * J_0. The
         problem is ill-conditioned (the time-variant state transformations of x^_k leave
         J_0 unchanged), so the model underestimates the remaining decrease: on Sec. 3.7.3,
         tol = 1e-12 stops within about 1e-8 (relative) of the limit, tol = 1e-10 within 1e-7.
-    max_iter : L-BFGS iteration limit (memory ``config.defaults["mjls.lbfgs_memory"]`` pairs).
-    warn : warn when the iteration does not converge.
-    progress : show a tqdm bar over iterations.
+    max_iter : int
+        L-BFGS iteration limit (memory ``config.defaults["mjls.lbfgs_memory"]`` pairs).
+    warn : bool
+        Warn when the iteration does not converge.
+    progress : bool
+        Show a tqdm bar over iterations.
 
     Returns
     -------

@@ -50,16 +50,25 @@ def gain_gradient(sys, K, L, At, X, EP, JJt, mu):
 
     Parameters
     ----------
-    sys : MJLS (one step of (3.36)/(3.54)).
-    K, L : the gains of (3.37); F enters only through ``At``.
-    At : (M, n, n) augmented closed loop (3.39).
-    X : (M, n, n) augmented second moments at this step.
-    EP : (M, n, n) E_i(P) of the costates at the next step.
-    JJt : (M, ny, ny) measurement-noise covariances; mu : (M,) mode distribution.
+    sys : MJLS
+        One step of (3.36)/(3.54).
+    K, L : numpy.ndarray
+        The gains of (3.37); F enters only through ``At``.
+    At : numpy.ndarray, shape (M, n, n)
+        Augmented closed loop (3.39).
+    X : numpy.ndarray, shape (M, n, n)
+        Augmented second moments at this step.
+    EP : numpy.ndarray, shape (M, n, n)
+        E_i(P) of the costates at the next step.
+    JJt : numpy.ndarray, shape (M, ny, ny)
+        Measurement-noise covariances.
+    mu : numpy.ndarray, shape (M,)
+        Mode distribution.
 
     Returns
     -------
-    (gF, gK, gL) : arrays of the shapes of F, K, L.
+    tuple of numpy.ndarray
+        (gF, gK, gL), of the shapes of F, K, L.
 
     Examples
     --------
@@ -90,13 +99,17 @@ def average_cost_and_gradient(sys, F, K, L):
 
     Parameters
     ----------
-    sys : MJLS with measurement noise J (Sec. 3.6).
-    F, K, L : gains of (3.37), shapes (nc, nc), (nc, ny), (nu, nc).
+    sys : MJLS
+        With measurement noise J (Sec. 3.6).
+    F, K, L : numpy.ndarray
+        Gains of (3.37), shapes (nc, nc), (nc, ny), (nu, nc).
 
     Returns
     -------
-    (cost, (gF, gK, gL)) : cost is inf and the gradient None when A~ is not mean-square
-        stable (Cor. 3.2).
+    cost : float
+        The exact average cost (3.42); inf when A~ is not mean-square stable (Cor. 3.2).
+    gradient : tuple of numpy.ndarray or None
+        (gF, gK, gL), of the shapes of F, K, L; None when the cost is inf.
 
     Examples
     --------
@@ -163,11 +176,18 @@ def radius_and_gradient(sys, F, K, L):
 
     Parameters
     ----------
-    sys : MJLS; F, K, L : gains of (3.37).
+    sys : MJLS
+        The system.
+    F, K, L : numpy.ndarray
+        Gains of (3.37).
 
     Returns
     -------
-    (rho, (gF, gK, gL)) : the gradient is zero where <V, X> vanishes (rho not differentiable).
+    rho : float
+        The mean-square spectral radius of the closed loop.
+    gradient : tuple of numpy.ndarray
+        (gF, gK, gL), of the shapes of F, K, L; zero where <V, X> vanishes (rho not
+        differentiable).
 
     Examples
     --------
@@ -190,13 +210,21 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
 
     Parameters
     ----------
-    st : :class:`asoc.mjls.finite_horizon.Stages` of the horizon.
-    F, K, L : (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc) gains of (3.55).
-    X0 : (M, n, n) E{x~_0 x~_0^T 1(theta_0 = i)}; mu : (horizon + 1, M) mode distributions.
+    st : Stages
+        The stages of the horizon (``asoc.mjls.finite_horizon.Stages``).
+    F, K, L : numpy.ndarray
+        Gains of (3.55), shapes (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc).
+    X0 : numpy.ndarray, shape (M, n, n)
+        E{x~_0 x~_0^T 1(theta_0 = i)}.
+    mu : numpy.ndarray, shape (horizon + 1, M)
+        Mode distributions.
 
     Returns
     -------
-    (cost, (gF, gK, gL)) : gradients of the shapes of F, K, L (backward adjoint recursion).
+    cost : float
+        The exact finite-horizon cost J_0.
+    gradient : tuple of numpy.ndarray
+        (gF, gK, gL), of the shapes of F, K, L (backward adjoint recursion).
 
     Examples
     --------

@@ -1,6 +1,7 @@
 """Counterexamples of the theorems study: saved as data, the one to show chosen, printed rounded."""
 
 import html
+import re
 import json
 from pathlib import Path
 
@@ -169,3 +170,169 @@ def _statement_row(st, records, findings) -> str:
     cells = (claim, html.escape(st.checked), html.escape(verdict_text(record)), mutant, corrected_text(record),
              evidence)
     return "<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"
+
+
+# The Theorems page as MyST Markdown: rendered by the HTML and the LaTeX builders alike (math
+# typeset by MathJax and by LaTeX), a compact table first, then one section per statement.
+
+MUTANTS_TEX = {
+    "the reference without the measurement update (the prediction P: the Schur complement dropped)":
+        r"the reference without the measurement update (the prediction $\mathbf P$: the Schur complement dropped)",
+    "the expansion with x^T V_K x in place of 1/2 x^T V_K x (a factor changed)":
+        r"the expansion with $\mathbf x^\top\mathbf V_K\mathbf x$ in place of "
+        r"$\tfrac12\mathbf x^\top\mathbf V_K\mathbf x$ (a factor changed)",
+    "the exact costs without the innovation's share P_k - Sigma_{k+1} of the estimate's second moment":
+        r"the exact costs without the innovation's share $\mathbf P_k-\boldsymbol\Sigma_{k+1}$ of the "
+        r"estimate's second moment",
+    "the covariance exp(-(d/l)^4), outside Table 2.1 and not positive definite even on the real line":
+        r"the covariance $\exp(-(d/l)^4)$, outside Table 2.1 and not positive definite even on the real line",
+    "the premise negated: a solution with an eigenvalue <= 0 in both forms 'implies' stability":
+        r"the premise negated: a solution with an eigenvalue $\leq 0$ in both forms 'implies' stability",
+    "the formula with D_i in place of D_i + E_i L_i C_i":
+        r"the formula with $\mathbf D_i$ in place of $\mathbf D_i+\mathbf E_i\mathbf L_i\mathbf C_i$",
+    "the BMI with its corner block G_i + G_i^T in place of G_i + G_i^T - D_i(Y)":
+        r"the BMI with its corner block $\mathbf G_i+\mathbf G_i^\top$ in place of "
+        r"$\mathbf G_i+\mathbf G_i^\top-\mathcal D_i(\mathbf Y)$",
+    "the gains recovered with a sign error, L_i = -F_i M_i^{-1}":
+        r"the gains recovered with a sign error, $\mathbf L_i=-\mathbf F_i\mathbf M_i^{-1}$",
+    "the recursion without the noise term mu_k^i H_i H_i^T":
+        r"the recursion without the noise term $\mu_k^i\mathbf H_i\mathbf H_i^\top$",
+    "the corrected reading with X_inf solved without the noise term":
+        r"the corrected reading with $\mathbf X_\infty$ solved without the noise term",
+    "the stated form without the noise term mu_i H_i H_i^T":
+        r"the stated form without the noise term $\mu_i\mathbf H_i\mathbf H_i^\top$",
+    "the residual of (3.31) without R_i": r"the residual of (3.31) without $\mathbf R_i$",
+    "the formula with 2 R_i in place of R_i": r"the formula with $2\mathbf R_i$ in place of $\mathbf R_i$",
+    "M / 2 in place of M (a factor changed: 'rho(M) < 2 implies stability')":
+        r"$\mathbf M/2$ in place of $\mathbf M$ (a factor changed: '$\rho(\mathbf M)<2$ implies stability')",
+    "Q~ = diag(Q, R) (the gain L dropped)":
+        r"$\tilde{\mathbf Q}=\mathrm{diag}(\mathbf Q,\mathbf R)$ (the gain $\mathbf L$ dropped)",
+    "the recursion without the process noise mu_k^i H_i H_i^T":
+        r"the recursion without the process noise $\mu_k^i\mathbf H_i\mathbf H_i^\top$",
+    "Q~ without the input's block L^T R_i L":
+        r"$\tilde{\mathbf Q}$ without the input's block $\mathbf L^\top\mathbf R_i\mathbf L$",
+    "the stated form without the noise term mu_i H~_i H~_i^T":
+        r"the stated form without the noise term $\mu_i\tilde{\mathbf H}_i\tilde{\mathbf H}_i^\top$",
+    "the solution's L scaled by 1.2": r"the solution's $\mathbf L$ scaled by 1.2",
+    "the recursion without the noise term omega": r"the recursion without the noise term $\omega$",
+    "the hypotheses A, B >= 0 dropped (A, B symmetric indefinite)":
+        r"the hypotheses $\mathbf A,\mathbf B\geq 0$ dropped ($\mathbf A$, $\mathbf B$ symmetric indefinite)",
+    "Jbar_0 without the noise's share omega":
+        r"$\bar{\mathcal J}_0$ without the noise's share $\omega$",
+    "the formula with D_i in place of D_i + E_i L C_i (the input's share of z dropped)":
+        r"the formula with $\mathbf D_i$ in place of $\mathbf D_i+\mathbf E_i\mathbf L\mathbf C_i$ "
+        r"(the input's share of $\mathbf z$ dropped)",
+    "the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)":
+        r"the BMI with its corner block $\mathbf G+\mathbf G^\top$ in place of "
+        r"$\mathbf G+\mathbf G^\top-\mathcal D_i(\mathbf Y)$",
+    "the gain recovered with a sign error, L = -F M^{-1}":
+        r"the gain recovered with a sign error, $\mathbf L=-\mathbf F\mathbf M^{-1}$",
+    "the closed form without Delta (the noise's cost dropped)":
+        r"the closed form without $\Delta$ (the noise's cost dropped)",
+    "the limit compared with the LQ gain for 2 R instead of R":
+        r"the limit compared with the LQ gain for $2\mathbf R$ instead of $\mathbf R$",
+    "the comparison with the LQG controller for 2 R instead of R":
+        r"the comparison with the LQG controller for $2\mathbf R$ instead of $\mathbf R$",
+}
+"""The mutants' descriptions (plain text in the study's records) with their math in LaTeX; a
+description not listed is shown as recorded."""
+
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*_\[\]<>#|])")
+
+
+def markdown_text(text: str) -> str:
+    """``text`` for MyST Markdown: Markdown's special characters escaped outside ``$...$`` math.
+
+    Examples
+    --------
+    >>> markdown_text(r"x_k [a] and $\\mathbf x_k$")
+    'x\\\\_k \\\\[a\\\\] and $\\\\mathbf x_k$'
+    """
+    parts = text.split("$")
+    if len(parts) % 2 == 0:
+        raise ValueError(f"text: expected paired $ signs, found {text!r}")
+    return "$".join(part if k % 2 else _MARKDOWN_SPECIAL.sub(r"\\\1", part) for k, part in enumerate(parts))
+
+
+def mutant_markdown(mutant) -> str:
+    """A mutant's description with its math typeset (:data:`MUTANTS_TEX`), as Markdown."""
+    description = mutant["description"]
+    return MUTANTS_TEX.get(description) or markdown_text(description)
+
+
+def _anchor(key: str) -> str:
+    return "check-" + key.removeprefix("statement_").replace("_", "-")
+
+
+def _links(st, record, findings) -> str:
+    links = []
+    if record.get("fails"):
+        links.append(f"{{ref}}`counterexample <{st.key.replace('_', '-')}>`")
+    if st.key in findings:
+        links.append(f"{{ref}}`finding <{findings[st.key]}>`")
+    return ", ".join(links)
+
+
+def statements_markdown(statements, records, findings) -> str:
+    """The theorems page's statements as MyST Markdown: one compact table (statement, verdict, whether the
+    check caught its mutant, a link to the statement's section), then per statement a section with the claim,
+    what one instance checks, the verdict, the mutant, and (when the record has them) the diagnosis and the
+    corrected statement with its verdict. ``records`` maps a key to its recorded value
+    (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of the findings page.
+
+    Examples
+    --------
+    >>> from asoc_companion.theorems.core import Statement
+    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing", not_checkable="a definition")
+    >>> page = statements_markdown([lemma], {}, {})
+    >>> "| {ref}`Lemma 3.0 <check-3-0>` | not checkable | - |" in page, "**Lemma 3.0.** $|x| >= 0$" in page
+    (True, True)
+    """
+    rows = ["| Statement | Verdict | Mutant |", "| :-- | :-- | :-- |"]
+    sections = []
+    for st in statements:
+        record = records.get(st.key, {})
+        title = f"{{ref}}`{st.label} <{_anchor(st.key)}>`"
+        lines = [f"({_anchor(st.key)})=", f"**{st.label}.** {st.summary}", "",
+                 f"- *One instance checks:* {markdown_text(st.checked)}"]
+        if st.check is None:
+            rows.append(f"| {title} | not checkable | - |")
+            lines.append(f"- *Not checkable:* {markdown_text(st.not_checkable)}")
+        else:
+            verdict = verdict_text(record)
+            rows.append(f"| {title} | {'**' + verdict + '**' if record['fails'] else verdict} "
+                        f"| {mutant_text(record)} |")
+            links = _links(st, record, findings)
+            lines.append(f"- *Verdict:* {verdict}" + (f" ({links})" if links else ""))
+            if record.get("mutant"):
+                lines.append(f"- *Mutant:* {mutant_markdown(record['mutant'])}; {mutant_text(record)}")
+        lines += _correction_lines(record)
+        sections.append("\n".join(lines))
+    return "\n".join(rows) + "\n\n" + "\n\n".join(sections) + "\n"
+
+
+def _correction_lines(record) -> list:
+    lines = []
+    if record.get("diagnosis"):
+        lines.append(f"- *Diagnosis:* {markdown_text(record['diagnosis'])}")
+    if record.get("corrected"):
+        corrected = record["corrected"]
+        text = (f"- *Corrected statement:* {markdown_text(corrected['statement'])} "
+                f"(*{verdict_text({**corrected, 'not_applicable': 0})}*")
+        if corrected.get("mutant"):
+            text += f"; mutant {mutant_markdown(corrected['mutant'])}: {mutant_text(corrected)}"
+        lines.append(text + ")")
+    elif record.get("no_correction"):
+        lines.append(f"- *No correction found:* {markdown_text(record['no_correction'])}")
+    return lines
+
+
+class StatementsPage:
+    """The statements of the theorems page for display in a notebook: Markdown (MyST) only, so that the
+    HTML and the PDF render the same table and sections (:func:`statements_markdown`)."""
+
+    def __init__(self, statements, records, findings):
+        self.markdown = statements_markdown(statements, records, findings)
+
+    def _repr_markdown_(self):
+        return self.markdown

@@ -1,0 +1,195 @@
+"""The book in print: which notebook cells the PDF leaves out, and `make pdf`'s short summary.
+
+The notebooks are rendered from their committed cells, so the rules apply when the book is
+built (a Sphinx ``doctree-resolved`` hook, :func:`prune_cells`), never by editing a notebook:
+
+- papermill's injected-parameters cell (tag ``injected-parameters``) repeats the parameters
+  cell above it; it is left out of every builder's output;
+- a *setup cell* (:func:`is_setup_cell`: it imports the companion or calls ``setup``) is
+  printed as one line naming the notebook to open instead of its code; its output stays.
+  The cells after it, the method's code that the text discusses, stay as they are.
+
+Record cells are tagged ``remove-cell`` in the notebooks and never rendered.
+
+``python -m asoc_companion.printing`` builds the PDF (:func:`build_pdf`) and prints a summary
+instead of the LaTeX log: pages, time, the overfull boxes over 10 pt and where the log is.
+"""
+
+import ast
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from docutils import nodes
+
+from . import paths
+
+INJECTED_TAG = "injected-parameters"
+"""papermill's tag of the cell it inserts below the parameters cell."""
+OVERFULL = re.compile(r"^Overfull \\hbox \((?P<points>[\d.]+)pt too wide\)", re.M)
+"""An overfull line box in a LaTeX log, with its excess width."""
+OVERFULL_LIMIT = 10.0
+"""Excess width (pt) above which an overfull box is visible on the page."""
+
+
+def is_setup_cell(source: str) -> bool:
+    """Whether a code cell sets a notebook up: it imports ``asoc_companion`` or calls ``setup``.
+
+    Examples
+    --------
+    >>> is_setup_cell("import numpy as np\\nimport asoc_companion as repro")
+    True
+    >>> is_setup_cell('out = repro.setup("theorems", fidelity=fidelity)')
+    True
+    >>> is_setup_cell("from asoc_companion.theorems.kernels import gram_certificate\\nx = 1")
+    False
+    >>> is_setup_cell("%matplotlib inline")
+    False
+    """
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:                 # IPython magics: no setup cell of this book has one
+        return False
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import) and any(a.name == "asoc_companion" for a in node.names):
+            return True
+        if isinstance(node, ast.Call):
+            func = node.func
+            name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
+            if name == "setup":
+                return True
+    return False
+
+
+def _notebook_name(cell, docname: str) -> str:
+    source = cell.source or cell.get("source") or docname
+    return f"book/{Path(source).stem}.ipynb"
+
+
+def setup_note(notebook: str) -> nodes.paragraph:
+    """The line printed in place of a setup cell's code."""
+    note = nodes.paragraph(classes=["setup-note"])
+    note += nodes.emphasis(text=f"Setup code (imports, parameters read, asoc_companion.setup) "
+                                f"not printed: open {notebook} to read or run it.")
+    return note
+
+
+def prune_cells(doctree, builder_format: str, docname: str = "") -> dict:
+    """Apply the print rules to a resolved doctree; return how many cells each rule changed.
+
+    ``builder_format`` is the Sphinx builder's format: injected-parameters cells are removed
+    for every builder, setup cells' code for ``"latex"`` only.
+    """
+    changed = {"injected": 0, "setup": 0}
+    for cell in list(doctree.findall(nodes.container)):
+        if cell.get("nb_element") != "cell_code":
+            continue
+        tags = cell.get("cell_metadata", {}).get("tags", [])
+        if INJECTED_TAG in tags:
+            cell.parent.remove(cell)
+            changed["injected"] += 1
+            continue
+        if builder_format != "latex":
+            continue
+        for source in [c for c in cell.children if c.get("nb_element") == "cell_code_source"]:
+            code = "".join(block.astext() for block in source.findall(nodes.literal_block))
+            if is_setup_cell(code):
+                cell.replace(source, setup_note(_notebook_name(cell, docname)))
+                changed["setup"] += 1
+    return changed
+
+
+TEXT_WIDTH_CHARACTERS = 80
+"""Characters of body text a printed line holds (A4, Sphinx's margins, 10 pt FreeSerif)."""
+COLUMN_CAP = 40
+"""A column wider than this many characters is wrapped rather than given its natural width."""
+
+
+def fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
+    """Give every table that would run past the margin column widths, so LaTeX wraps its cells.
+
+    Sphinx sets a long table without declared widths in ``l`` columns, which never wrap; a
+    table whose longest cells add up to more than ``width`` characters gets widths
+    proportional to its columns' longest cells (capped at :data:`COLUMN_CAP`). Returns how
+    many tables were changed.
+    """
+    changed = 0
+    for table in doctree.findall(nodes.table):
+        if "colwidths-given" in table["classes"]:
+            continue
+        for group in table.findall(nodes.tgroup):
+            specs = [c for c in group.children if isinstance(c, nodes.colspec)]
+            longest = [0] * len(specs)
+            for row in group.findall(nodes.row):
+                for k, entry in enumerate(row.children[:len(specs)]):
+                    longest[k] = max(longest[k], len(entry.astext()))
+            if sum(longest) <= width:
+                continue
+            for spec, chars in zip(specs, longest):
+                spec["colwidth"] = max(min(chars, COLUMN_CAP), 4)
+            table["classes"].append("colwidths-given")
+            changed += 1
+    return changed
+
+
+def prune_doctree(app, doctree, docname):
+    """Sphinx's ``doctree-resolved`` hook: :func:`prune_cells` for the running builder, and
+    :func:`fit_wide_tables` for the LaTeX builder."""
+    prune_cells(doctree, app.builder.format, docname)
+    if app.builder.format == "latex":
+        fit_wide_tables(doctree)
+
+
+LATEX_PREAMBLE = r"""
+% identifiers break after an underscore (API names, record keys) instead of running past the margin
+\let\asocunderscore\_
+\DeclareRobustCommand{\_}{\asocunderscore\hspace{0pt}}
+"""
+"""LaTeX for the preamble of the PDF (Sphinx's ``latex_elements["preamble"]``)."""
+
+
+def overfull_boxes(log: str, limit: float = OVERFULL_LIMIT) -> list:
+    """The excess widths (pt) of the overfull line boxes in a LaTeX log wider than ``limit``.
+
+    Examples
+    --------
+    >>> overfull_boxes("Overfull \\\\hbox (12.5pt too wide) in paragraph\\nOverfull \\\\hbox (1.2pt too wide)")
+    [12.5]
+    """
+    return [p for p in map(float, OVERFULL.findall(log)) if p > limit]
+
+
+def build_pdf(book=None, options=(), out=sys.stdout) -> int:
+    """Build the PDF with Jupyter Book's LaTeX builder; print a summary, not the log.
+
+    ``options`` are passed to ``jupyter-book build`` (e.g. ``["--all"]``). The builder's output goes to ``_build/latex/build-output.txt`` beside LaTeX's own log;
+    on failure its last lines are printed. Returns the builder's exit status.
+    """
+    book = Path(book or paths.project().book)
+    latex = book / "_build" / "latex"
+    jupyter_book = Path(sys.executable).parent / "jupyter-book"
+    start = time.perf_counter()
+    proc = subprocess.run([str(jupyter_book), "build", str(book), "--builder", "pdflatex", *options],
+                          capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    latex.mkdir(parents=True, exist_ok=True)
+    output = latex / "build-output.txt"
+    output.write_text(proc.stdout + proc.stderr)
+    pdf, log = latex / "asoc-companion.pdf", latex / "asoc-companion.log"
+    if proc.returncode != 0 or not pdf.exists():
+        tail = "\n".join((proc.stdout + proc.stderr).splitlines()[-25:])
+        print(f"{tail}\nThe PDF build failed after {seconds:.0f} s; the whole output: {output}", file=out)
+        return proc.returncode or 1
+    info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True).stdout
+    pages = re.search(r"Pages:\s+(\d+)", info)
+    boxes = overfull_boxes(log.read_text(errors="replace")) if log.exists() else []
+    print(f"The PDF is at {pdf}: {pages[1] if pages else '?'} pages, built in "
+          f"{seconds:.0f} s, {len(boxes)} overfull boxes over {OVERFULL_LIMIT:g} pt.\n"
+          f"LaTeX's log: {log}; the builder's output: {output}", file=out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(build_pdf(options=sys.argv[1:]))
