@@ -14,11 +14,23 @@ the current directory).
 
 import argparse
 import os
+import re
 import signal
 import sys
 
 from . import paths
 from .requirements import INSTALL_HINT, missing_requirements
+
+def plain(text: str) -> str:
+    """``text`` without reStructuredText markup, for the terminal: ``x``, `x` and :role:`x` become x.
+
+    Examples
+    --------
+    >>> plain("``python -m asoc_companion list`` (:func:`run`, `list` shows them)")
+    'python -m asoc_companion list (run, list shows them)'
+    """
+    return re.sub(r"(?::[\w:]+:)?`{1,2}~?([^`]+?)`{1,2}", r"\1", text)
+
 
 FIDELITY_HELP = ("full: the thesis's settings, updates figures/ and book/; "
                  "ci: small Monte Carlo sizes, writes to book/_build/ci/ only (default: full)")
@@ -80,6 +92,32 @@ def unused_parameters(info, kind, number, overrides) -> str:
             f"the {thing} is the same without {'it' if len(unused) == 1 else 'them'}.")
 
 
+def notebook_list(infos) -> str:
+    """``list``'s text: per notebook its name and title, its figures and tables, its parameters,
+    the later lines indented to the title's column.
+
+    Examples
+    --------
+    >>> from asoc_companion import notebooks as nbs
+    >>> lines = notebook_list([nbs.by_name("sec3_2"), nbs.by_name("large_system")]).splitlines()
+    >>> lines[0].index("Sec. 3.2") == lines[1].index("Fig. 3.2") == lines[3].index("A larger")
+    True
+    """
+    from . import notebooks as nbs
+
+    infos = list(infos)
+    width = max(len(info.name) for info in infos)
+    lines = []
+    for info in infos:
+        figs = ", ".join(f"Fig. {f}" for f in info.figures)
+        tabs = ", ".join(f"Table {t}" for t in info.tables)
+        params = ", ".join(n for n in nbs.default_parameters(info) if n not in nbs.HARNESS_PARAMETERS)
+        lines.append(f"{info.name:{width}}  {info.title}")
+        lines.append(f"{'':{width}}  {'; '.join(x for x in (figs, tabs) if x) or 'no figure or table of the thesis'}")
+        lines.append(f"{'':{width}}  parameters (-p): {params}")
+    return "\n".join(lines)
+
+
 def _ledger(fidelity):
     from .ledger import intro_markdown, ledger_markdown, ledger_rows
     from .values import load_all_values
@@ -109,7 +147,8 @@ def _write_if_changed(path, text, remark=""):
 
 
 def _parser():
-    parser = argparse.ArgumentParser(prog="python -m asoc_companion", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m asoc_companion", description=plain(__doc__.splitlines()[0]),
+                                     epilog=plain(" ".join(__doc__.split("\n\n", 1)[1].split())))
     parser.add_argument("--root", help=f"the checkout to work on (default: ${paths.ENV_VAR}, "
                                        "else the nearest one above the current directory)")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -127,7 +166,7 @@ def _parser():
              "the figure's number in the thesis (e.g. 3.4), or own.N for the companion's own figures"),
             ("table", "number", "regenerate one table by its number, e.g. 3.2", "the table's number in the thesis"),
             ("run", "name", "run one notebook by its name, e.g. sec3_5 or findings",
-             "the notebook's file name without .ipynb (`list` shows them)")]:
+             "the notebook's file name without .ipynb (list shows them)")]:
         p = sub.add_parser(name, help=help_, description=help_)
         p.add_argument(what, help=what_help)
         p.add_argument("--fidelity", choices=("full", "ci"), default="full", help=FIDELITY_HELP)
@@ -169,12 +208,7 @@ def _command(args) -> int:
 
     paths.project()              # fail early, with the message, outside a checkout
     if args.command == "list":
-        for info in nbs.notebooks().values():
-            figs = ", ".join(f"Fig. {f}" for f in info.figures)
-            tabs = ", ".join(f"Table {t}" for t in info.tables)
-            params = ", ".join(n for n in nbs.default_parameters(info) if n not in nbs.HARNESS_PARAMETERS)
-            print(f"{info.name:10s} {info.title}\n{'':10s} {'; '.join(x for x in (figs, tabs) if x)}\n"
-                  f"{'':10s} parameters (-p): {params}")
+        print(notebook_list(nbs.notebooks().values()))
         return 0
     if args.command in ("figure", "table", "run"):
         info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command, args.number)

@@ -14,6 +14,7 @@ import signal
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import get_context
+from pathlib import Path
 
 from . import manifest, paths
 from . import notebooks as nbs
@@ -36,12 +37,34 @@ def terminate(signum, frame):
 
 def run_one(info, fidelity, output_dir=None, overrides=None, progress_bar=None):
     """Run ``info``; return the executed notebook's path and the wall time in seconds."""
-    start = time.perf_counter()
+    start, started = time.perf_counter(), time.time()
     print(f"running {info.path.name} ({info.title}) at fidelity={fidelity} ...", flush=True)
     executed = nbs.run(info, fidelity, output_dir=output_dir, overrides=overrides, progress_bar=progress_bar)
     seconds = time.perf_counter() - start
     print(f"  {info.path.name} done in {seconds:.1f} s -> {rel(executed)}", flush=True)
+    folder = Path(output_dir or nbs.default_output_dir(fidelity))
+    written = written_since(folder, started)
+    if written:
+        print(f"  outputs in {rel(folder)}/: {', '.join(written)}", flush=True)
     return executed, seconds
+
+
+def written_since(folder, since: float) -> list:
+    """The files under ``folder`` written at or after ``since`` (a ``time.time()``), relative to it,
+    in natural order (fig2_2 before fig2_10).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     for name in ("fig2_10.png", "fig2_2.png"):
+    ...         _ = (Path(tmp) / name).write_text("")
+    ...     written_since(tmp, 0)
+    ['fig2_2.png', 'fig2_10.png']
+    """
+    folder = Path(folder)
+    found = [p for p in folder.rglob("*") if p.is_file() and p.stat().st_mtime >= since - 1]
+    return sorted((p.relative_to(folder).as_posix() for p in found), key=nbs.natural_key)
 
 
 def run_and_record(info, fidelity, progress_bar=None):

@@ -144,8 +144,7 @@ def prune_doctree(app, doctree, docname):
 
 LATEX_PREAMBLE = r"""
 % identifiers break after an underscore (API names, record keys) instead of running past the margin
-\let\asocunderscore\_
-\DeclareRobustCommand{\_}{\asocunderscore\hspace{0pt}}
+\DeclareRobustCommand{\_}{\textunderscore\hspace{0pt}}
 """
 """LaTeX for the preamble of the PDF (Sphinx's ``latex_elements["preamble"]``)."""
 

@@ -269,3 +269,53 @@ def test_without_the_companion_extra_the_command_prints_one_line():
     use = subprocess.run([sys.executable, "-c", "import sys; sys.modules['yaml'] = None\n"
                           "import asoc_companion; asoc_companion.record"], capture_output=True, text=True)
     assert "pip install 'asoc[companion]'" in use.stderr.splitlines()[-1]
+
+
+# ---- plain help, aligned list, natural order, where outputs went (issue 31, item 5) ----------
+
+def _all_help_texts():
+    parser = cli._parser()
+    texts = [parser.format_help()]
+    for action in parser._subparsers._group_actions:
+        texts += [sub.format_help() for sub in action.choices.values()]
+    return texts
+
+
+def test_help_is_plain_text():
+    for text in _all_help_texts():
+        assert "`" not in text and ":func:" not in text, text
+
+
+def test_list_aligns_every_row_to_the_longest_name(capsys):
+    assert cli.main(["list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = [name for name in nbs.notebooks()]
+    column = max(map(len, names)) + 2
+    assert len(lines) == 3 * len(names)
+    for k, name in enumerate(names):
+        title, items, params = lines[3 * k: 3 * k + 3]
+        assert title.startswith(name) and title[column - 2:column] == "  " and title[column] != " "
+        assert items[:column].strip() == "" and items[column] != " "
+        assert params[:column].strip() == "" and params[column:].startswith("parameters (-p):")
+
+
+def test_known_figures_are_in_natural_order(capsys):
+    assert cli.main(["figure", "9.9", "--fidelity", "ci"]) == 2
+    known = capsys.readouterr().err.split("known: ")[1].strip().split(", ")
+    assert known.index("2.2") < known.index("2.10") and known == sorted(known, key=nbs.natural_key)
+
+
+def test_a_run_prints_where_its_outputs_went(tmp_path, monkeypatch, capsys):
+    from asoc_companion import build
+
+    info = _notebook(tmp_path, "demo")
+
+    def fake_run(info, fidelity, output_dir=None, **kwargs):
+        (output_dir / "fig2_10.png").write_text("")
+        (output_dir / "fig2_2.png").write_text("")
+        return output_dir / "demo.ipynb"
+
+    monkeypatch.setattr(nbs, "run", fake_run)
+    build.run_one(info, "ci", output_dir=tmp_path)
+    out = capsys.readouterr().out
+    assert f"outputs in {build.rel(tmp_path)}/: " in out and "fig2_2.png, fig2_10.png" in out, out
