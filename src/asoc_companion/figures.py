@@ -19,6 +19,17 @@ __all__ = ["STYLE", "SAVE_METADATA", "apply_style", "NUMBER", "file_stem", "save
            "markdown_table", "save_table", "close"]
 
 
+PALETTE = {"blue": "#0072B2", "vermillion": "#D55E00", "bluish green": "#009E73",
+           "reddish purple": "#CC79A7", "orange": "#E69F00", "sky blue": "#56B4E9",
+           "yellow": "#F0E442", "black": "#000000"}
+"""The colour cycle (Okabe and Ito's colour-blind-safe palette) by the names captions use:
+``C0`` is blue, ``C1`` vermillion, ... (:func:`colour_name`)."""
+
+PRINT_WIDTH_INCHES = 6.2
+"""The width a figure is printed at: the PDF's text width (A4 with 1 in margins is 6.27 in)."""
+MIN_FONT_POINTS = 9
+"""The smallest text size of a figure, in points at :data:`PRINT_WIDTH_INCHES`."""
+
 STYLE = {
     "figure.figsize": (6.4, 4.0),
     "figure.dpi": 100,
@@ -31,13 +42,14 @@ STYLE = {
     "grid.alpha": 0.3,
     "axes.spines.top": False,
     "axes.spines.right": False,
-    "legend.fontsize": 9,
+    "legend.fontsize": MIN_FONT_POINTS,
+    "xtick.labelsize": MIN_FONT_POINTS,
+    "ytick.labelsize": MIN_FONT_POINTS,
     "legend.frameon": False,
     "lines.linewidth": 1.5,
     "image.cmap": "viridis",
     "mathtext.fontset": "cm",
-    "axes.prop_cycle": matplotlib.cycler(color=["#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                                "#E69F00", "#56B4E9", "#F0E442", "#000000"]),
+    "axes.prop_cycle": matplotlib.cycler(color=list(PALETTE.values())),
 }
 
 
@@ -61,6 +73,53 @@ def apply_style():
     150.0 True
     """
     matplotlib.rcParams.update(STYLE)
+
+
+def colour_name(colour) -> str:
+    """The palette's name of ``colour`` ("C1", a hex string or an RGB tuple), for a caption.
+
+    Examples
+    --------
+    >>> colour_name("C1"), colour_name("#0072b2")
+    ('vermillion', 'blue')
+    """
+    import matplotlib.colors as mcolors
+
+    if isinstance(colour, str) and re.fullmatch(r"C\d+", colour):
+        names = list(PALETTE)
+        return names[int(colour[1:]) % len(names)]
+    wanted = mcolors.to_hex(colour)
+    for name, hex_ in PALETTE.items():
+        if mcolors.to_hex(hex_) == wanted:
+            return name
+    raise ValueError(f"colour: {colour!r} is not a colour of the figure style's palette")
+
+
+def fit_for_print(fig):
+    """Make ``fig`` legible at the printed width: no wider than :data:`PRINT_WIDTH_INCHES`
+    (a wider figure is shrunk, keeping its aspect ratio and re-laid out), and no text below
+    :data:`MIN_FONT_POINTS`, so every text is printed at least that large.
+
+    Examples
+    --------
+    >>> from matplotlib.figure import Figure
+    >>> fig = Figure(figsize=(9.6, 3.6))
+    >>> ax = fig.add_subplot()
+    >>> _ = ax.set_title("title", fontsize=7)
+    >>> fit_for_print(fig)
+    >>> float(fig.get_figwidth()), min(t.get_fontsize() for t in fig.findobj(matplotlib.text.Text))
+    (6.2, 9.0)
+    """
+    import matplotlib.text
+
+    width, height = fig.get_size_inches()
+    if width > PRINT_WIDTH_INCHES:
+        if fig.get_layout_engine() is None:
+            fig.set_layout_engine("tight")
+        fig.set_size_inches(PRINT_WIDTH_INCHES, height * PRINT_WIDTH_INCHES / width)
+    for text in fig.findobj(matplotlib.text.Text):
+        if text.get_text() and text.get_fontsize() < MIN_FONT_POINTS:
+            text.set_fontsize(MIN_FONT_POINTS)
 
 
 NUMBER = re.compile(r"(\d+)\.(\d+)|own\.(\d+)")
@@ -87,6 +146,9 @@ def file_stem(kind: str, number: str) -> str:
 
 def save_figure(fig, number: str, output_dir):
     """Save ``fig`` as ``fig<chapter>_<n>.png`` and ``.pdf`` (atomically); return the PNG path.
+
+    The figure is first made legible in print (:func:`fit_for_print`); the notebook then shows
+    it at that size too.
 
     Parameters
     ----------
@@ -119,6 +181,7 @@ def save_figure(fig, number: str, output_dir):
     """
     out = Path(output_dir)
     stem = file_stem("fig", number)
+    fit_for_print(fig)
     paths = []
     for ext in ("png", "pdf"):
         buf = io.BytesIO()

@@ -107,29 +107,62 @@ COLUMN_CAP = 40
 """A column wider than this many characters is wrapped rather than given its natural width."""
 
 
+def column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
+    """Relative widths of a table's columns (characters) from each column's longest cell and
+    longest word, and whether the table needs the small font to fit ``width`` characters.
+
+    Each column gets at least its longest word and the cell padding (3 characters); what the
+    line has left goes to the columns with longer cells, up to :data:`COLUMN_CAP`. When the
+    words alone do not fit, the table is set in the small font (a quarter more characters).
+
+    Examples
+    --------
+    >>> column_widths([60, 60], [10, 10])
+    ([40.0, 40.0], False)
+    >>> column_widths([8] * 10, [8] * 10)
+    ([11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0], True)
+    """
+    least = [w + 3 for w in words]
+    wants = [max(m, min(n, COLUMN_CAP)) for m, n in zip(least, longest)]
+    small = sum(least) > width
+    room = width * 1.25 if small else width
+    spare, extra = room - sum(least), [w - m for w, m in zip(wants, least)]
+    if spare <= 0 or not sum(extra):
+        return [float(m) for m in least], small
+    share = min(1.0, spare / sum(extra))
+    return [m + share * e for m, e in zip(least, extra)], small
+
+
 def fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
     """Give every table that would run past the margin column widths, so LaTeX wraps its cells.
 
     Sphinx sets a long table without declared widths in ``l`` columns, which never wrap; a
-    table whose longest cells add up to more than ``width`` characters gets widths
-    proportional to its columns' longest cells (capped at :data:`COLUMN_CAP`). Returns how
-    many tables were changed.
+    table whose longest cells add up to more than ``width`` characters gets the widths of
+    :func:`column_widths`, and the small font when it needs it. Returns how many tables
+    were changed.
     """
     changed = 0
-    for table in doctree.findall(nodes.table):
+    for table in list(doctree.findall(nodes.table)):
         if "colwidths-given" in table["classes"]:
             continue
         for group in table.findall(nodes.tgroup):
             specs = [c for c in group.children if isinstance(c, nodes.colspec)]
-            longest = [0] * len(specs)
+            longest, words = [0] * len(specs), [0] * len(specs)
             for row in group.findall(nodes.row):
                 for k, entry in enumerate(row.children[:len(specs)]):
-                    longest[k] = max(longest[k], len(entry.astext()))
+                    text = entry.astext()
+                    longest[k] = max(longest[k], len(text))
+                    words[k] = max([words[k]] + [len(w) for w in text.split()])
             if sum(longest) <= width:
                 continue
-            for spec, chars in zip(specs, longest):
-                spec["colwidth"] = max(min(chars, COLUMN_CAP), 4)
+            widths, small = column_widths(longest, words, width)
+            for spec, chars in zip(specs, widths):
+                spec["colwidth"] = max(1, round(10 * chars))
             table["classes"].append("colwidths-given")
+            if small:
+                index = table.parent.index(table)
+                table.parent.insert(index + 1, nodes.raw("", r"\endgroup", format="latex"))
+                table.parent.insert(index, nodes.raw("", r"\begingroup\footnotesize", format="latex"))
             changed += 1
     return changed
 
