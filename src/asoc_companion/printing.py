@@ -111,7 +111,8 @@ def column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
     """Relative widths of a table's columns (characters) from each column's longest cell and
     longest word, and whether the table needs the small font to fit ``width`` characters.
 
-    Each column gets at least its longest word and the cell padding (3 characters); what the
+    Each column gets at least its longest word (up to the cap) and the cell padding (3
+    characters); what the
     line has left goes to the columns with longer cells, up to :data:`COLUMN_CAP`. When the
     words alone do not fit, the table is set in the small font (a quarter more characters).
 
@@ -122,7 +123,7 @@ def column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
     >>> column_widths([8] * 10, [8] * 10)
     ([11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0], True)
     """
-    least = [w + 3 for w in words]
+    least = [min(w, COLUMN_CAP) + 3 for w in words]
     wants = [max(m, min(n, COLUMN_CAP)) for m, n in zip(least, longest)]
     small = sum(least) > width
     room = width * 1.25 if small else width
@@ -193,18 +194,22 @@ def overfull_boxes(log: str, limit: float = OVERFULL_LIMIT) -> list:
     return [p for p in map(float, OVERFULL.findall(log)) if p > limit]
 
 
-def build_pdf(book=None, options=(), out=sys.stdout) -> int:
+def build_pdf(book=None, options=(), output_folder=None, out=sys.stdout) -> int:
     """Build the PDF with Jupyter Book's LaTeX builder; print a summary, not the log.
 
-    ``options`` are passed to ``jupyter-book build`` (e.g. ``["--all"]``). The builder's output goes to ``_build/latex/build-output.txt`` beside LaTeX's own log;
-    on failure its last lines are printed. Returns the builder's exit status.
+    ``options`` are passed to ``jupyter-book build`` (e.g. ``["--all"]``); the build goes to
+    ``output_folder/_build`` (default: the book's folder). The builder's output is saved as
+    ``_build/latex/build-output.txt`` beside LaTeX's own log; on failure its last lines are
+    printed. Returns the builder's exit status.
     """
     book = Path(book or paths.project().book)
-    latex = book / "_build" / "latex"
+    folder = Path(output_folder or book)
+    latex = folder / "_build" / "latex"
     jupyter_book = Path(sys.executable).parent / "jupyter-book"
     start = time.perf_counter()
-    proc = subprocess.run([str(jupyter_book), "build", str(book), "--builder", "pdflatex", *options],
-                          capture_output=True, text=True)
+    where = ["--path-output", str(folder)] if output_folder else []
+    proc = subprocess.run([str(jupyter_book), "build", str(book), "--builder", "pdflatex", *where, *options],
+                          capture_output=True, text=True, timeout=1800)
     seconds = time.perf_counter() - start
     latex.mkdir(parents=True, exist_ok=True)
     output = latex / "build-output.txt"

@@ -1,20 +1,24 @@
 """The whole book as one PDF (`make pdf`): built once per session from the committed notebooks
 with XeLaTeX, then read with poppler-utils. It has a title page naming the thesis, the
 licences and the software's version; a bookmark for every page and every finding; every
-figure as an image and every thesis table; and no glyph missing from its fonts."""
+figure as an image and every thesis table; and no glyph missing from its fonts. It prints
+no HTML-only output as its repr, no papermill parameters cell and no setup code (a line names
+the notebook instead); at most 5 lines run more than 10 pt past the margin; and the build
+prints a short summary instead of LaTeX's log."""
 
+import io
 import json
 import re
 import shutil
 import subprocess
 import sys
 from importlib.metadata import version
-from pathlib import Path
 
 import pytest
 
 from asoc_companion.notebooks import notebooks
 from asoc_companion.paths import BOOK
+from asoc_companion.printing import OVERFULL_LIMIT, build_pdf, is_setup_cell, overfull_boxes
 
 TOOLS = ("xelatex", "latexmk", "pdfinfo", "pdftotext", "pdfimages", "pdftohtml")
 
@@ -27,11 +31,11 @@ def pdf(tmp_path_factory):
         pytest.fail(f"{', '.join(missing)} missing: `make tex` installs Debian's TeX Live and poppler-utils")
     out = tmp_path_factory.mktemp("pdf")
     subprocess.run([sys.executable, "-m", "asoc_companion.book"], check=True, capture_output=True)
-    jb = Path(sys.executable).parent / "jupyter-book"
-    proc = subprocess.run([str(jb), "build", str(BOOK), "--builder", "pdflatex", "--path-output", str(out)],
-                          capture_output=True, text=True, timeout=900)
+    summary = io.StringIO()
+    status = build_pdf(BOOK, output_folder=out, out=summary)
     path = out / "_build" / "latex" / "asoc-companion.pdf"
-    assert proc.returncode == 0 and path.exists(), proc.stdout[-4000:] + proc.stderr[-2000:]
+    assert status == 0 and path.exists(), summary.getvalue()
+    (out / "summary.txt").write_text(summary.getvalue())
     return path
 
 
@@ -105,3 +109,50 @@ def test_no_missing_glyphs(pdf):
     log = pdf.with_suffix(".log").read_text(errors="replace")
     missing = sorted(set(re.findall(r"Missing character: There is no (.+?) in font", log)))
     assert not missing, f"characters the PDF's fonts lack: {missing}"
+
+
+# ---- a PDF a reader can read from cover to cover (issue 31, item 1) ---------------------------
+
+MAX_OVERFULL = 5
+"""Lines allowed to run more than OVERFULL_LIMIT past the margin."""
+
+
+@pytest.mark.book
+def test_no_html_repr_in_the_latex(pdf):
+    tex = pdf.with_suffix(".tex").read_text()
+    reprs = sorted(set(re.findall(r"<IPython\.core\.display[^>]*>|<[\w.]+ object at 0x[0-9a-f]+>", tex)))
+    assert not reprs, f"outputs printed as their repr (an HTML-only display?): {reprs}"
+
+
+@pytest.mark.book
+def test_no_injected_parameters_and_no_setup_code(pdf):
+    text = _text(pdf)
+    assert "# Parameters" not in text, "papermill's injected-parameters cell is printed"
+    for info in notebooks().values():
+        cells = json.loads(info.path.read_text())["cells"]
+        setup = ["".join(c["source"]) for c in cells if c["cell_type"] == "code" and is_setup_cell("".join(c["source"]))
+                 and not {"remove-cell", "remove-input"} & set(c["metadata"].get("tags", []))]
+        if setup:
+            assert f"open book/{info.path.name}" in text, f"no line names {info.path.name} for its setup code"
+    assert "import asoc_companion as repro" not in text, "setup code is printed"
+    # the method's code stays: a cell the text discusses, after the setup cell
+    assert "sigma_point_linearizations()" in text
+
+
+@pytest.mark.book
+def test_theorems_table_is_in_the_pdf(pdf):
+    text = " ".join(_text(pdf).split())
+    assert "Theorem 3.19" in text and "Corrected statement:" in text and "One instance checks:" in text
+
+
+@pytest.mark.book
+def test_few_lines_run_past_the_margin(pdf):
+    boxes = overfull_boxes(pdf.with_suffix(".log").read_text(errors="replace"))
+    assert len(boxes) <= MAX_OVERFULL, f"{len(boxes)} lines over {OVERFULL_LIMIT} pt too wide: {boxes}"
+
+
+@pytest.mark.book
+def test_the_build_prints_a_summary_not_the_log(pdf):
+    summary = (pdf.parents[2] / "summary.txt").read_text()
+    assert len(summary.splitlines()) <= 3, summary
+    assert re.search(r"\d+ pages, built in \d+ s", summary) and str(pdf.with_suffix(".log")) in summary

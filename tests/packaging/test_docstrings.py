@@ -8,6 +8,7 @@ import importlib
 import inspect
 import re
 
+import numpydoc.validate as numpydoc_validate
 import pytest
 from docutils.frontend import get_default_settings
 from docutils.parsers.rst import Parser
@@ -16,8 +17,6 @@ from sphinx.ext.autosummary import extract_summary
 
 from asoc_companion.book import API_BLOCK, THESIS_ABBREVIATIONS, documented, public_names, use_abbreviations
 from asoc_companion.paths import BOOK
-
-numpydoc_validate = pytest.importorskip("numpydoc.validate")
 
 PARSE_ERRORS = {
     "PR02": "documents a parameter the signature lacks (often a sentence read as a name)",
