@@ -306,7 +306,7 @@ def _resolvent_stacks(A, T, rho):
 
 
 def certify(A, T, method):
-    """(lower, upper, rho, X, estimate) of the balanced (A, T): :func:`_certify_estimates` with BLAS on one thread: its work is small products and M small
+    """(lower, upper, rho, X, estimate) of the balanced (A, T): ``_certify_estimates`` with BLAS on one thread: its work is small products and M small
     eigenproblems, where threads only cost (a stack of 8 eigh of 32 x 32: 0.49 s with threads on a
     loaded 2-core machine, 1 ms without).
 

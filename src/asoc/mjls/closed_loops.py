@@ -122,7 +122,12 @@ def augmented_closed_loop(sys, F, K, L):
 
     Returns
     -------
-    At, HHt_cl, Qt : numpy.ndarray, each (M, nx + nc, nx + nc)
+    At : numpy.ndarray, (M, nx + nc, nx + nc)
+        The augmented closed loop (3.39).
+    HHt_cl : numpy.ndarray, (M, nx + nc, nx + nc)
+        Its noise covariances.
+    Qt : numpy.ndarray, (M, nx + nc, nx + nc)
+        Its cost weights.
 
     Raises
     ------

@@ -12,9 +12,9 @@ def average_cost(sys, controller):
     """The exact average cost (3.9) of a time-invariant controller without mode observation.
 
     u = L y (:class:`StaticGain`): Prop. 3.7 with the measurement noise J
-    (:func:`asoc.mjls.static.static_cost`); the dynamic controller (3.37)
+    (:func:`asoc.mjls.static_cost`); the dynamic controller (3.37)
     (:class:`DynamicOutputFeedback` with constant F, K, L): Prop. 3.24
-    (:func:`asoc.mjls.dynamic.steady_state_cost`). Its initial state does not enter the
+    (:func:`asoc.mjls.steady_state_cost`). Its initial state does not enter the
     average cost.
 
     Parameters

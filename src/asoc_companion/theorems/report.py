@@ -282,7 +282,7 @@ def statements_markdown(statements, records, findings) -> str:
 
     Examples
     --------
-    >>> from asoc_companion.theorems.core import Statement
+    >>> from asoc_companion.theorems.statement import Statement
     >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing", not_checkable="a definition")
     >>> page = statements_markdown([lemma], {}, {})
     >>> "| {ref}`Lemma 3.0 <check-3-0>` | not checkable | - |" in page, "**Lemma 3.0.** $|x| >= 0$" in page
