@@ -12,6 +12,7 @@ real one: they are importable, and must not be imported.)
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -100,3 +101,20 @@ def test_installed_wheel_runs_alg_3_1_outside_the_checkout(installed, tmp_path):
 
     here = static_output_feedback(sec354_system(1))
     assert out["converged"] and np.allclose(out["L"], here.L, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.packaging
+def test_building_the_wheel_prints_no_warning(tmp_path):
+    """No deprecation warning from setuptools (a license table or classifier, a beta notice)."""
+    source = tmp_path / "source"
+    source.mkdir()
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, source / name)
+    shutil.copytree(ROOT / "src", source / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "-v", "--no-deps", "--no-build-isolation",
+                           "--no-index", "-w", str(tmp_path / "dist"), str(source)],
+                          capture_output=True, text=True, env=_clean_env(), timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    noise = [line.strip() for line in (proc.stdout + proc.stderr).splitlines()
+             if re.search(r"Deprecat|BuildBackendWarning|SetuptoolsWarning|\bbeta\b", line)]
+    assert not noise, noise
