@@ -64,12 +64,25 @@ def _has_section(doc: str, title: str) -> bool:
     return re.search(rf"^\s*{title}\n\s*-{{3,}}", doc or "", re.M) is not None
 
 
+def sentence_types(doc: str) -> list:
+    """Entries of the Parameters, Returns and Attributes sections whose type reads as a sentence
+    (a colon, a semicolon, an unbalanced parenthesis, a final period or a leading "the"): the
+    description was written on the type's line."""
+    from numpydoc.docscrape import NumpyDocString
+
+    parsed = NumpyDocString(doc)
+    return [f"{entry.name or section}: {entry.type!r}" for section in ("Parameters", "Returns", "Attributes")
+            for entry in parsed[section]
+            if re.search(r": |;|\.$|^the ", entry.type) or entry.type.count("(") != entry.type.count(")")]
+
+
 @pytest.mark.parametrize("qualified", [q for q, _, _ in OBJECTS])
 def test_parameters_and_returns_parse(qualified):
     errors = numpydoc_validate.validate(qualified)["errors"]
     obj = next(o for q, o, _ in OBJECTS if q == qualified)
     bad = [f"{code} {msg}" for code, msg in errors if code in PARSE_ERRORS
            or (code == "PR01" and _has_section(inspect.getdoc(obj), "Parameters"))]
+    bad += [f"a sentence where the type belongs, {entry}" for entry in sentence_types(inspect.getdoc(obj) or "")]
     assert not bad, f"{qualified}: " + "; ".join(bad)
 
 

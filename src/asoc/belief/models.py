@@ -74,8 +74,9 @@ class NonlinearModel:
         ``a(x, u, w)``, broadcasting over leading axes.
     h : callable
         ``h(x, v)``, returning shape ``(..., n_y)``.
-    w, v : :class:`GaussianNoise` (process and measurement noise; the filters use their
-        moments, simulation and particle filters their samplers).
+    w, v : GaussianNoise
+        Process and measurement noise; the filters use their moments, simulation and particle
+        filters their samplers.
     n_x, n_u : int
         State and input dimensions, >= 1.
     likelihood : callable, optional

@@ -170,7 +170,8 @@ class StageProblem:
     model, cost : NonlinearModel and QuadraticCost
     filt : BeliefFilter
         Used through :class:`~asoc.belief.BeliefFilter` only (``mixture``, ``covariance_map``).
-    estimate : the filter's estimate p_bar_k (for the UKF a tuple (mean, cov))
+    estimate : object
+        The filter's estimate p_bar_k (for the UKF a tuple (mean, cov)).
     nxt : Value
         V_{k+1} of eq. (2.10).
     w_points, beta : array_like, (R, n_w) and (R,)

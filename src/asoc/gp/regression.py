@@ -259,7 +259,8 @@ class DistributionGP(_LikelihoodGP):
         ``{"alpha": (lo, hi), "l": (lo, hi), "sigma_n": (lo, hi)}``; default: alpha in
         [1e-3, 1e3] std(y), l in [1e-3, 1e3] median distance, sigma_n in [1e-4, 1] std(y)
         (the floor keeps :math:`\\Sigma_y` well conditioned, cond <~ M 1e8, for noiseless data).
-    **shape : ``nu`` (Matern), ``gamma`` (gamma-exponential), ``alpha_rq`` (rational quadratic).
+    **shape : float
+        ``nu`` (Matern), ``gamma`` (gamma-exponential), ``alpha_rq`` (rational quadratic).
 
     Examples
     --------

@@ -229,7 +229,8 @@ def gaussian_dirac_mixtures(means, variances, L: int = 10, b_max: float = DEFAUL
 
     Returns
     -------
-    ndarray, (N, L, 1): locations ``mean + sqrt(variance) * x_i`` (:func:`standard_normal_dirac_approximation`).
+    ndarray, (N, L, 1)
+        The locations ``mean + sqrt(variance) * x_i`` (:func:`standard_normal_dirac_approximation`).
 
     Raises
     ------

@@ -283,7 +283,8 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
     ----------
     sys : MJLS
         The system (Sec. 3.6).
-    init : start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a
+    init : DynamicOutputFeedbackResult, tuple or None
+        The start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a
         tuple (F, K, L), or None for the best default start of
         :func:`exact_dynamic_output_feedback`.
     nc : int, optional
@@ -338,13 +339,15 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     ----------
     sys : MJLS
         With measurement noise J (Sec. 3.6; J = None means y = C x).
-    init : start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a tuple
+    init : DynamicOutputFeedbackResult, tuple or None
+        The start: a result with F, K, L (e.g. :class:`DynamicOutputFeedbackResult`), a tuple
         (F, K, L), or None for the better (in exact cost) of Algorithm 3.2's controller after
         at most ``config.defaults["mjls.exact_warm_start_iterations"]`` iterations and the LQG
         compensator of the mode-averaged system (``averaged_lqg`` in this module). A non-stabilising
         start is first moved into the stabilising set by minimising the mean-square spectral
         radius (:func:`min_radius_dynamic_output_feedback`).
-    nc : controller order (default: that of ``init``, else nx; Alg. 3.2's controller is
+    nc : int, optional
+        Controller order (default: that of ``init``, else nx; Alg. 3.2's controller is
         padded with zeros or cut to nc states).
     tol : float
         Stop when the decrease the quasi-Newton model predicts is below tol * cost.
@@ -416,7 +419,8 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
         The horizon K >= 1.
     mean0, cov0, mu0 : array_like
         The Gaussian-mixture initial state, as for Alg. 3.3.
-    init : start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a result
+    init : FiniteHorizonResult, DynamicOutputFeedbackResult, tuple or None
+        The start: None for Algorithm 3.3's result (itself started from Alg. 3.2), a result
         with F, K, L (e.g. FiniteHorizonResult, DynamicOutputFeedbackResult) or a tuple
         (F, K, L), constant or per step.
     tol : float
