@@ -226,3 +226,40 @@ def test_landing_page_and_ledger_give_the_same_totals():
     cited = [(p.name, m) for p in [*BOOK.glob("*.md"), *BOOK.glob("*.ipynb")]
              for m in re.findall(r"\bissues? \d+\b", p.read_text())]
     assert not cited, f"references to issue numbers a reader cannot follow: {cited}"
+
+
+# ---- the Theorems page on a phone and on a desktop (issue 31, item 3) ---------------------------
+
+FORMULAS_CUT = """
+const cut = [];
+for (const m of document.querySelectorAll('article mjx-container')) {
+  const r = m.getBoundingClientRect();
+  for (let e = m.parentElement; e && e !== document.body; e = e.parentElement) {
+    if (getComputedStyle(e).overflowX !== 'visible') {
+      const p = e.getBoundingClientRect();
+      if (r.right > p.right + 1 || r.left < p.left - 1) cut.push(m.textContent.slice(0, 60));
+      break;
+    }
+  }
+}
+return cut;"""
+"""The formulas of a page that run past the box that clips or scrolls them."""
+
+
+@pytest.mark.book
+def test_theorems_page_reads_on_a_phone_and_shows_whole_formulas(html, browser):
+    browser.set_window_size(1280, 900)
+    browser.get((html / "theorems.html").as_uri())
+    _wait_for_math(browser)
+    header = browser.execute_script(
+        "return Array.from(document.querySelectorAll('article table')[0].querySelectorAll('th'))"
+        ".map(th => th.textContent.trim())")
+    assert header == ["Statement", "Verdict", "Mutant"], header
+    sections = browser.execute_script("return document.querySelectorAll('[id^=check-]').length")
+    assert sections >= 30, f"{sections} statement sections"
+    assert not browser.execute_script(FORMULAS_CUT), "formulas cut at 1280 px"
+    browser.set_window_size(400, 900)
+    width, client = browser.execute_script(
+        "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+    browser.set_window_size(1280, 900)
+    assert width <= client, f"the Theorems page scrolls sideways at 400 px ({width} > {client} px)"
