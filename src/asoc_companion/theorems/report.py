@@ -11,6 +11,7 @@ from ..atomic_files import atomic_write_json
 from .chapter3 import MARGIN, SHOW
 from .statement import Outcome
 from .engine import verdict_text
+from .typeset import CORRECTIONS_TEX, MUTANTS_TEX
 
 __all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "trim_systems",
            "load_counterexamples", "margin", "shown_counterexample", "describe", "system_from",
@@ -175,68 +176,6 @@ def _statement_row(st, records, findings) -> str:
 # The Theorems page as MyST Markdown: rendered by the HTML and the LaTeX builders alike (math
 # typeset by MathJax and by LaTeX), a compact table first, then one section per statement.
 
-MUTANTS_TEX = {
-    "the reference without the measurement update (the prediction P: the Schur complement dropped)":
-        r"the reference without the measurement update (the prediction $\mathbf P$: the Schur complement dropped)",
-    "the expansion with x^T V_K x in place of 1/2 x^T V_K x (a factor changed)":
-        r"the expansion with $\mathbf x^\top\mathbf V_K\mathbf x$ in place of "
-        r"$\tfrac12\mathbf x^\top\mathbf V_K\mathbf x$ (a factor changed)",
-    "the exact costs without the innovation's share P_k - Sigma_{k+1} of the estimate's second moment":
-        r"the exact costs without the innovation's share $\mathbf P_k-\boldsymbol\Sigma_{k+1}$ of the "
-        r"estimate's second moment",
-    "the covariance exp(-(d/l)^4), outside Table 2.1 and not positive definite even on the real line":
-        r"the covariance $\exp(-(d/l)^4)$, outside Table 2.1 and not positive definite even on the real line",
-    "the premise negated: a solution with an eigenvalue <= 0 in both forms 'implies' stability":
-        r"the premise negated: a solution with an eigenvalue $\leq 0$ in both forms 'implies' stability",
-    "the formula with D_i in place of D_i + E_i L_i C_i":
-        r"the formula with $\mathbf D_i$ in place of $\mathbf D_i+\mathbf E_i\mathbf L_i\mathbf C_i$",
-    "the BMI with its corner block G_i + G_i^T in place of G_i + G_i^T - D_i(Y)":
-        r"the BMI with its corner block $\mathbf G_i+\mathbf G_i^\top$ in place of "
-        r"$\mathbf G_i+\mathbf G_i^\top-\mathcal D_i(\mathbf Y)$",
-    "the gains recovered with a sign error, L_i = -F_i M_i^{-1}":
-        r"the gains recovered with a sign error, $\mathbf L_i=-\mathbf F_i\mathbf M_i^{-1}$",
-    "the recursion without the noise term mu_k^i H_i H_i^T":
-        r"the recursion without the noise term $\mu_k^i\mathbf H_i\mathbf H_i^\top$",
-    "the corrected reading with X_inf solved without the noise term":
-        r"the corrected reading with $\mathbf X_\infty$ solved without the noise term",
-    "the stated form without the noise term mu_i H_i H_i^T":
-        r"the stated form without the noise term $\mu_i\mathbf H_i\mathbf H_i^\top$",
-    "the residual of (3.31) without R_i": r"the residual of (3.31) without $\mathbf R_i$",
-    "the formula with 2 R_i in place of R_i": r"the formula with $2\mathbf R_i$ in place of $\mathbf R_i$",
-    "M / 2 in place of M (a factor changed: 'rho(M) < 2 implies stability')":
-        r"$\mathbf M/2$ in place of $\mathbf M$ (a factor changed: '$\rho(\mathbf M)<2$ implies stability')",
-    "Q~ = diag(Q, R) (the gain L dropped)":
-        r"$\tilde{\mathbf Q}=\mathrm{diag}(\mathbf Q,\mathbf R)$ (the gain $\mathbf L$ dropped)",
-    "the recursion without the process noise mu_k^i H_i H_i^T":
-        r"the recursion without the process noise $\mu_k^i\mathbf H_i\mathbf H_i^\top$",
-    "Q~ without the input's block L^T R_i L":
-        r"$\tilde{\mathbf Q}$ without the input's block $\mathbf L^\top\mathbf R_i\mathbf L$",
-    "the stated form without the noise term mu_i H~_i H~_i^T":
-        r"the stated form without the noise term $\mu_i\tilde{\mathbf H}_i\tilde{\mathbf H}_i^\top$",
-    "the solution's L scaled by 1.2": r"the solution's $\mathbf L$ scaled by 1.2",
-    "the recursion without the noise term omega": r"the recursion without the noise term $\omega$",
-    "the hypotheses A, B >= 0 dropped (A, B symmetric indefinite)":
-        r"the hypotheses $\mathbf A,\mathbf B\geq 0$ dropped ($\mathbf A$, $\mathbf B$ symmetric indefinite)",
-    "Jbar_0 without the noise's share omega":
-        r"$\bar{\mathcal J}_0$ without the noise's share $\omega$",
-    "the formula with D_i in place of D_i + E_i L C_i (the input's share of z dropped)":
-        r"the formula with $\mathbf D_i$ in place of $\mathbf D_i+\mathbf E_i\mathbf L\mathbf C_i$ "
-        r"(the input's share of $\mathbf z$ dropped)",
-    "the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)":
-        r"the BMI with its corner block $\mathbf G+\mathbf G^\top$ in place of "
-        r"$\mathbf G+\mathbf G^\top-\mathcal D_i(\mathbf Y)$",
-    "the gain recovered with a sign error, L = -F M^{-1}":
-        r"the gain recovered with a sign error, $\mathbf L=-\mathbf F\mathbf M^{-1}$",
-    "the closed form without Delta (the noise's cost dropped)":
-        r"the closed form without $\Delta$ (the noise's cost dropped)",
-    "the limit compared with the LQ gain for 2 R instead of R":
-        r"the limit compared with the LQ gain for $2\mathbf R$ instead of $\mathbf R$",
-    "the comparison with the LQG controller for 2 R instead of R":
-        r"the comparison with the LQG controller for $2\mathbf R$ instead of $\mathbf R$",
-}
-"""The mutants' descriptions (plain text in the study's records) with their math in LaTeX; a
-description not listed is shown as recorded."""
-
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_\[\]<>#|])")
 
 
@@ -317,7 +256,8 @@ def _correction_lines(record) -> list:
         lines.append(f"- *Diagnosis:* {markdown_text(record['diagnosis'])}")
     if record.get("corrected"):
         corrected = record["corrected"]
-        text = (f"- *Corrected statement:* {markdown_text(corrected['statement'])} "
+        statement = CORRECTIONS_TEX.get(corrected["statement"]) or markdown_text(corrected["statement"])
+        text = (f"- *Corrected statement:* {statement} "
                 f"(*{verdict_text({**corrected, 'not_applicable': 0})}*")
         if corrected.get("mutant"):
             text += f"; mutant {mutant_markdown(corrected['mutant'])}: {mutant_text(corrected)}"

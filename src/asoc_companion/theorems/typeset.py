@@ -1,0 +1,167 @@
+"""The theorems study's plain-text descriptions typeset for the Theorems page: the same words,
+their math in LaTeX (MyST Markdown, ``$...$``), keyed by the text the study records.
+
+A text the study changes is no longer found here and is shown as recorded (plain text);
+tests/companion/test_theorems_page.py lists the records without a typeset form.
+"""
+
+MUTANTS_TEX = {
+    "the reference without the measurement update (the prediction P: the Schur complement dropped)":
+        r"the reference without the measurement update (the prediction $\mathbf P$: the Schur complement dropped)",
+    "the expansion with x^T V_K x in place of 1/2 x^T V_K x (a factor changed)":
+        r"the expansion with $\mathbf x^\top\mathbf V_K\mathbf x$ in place of "
+        r"$\tfrac12\mathbf x^\top\mathbf V_K\mathbf x$ (a factor changed)",
+    "the exact costs without the innovation's share P_k - Sigma_{k+1} of the estimate's second moment":
+        r"the exact costs without the innovation's share $\mathbf P_k-\boldsymbol\Sigma_{k+1}$ of the "
+        r"estimate's second moment",
+    "the covariance exp(-(d/l)^4), outside Table 2.1 and not positive definite even on the real line":
+        r"the covariance $\exp(-(d/l)^4)$, outside Table 2.1 and not positive definite even on the real line",
+    "the premise negated: a solution with an eigenvalue <= 0 in both forms 'implies' stability":
+        r"the premise negated: a solution with an eigenvalue $\leq 0$ in both forms 'implies' stability",
+    "the formula with D_i in place of D_i + E_i L_i C_i":
+        r"the formula with $\mathbf D_i$ in place of $\mathbf D_i+\mathbf E_i\mathbf L_i\mathbf C_i$",
+    "the BMI with its corner block G_i + G_i^T in place of G_i + G_i^T - D_i(Y)":
+        r"the BMI with its corner block $\mathbf G_i+\mathbf G_i^\top$ in place of "
+        r"$\mathbf G_i+\mathbf G_i^\top-\mathcal D_i(\mathbf Y)$",
+    "the gains recovered with a sign error, L_i = -F_i M_i^{-1}":
+        r"the gains recovered with a sign error, $\mathbf L_i=-\mathbf F_i\mathbf M_i^{-1}$",
+    "the recursion without the noise term mu_k^i H_i H_i^T":
+        r"the recursion without the noise term $\mu_k^i\mathbf H_i\mathbf H_i^\top$",
+    "the corrected reading with X_inf solved without the noise term":
+        r"the corrected reading with $\mathbf X_\infty$ solved without the noise term",
+    "the stated form without the noise term mu_i H_i H_i^T":
+        r"the stated form without the noise term $\mu_i\mathbf H_i\mathbf H_i^\top$",
+    "the residual of (3.31) without R_i": r"the residual of (3.31) without $\mathbf R_i$",
+    "the formula with 2 R_i in place of R_i": r"the formula with $2\mathbf R_i$ in place of $\mathbf R_i$",
+    "M / 2 in place of M (a factor changed: 'rho(M) < 2 implies stability')":
+        r"$\mathbf M/2$ in place of $\mathbf M$ (a factor changed: '$\rho(\mathbf M)<2$ implies stability')",
+    "Q~ = diag(Q, R) (the gain L dropped)":
+        r"$\tilde{\mathbf Q}=\mathrm{diag}(\mathbf Q,\mathbf R)$ (the gain $\mathbf L$ dropped)",
+    "the recursion without the process noise mu_k^i H_i H_i^T":
+        r"the recursion without the process noise $\mu_k^i\mathbf H_i\mathbf H_i^\top$",
+    "Q~ without the input's block L^T R_i L":
+        r"$\tilde{\mathbf Q}$ without the input's block $\mathbf L^\top\mathbf R_i\mathbf L$",
+    "the stated form without the noise term mu_i H~_i H~_i^T":
+        r"the stated form without the noise term $\mu_i\tilde{\mathbf H}_i\tilde{\mathbf H}_i^\top$",
+    "the solution's L scaled by 1.2": r"the solution's $\mathbf L$ scaled by 1.2",
+    "the recursion without the noise term omega": r"the recursion without the noise term $\omega$",
+    "the hypotheses A, B >= 0 dropped (A, B symmetric indefinite)":
+        r"the hypotheses $\mathbf A,\mathbf B\geq 0$ dropped ($\mathbf A$, $\mathbf B$ symmetric indefinite)",
+    "Jbar_0 without the noise's share omega":
+        r"$\bar{\mathcal J}_0$ without the noise's share $\omega$",
+    "the formula with D_i in place of D_i + E_i L C_i (the input's share of z dropped)":
+        r"the formula with $\mathbf D_i$ in place of $\mathbf D_i+\mathbf E_i\mathbf L\mathbf C_i$ "
+        r"(the input's share of $\mathbf z$ dropped)",
+    "the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)":
+        r"the BMI with its corner block $\mathbf G+\mathbf G^\top$ in place of "
+        r"$\mathbf G+\mathbf G^\top-\mathcal D_i(\mathbf Y)$",
+    "the gain recovered with a sign error, L = -F M^{-1}":
+        r"the gain recovered with a sign error, $\mathbf L=-\mathbf F\mathbf M^{-1}$",
+    "the closed form without Delta (the noise's cost dropped)":
+        r"the closed form without $\Delta$ (the noise's cost dropped)",
+    "the limit compared with the LQ gain for 2 R instead of R":
+        r"the limit compared with the LQ gain for $2\mathbf R$ instead of $\mathbf R$",
+    "the comparison with the LQG controller for 2 R instead of R":
+        r"the comparison with the LQG controller for $2\mathbf R$ instead of $\mathbf R$",
+    "the printed Hellinger expression (1 - BC)^2 as D, with the same covariances and length scales":
+        r"the printed Hellinger expression $(1-\mathrm{BC})^2$ as $D$, with the same covariances and length scales",
+    "(B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T dropped":
+        r"(B.4) with the factor 2 of $2\,\mathcal E(\bar{\mathbf P}+\underline{\mathbf P})\mathbf B\mathbf L"
+        r"\underline{\mathbf X}\mathbf A^\top$ dropped",
+}
+"""The mutants' descriptions (plain text in the study's records) with their math in LaTeX; a
+description not listed is shown as recorded."""
+
+
+CORRECTIONS_TEX = {
+    "If D embeds isometrically in a Hilbert space (mCvMd, the L2 distance of densities, the Hellinger distance "
+    "sqrt(1 - int sqrt(p1 p2))), every covariance of Table 2.1 (gamma <= 2) of Delta = D is positive semidefinite "
+    "at every length scale. Proof: each is a scale mixture int exp(-t Delta^2) dmu(t) (t Delta^2 for SE, Gamma "
+    "mixtures for RQ and Matern, Bernstein's theorem for exp(-(Delta/l)^gamma)), and exp(-t D^2) is PSD for all "
+    "t > 0 iff D^2 is conditionally negative definite, i.e. D is Hilbertian (Schoenberg).":
+        r"If $D$ embeds isometrically in a Hilbert space (mCvMd, the $L_2$ distance of densities, the Hellinger "
+        r"distance $\sqrt{1-\int\sqrt{p_1p_2}}$), every covariance of Table 2.1 ($\gamma\leq2$) of $\Delta=D$ is "
+        r"positive semidefinite at every length scale. Proof: each is a scale mixture "
+        r"$\int e^{-t\Delta^2}\,\mathrm d\mu(t)$ ($t\Delta^2$ for SE, Gamma mixtures for RQ and Matérn, "
+        r"Bernstein's theorem for $e^{-(\Delta/l)^\gamma}$), and $e^{-tD^2}$ is PSD for all $t>0$ iff $D^2$ is "
+        r"conditionally negative definite, i.e. $D$ is Hilbertian (Schoenberg).",
+    "If M = 1 and C = I (state feedback), (A, B) is stabilisable and Q > 0, Alg. 3.1 converges from every "
+    "X_0 > 0, P_0 >= 0 to the LQ gain. Proof: with one mode and C = I the X-factors cancel in (3.34), "
+    "L = -(R + B^T P B)^{-1} B^T P A, so (3.35) for P is the Riccati value iteration, which converges to the "
+    "stabilising solution (Kalman; Bertsekas, Vol. 1, Prop. 4.4.1); X then follows a converging Lyapunov "
+    "recursion.":
+        r"If $M=1$ and $\mathbf C=\mathbf I$ (state feedback), $(\mathbf A,\mathbf B)$ is stabilisable and "
+        r"$\mathbf Q>0$, Alg. 3.1 converges from every $\mathbf X_0>0$, $\mathbf P_0\geq0$ to the LQ gain. "
+        r"Proof: with one mode and $\mathbf C=\mathbf I$ the $\mathbf X$-factors cancel in (3.34), "
+        r"$\mathbf L=-(\mathbf R+\mathbf B^\top\mathbf P\mathbf B)^{-1}\mathbf B^\top\mathbf P\mathbf A$, so "
+        r"(3.35) for $\mathbf P$ is the Riccati value iteration, which converges to the stabilising solution "
+        r"(Kalman; Bertsekas, Vol. 1, Prop. 4.4.1); $\mathbf X$ then follows a converging Lyapunov recursion.",
+    "X~_inf <= 2 [[Xbar + Xu, Xu], [Xu, Xu]] and P~_inf <= 2 [[Pbar + Pu, -Pu], [-Pu, Pu]] with "
+    "Xbar = X1 - X12 - X12^T + X2, Xu = X2, Pbar = P1 + P12 + P12^T + P2, Pu = P2. Proof: with e = x - x^, "
+    "[x; x^] = [e; 0] + [x^; x^] and (a + b)(a + b)^T <= 2 a a^T + 2 b b^T; for P~, z = [x; x] + [0; -e] in "
+    "z^T P~ z <= 2 (.) + 2 (.). (For P the cross terms enter Pbar with +, not - as printed.)":
+        r"$\tilde{\mathbf X}_\infty\preceq2\begin{bmatrix}\bar{\mathbf X}+\underline{\mathbf X}&"
+        r"\underline{\mathbf X}\\\underline{\mathbf X}&\underline{\mathbf X}\end{bmatrix}$ and "
+        r"$\tilde{\mathbf P}_\infty\preceq2\begin{bmatrix}\bar{\mathbf P}+\underline{\mathbf P}&"
+        r"-\underline{\mathbf P}\\-\underline{\mathbf P}&\underline{\mathbf P}\end{bmatrix}$ with "
+        r"$\bar{\mathbf X}=\mathbf X_1-\mathbf X_{12}-\mathbf X_{12}^\top+\mathbf X_2$, "
+        r"$\underline{\mathbf X}=\mathbf X_2$, $\bar{\mathbf P}=\mathbf P_1+\mathbf P_{12}+\mathbf P_{12}^\top"
+        r"+\mathbf P_2$, $\underline{\mathbf P}=\mathbf P_2$. Proof: with $\mathbf e=\mathbf x-\hat{\mathbf x}$, "
+        r"$[\mathbf x;\hat{\mathbf x}]=[\mathbf e;\mathbf 0]+[\hat{\mathbf x};\hat{\mathbf x}]$ and "
+        r"$(\mathbf a+\mathbf b)(\mathbf a+\mathbf b)^\top\preceq2\mathbf a\mathbf a^\top+2\mathbf b\mathbf b^\top$; "
+        r"for $\tilde{\mathbf P}$, $\mathbf z=[\mathbf x;\mathbf x]+[\mathbf 0;-\mathbf e]$ in "
+        r"$\mathbf z^\top\tilde{\mathbf P}\mathbf z\leq2(\cdot)+2(\cdot)$. (For $\mathbf P$ the cross terms "
+        r"enter $\bar{\mathbf P}$ with $+$, not $-$ as printed.)",
+    "For M = 1: a solution of (3.45)-(3.49) with invertible Xu and E(Pu) whose controller stabilises is the LQG "
+    "controller, the optimum of (3.38). Proof: the F-row of (3.49) reads E(Pu)(F + K C - B L - A) Xu = 0, so "
+    "F = A + B L - K C; then the K-row gives K = A Xbar C^T (C Xbar C^T + J J^T)^{-1} and (3.45) the filter "
+    "Riccati equation, the L-row L = -(R + B^T Pbar B)^{-1} B^T Pbar A and (3.47) the control Riccati equation; "
+    "the closed loop's eigenvalues are those of A + B L and A - K C, so Xbar and Pbar are the stabilising "
+    "(unique) solutions. Checked: the exact cost of Alg. 3.2's converged, stabilising controller equals the LQG "
+    "cost.":
+        r"For $M=1$: a solution of (3.45)-(3.49) with invertible $\underline{\mathbf X}$ and "
+        r"$\mathcal E(\underline{\mathbf P})$ whose controller stabilises is the LQG controller, the optimum of "
+        r"(3.38). Proof: the $\mathbf F$-row of (3.49) reads $\mathcal E(\underline{\mathbf P})(\mathbf F+"
+        r"\mathbf K\mathbf C-\mathbf B\mathbf L-\mathbf A)\underline{\mathbf X}=\mathbf 0$, so "
+        r"$\mathbf F=\mathbf A+\mathbf B\mathbf L-\mathbf K\mathbf C$; then the $\mathbf K$-row gives "
+        r"$\mathbf K=\mathbf A\bar{\mathbf X}\mathbf C^\top(\mathbf C\bar{\mathbf X}\mathbf C^\top+\mathbf J"
+        r"\mathbf J^\top)^{-1}$ and (3.45) the filter Riccati equation, the $\mathbf L$-row "
+        r"$\mathbf L=-(\mathbf R+\mathbf B^\top\bar{\mathbf P}\mathbf B)^{-1}\mathbf B^\top\bar{\mathbf P}"
+        r"\mathbf A$ and (3.47) the control Riccati equation; the closed loop's eigenvalues are those of "
+        r"$\mathbf A+\mathbf B\mathbf L$ and $\mathbf A-\mathbf K\mathbf C$, so $\bar{\mathbf X}$ and "
+        r"$\bar{\mathbf P}$ are the stabilising (unique) solutions. Checked: the exact cost of Alg. 3.2's "
+        r"converged, stabilising controller equals the LQG cost.",
+    "J_0 <= sum_k sum_i 2 tr[Q_i (Xbar_k + Xu_k) + L_k^T R_i L_k Xu_k] (+ the final term), with (3.66)-(3.67) "
+    "whose two transported terms are doubled, started at the exact Xbar_0 = E{e_0 e_0^T}, "
+    "Xu_0 = E{x^_0 x^_0^T}. Proof: e_{k+1} = (A - K C) e + (A - F + B L - K C) x^ + H w - K J v and "
+    "x^_{k+1} = K C e + (F + K C) x^ + K J v; (a + b)(a + b)^T <= 2 a a^T + 2 b b^T and monotonicity give the "
+    "blocks' bounds by induction, and Prop. 3.26 corrected gives X~_k <= 2 [[Xbar + Xu, Xu], [Xu, Xu]]. "
+    "Valid, but loose: the factor 2 compounds over the horizon.":
+        r"$\mathcal J_0\leq\sum_k\sum_i2\,\mathrm{tr}[\mathbf Q_i(\bar{\mathbf X}_k+\underline{\mathbf X}_k)+"
+        r"\mathbf L_k^\top\mathbf R_i\mathbf L_k\underline{\mathbf X}_k]$ (+ the final term), with "
+        r"(3.66)-(3.67) whose two transported terms are doubled, started at the exact "
+        r"$\bar{\mathbf X}_0=\mathrm E\{\mathbf e_0\mathbf e_0^\top\}$, $\underline{\mathbf X}_0="
+        r"\mathrm E\{\hat{\mathbf x}_0\hat{\mathbf x}_0^\top\}$. Proof: $\mathbf e_{k+1}=(\mathbf A-\mathbf K"
+        r"\mathbf C)\mathbf e+(\mathbf A-\mathbf F+\mathbf B\mathbf L-\mathbf K\mathbf C)\hat{\mathbf x}+"
+        r"\mathbf H\mathbf w-\mathbf K\mathbf J\mathbf v$ and $\hat{\mathbf x}_{k+1}=\mathbf K\mathbf C\mathbf e+"
+        r"(\mathbf F+\mathbf K\mathbf C)\hat{\mathbf x}+\mathbf K\mathbf J\mathbf v$; "
+        r"$(\mathbf a+\mathbf b)(\mathbf a+\mathbf b)^\top\preceq2\mathbf a\mathbf a^\top+2\mathbf b\mathbf b^\top$ "
+        r"and monotonicity give the blocks' bounds by induction, and Prop. 3.26 corrected gives "
+        r"$\tilde{\mathbf X}_k\preceq2\begin{bmatrix}\bar{\mathbf X}+\underline{\mathbf X}&\underline{\mathbf X}"
+        r"\\\underline{\mathbf X}&\underline{\mathbf X}\end{bmatrix}$. Valid, but loose: the factor 2 compounds "
+        r"over the horizon.",
+    "For PSD Xbar_k, Xu_k, E(Pbar_{k+1}), E(Pu_{k+1}), the solutions of (3.70) are the minimisers of (B.4) over "
+    "(F_k, K_k, L_k). Proof: the quadratic part of (B.4) is sum_i tr[E(Pu)(K C + F - B L) Xu (.)^T + "
+    "E(Pu) K C Xbar C^T K^T + E(Pbar) B L Xu L^T B^T + L^T R L Xu + mu E(Pu) K J J^T K^T] >= 0, so (B.4) is "
+    "convex, and its gradient is twice the residual of (3.70) (B.5).":
+        r"For PSD $\bar{\mathbf X}_k$, $\underline{\mathbf X}_k$, $\mathcal E(\bar{\mathbf P}_{k+1})$, "
+        r"$\mathcal E(\underline{\mathbf P}_{k+1})$, the solutions of (3.70) are the minimisers of (B.4) over "
+        r"$(\mathbf F_k,\mathbf K_k,\mathbf L_k)$. Proof: the quadratic part of (B.4) is "
+        r"$\sum_i\mathrm{tr}[\mathcal E(\underline{\mathbf P})(\mathbf K\mathbf C+\mathbf F-\mathbf B\mathbf L)"
+        r"\underline{\mathbf X}(\cdot)^\top+\mathcal E(\underline{\mathbf P})\mathbf K\mathbf C\bar{\mathbf X}"
+        r"\mathbf C^\top\mathbf K^\top+\mathcal E(\bar{\mathbf P})\mathbf B\mathbf L\underline{\mathbf X}"
+        r"\mathbf L^\top\mathbf B^\top+\mathbf L^\top\mathbf R\mathbf L\underline{\mathbf X}+\mu\,"
+        r"\mathcal E(\underline{\mathbf P})\mathbf K\mathbf J\mathbf J^\top\mathbf K^\top]\geq0$, so (B.4) is "
+        r"convex, and its gradient is twice the residual of (3.70) (B.5).",
+}
+"""The corrected statements (plain text in the study's records) with their math in LaTeX."""
