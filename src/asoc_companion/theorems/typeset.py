@@ -157,11 +157,13 @@ CORRECTIONS_TEX = {
         r"For PSD $\bar{\mathbf X}_k$, $\underline{\mathbf X}_k$, $\mathcal E(\bar{\mathbf P}_{k+1})$, "
         r"$\mathcal E(\underline{\mathbf P}_{k+1})$, the solutions of (3.70) are the minimisers of (B.4) over "
         r"$(\mathbf F_k,\mathbf K_k,\mathbf L_k)$. Proof: the quadratic part of (B.4) is "
+        # one formula per term: the sum breaks between them on a narrow page
         r"$\sum_i\mathrm{tr}[\mathcal E(\underline{\mathbf P})(\mathbf K\mathbf C+\mathbf F-\mathbf B\mathbf L)"
-        r"\underline{\mathbf X}(\cdot)^\top+\mathcal E(\underline{\mathbf P})\mathbf K\mathbf C\bar{\mathbf X}"
-        r"\mathbf C^\top\mathbf K^\top+\mathcal E(\bar{\mathbf P})\mathbf B\mathbf L\underline{\mathbf X}"
-        r"\mathbf L^\top\mathbf B^\top+\mathbf L^\top\mathbf R\mathbf L\underline{\mathbf X}+\mu\,"
-        r"\mathcal E(\underline{\mathbf P})\mathbf K\mathbf J\mathbf J^\top\mathbf K^\top]\geq0$, so (B.4) is "
+        r"\underline{\mathbf X}(\cdot)^\top$ $+\,\mathcal E(\underline{\mathbf P})\mathbf K\mathbf C"
+        r"\bar{\mathbf X}\mathbf C^\top\mathbf K^\top$ $+\,\mathcal E(\bar{\mathbf P})\mathbf B\mathbf L"
+        r"\underline{\mathbf X}\mathbf L^\top\mathbf B^\top$ $+\,\mathbf L^\top\mathbf R\mathbf L"
+        r"\underline{\mathbf X}$ $+\,\mu\,\mathcal E(\underline{\mathbf P})\mathbf K\mathbf J\mathbf J^\top"
+        r"\mathbf K^\top]\geq0$, so (B.4) is "
         r"convex, and its gradient is twice the residual of (3.70) (B.5).",
 }
 """The corrected statements (plain text in the study's records) with their math in LaTeX."""
