@@ -22,14 +22,15 @@ COLOURS = {"red", "green", "blue", "orange", "yellow", "purple", "black", "grey"
 
 
 def test_a_wide_figure_is_shrunk_to_the_printed_width_with_legible_text(tmp_path):
-    fig = Figure(figsize=(9.6, 3.6))
-    ax = fig.add_subplot()
-    ax.plot([0, 1], [0, 1], label="a line")
-    ax.legend(fontsize=6)
-    ax.set_xlabel("x", fontsize=7)
-    png = figures.save_figure(fig, "own.9", tmp_path)
+    with matplotlib.rc_context(figures.STYLE):
+        fig = Figure(figsize=(9.6, 3.6))
+        ax = fig.add_subplot()
+        ax.plot([0, 1], [0, 1], label="a line")
+        ax.legend(fontsize=6)
+        ax.set_xlabel("x", fontsize=7)
+        png = figures.save_figure(fig, "own.9", tmp_path)
     width_px = struct.unpack(">I", png.read_bytes()[16:20])[0]
-    assert width_px / matplotlib.rcParams["savefig.dpi"] <= figures.PRINT_WIDTH_INCHES + 0.05
+    assert width_px / figures.STYLE["savefig.dpi"] <= figures.PRINT_WIDTH_INCHES + 0.05
     sizes = [t.get_fontsize() for t in fig.findobj(matplotlib.text.Text) if t.get_text()]
     assert min(sizes) >= figures.MIN_FONT_POINTS
 
