@@ -1,13 +1,14 @@
 """The Theorems page (issue 31, item 3): one compact table (statement, verdict, mutant) with a link
 to each statement's section, then per statement its claim, its check, its mutant, and where it
 fails the diagnosis and the corrected statement, as MyST Markdown that the HTML and the PDF both
-render; every mutant and corrected statement that has math is typeset (LaTeX), not ASCII."""
+render; every check, mutant and corrected statement that has math is typeset (LaTeX), not ASCII
+(the diagnoses are still the study's plain text)."""
 
 import re
 
 from asoc_companion.theorems import STATEMENTS
-from asoc_companion.theorems.report import StatementsPage, markdown_text, statements_markdown
-from asoc_companion.theorems.typeset import CORRECTIONS_TEX, MUTANTS_TEX
+from asoc_companion.theorems.report import StatementsPage, statements_markdown
+from asoc_companion.theorems.typeset import CHECKS_TEX, CORRECTIONS_TEX, MUTANTS_TEX
 from asoc_companion.values import load_values
 
 ASCII_MATH = re.compile(r"[_^~]|<=|>=|\bsqrt\(|\bexp\(|\btr\[")
@@ -41,10 +42,12 @@ def test_every_mutant_and_correction_with_math_is_typeset():
         statement = corrected.get("statement", "")
         if "$" not in statement and ASCII_MATH.search(statement) and statement not in CORRECTIONS_TEX:
             untyped.append(f"{key} corrected: {statement[:80]}")
+    untyped += [f"{st.key} check: {st.checked[:80]}" for st in STATEMENTS
+                if ASCII_MATH.search(st.checked) and st.checked not in CHECKS_TEX]
     assert not untyped, untyped
 
 
 def test_typeset_texts_keep_no_ascii_math_outside_dollars():
-    for text in list(MUTANTS_TEX.values()) + list(CORRECTIONS_TEX.values()):
-        prose = markdown_text(text).split("$")[::2]
+    for text in [*MUTANTS_TEX.values(), *CORRECTIONS_TEX.values(), *CHECKS_TEX.values()]:
+        prose = re.sub(r"`[^`]*`", "", text).split("$")[::2]          # outside math and code
         assert not [p for p in prose if re.search(r"\^|_\w|<=|>=", p)], text

@@ -11,7 +11,7 @@ from ..atomic_files import atomic_write_json
 from .chapter3 import MARGIN, SHOW
 from .statement import Outcome
 from .engine import verdict_text
-from .typeset import CORRECTIONS_TEX, MUTANTS_TEX
+from .typeset import CHECKS_TEX, CORRECTIONS_TEX, MUTANTS_TEX
 
 __all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "trim_systems",
            "load_counterexamples", "margin", "shown_counterexample", "describe", "system_from",
@@ -233,7 +233,7 @@ def statements_markdown(statements, records, findings) -> str:
         record = records.get(st.key, {})
         title = f"{{ref}}`{st.label} <{_anchor(st.key)}>`"
         lines = [f"({_anchor(st.key)})=", f"**{st.label}.** {st.summary}", "",
-                 f"- *One instance checks:* {markdown_text(st.checked)}"]
+                 f"- *One instance checks:* {CHECKS_TEX.get(st.checked) or markdown_text(st.checked)}"]
         if st.check is None:
             rows.append(f"| {title} | not checkable | - |")
             lines.append(f"- *Not checkable:* {markdown_text(st.not_checkable)}")

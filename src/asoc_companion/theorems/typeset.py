@@ -167,3 +167,109 @@ CORRECTIONS_TEX = {
         r"convex, and its gradient is twice the residual of (3.70) (B.5).",
 }
 """The corrected statements (plain text in the study's records) with their math in LaTeX."""
+
+CHECKS_TEX = {
+    "Random quadratic terminal cost (PSD, possibly singular weight), random reference and evaluation mixtures: "
+    "the library's s_K, v_K, V_K, S_K give E{C_K} under the evaluation mixture exactly (rounding tolerance).":
+        r"Random quadratic terminal cost (PSD, possibly singular weight), random reference and evaluation "
+        r"mixtures: the library's $s_K$, $\mathbf v_K$, $\mathbf V_K$, $\mathbf S_K$ give $\mathrm E\{C_K\}$ "
+        r"under the evaluation mixture exactly (rounding tolerance).",
+    "Random linear-Gaussian system (1-2 states, inputs, outputs; horizon 2-3), quadratic costs, random reference "
+    "policy and steps eps_k: the library's V_0 at a random mean against the exact expected cost of the induced "
+    "policy (forward moments), and for eps_k = 1 against the Riccati/LQG optimum.":
+        r"Random linear-Gaussian system (1-2 states, inputs, outputs; horizon 2-3), quadratic costs, random "
+        r"reference policy and steps $\varepsilon_k$: the library's $V_0$ at a random mean against the exact "
+        r"expected cost of the induced policy (forward moments), and for $\varepsilon_k=1$ against the "
+        r"Riccati/LQG optimum.",
+    "Random inputs in R^1-3, outputs, covariance of Table 2.1 and hyperparameters: DistributionGP's mean, "
+    "variance and joint covariance against conditioning the joint Gaussian through its precision matrix "
+    "(eigendecomposition), within 64 eps (M + N) cond x scale.":
+        r"Random inputs in $\mathbb R^{1\dots3}$, outputs, covariance of Table 2.1 and hyperparameters: "
+        r"`DistributionGP`'s mean, variance and joint covariance against conditioning the joint Gaussian "
+        r"through its precision matrix (eigendecomposition), within "
+        r"$64\,\varepsilon\,(M+N)\,\mathrm{cond}\times\mathrm{scale}$.",
+    "Random A_i, T and S_i > 0; Q solved from each form; if Q > 0, mean-square stability decided by the dense "
+    "eigenvalues of the second-moment map, its matrix built from the map's action on a basis.":
+        r"Random $\mathbf A_i$, $\mathbf T$ and $\mathbf S_i>0$; $\mathbf Q$ solved from each form; if "
+        r"$\mathbf Q>0$, mean-square stability decided by the dense eigenvalues of the second-moment map, its "
+        r"matrix built from the map's action on a basis.",
+    "Formula against the Monte Carlo stationary E{z^T z} (1000 runs), within 6 standard errors.":
+        r"Formula against the Monte Carlo stationary $\mathrm E\{\mathbf z^\top\mathbf z\}$ (1000 runs), within "
+        r"6 standard errors.",
+    "Y_i and G random SPD at random scales, drawn with no relation to L's Lyapunov equation; premise: the BMI "
+    "(3.15) by eigenvalues; conclusion: P = D(Y) satisfies (3.14)'s constraint, L stabilises, and the objective "
+    ">= ||G||_2^2 of L.":
+        r"$\mathbf Y_i$ and $\mathbf G$ random SPD at random scales, drawn with no relation to $\mathbf L$'s "
+        r"Lyapunov equation; premise: the BMI (3.15) by eigenvalues; conclusion: "
+        r"$\mathbf P=\mathcal D(\mathbf Y)$ satisfies (3.14)'s constraint, $\mathbf L$ stabilises, and the "
+        r"objective $\geq\|G\|_2^2$ of $\mathbf L$.",
+    "LMIs solved (Clarabel); feasibility from the certificate (the returned matrices satisfy the LMIs by "
+    "eigenvalues, margin >= -eps/2); rho of the recovered gain by the dense second-moment map. Conservatism: SOF "
+    "stabilisability by a 2001-point grid over scalar L plus a bounded search.":
+        r"LMIs solved (Clarabel); feasibility from the certificate (the returned matrices satisfy the LMIs by "
+        r"eigenvalues, margin $\geq-\varepsilon/2$); $\rho$ of the recovered gain by the dense second-moment "
+        r"map. Conservatism: SOF stabilisability by a 2001-point grid over scalar $\mathbf L$ plus a bounded "
+        r"search.",
+    "Formula against the Monte Carlo stationary E{z^T z}, within 6 standard errors.":
+        r"Formula against the Monte Carlo stationary $\mathrm E\{\mathbf z^\top\mathbf z\}$, within 6 standard "
+        r"errors.",
+    "As Lemma 3.8 with mode-dependent G_i and L_i.":
+        r"As Lemma 3.8 with mode-dependent $\mathbf G_i$ and $\mathbf L_i$.",
+    "LMIs solved (Clarabel); feasibility from the verified certificate; rho of A_i + B_i L_i C_i by the dense "
+    "second-moment map.":
+        r"LMIs solved (Clarabel); feasibility from the verified certificate; $\rho$ of "
+        r"$\mathbf A_i+\mathbf B_i\mathbf L_i\mathbf C_i$ by the dense second-moment map.",
+    "Recursion against Monte Carlo E{x_k x_k^T 1(theta_k=i)} (10000 runs, k = 1..3, Gaussian-mixture x_0, closed "
+    "loop scaled to max ||A_i + B_i L C_i|| in [0.5, 1.5]), every entry within 6 standard errors.":
+        r"Recursion against Monte Carlo $\mathrm E\{\mathbf x_k\mathbf x_k^\top\mathbf 1(\theta_k=i)\}$ (10000 "
+        r"runs, $k=1,\dots,3$, Gaussian-mixture $\mathbf x_0$, closed loop scaled to "
+        r"$\max\|\mathbf A_i+\mathbf B_i\mathbf L\mathbf C_i\|\in[0.5,1.5]$), every entry within 6 standard "
+        r"errors.",
+    "The printed objective (defined when n_y = n_x) against the average cost, the mean stage cost of the moment "
+    "recursion from a random x_0 and theta_0 ~ mu_inf over steps h..2h-1 with rho^h <= 1e-13, within 1e-8; the "
+    "reading with C_i^T L^T R_i L C_i is checked beside it.":
+        r"The printed objective (defined when $n_y=n_x$) against the average cost, the mean stage cost of the "
+        r"moment recursion from a random $\mathbf x_0$ and $\theta_0\sim\mu_\infty$ over steps $h,\dots,2h-1$ "
+        r"with $\rho^h\leq10^{-13}$, within $10^{-8}$; the reading with "
+        r"$\mathbf C_i^\top\mathbf L^\top\mathbf R_i\mathbf L\mathbf C_i$ is checked beside it.",
+    "Printed formula (column-major vec) at random X, P; residual of (3.31); also compared with "
+    "asoc.mjls.gain_from_moments.":
+        r"Printed formula (column-major vec) at random $\mathbf X$, $\mathbf P$; residual of (3.31); also "
+        r"compared with `asoc.mjls.gain_from_moments`.",
+    "Premise by a 2001-point grid over scalar L plus a bounded search (rho < 1); Alg. 3.1 "
+    "(asoc.mjls.static_output_feedback) must converge to a stabilising gain, the same from 1e-4 I and from I.":
+        r"Premise by a 2001-point grid over scalar $\mathbf L$ plus a bounded search ($\rho<1$); Alg. 3.1 "
+        r"(`asoc.mjls.static_output_feedback`) must converge to a stabilising gain, the same from "
+        r"$10^{-4}\mathbf I$ and from $\mathbf I$.",
+    "x~^T Q~ x~ against x^T Q x + u^T R u at random points.":
+        r"$\tilde{\mathbf x}^\top\tilde{\mathbf Q}\tilde{\mathbf x}$ against "
+        r"$\mathbf x^\top\mathbf Q\mathbf x+\mathbf u^\top\mathbf R\mathbf u$ at random points.",
+    "Printed blocks against Monte Carlo of plant and controller (10000 runs, k = 1..3, max ||A~_i|| in "
+    "[0.5, 1.5]), within 6 standard errors.":
+        r"Printed blocks against Monte Carlo of plant and controller (10000 runs, $k=1,\dots,3$, "
+        r"$\max\|\tilde{\mathbf A}_i\|\in[0.5,1.5]$), within 6 standard errors.",
+    "Stated form against the Lagrangian built densely: the augmented closed loop, its noise and cost assembled "
+    "block by block, the constraint multiplied by P~ as a vector product.":
+        r"Stated form against the Lagrangian built densely: the augmented closed loop, its noise and cost "
+        r"assembled block by block, the constraint multiplied by $\tilde{\mathbf P}$ as a vector product.",
+    "Exact X~_inf, P~_inf of a random stabilising (F, K, L); smallest eigenvalue of bound minus matrix.":
+        r"Exact $\tilde{\mathbf X}_\infty$, $\tilde{\mathbf P}_\infty$ of a random stabilising "
+        r"$(\mathbf F,\mathbf K,\mathbf L)$; smallest eigenvalue of bound minus matrix.",
+    "Moment form (asoc.mjls.finite_horizon_cost) against Monte Carlo of plant and time-variant controller "
+    "(10000 runs), within 6 standard errors.":
+        r"Moment form (`asoc.mjls.finite_horizon_cost`) against Monte Carlo of plant and time-variant "
+        r"controller (10000 runs), within 6 standard errors.",
+    "Exact J_0 (moment recursion) against Jbar_0 from (3.66)-(3.69), random gains, horizons 2-8.":
+        r"Exact $\mathcal J_0$ (moment recursion) against $\bar{\mathcal J}_0$ from (3.66)-(3.69), random gains, "
+        r"horizons 2-8.",
+    "At one step, the solution of (3.70) against random perturbations of (F_k, K_k, L_k) in Jbar_k "
+    "(3.65)/(3.68)-(3.69).":
+        r"At one step, the solution of (3.70) against random perturbations of "
+        r"$(\mathbf F_k,\mathbf K_k,\mathbf L_k)$ in $\bar{\mathcal J}_k$ (3.65)/(3.68)-(3.69).",
+    "Alg. 3.3 (asoc.mjls.finite_horizon_dynamic_output_feedback, Step 5 safeguard on) from random gains: "
+    "increases of Jbar_0, convergence within 300 iterations, change of the gains over 20 more iterations.":
+        r"Alg. 3.3 (`asoc.mjls.finite_horizon_dynamic_output_feedback`, Step 5 safeguard on) from random gains: "
+        r"increases of $\bar{\mathcal J}_0$, convergence within 300 iterations, change of the gains over 20 more "
+        r"iterations.",
+}
+"""What one instance of each statement checks (plain text in ``Statement.checked``), math in LaTeX."""
