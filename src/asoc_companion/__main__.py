@@ -22,7 +22,7 @@ from . import paths
 from .requirements import INSTALL_HINT, missing_requirements
 
 def plain(text: str) -> str:
-    """``text`` without reStructuredText markup, for the terminal: ``x``, `x` and :role:`x` become x.
+    """``text`` without reStructuredText markup, for the terminal: ``x``, `x`, :role:`x` become x.
 
     Examples
     --------
@@ -111,9 +111,11 @@ def notebook_list(infos) -> str:
     for info in infos:
         figs = ", ".join(f"Fig. {f}" for f in info.figures)
         tabs = ", ".join(f"Table {t}" for t in info.tables)
-        params = ", ".join(n for n in nbs.default_parameters(info) if n not in nbs.HARNESS_PARAMETERS)
+        params = ", ".join(n for n in nbs.default_parameters(info)
+                           if n not in nbs.HARNESS_PARAMETERS)
+        items = "; ".join(x for x in (figs, tabs) if x) or "no figure or table of the thesis"
         lines.append(f"{info.name:{width}}  {info.title}")
-        lines.append(f"{'':{width}}  {'; '.join(x for x in (figs, tabs) if x) or 'no figure or table of the thesis'}")
+        lines.append(f"{'':{width}}  {items}")
         lines.append(f"{'':{width}}  parameters (-p): {params}")
     return "\n".join(lines)
 
@@ -147,7 +149,8 @@ def _write_if_changed(path, text, remark=""):
 
 
 def _parser():
-    parser = argparse.ArgumentParser(prog="python -m asoc_companion", description=plain(__doc__.splitlines()[0]),
+    parser = argparse.ArgumentParser(prog="python -m asoc_companion",
+                                     description=plain(__doc__.splitlines()[0]),
                                      epilog=plain(" ".join(__doc__.split("\n\n", 1)[1].split())))
     parser.add_argument("--root", help=f"the checkout to work on (default: ${paths.ENV_VAR}, "
                                        "else the nearest one above the current directory)")

@@ -343,9 +343,9 @@ def _generated_pages(app, env, added, changed, removed):
             and re.search(r"<!-- (api |layout:)", (Path(app.srcdir) / f"{doc}.md").read_text())]
 
 
-THESIS_ABBREVIATIONS = ("Alg.", "App.", "Assm.", "Cor.", "Def.", "Eq.", "Eqs.", "Fig.", "Figs.", "Lem.",
-                        "Prop.", "Props.", "Ref.", "Sec.", "Secs.", "Thm.", "Thms.", "Vol.", "cf.", "ch.",
-                        "resp.", "vs.")
+THESIS_ABBREVIATIONS = ("Alg.", "App.", "Assm.", "Cor.", "Def.", "Eq.", "Eqs.", "Fig.", "Figs.",
+                        "Lem.", "Prop.", "Props.", "Ref.", "Sec.", "Secs.", "Thm.", "Thms.", "Vol.",
+                        "cf.", "ch.", "resp.", "vs.")
 """Abbreviations the docstrings use before a number ("Cor. 3.2"): no sentence ends there."""
 
 
@@ -359,7 +359,8 @@ def use_abbreviations():
     from sphinx.ext import autosummary
 
     known = autosummary.WELL_KNOWN_ABBREVIATIONS
-    autosummary.WELL_KNOWN_ABBREVIATIONS = known + tuple(a for a in THESIS_ABBREVIATIONS if a not in known)
+    added = tuple(a for a in THESIS_ABBREVIATIONS if a not in known)
+    autosummary.WELL_KNOWN_ABBREVIATIONS = known + added
 
 
 def setup(app):

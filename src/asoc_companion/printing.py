@@ -163,7 +163,8 @@ def fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
             if small:
                 index = table.parent.index(table)
                 table.parent.insert(index + 1, nodes.raw("", r"\endgroup", format="latex"))
-                table.parent.insert(index, nodes.raw("", r"\begingroup\footnotesize", format="latex"))
+                small_font = nodes.raw("", r"\begingroup\footnotesize", format="latex")
+                table.parent.insert(index, small_font)
             changed += 1
     return changed
 
@@ -188,7 +189,8 @@ def overfull_boxes(log: str, limit: float = OVERFULL_LIMIT) -> list:
 
     Examples
     --------
-    >>> overfull_boxes("Overfull \\\\hbox (12.5pt too wide) in paragraph\\nOverfull \\\\hbox (1.2pt too wide)")
+    >>> log = "Overfull \\\\hbox (12.5pt too wide) in par\\nOverfull \\\\hbox (1.2pt too wide)"
+    >>> overfull_boxes(log)
     [12.5]
     """
     return [p for p in map(float, OVERFULL.findall(log)) if p > limit]
@@ -208,8 +210,8 @@ def build_pdf(book=None, options=(), output_folder=None, out=sys.stdout) -> int:
     jupyter_book = Path(sys.executable).parent / "jupyter-book"
     start = time.perf_counter()
     where = ["--path-output", str(folder)] if output_folder else []
-    proc = subprocess.run([str(jupyter_book), "build", str(book), "--builder", "pdflatex", *where, *options],
-                          capture_output=True, text=True, timeout=1800)
+    command = [str(jupyter_book), "build", str(book), "--builder", "pdflatex", *where, *options]
+    proc = subprocess.run(command, capture_output=True, text=True, timeout=1800)
     seconds = time.perf_counter() - start
     latex.mkdir(parents=True, exist_ok=True)
     output = latex / "build-output.txt"
@@ -217,7 +219,8 @@ def build_pdf(book=None, options=(), output_folder=None, out=sys.stdout) -> int:
     pdf, log = latex / "asoc-companion.pdf", latex / "asoc-companion.log"
     if proc.returncode != 0 or not pdf.exists():
         tail = "\n".join((proc.stdout + proc.stderr).splitlines()[-25:])
-        print(f"{tail}\nThe PDF build failed after {seconds:.0f} s; the whole output: {output}", file=out)
+        print(f"{tail}\nThe PDF build failed after {seconds:.0f} s; the whole output: {output}",
+              file=out)
         return proc.returncode or 1
     info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True).stdout
     pages = re.search(r"Pages:\s+(\d+)", info)

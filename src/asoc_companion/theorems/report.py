@@ -121,7 +121,8 @@ def statements_table(statements, records, findings) -> str:
     Examples
     --------
     >>> from asoc_companion.theorems.statement import Statement
-    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing", not_checkable="a definition")
+    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing",
+    ...                   not_checkable="a definition")
     >>> table = statements_table([lemma], {}, {})
     >>> table.count("<tr>"), "<strong>Lemma 3.0.</strong> \\\\(|x| &gt;= 0\\\\)" in table
     (2, True)
@@ -190,13 +191,18 @@ def markdown_text(text: str) -> str:
     parts = text.split("$")
     if len(parts) % 2 == 0:
         raise ValueError(f"text: expected paired $ signs, found {text!r}")
-    return "$".join(part if k % 2 else _MARKDOWN_SPECIAL.sub(r"\\\1", part) for k, part in enumerate(parts))
+    return "$".join(part if k % 2 else _MARKDOWN_SPECIAL.sub(r"\\\1", part)
+                    for k, part in enumerate(parts))
+
+
+def typeset(table: dict, text: str) -> str:
+    """``text`` as Markdown: its typeset form from ``table`` (theorems.typeset), else escaped."""
+    return table.get(text) or markdown_text(text)
 
 
 def mutant_markdown(mutant) -> str:
-    """A mutant's description with its math typeset (:data:`MUTANTS_TEX`), as Markdown."""
-    description = mutant["description"]
-    return MUTANTS_TEX.get(description) or markdown_text(description)
+    """A mutant's description with its math typeset (``MUTANTS_TEX``), as Markdown."""
+    return typeset(MUTANTS_TEX, mutant["description"])
 
 
 def _anchor(key: str) -> str:
@@ -213,19 +219,22 @@ def _links(st, record, findings) -> str:
 
 
 def statements_markdown(statements, records, findings) -> str:
-    """The theorems page's statements as MyST Markdown: one compact table (statement, verdict, whether the
-    check caught its mutant, a link to the statement's section), then per statement a section with the claim,
-    what one instance checks, the verdict, the mutant, and (when the record has them) the diagnosis and the
-    corrected statement with its verdict. ``records`` maps a key to its recorded value
+    """The theorems page's statements as MyST Markdown: one compact table (statement, verdict,
+    whether the check caught its mutant, a link to the statement's section), then per statement a
+    section with the claim, what one instance checks, the verdict, the mutant, and (when the record
+    has them) the diagnosis and the corrected statement with its verdict. ``records`` maps a key to its recorded value
     (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of the findings page.
 
     Examples
     --------
     >>> from asoc_companion.theorems.statement import Statement
-    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing", not_checkable="a definition")
+    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing",
+    ...                   not_checkable="a definition")
     >>> page = statements_markdown([lemma], {}, {})
-    >>> "| {ref}`Lemma 3.0 <check-3-0>` | not checkable | - |" in page, "**Lemma 3.0.** $|x| >= 0$" in page
-    (True, True)
+    >>> "| {ref}`Lemma 3.0 <check-3-0>` | not checkable | - |" in page
+    True
+    >>> "**Lemma 3.0.** $|x| >= 0$" in page
+    True
     """
     rows = ["| Statement | Verdict | Mutant |", "| :-- | :-- | :-- |"]
     sections = []
@@ -233,7 +242,7 @@ def statements_markdown(statements, records, findings) -> str:
         record = records.get(st.key, {})
         title = f"{{ref}}`{st.label} <{_anchor(st.key)}>`"
         lines = [f"({_anchor(st.key)})=", f"**{st.label}.** {st.summary}", "",
-                 f"- *One instance checks:* {CHECKS_TEX.get(st.checked) or markdown_text(st.checked)}"]
+                 f"- *One instance checks:* {typeset(CHECKS_TEX, st.checked)}"]
         if st.check is None:
             rows.append(f"| {title} | not checkable | - |")
             lines.append(f"- *Not checkable:* {markdown_text(st.not_checkable)}")
@@ -244,7 +253,8 @@ def statements_markdown(statements, records, findings) -> str:
             links = _links(st, record, findings)
             lines.append(f"- *Verdict:* {verdict}" + (f" ({links})" if links else ""))
             if record.get("mutant"):
-                lines.append(f"- *Mutant:* {mutant_markdown(record['mutant'])}; {mutant_text(record)}")
+                mutant = mutant_markdown(record["mutant"])
+                lines.append(f"- *Mutant:* {mutant}; {mutant_text(record)}")
         lines += _correction_lines(record)
         sections.append("\n".join(lines))
     return "\n".join(rows) + "\n\n" + "\n\n".join(sections) + "\n"
@@ -256,7 +266,7 @@ def _correction_lines(record) -> list:
         lines.append(f"- *Diagnosis:* {markdown_text(record['diagnosis'])}")
     if record.get("corrected"):
         corrected = record["corrected"]
-        statement = CORRECTIONS_TEX.get(corrected["statement"]) or markdown_text(corrected["statement"])
+        statement = typeset(CORRECTIONS_TEX, corrected["statement"])
         text = (f"- *Corrected statement:* {statement} "
                 f"(*{verdict_text({**corrected, 'not_applicable': 0})}*")
         if corrected.get("mutant"):
@@ -268,8 +278,8 @@ def _correction_lines(record) -> list:
 
 
 class StatementsPage:
-    """The statements of the theorems page for display in a notebook: Markdown (MyST) only, so that the
-    HTML and the PDF render the same table and sections (:func:`statements_markdown`)."""
+    """The statements of the theorems page for display in a notebook: Markdown (MyST) only, so
+    that the HTML and the PDF render the same table and sections (:func:`statements_markdown`)."""
 
     def __init__(self, statements, records, findings):
         self.markdown = statements_markdown(statements, records, findings)
