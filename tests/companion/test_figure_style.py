@@ -14,11 +14,12 @@ from asoc_companion import figures
 from asoc_companion.notebooks import notebooks
 from asoc_companion.paths import FIGURES
 
-COLOUR_WORDS = re.compile(r"\((?P<colour>[a-z ]+?)(?:,[^)]*)?\)|\b(?P<plain>red|green|blue|orange|yellow|purple|"
-                          r"vermillion|grey|gray|magenta|cyan) (?:crosses|line|curve|dots|markers)\b")
+COLOUR_WORDS = re.compile(r"\((?P<colour>[a-z ]+?)(?:,[^)]*)?\)"
+                          r"|\b(?P<plain>red|green|blue|orange|yellow|purple|vermillion|grey|gray|magenta"
+                          r"|cyan) (?:crosses|line|curve|dots|markers)\b")
 """A colour named in a caption: "(red)", "(red, covariances ...)" or "red crosses"."""
-COLOURS = {"red", "green", "blue", "orange", "yellow", "purple", "black", "grey", "gray", "magenta", "cyan",
-           "violet", "brown", "pink", *figures.PALETTE}
+COLOURS = {"red", "green", "blue", "orange", "yellow", "purple", "black", "grey", "gray", "magenta",
+           "cyan", "violet", "brown", "pink", *figures.PALETTE}
 
 
 def test_a_wide_figure_is_shrunk_to_the_printed_width_with_legible_text(tmp_path):

@@ -37,10 +37,12 @@ def test_every_mutant_and_correction_with_math_is_typeset():
     for key, record in _records().items():
         corrected = record.get("corrected") or {}
         for mutant in (record.get("mutant"), corrected.get("mutant")):
-            if mutant and ASCII_MATH.search(mutant["description"]) and mutant["description"] not in MUTANTS_TEX:
+            text = mutant["description"] if mutant else ""
+            if ASCII_MATH.search(text) and text not in MUTANTS_TEX:
                 untyped.append(f"{key} mutant: {mutant['description']}")
         statement = corrected.get("statement", "")
-        if "$" not in statement and ASCII_MATH.search(statement) and statement not in CORRECTIONS_TEX:
+        if "$" not in statement and ASCII_MATH.search(statement) \
+                and statement not in CORRECTIONS_TEX:
             untyped.append(f"{key} corrected: {statement[:80]}")
     untyped += [f"{st.key} check: {st.checked[:80]}" for st in STATEMENTS
                 if ASCII_MATH.search(st.checked) and st.checked not in CHECKS_TEX]

@@ -1,8 +1,8 @@
-"""The API pages parse: every public function, class and method of the modules the API pages list
-passes numpydoc's validation of its Parameters and Returns sections (a sentence where a type belongs,
-an undocumented or misordered parameter, a Returns line that is not a type); its summary line, as
-the pages' autosummary tables cut it, is a whole sentence; and every name its See Also section or
-its ``:func:``/``:class:`` references name resolves."""
+"""The API pages parse: every public function, class and method of the modules the API pages
+list passes numpydoc's validation of its Parameters and Returns sections (a sentence where a
+type belongs, an undocumented or misordered parameter, a Returns line that is not a type); its
+summary line, as the pages' autosummary tables cut it, is a whole sentence; and every name its
+See Also section or its ``:func:``/``:class:`` references name resolves."""
 
 import importlib
 import inspect
@@ -15,7 +15,8 @@ from docutils.parsers.rst import Parser
 from docutils.utils import new_document
 from sphinx.ext.autosummary import extract_summary
 
-from asoc_companion.book import API_BLOCK, THESIS_ABBREVIATIONS, documented, public_names, use_abbreviations
+from asoc_companion.book import (API_BLOCK, THESIS_ABBREVIATIONS, documented, public_names,
+                                 use_abbreviations)
 from asoc_companion.paths import BOOK
 
 PARSE_ERRORS = {
@@ -32,11 +33,12 @@ PARSE_ERRORS = {
 
 def api_modules() -> list:
     """The modules of the API pages' ``<!-- api MODULE -->`` blocks."""
-    return sorted({m["module"] for page in BOOK.glob("api*.md") for m in API_BLOCK.finditer(page.read_text())})
+    return sorted({m["module"] for page in BOOK.glob("api*.md")
+                   for m in API_BLOCK.finditer(page.read_text())})
 
 
 def api_objects():
-    """``(qualified name, object, module)`` of every public function, class and method, once each."""
+    """``(qualified name, object, module)`` of each public function, class and method, once."""
     seen = {}
     for module_name in api_modules():
         module = importlib.import_module(module_name)
@@ -71,9 +73,10 @@ def sentence_types(doc: str) -> list:
     from numpydoc.docscrape import NumpyDocString
 
     parsed = NumpyDocString(doc)
-    return [f"{entry.name or section}: {entry.type!r}" for section in ("Parameters", "Returns", "Attributes")
-            for entry in parsed[section]
-            if re.search(r": |;|\.$|^the ", entry.type) or entry.type.count("(") != entry.type.count(")")]
+    return [f"{entry.name or section}: {entry.type!r}"
+            for section in ("Parameters", "Returns", "Attributes") for entry in parsed[section]
+            if re.search(r": |;|\.$|^the ", entry.type)
+            or entry.type.count("(") != entry.type.count(")")]
 
 
 @pytest.mark.parametrize("qualified", [q for q, _, _ in OBJECTS])
@@ -82,7 +85,8 @@ def test_parameters_and_returns_parse(qualified):
     obj = next(o for q, o, _ in OBJECTS if q == qualified)
     bad = [f"{code} {msg}" for code, msg in errors if code in PARSE_ERRORS
            or (code == "PR01" and _has_section(inspect.getdoc(obj), "Parameters"))]
-    bad += [f"a sentence where the type belongs, {entry}" for entry in sentence_types(inspect.getdoc(obj) or "")]
+    bad += [f"a sentence where the type belongs, {entry}"
+            for entry in sentence_types(inspect.getdoc(obj) or "")]
     assert not bad, f"{qualified}: " + "; ".join(bad)
 
 
@@ -92,22 +96,22 @@ def _summary(doc: str) -> str:
 
 
 def test_summaries_are_whole_sentences():
-    """The autosummary tables' summary line never stops at a thesis abbreviation ("Cor.", "Prop.")."""
+    """The autosummary tables' summary never stops at a thesis abbreviation ("Cor.", "Prop.")."""
     use_abbreviations()
     cut = {}
     for qualified, obj, _ in OBJECTS:
         doc = inspect.getdoc(obj)
         if doc:
             summary = _summary(doc)
-            if summary.endswith(tuple(" " + a for a in THESIS_ABBREVIATIONS) + tuple("(" + a for a in
-                                                                                     THESIS_ABBREVIATIONS)):
+            if summary.endswith(tuple(c + a for a in THESIS_ABBREVIATIONS for c in " (")):
                 cut[qualified] = summary
     assert not cut, cut
 
 
 def test_summary_line_is_not_cut_at_an_abbreviation():
     use_abbreviations()
-    assert _summary("The matrix of Cor. 3.2 (dense). More text.") == "The matrix of Cor. 3.2 (dense)."
+    summary = _summary("The matrix of Cor. 3.2 (dense). More text.")
+    assert summary == "The matrix of Cor. 3.2 (dense)."
 
 
 REFERENCE = re.compile(r":(?:func|class|meth|data|attr|obj):`~?(?P<name>[\w.]+)`")
@@ -122,7 +126,8 @@ def documented_targets() -> set:
             targets.add(f"{module_name}.{name}")
             obj = getattr(module, name)
             if inspect.isclass(obj):
-                targets.update(f"{module_name}.{name}.{a}" for a in dir(obj) if not a.startswith("_"))
+                targets.update(f"{module_name}.{name}.{a}" for a in dir(obj)
+                               if not a.startswith("_"))
     return targets
 
 
