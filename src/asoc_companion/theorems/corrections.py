@@ -12,6 +12,8 @@ instance); its *mutant* runs the same check against a deliberately wrong variant
 instances and must fail on some. Diagnoses quote numbers computed here, never typed.
 """
 
+import warnings
+
 import numpy as np
 import scipy.linalg
 
@@ -22,7 +24,8 @@ from asoc.mjls import (augmented_closed_loop, dynamic_output_feedback, finite_ho
 from asoc.progress import progress_bar
 
 from . import bounds
-from .counterexamples import kernel_example, prop_3_26_example, thm_3_19_example, thm_3_31_example
+from .counterexamples import (kernel_example, mcvmd_integral, prop_3_26_example, thm_3_19_example, thm_3_19_noiseless_example,
+                              thm_3_27_fixed_points, thm_3_31_example)
 from .instances import draw_system, random_spd_stack, rescaled
 
 __all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "check_kernels", "check_3_19",
@@ -56,58 +59,94 @@ def _l2_gaussians(m, s):
     return np.sqrt(np.maximum(own[:, None] + own[None, :] - 2 * cross, 0.0))
 
 
+SPREAD = 100.0          # the spread-out Dirac sets: means on [0, 4 SPREAD], beyond 2 b_max of gp.mcvmd
+
+
+def _gram_verdict(D, name, relative_scale, reference=None):
+    """(verdict, lowest eigenvalue) of the Gram matrix at relative_scale times the median of the positive
+    distances of ``reference`` (default ``D``)."""
+    reference = D if reference is None else reference
+    gram = gp.COVARIANCES[name](D, relative_scale * np.median(reference[reference > 0]))
+    lowest = _min_eig(gram)
+    return ("holds" if lowest >= -EIG_TOL * len(D) else "fails"), lowest
+
+
 def check_kernels(rng):
     """Corrected Sec. 2.6.3 on 3-7 random 1-D Gaussians: a Hilbert-embeddable distance (usual Hellinger,
-    L2, mCvMd of 3-point Dirac approximations) under a random covariance of Table 2.1 gives a PSD Gram
-    matrix; the mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule."""
+    L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the definition on sets
+    spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a PSD Gram matrix; the
+    mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule. Third entry, on the
+    spread sets only: (verdict, lowest eigenvalue) of the closed form with b_max = 100 (``gp.mcvmd``),
+    which the corrected statement excludes."""
     n = int(rng.integers(3, 8))
     m, s = np.sort(rng.uniform(0.0, 4.0, n)), rng.uniform(0.5, 1.5, n)
-    kind = ("hellinger", "l2", "mcvmd")[rng.integers(3)]
+    kind = ("hellinger", "l2", "mcvmd", "mcvmd_spread")[rng.integers(4)]
     name = sorted(gp.COVARIANCES)[rng.integers(len(gp.COVARIANCES))]
     relative_scale = np.exp(rng.uniform(np.log(0.01), 0.0))
     bc = _bhattacharyya(m, s)
+    closed_form = None
     if kind == "hellinger":
         D = np.sqrt(1 - bc)
     elif kind == "l2":
         D = _l2_gaussians(m, s)
     else:
-        points = [mi + si * np.array([-1.0, 0.0, 1.0]) for mi, si in zip(m, s)]
-        D = np.array([[gp.mcvmd(a, None, b, None) for b in points] for a in points])
+        scale = SPREAD if kind == "mcvmd_spread" else 1.0
+        points = [scale * (mi + si * np.array([-1.0, 0.0, 1.0])) for mi, si in zip(m, s)]
+        pairwise = lambda distance: np.array([[distance(a, b) for b in points] for a in points])
+        D = pairwise(lambda a, b: gp.mcvmd(a, None, b, None))
+        if kind == "mcvmd_spread":
+            D, closed = pairwise(mcvmd_integral), D
+            closed_form = _gram_verdict(closed, name, relative_scale, reference=D)
+    return _gram_verdict(D, name, relative_scale)[0], _gram_verdict((1 - bc) ** 2, name, relative_scale)[0], \
+        closed_form
 
-    def verdict(D):
-        gram = gp.COVARIANCES[name](D, relative_scale * np.median(D[D > 0]))
-        return "holds" if _min_eig(gram) >= -EIG_TOL * n else "fails"
 
-    return verdict(D), verdict((1 - bc) ** 2)
-
-
-def _record_kernels(outcomes):
+def _record_kernels(outcomes, spread):
     ex = kernel_example()
+    lowest = min((e for _, e in spread), default=0.0)
     return {"diagnosis": (
         "Table 2.1's covariances of Delta = D(d_i, d_j) are covariance functions for every length scale "
         "exactly when D embeds isometrically in a Hilbert space (Schoenberg 1938); the text admits any "
         "'admissible distance'. The printed Hellinger expression (1 - int sqrt(p1 p2))^2 and the "
         "Jensen-Shannon divergence are not such distances: N(0,1), N(1,1), N(2,1) with the printed "
         f"Hellinger and the SE kernel at l = {ex['length_scale']} give the Gram eigenvalue {ex['printed']:.3f} "
-        f"(with the usual Hellinger sqrt(1 - BC): {ex['usual']:.3f}). The study's failure count is the yield of "
-        "an adversarial search over distances, covariances and length scales, not a failure rate."),
-        "corrected": _tally(outcomes, (
-            "If D embeds isometrically in a Hilbert space (mCvMd, the L2 distance of densities, the Hellinger "
-            "distance sqrt(1 - int sqrt(p1 p2))), every covariance of Table 2.1 (gamma <= 2) of Delta = D is "
-            "positive semidefinite at every length scale. Proof: each is a scale mixture int exp(-t Delta^2) "
-            "dmu(t) (t Delta^2 for SE, Gamma mixtures for RQ and Matern, Bernstein's theorem for "
-            "exp(-(Delta/l)^gamma)), and exp(-t D^2) is PSD for all t > 0 iff D^2 is conditionally negative "
-            "definite, i.e. D is Hilbertian (Schoenberg)."),
-            "the printed Hellinger expression (1 - BC)^2 as D, with the same covariances and length scales")}
+        f"(with the usual Hellinger sqrt(1 - BC): {ex['usual']:.3f}). Nor is the thesis's closed form of the "
+        "mCvMd with a finite b_max (gp.mcvmd, b_max = 100), a large-b_max expansion of its integral, once "
+        f"the points spread beyond about 2 b_max: on Dirac sets spread over about {4 * SPREAD:.0f} its Gram "
+        f"matrices fail in {sum(v == 'fails' for v, _ in spread)} of {len(spread)} draws (lowest eigenvalue "
+        f"{lowest:.2f}), while the integral itself (exact, mcvmd_integral) gives PSD Gram matrices. The "
+        "study's failure count is the yield of an adversarial search over distances, covariances and "
+        "length scales, not a failure rate."),
+        "corrected": {**_tally(outcomes, (
+            "If D embeds isometrically in a Hilbert space (the mCvMd defined by its integral, for every "
+            "b_max; the L2 distance of densities; the Hellinger distance sqrt(1 - int sqrt(p1 p2))), every "
+            "covariance of Table 2.1 (gamma <= 2) of Delta = D is positive semidefinite at every length "
+            "scale. The thesis's closed form of the mCvMd equals the integral only as b_max -> infinity; "
+            "with a finite b_max it is covered only while all points lie within about 2 b_max of each "
+            "other. Proof: each covariance is a scale mixture int exp(-t Delta^2) dmu(t) (t Delta^2 for SE, "
+            "Gamma mixtures for RQ and Matern, Bernstein's theorem for exp(-(Delta/l)^gamma)), and "
+            "exp(-t D^2) is PSD for all t > 0 iff D^2 is conditionally negative definite, i.e. D is "
+            "Hilbertian (Schoenberg); the mCvMd integral is an L2 norm of P_1 - P_2 over (m, b)."),
+            "the printed Hellinger expression (1 - BC)^2 as D, with the same covariances and length scales"),
+            "closed_form_spread_excluded": {
+                "description": f"gp.mcvmd's closed form (b_max = 100) on Dirac sets spread over about "
+                               f"{4 * SPREAD:.0f}, outside the corrected statement",
+                **_counts([v for v, _ in spread]), "lowest_eigenvalue": lowest}}}
 
 
 # ------------------------------------------------------------------ Thm. 3.19: Alg. 3.1
 
+SINGULAR_NOISE_SHARE = 0.25       # share of the corrected Thm. 3.19's draws with H = 0 (outside its hypothesis)
+
+
 def check_3_19(rng):
-    """Corrected Thm. 3.19 (M = 1, C = I): Alg. 3.1 converges to the LQ gain of the Riccati equation.
-    Premise: the DARE has a stabilising solution (Q > 0). Mutant: the limit is the LQ gain for 2 R."""
+    """Corrected Thm. 3.19 (M = 1, C = I, H H^T > 0): Alg. 3.1 converges to the LQ gain of the Riccati
+    equation. Premise: the DARE has a stabilising solution (Q > 0). Mutant: the limit is the LQ gain for
+    2 R. A quarter of the draws have H = 0: the hypothesis excludes them (``not_applicable``), and the
+    third entry says whether Alg. 3.1 still reached the LQ gain there (None on the others)."""
+    singular = rng.random() < SINGULAR_NOISE_SHARE
     sys = draw_system(rng, max_modes=1)
-    sys = sys.replace(C=np.eye(sys.nx)[None], J=None)
+    sys = sys.replace(C=np.eye(sys.nx)[None], J=None, H=0 * sys.H if singular else sys.H)
     A, B, Q, R = sys.A[0], sys.B[0], sys.Q[0], sys.R[0]
 
     def lq_gain(weight):
@@ -117,17 +156,23 @@ def check_3_19(rng):
     try:
         gains = lq_gain(R), lq_gain(2 * R)
     except (np.linalg.LinAlgError, ValueError):
-        return "not_applicable", "not_applicable"
-    run = static_output_feedback(sys, warn=False, moments="step")
+        return "not_applicable", "not_applicable", None
+    with warnings.catch_warnings():                     # H = 0 drives the moments' scales to overflow
+        warnings.simplefilter("ignore", RuntimeWarning)
+        run = static_output_feedback(sys, warn=False, moments="step")
     L = np.asarray(run.L).reshape(gains[0].shape)
     agree = lambda G: run.converged and run.stabilizing and np.abs(L - G).max() <= 1e-6 * (1 + np.abs(G).max())
-    return ("holds" if agree(gains[0]) else "fails"), ("holds" if agree(gains[1]) else "fails")
+    verdicts = ("holds" if agree(gains[0]) else "fails"), ("holds" if agree(gains[1]) else "fails")
+    if singular:
+        return "not_applicable", "not_applicable", verdicts[0]
+    return (*verdicts, None)
 
 
-def _record_3_19(outcomes):
+def _record_3_19(outcomes, singular_verdicts):
     ex = thm_3_19_example()
     cycle = ex["cycles"][0]
     starts = ", ".join(f"{c['start']:g} I" for c in ex["cycles"])
+    noiseless = thm_3_19_noiseless_example()
     return {"diagnosis": (
         "The proof (after (3.35)) shows that a solution of (3.31)-(3.33) stabilises, then argues by a "
         "homotopy from the mode-observed problem and degree theory that the solution is unique and that "
@@ -136,14 +181,21 @@ def _record_3_19(outcomes):
         f"(plain output feedback), two states (one-decimal data): from X = P = {starts} Alg. 3.1 ends in a "
         f"period-2 cycle of the gain, {cycle['gains'][0]:.4f} <-> {cycle['gains'][1]:.4f} (rho "
         f"{cycle['rho'][0]:.2f} and {cycle['rho'][1]:.2f}), although L = {ex['best_gain']:.3f} gives rho "
-        f"{ex['best_rho']:.3f}."),
-        "corrected": _tally(outcomes, (
-            "If M = 1 and C = I (state feedback), (A, B) is stabilisable and Q > 0, Alg. 3.1 converges from "
-            "every X_0 > 0, P_0 >= 0 to the LQ gain. Proof: with one mode and C = I the X-factors cancel in "
-            "(3.34), L = -(R + B^T P B)^{-1} B^T P A, so (3.35) for P is the Riccati value iteration, which "
-            "converges to the stabilising solution (Kalman; Bertsekas, Vol. 1, Prop. 4.4.1); X then follows "
-            "a converging Lyapunov recursion."),
-            "the limit compared with the LQ gain for 2 R instead of R")}
+        f"{ex['best_rho']:.3f}. Even with state feedback (C = I) the noise must be non-degenerate: with "
+        f"H = 0, A = {noiseless['A']}, B = {noiseless['B']}, Q = I, R = 1, X_0 = I, P_0 = 0, X_1 = A A^T has "
+        f"smallest eigenvalue {noiseless['min_eig_X1']:.1e}, (3.34) no longer fixes L, and Alg. 3.1 (the "
+        f"library's) stops with status '{noiseless['status']}' instead of the LQ gain "
+        f"{noiseless['lq_gain']} (with H = 0.1 I: '{noiseless['status_with_noise']}', the LQ gain)."),
+        "corrected": {**_tally(outcomes, (
+            "If M = 1 and C = I (state feedback), H H^T > 0, (A, B) is stabilisable and Q > 0, Alg. 3.1 "
+            "converges from every X_0 > 0, P_0 >= 0 to the LQ gain. Proof: H H^T > 0 keeps X_k > 0, so the "
+            "X-factors cancel in (3.34), L = -(R + B^T P B)^{-1} B^T P A, and (3.35) for P is the Riccati "
+            "value iteration, which converges to the stabilising solution (Kalman; Bertsekas, Vol. 1, Prop. "
+            "4.4.1); X then follows a converging Lyapunov recursion. Without H H^T > 0, X_k can become "
+            "singular and (3.34) leaves L undetermined."),
+            "the limit compared with the LQ gain for 2 R instead of R"),
+            "singular_noise_excluded": {"description": "draws with H = 0, outside the hypothesis H H^T > 0: "
+                                        "Alg. 3.1's limit against the LQ gain", **_counts(singular_verdicts)}}}
 
 
 # ------------------------------------------------------------------ Prop. 3.26
@@ -225,11 +277,22 @@ def check_3_27(rng):
 
 
 def _record_3_27(outcomes):
+    ex = thm_3_27_fixed_points()
+    low, high = ex["fixed_points"][0], ex["fixed_points"][-1]
+    worst = lambda name: max(p[name] for p in ex["fixed_points"])
     return {"diagnosis": (
         "App. A.1 rewrites the Hamiltonian of (3.42) 'if we use (3.43)', which replaces X12 by X2 and P12 by "
         "-P2; (3.49) is the stationarity condition of that approximate Hamiltonian (A.7), not of (3.42). The "
         "two agree where X12 = X2 and P12 = -P2, as at the one-mode LQG optimum; with M >= 2 the fixed point "
-        "of Alg. 3.2 is in general not a stationary point of the exact cost (3.42)."),
+        "of Alg. 3.2 is in general not a stationary point of the exact cost (3.42). Nor is it unique: the "
+        f"study's instance {ex['index']} (M = {ex['M']}, nx = {ex['nx']}, nu = {ex['nu']}, ny = {ex['ny']}) has "
+        f"{len(ex['fixed_points'])} stabilising fixed points of Alg. 3.2: from {low['starts'][0]} (exact cost "
+        f"{low['cost']:.3f}) and from {len(high['starts'])} of {ex['random_starts']} random starts (cost "
+        f"{high['cost']:.3f}). Both solve (3.45)-(3.48) to {worst('residual_3_45_3_48'):.0e} and (3.49) to "
+        f"{worst('residual_3_49'):.0e} (relative), with Xu and Pu invertible (smallest eigenvalues "
+        f"{min(p['min_eig_Xu'] for p in ex['fixed_points']):.3f} and {min(p['min_eig_Pu'] for p in ex['fixed_points']):.1f}), "
+        "so the equations do not determine the controller."),
+        "fixed_points": ex,
         "corrected": _tally(outcomes, (
             "For M = 1: a solution of (3.45)-(3.49) with invertible Xu and E(Pu) whose controller stabilises is the "
             "LQG controller, the optimum of (3.38). Proof: "
@@ -438,11 +501,11 @@ def correction_records(seed_sequence, n_instances=200, mutant_instances=100, pro
     count = lambda key: min(n_instances, EXPENSIVE.get(key, n_instances))
     records = {}
     bar = progress_bar(total=len(STATEMENT_IDS), enabled=progress, desc="corrections", unit="statement")
-    pairs, _ = _run(check_kernels, children["2_6_3_kernels"], count("2_6_3_kernels"), mutant_instances)
-    records["2_6_3_kernels"] = _record_kernels(pairs)
+    pairs, full = _run(check_kernels, children["2_6_3_kernels"], count("2_6_3_kernels"), mutant_instances)
+    records["2_6_3_kernels"] = _record_kernels(pairs, [r[2] for r in full if r[2] is not None])
     bar.update()
-    pairs, _ = _run(check_3_19, children["3_19"], count("3_19"), mutant_instances)
-    records["3_19"] = _record_3_19(pairs)
+    pairs, full = _run(check_3_19, children["3_19"], count("3_19"), mutant_instances)
+    records["3_19"] = _record_3_19(pairs, [r[2] for r in full if r[2] is not None])
     bar.update()
     pairs, full = _run(lambda r: check_3_26(r, with_sign=True), children["3_26"], count("3_26"), mutant_instances)
     records["3_26"] = _record_3_26(pairs, [r[2] for r in full[:mutant_instances]])

@@ -2,14 +2,25 @@
 
 Each function recomputes its counterexample from the printed equations: exactly in
 ``fractions.Fraction`` where the data are rational (Prop. 3.26, Thm. 3.31), to rounding
-otherwise (Thm. 3.19, the kernels of Sec. 2.6.3). The notebook re-runs them.
+otherwise (Thm. 3.19, the kernels of Sec. 2.6.3), or from the study's own instance (the two fixed
+points of Alg. 3.2 behind Thm. 3.27). The notebook re-runs them.
 """
 
+import warnings
 from fractions import Fraction
 
 import numpy as np
+import scipy.linalg
+import scipy.special
 
 from asoc import gp
+from asoc.gp.cramer_von_mises import DEFAULT_B_MAX
+from asoc.mjls import MJLS, dynamic_output_feedback, static_output_feedback, successor_average
+from asoc.mjls.bound import bound_costate_step, bound_moment_step
+from asoc.mjls.operators import noise_covariances
+from asoc.mjls.optimality import optimality_system
+
+from .instances import draw_system
 
 __all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "alg_3_1_one_mode",
            "thm_3_19_example", "kernel_example"]
@@ -151,6 +162,37 @@ def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
     return {"cycles": cycles, "best_gain": float(candidates[best]), "best_rho": float(radii[best])}
 
 
+THM_3_19_NOISELESS = dict(A=[[0.3364, 0.1107], [-1.3845, -0.4556]], B=[[0.8825], [0.5804]])   # issue 30
+
+
+def thm_3_19_noiseless_example():
+    """Alg. 3.1 with state feedback (C = I, one mode) on :data:`THM_3_19_NOISELESS`, Q = I, R = 1, without
+    noise (H = 0) and with H = 0.1 I: the library's status and gain against the LQ gain, and the smallest
+    eigenvalue of X_1 = A X_0 A^T from X_0 = I (the first gain is 0 when P_0 = 0).
+
+    Examples
+    --------
+    >>> ex = thm_3_19_noiseless_example()
+    >>> ex["reaches_lq_gain"], ex["reaches_lq_gain_with_noise"], ex["min_eig_X1"] < 1e-6
+    (False, True, True)
+    """
+    A, B = (np.array(THM_3_19_NOISELESS[k]) for k in "AB")
+    Q, R = np.eye(2), np.eye(1)
+    P = scipy.linalg.solve_discrete_are(A, B, Q, R)
+    lq = -np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
+    runs = []
+    for H in (np.zeros((2, 2)), 0.1 * np.eye(2)):
+        sys = MJLS(A=A[None], B=B[None], C=np.eye(2)[None], H=H[None], Q=Q[None], R=R[None], T=np.eye(1), J=None)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            run = static_output_feedback(sys, warn=False, moments="step", init=1.0)
+        reached = bool(run.converged and np.abs(np.asarray(run.L).reshape(lq.shape) - lq).max() <= 1e-6)
+        runs.append((run.status, reached))
+    return {"A": THM_3_19_NOISELESS["A"], "B": THM_3_19_NOISELESS["B"], "lq_gain": np.round(lq, 4).tolist(),
+            "min_eig_X1": float(np.linalg.eigvalsh(A @ A.T).min()), "status": runs[0][0],
+            "reaches_lq_gain": runs[0][1], "status_with_noise": runs[1][0], "reaches_lq_gain_with_noise": runs[1][1]}
+
+
 # ------------------------------------------------------------------ Sec. 2.6.3: kernels
 
 def kernel_example(length_scale=0.03):
@@ -167,3 +209,87 @@ def kernel_example(length_scale=0.03):
     usual = np.array([[gp.hellinger_gaussian([a], [[1.0]], [b], [[1.0]]) for b in means] for a in means])
     lowest = lambda D: float(np.linalg.eigvalsh(gp.squared_exponential(D, length_scale))[0])
     return {"printed": lowest(usual ** 4), "usual": lowest(usual), "length_scale": length_scale}
+
+
+# ------------------------------------------------------------------ Thm. 3.27: two fixed points
+
+THM_3_27_INSTANCE = 13           # the study's saved counterexample of Thm. 3.27 (seed 2017): M = 2, nx = 1
+
+
+def fixed_point_residuals(sys, run):
+    """How well Alg. 3.2's last iterate solves (3.45)-(3.49): the largest relative change of Xbar, Xu,
+    Pbar, Pu under one more step (3.45)-(3.48) with the iterate's gains, the relative residual
+    ||H z + rho|| / ||rho|| of (3.49) (z = [vec F; vec K; vec L], column-stacking), and the smallest
+    eigenvalues of Xu and Pu (both invertible where positive)."""
+    Xbar, Xunder, Pbar, Punder = run.Xbar, run.Xunder, run.Pbar, run.Punder
+    HHt, JJt = noise_covariances(sys)
+    EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
+    step = (*bound_moment_step(sys, run.F, run.K, run.L, Xbar, Xunder, sys.mu_inf, HHt, JJt),
+            *bound_costate_step(sys, run.F, run.K, run.L, EPbar, EPunder))
+    change = max(np.abs(new - old).max() / np.abs(old).max()
+                 for new, old in zip(step, (Xbar, Xunder, Pbar, Punder)))
+    H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, sys.mu_inf, JJt)
+    z = np.concatenate([np.ravel(G, order="F") for G in (run.F, run.K, run.L)])
+    return {"residual_3_45_3_48": float(change),
+            "residual_3_49": float(np.linalg.norm(H @ z + rho) / np.linalg.norm(rho)),
+            "min_eig_Xu": float(np.linalg.eigvalsh(Xunder).min()),
+            "min_eig_Pu": float(np.linalg.eigvalsh(Punder).min())}
+
+
+def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, tol=1e-14):
+    """Alg. 3.2 on instance ``index`` of the study's Thm. 3.27 (drawn as the study draws it) from the
+    author's start 1e-4 I and from ``random_starts`` random SPD starts of scale 1 (seeds 0, 1, ...):
+    the distinct converged, stabilising fixed points (costs equal to 1e-9 relative merged), each with
+    its exact cost (3.42), how many starts reach it, its gains and :func:`fixed_point_residuals`.
+
+    Examples
+    --------
+    >>> ex = thm_3_27_fixed_points(random_starts=2)
+    >>> (ex["M"], ex["nx"], ex["nu"], ex["ny"]), len(ex["fixed_points"])
+    ((2, 1, 2, 1), 2)
+    >>> [round(p["cost"], 3) for p in ex["fixed_points"]]
+    [1.952, 2.424]
+    """
+    from .engine import instance_seed                    # engine imports the statements, which import this
+
+    sys = draw_system(np.random.default_rng(instance_seed("statement_3_27", seed, index)), max_states=2,
+                      max_modes=2)
+    starts = [("1e-4 I", dict(init=1e-4))] + [(f"random SPD, seed {s}", dict(init=1.0, rng=np.random.default_rng(s)))
+                                                for s in range(random_starts)]
+    points = []
+    for name, kwargs in starts:
+        run = dynamic_output_feedback(sys, tol=tol, max_iter=20000, warn=False, **kwargs)
+        if not (run.converged and run.stabilizing):
+            continue
+        same = [p for p in points if abs(p["cost"] - run.cost) <= 1e-9 * run.cost]
+        if same:
+            same[0]["starts"].append(name)
+            continue
+        points.append({"cost": float(run.cost), "starts": [name], "F": run.F.tolist(), "K": run.K.tolist(),
+                       "L": run.L.tolist(), "rho": float(run.rho), **fixed_point_residuals(sys, run)})
+    return {"seed": seed, "index": index, "M": sys.M, "nx": sys.nx, "nu": sys.nu, "ny": sys.ny,
+            "random_starts": random_starts, "fixed_points": sorted(points, key=lambda p: p["cost"])}
+
+
+def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
+    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly, for finite ``b_max``.
+
+    With the LCD kernel, :math:`\int (P_1 - P_2)^2 dm = \sqrt\pi\, b \sum_{kl} c_k c_l e^{-\Delta_{kl}^2/(4b^2)}`
+    (``c``: the weights, those of ``y`` negative), and :math:`\int_0^{b_{\max}} b e^{-a/b^2} db =
+    \tfrac12 (S e^{-a/S} - a E_1(a/S))`, :math:`S = b_{\max}^2`. Unlike the closed form of the thesis
+    (``gp.mcvmd``, its large-``b_max`` expansion), this is an L2 distance for every ``b_max``.
+
+    Examples
+    --------
+    >>> round(mcvmd_integral([0.0], [0.3], 10.0), 3)         # gp.mcvmd_quadrature: 0.593
+    0.593
+    >>> round(mcvmd_integral([0.0, 1.0], [300.0], 100.0), 1), gp.mcvmd([0.0, 1.0], None, [300.0], None)
+    (93.1, 0.0)
+    """
+    points = np.concatenate([np.ravel(x), np.ravel(y)])
+    c = np.concatenate([np.full(np.size(x), 1 / np.size(x)), np.full(np.size(y), -1 / np.size(y))])
+    a = (points[:, None] - points[None]) ** 2 / 4
+    S = float(b_max) ** 2
+    g = S * np.exp(-a / S) - a * scipy.special.exp1(np.maximum(a, 1e-300) / S)
+    g[a == 0] = S
+    return float(np.sqrt(max(np.sqrt(np.pi) / 2 * (c @ g @ c), 0.0)))

@@ -11,11 +11,13 @@
   and test the recovered gain's mean-square stability on its own (:func:`moment_map_radius`).
 """
 
+import cvxpy as cp
 import numpy as np
 
 from asoc.linalg import transpose
 from asoc.mjls import closed_loop, static_output_lmi, steady_state_second_moment
-from asoc.mjls.lmi import performance_output
+from asoc.mjls.examples import sec354_system
+from asoc.mjls.lmi import performance_output, solve_quietly
 
 from .instances import (Z_SCORE, ModeOperator, best_scalar_gain, draw_system, initial_modes, min_eig, outcome,
                         random_spd_stack, stabilised, stationary_average, trace_sum, verdict)
@@ -168,3 +170,58 @@ def summarise_lmi(outcomes):
     certified = [o for o in stabilisable if o.numbers.get("lmi_feasible")]
     return {"sof_stabilisable": len(stabilisable), "certified_by_lmi": len(certified),
             "lmi_feasible": sum(bool(o.numbers.get("lmi_feasible")) for o in outcomes)}
+
+
+MARGIN_SOLVERS = ("CLARABEL", "SCS")
+MARGIN_AGREEMENT = 1e-4       # two solvers' optimal margins agree to this (SCS is first order)
+
+
+def lmi_margin(sys, solver="CLARABEL"):
+    """The optimal margin of Thm. 3.9's LMIs without the noise term and the objective's LMI: the largest
+    t with [[Y_i, A_i G + B_i F C_i], [., G + G^T - D_i(Y)]] >= t I, Y_i >= t I, G >= t I, M >= t I,
+    M C_i = C_i G, normalised by tr G + sum_i tr Y_i = 1. These LMIs are homogeneous and implied by the
+    printed ones (dropping mu_i H_i H_i^T >= 0 only enlarges the corner), so a negative optimal margin
+    certifies that the printed LMIs are infeasible for every eps > 0.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> lmi_margin(sec354_system(1)) < 0                    # C1 = [1 2], C2 = [2 1]
+    True
+    >>> stable = sec354_system(1).replace(A=0.1 * sec354_system(1).A)
+    >>> lmi_margin(stable) > 0
+    True
+    """
+    nx, ny, nu = sys.nx, sys.ny, sys.nu
+    t = cp.Variable()
+    F, G, Mv = cp.Variable((nu, ny)), cp.Variable((nx, nx), symmetric=True), cp.Variable((ny, ny), symmetric=True)
+    Y = [cp.Variable((nx, nx), symmetric=True) for _ in range(sys.M)]
+    cons = [G >> t * np.eye(nx), Mv >> t * np.eye(ny), cp.trace(G) + sum(cp.trace(Yi) for Yi in Y) == 1]
+    for i in range(sys.M):
+        DY = sum(sys.T[j, i] * Y[j] for j in range(sys.M))
+        mid = sys.A[i] @ G + sys.B[i] @ F @ sys.C[i]
+        block = cp.bmat([[Y[i], mid], [mid.T, 2 * G - DY]])
+        cons += [0.5 * (block + block.T) >> t * np.eye(2 * nx), Y[i] >> t * np.eye(nx), Mv @ sys.C[i] == sys.C[i] @ G]
+    problem = cp.Problem(cp.Maximize(t), cons)
+    status = solve_quietly(problem, solver)
+    if status != cp.OPTIMAL:
+        raise RuntimeError(f"lmi_margin: {solver} returned {status!r}, not an optimal margin")
+    return float(t.value)
+
+
+def certified_margins(sys):
+    """:func:`lmi_margin` by each of :data:`MARGIN_SOLVERS` and the verdict: "infeasible" when all are
+    negative beyond :data:`MARGIN_AGREEMENT` and agree to it, "feasible" when all are positive beyond it,
+    else "undecided"."""
+    margins = {solver: lmi_margin(sys, solver) for solver in MARGIN_SOLVERS}
+    values = np.array(list(margins.values()))
+    agree = np.ptp(values) <= MARGIN_AGREEMENT
+    verdict = ("infeasible" if agree and values.max() < -MARGIN_AGREEMENT else
+               "feasible" if agree and values.min() > MARGIN_AGREEMENT else "undecided")
+    return {"margins": margins, "verdict": verdict}
+
+
+def lmi_C12_margin():
+    """:func:`certified_margins` for the example of Sec. 3.5.4 with C1 = [1 2], C2 = [2 1], per T: the
+    thesis says Thm. 3.9's LMIs are feasible there (``sec3_5.lmi_C12_T1``, ``_T2``)."""
+    return {f"T{t}": certified_margins(sec354_system(t, "C1=[1 2], C2=[2 1]")) for t in (1, 2)}
