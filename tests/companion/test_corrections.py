@@ -104,3 +104,55 @@ def test_bad_arguments_are_named(kwargs, error):
     with pytest.raises(error, match=next(k for k in ("mutant_instances", "n_instances", "seed_sequence")
                                          if k in kwargs and (k != "seed_sequence" or error is TypeError))):
         corrections.correction_records(**kwargs)
+
+
+def test_thm_3_27_instance_13_has_two_verified_fixed_points():
+    from asoc_companion.theorems.counterexamples import thm_3_27_fixed_points
+    ex = thm_3_27_fixed_points(random_starts=3)
+    assert (ex["M"], ex["nx"], ex["nu"], ex["ny"]) == (2, 1, 2, 1)
+    low, high = ex["fixed_points"]
+    assert low["cost"] == pytest.approx(1.952, abs=1e-3) and "1e-4 I" in low["starts"]
+    assert high["cost"] == pytest.approx(2.424, abs=1e-3) and len(high["starts"]) == 3
+    for point in (low, high):
+        assert point["residual_3_45_3_48"] < 1e-12 and point["residual_3_49"] < 1e-12
+        assert point["min_eig_Xu"] > 1e-3 and point["min_eig_Pu"] > 1e-3 and point["rho"] < 1
+
+
+def test_thm_3_19_needs_nonsingular_noise():
+    from asoc_companion.theorems.counterexamples import thm_3_19_noiseless_example
+    ex = thm_3_19_noiseless_example()
+    assert not ex["reaches_lq_gain"] and ex["reaches_lq_gain_with_noise"]
+    outcomes = [corrections.check_3_19(np.random.default_rng(c)) for c in np.random.SeedSequence(3).spawn(40)]
+    singular = [o for o in outcomes if o[2] is not None]
+    assert singular and all(o[:2] == ("not_applicable", "not_applicable") for o in singular)
+    assert any(o[2] == "fails" for o in singular)                 # the hypothesis excludes real failures
+    assert all(o[0] == "holds" for o in outcomes if o[2] is None and o[0] != "not_applicable")
+
+
+def test_mcvmd_integral_matches_quadrature_and_the_closed_form_fails_when_spread():
+    from asoc import gp
+    from asoc_companion.theorems.counterexamples import mcvmd_integral
+    x, y = [0.0, 1.0, 2.5], [0.3, 4.0]
+    quadrature = gp.mcvmd_quadrature(lambda m, b: gp.lcd_dirac(x, None, m, b),
+                                     lambda m, b: gp.lcd_dirac(y, None, m, b), b_max=10.0, center=2.0,
+                                     spread=6.0, points=x + y)
+    assert mcvmd_integral(x, y, 10.0) == pytest.approx(quadrature, rel=1e-8)
+    outcomes = [corrections.check_kernels(np.random.default_rng(c)) for c in np.random.SeedSequence(3).spawn(60)]
+    spread = [o[2] for o in outcomes if o[2] is not None]
+    assert all(o[0] == "holds" for o in outcomes)
+    assert spread and any(verdict == "fails" and lowest < -0.1 for verdict, lowest in spread)
+
+
+def test_thm_3_9_c12_infeasibility_is_certified_by_two_solvers():
+    from asoc_companion.theorems.h2_lmi import certified_margins, lmi_C12_margin
+    from asoc.mjls.examples import sec354_system
+    margins = lmi_C12_margin()
+    assert all(m["verdict"] == "infeasible" for m in margins.values())
+    assert all(v < 0 for m in margins.values() for v in m["margins"].values())
+    stable = sec354_system(1).replace(A=0.1 * sec354_system(1).A)     # the margin separates: feasible here
+    assert certified_margins(stable)["verdict"] == "feasible"
+
+
+def test_prop_3_15_diagnosis_points_at_3_11():
+    from asoc_companion.theorems.static_feedback import summarise_3_15
+    assert "starts in (3.11)" in summarise_3_15([])["diagnosis"]

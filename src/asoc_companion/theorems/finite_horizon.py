@@ -72,16 +72,18 @@ def check_3_29(rng, mutant=False):
 
 
 def check_3_30(rng, mutant=False):
-    """Lemma 3.30: X >= A >= 0 and Y >= B >= 0 imply tr[AB] <= tr[XY] (rank-deficient draws included).
-    Mutant: the hypotheses A, B >= 0 dropped (A, B symmetric indefinite)."""
+    """Lemma 3.30: X >= A >= 0 and Y >= B >= 0 imply tr[AB] <= tr[XY] (rank-deficient draws included,
+    increments X - A, Y - B at a scale log-uniform on [0.01, 1]: near the equality X = A, Y = B).
+    Mutant: the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative)."""
     n = int(rng.integers(1, 5))
 
     def psd():
         G = rng.standard_normal((n, int(rng.integers(1, n + 1))))
         return G @ G.T
 
-    A, B = (psd() - 2 * psd(), psd() - 2 * psd()) if mutant else (psd(), psd())
-    X, Y = A + psd(), B + psd()
+    A, B = (psd() - 4 * psd(), psd() - 4 * psd()) if mutant else (psd(), psd())
+    scale = np.exp(rng.uniform(np.log(0.01), 0.0))
+    X, Y = A + scale * psd(), B + scale * psd()
     small, large = np.trace(A @ B), np.trace(X @ Y)
     return outcome(verdict(small <= large * (1 + 1e-12) + 1e-12), None, tr_AB=small, tr_XY=large, n_states=n,
                    n_modes=1)

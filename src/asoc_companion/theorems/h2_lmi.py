@@ -70,22 +70,54 @@ def _random_scaled_spd(rng, count, n, scale):
     return spread * (scale * np.exp(0.15 * rng.standard_normal(count)))[:, None, None]
 
 
+BOUNDARY_SHARE = 0.5     # share of the lemmas' draws at the BMI's boundary (all of the mutants')
+
+
+def boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
+    """(Y, G) near the boundary of the BMI (3.15): Y solves Y_i = s Acl_i D_i(Y) Acl_i^T + mu_i H_i H_i^T
+    + delta I and G_i = D_i(Y) (Lemma 3.8, one G: the largest multiple of sum_i mu_i D_i(Y) below every
+    D_i(Y)), so that with G_i = D_i(Y) the BMI's Schur
+    complement is (1 - s) Acl_i D_i(Y) Acl_i^T + delta I: s uniform on [0.5, min(1.5, 0.999 / rho)] puts the
+    draws on both sides of the boundary s = 1, delta = 1e-3 tr(mean H H^T) / n (a thin margin)."""
+    M, n, mu = sys.M, sys.nx, sys.mu_inf
+    s = rng.uniform(0.5, min(1.5, 0.999 / rho))
+    delta = 1e-3 * float(np.trace(HHt.mean(axis=0)) / n)
+    basis = np.eye(M * n * n).reshape(M * n * n, M, n, n)
+    images = s * np.einsum("ji,iab,Njbc,idc->Niad", sys.T, Acl, basis, Acl).reshape(M * n * n, -1).T
+    noise = mu[:, None, None] * HHt + delta * np.eye(n)
+    Y = np.linalg.solve(np.eye(M * n * n) - images, noise.ravel()).reshape(M, n, n)
+    Y = 0.5 * (Y + transpose(Y))
+    P = np.einsum("ji,jab->iab", sys.T, Y)
+    if mode_dependent:
+        return Y, P, s
+    average = np.einsum("i,iab->ab", mu, P)
+    root = np.linalg.cholesky(average)
+    below = min(np.linalg.eigvalsh(np.linalg.solve(root, np.linalg.solve(root, Pi).T)).min() for Pi in P)
+    return Y, below * average[None], s
+
+
 def _lemma_bmi(rng, mode_dependent, mutant):
     """Lemmas 3.8 / 3.11: a point (L, G, Y) satisfying the BMI (3.15) gives D(Y) feasible for (3.14),
-    hence a stabilising L, and an objective >= ||G||_2^2 of L. Y and G are drawn independently of L's
+    hence a stabilising L, and an objective >= ||G||_2^2 of L. Half the draws (all of the mutant's) lie
+    near the BMI's boundary (:func:`boundary_point`), the others draw Y and G independently of L's
     Lyapunov equation; the BMI decides the premise.
     Mutant: the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)."""
     sys = draw_system(rng)
     shape = (sys.M, sys.nu, sys.ny) if mode_dependent else (sys.nu, sys.ny)
     L = 0.5 * rng.standard_normal(shape)
     acl = lambda s: s.A + s.B @ L @ s.C
-    sys, _ = stabilised(rng, sys, acl, 0.1, 1.6)
+    boundary = mutant or rng.random() < BOUNDARY_SHARE
+    sys, target = stabilised(rng, sys, acl, *((0.3, 1.5) if boundary else (0.1, 1.6)))
     Acl, mu, M, n = acl(sys), sys.mu_inf, sys.M, sys.nx
     HHt = sys.H @ transpose(sys.H)
-    scale = float(np.trace(HHt.mean(axis=0)) / n) * np.exp(rng.uniform(1.0, 4.0))
-    Y = _random_scaled_spd(rng, M, n, scale)
-    P = np.einsum("ji,jab->iab", sys.T, Y)                                  # D_i(Y) = sum_j p_ji Y_j
-    G = _random_scaled_spd(rng, M if mode_dependent else 1, n, float(np.trace(P.mean(axis=0)) / n))
+    if boundary:
+        Y, G, s = boundary_point(rng, sys, Acl, HHt, mode_dependent, target)
+        P = np.einsum("ji,jab->iab", sys.T, Y)
+    else:
+        scale = float(np.trace(HHt.mean(axis=0)) / n) * np.exp(rng.uniform(1.0, 4.0))
+        Y = _random_scaled_spd(rng, M, n, scale)
+        P = np.einsum("ji,jab->iab", sys.T, Y)                              # D_i(Y) = sum_j p_ji Y_j
+        G = _random_scaled_spd(rng, M if mode_dependent else 1, n, float(np.trace(P.mean(axis=0)) / n))
     G = np.broadcast_to(G, P.shape)
     corner = G + transpose(G) - (0 if mutant else P)
     blocks = np.block([[Y - mu[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G), corner]])

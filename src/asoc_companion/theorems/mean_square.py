@@ -52,24 +52,67 @@ def moment_map_radius(A, T):
     return float(np.max(np.abs(np.linalg.eigvals(moment_map_matrix(A, T)))))
 
 
-def check_3_1(rng, mutant=False):
-    """Thm. 3.1: PD solutions Q of the coupled Lyapunov equations (either form) for PD S imply MSS.
-    Mutant: the premise negated (a solution with an eigenvalue <= 0 in both forms "implies" MSS)."""
-    sys = draw_system(rng)
-    A, T, M, n = sys.A, sys.T, sys.M, sys.nx
-    S = random_spd_stack(rng, M, n)
+BOUNDARY_SHARE = 0.5  # share of the checks' own draws from :func:`boundary_system` (all of the mutants')
+
+
+def near_cycle(rng, M, reverse=False):
+    """A random asymmetric transition matrix: one random M-cycle of the modes (run backwards when
+    ``reverse``), mixed with Dirichlet(1) rows at a weight uniform on [0, 0.3] (T^T is far from T)."""
+    order = rng.permutation(M)
+    cycle = np.zeros((M, M))
+    cycle[order, np.roll(order, -1)] = 1.0                      # order[k] -> order[k + 1]
+    weight = rng.uniform(0.0, 0.3)
+    mixed = rng.dirichlet(np.ones(M), size=M)
+    return [(1 - weight) * C + weight * mixed for C in (cycle, cycle.T)][::-1 if reverse else 1]
+
+
+def boundary_system(rng, radius_of, against=None):
+    """Mode matrices A_i (3 modes, 2-3 states, standard normal) and a :func:`near_cycle` T, with A scaled
+    so that ``radius_of(A, T)`` (homogeneous of degree 2 in A) is log-uniform on [0.97, 1): the draws where
+    a statement about mean-square stability is decided by small differences of spectra. With ``against``
+    (a mutant's radius), the cycle runs in the direction in which ``against`` understates the library's
+    ``ms_spectral_radius`` more (reversing the cycle is what transposing T does, so in a family symmetric
+    under reversal the mutant's premise errs on the safe side in half the draws)."""
+    M, n = 3, int(rng.integers(2, 4))
+    A, candidates = rng.standard_normal((M, n, n)), near_cycle(rng, M)
+    T = candidates[0] if against is None else max(
+        candidates, key=lambda T: ms_spectral_radius(A, T) / against(A, T))
+    target = np.exp(rng.uniform(np.log(0.97), 0.0))
+    return A * np.sqrt(target / radius_of(A, T)), T
+
+
+def coupled_lyapunov_solutions(A, T, S):
+    """Q of the two forms of Thm. 3.1 for S: A_i^T E_i(Q) A_i - Q_i = -S_i and D_j(A Q A^T) - Q_j = -S_j."""
+    M, n, _ = A.shape
     op = ms_operator(A, T, check=False)
     eye = np.eye(M * n * n)
+    return (np.linalg.solve(eye - op.T, S.ravel()).reshape(M, n, n),
+            np.linalg.solve(eye - op, S.ravel()).reshape(M, n, n))
+
+
+def check_3_1(rng, mutant=False):
+    """Thm. 3.1: PD solutions Q of the coupled Lyapunov equations (either form) for PD S imply MSS.
+    Half the draws (all of the mutant's) come from :func:`boundary_system`, scaled at the premise's own
+    boundary. Mutant: the equations solved with T^T in place of T (nx >= 2, a 3-cycle T: with nx = 1 or
+    M = 2 the two spectra coincide)."""
+    premise_T = (lambda T: T.T) if mutant else (lambda T: T)
+    premise_radius = lambda A, T: moment_map_radius(A, premise_T(T))
+    if mutant or rng.random() < BOUNDARY_SHARE:
+        A, T = boundary_system(rng, premise_radius, against=premise_radius if mutant else None)
+        sys = None
+    else:
+        sys = draw_system(rng)
+        A, T = sys.A, sys.T
+    S = random_spd_stack(rng, *A.shape[:2])
     try:
-        Q_first = np.linalg.solve(eye - op.T, S.ravel()).reshape(M, n, n)     # A_i^T E_i(Q) A_i - Q_i = -S_i
-        Q_second = np.linalg.solve(eye - op, S.ravel()).reshape(M, n, n)      # D_j(A Q A^T) - Q_j = -S_j
+        Q_first, Q_second = coupled_lyapunov_solutions(A, premise_T(T), S)
     except np.linalg.LinAlgError:
         return outcome("not_applicable", sys, reason="singular coupled Lyapunov operator")
     eig_first, eig_second = min_eig(Q_first), min_eig(Q_second)
     rho = moment_map_radius(A, T)
-    numbers = dict(min_eig_Q_first_form=eig_first, min_eig_Q_second_form=eig_second, moment_map_radius=rho)
-    premise = eig_first > 0 or eig_second > 0
-    if premise == mutant or abs(rho - 1) < DECISIVE:
+    numbers = dict(min_eig_Q_first_form=eig_first, min_eig_Q_second_form=eig_second, moment_map_radius=rho,
+                   **({} if sys is not None else dict(A=A, T=T)))
+    if not (eig_first > 0 or eig_second > 0) or abs(rho - 1) < DECISIVE:
         return outcome("not_applicable", sys, **numbers)
     return outcome(verdict(rho < 1), sys, **numbers)
 
@@ -90,16 +133,21 @@ def printed_matrix(A, T):
 
 
 def check_3_2(rng, mutant=False):
-    """Cor. 3.2: rho(M) < 1 of the printed M implies MSS, decided by :func:`moment_map_radius`.
-    Mutant: M / 2 in place of M (a factor changed: "rho(M) < 2 implies MSS")."""
-    sys = draw_system(rng)
-    matrix = printed_matrix(sys.A, sys.T) / (2.0 if mutant else 1.0)
-    rho = float(np.max(np.abs(np.linalg.eigvals(matrix))))
-    rho_map = moment_map_radius(sys.A, sys.T)
-    numbers = dict(rho_printed=rho, rho_library=ms_spectral_radius(sys.A, sys.T), moment_map_radius=rho_map)
-    if not rho < 1 or abs(rho_map - 1) < DECISIVE:
+    """Cor. 3.2 with the text's remark ([112]: also necessary): rho(M) < 1 of the printed M iff MSS,
+    decided by :func:`moment_map_radius`. Half the draws (all of the mutant's) come from
+    :func:`boundary_system`, scaled at the printed matrix's boundary. Mutant: M built with T^T."""
+    printed = lambda A, T: float(np.max(np.abs(np.linalg.eigvals(printed_matrix(A, T.T if mutant else T)))))
+    if mutant or rng.random() < BOUNDARY_SHARE:
+        A, T = boundary_system(rng, printed, against=printed if mutant else None)
+        sys, data = None, dict(A=A, T=T)
+    else:
+        sys = draw_system(rng)
+        A, T, data = sys.A, sys.T, dict(rho_library=ms_spectral_radius(sys.A, sys.T))
+    rho, rho_map = printed(A, T), moment_map_radius(A, T)
+    numbers = dict(rho_printed=rho, moment_map_radius=rho_map, **data)
+    if abs(rho - 1) < DECISIVE or abs(rho_map - 1) < DECISIVE:
         return outcome("not_applicable", sys, **numbers)
-    return outcome(verdict(rho_map < 1), sys, **numbers)
+    return outcome(verdict((rho < 1) == (rho_map < 1)), sys, **numbers)
 
 
 def check_3_5(rng, mutant=False):

@@ -46,6 +46,7 @@ class Statement:
     not_checkable  why there is nothing to check (when ``check`` is ``None``)
     expensive      one instance costs more than a second (the study then runs >= 100, not >= 1000)
     summarise      ``summarise(outcomes) -> dict``, recorded next to the counts (optional)
+    why_not        why the mutant cannot be caught in at least half of its draws (recorded with it)
     """
 
     key: str
@@ -57,6 +58,7 @@ class Statement:
     not_checkable: str = ""
     expensive: bool = False
     summarise: Callable[[list], dict] | None = None
+    why_not: str = ""
 
     def __post_init__(self):
         if (self.check is None) == (not self.not_checkable):
