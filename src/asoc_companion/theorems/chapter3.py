@@ -29,30 +29,32 @@ __all__ = ["MC", "STATEMENTS", "SHOW", "MARGIN"]
 
 
 MC = "within 6 standard errors"
-WHY_NOT_LMI = ("The sign-flipped gain is testable only where the LMIs are feasible (the premise) and caught only "
-               "where -L destabilises; on the stable family every small gain stabilises, and on the others the "
-               "LMIs are often infeasible. Open: draws restricted to open-loop-unstable systems with feasible "
-               "LMIs would raise the count.")
+WHY_NOT_LMI = ("The sign-flipped gain is testable only where the LMIs are feasible (the premise) "
+               "and caught only where -L destabilises; on the stable family every small gain "
+               "stabilises, and on the others the LMIs are often infeasible. Open: draws "
+               "restricted to open-loop-unstable systems with feasible LMIs would raise the count.")
 
 STATEMENTS = [
     Statement("statement_3_1", "Theorem 3.1",
               r"Positive definite solutions $\mathbf Q_i$ of either coupled Lyapunov equation, for "
               r"$\mathbf S_i>0$, imply mean-square stability.",
-              "Random A_i, T and S_i > 0 (half the draws: 3 modes, 2-3 states, T near a 3-cycle, A scaled to put "
-              "the premise's radius just below 1); Q solved from each form; if Q > 0, mean-square stability "
-              "decided by the dense eigenvalues of the second-moment map, its matrix built from the map's action "
-              "on a basis.",
-              check_3_1, "T transposed in both Lyapunov equations (on 3 modes, 2-3 states, T near a 3-cycle run in "
-              "the direction where the transposition understates the radius: with n_x = 1 or M = 2 the spectra "
-              "coincide, and reversing the cycle is what T^T does)"),
+              "Random A_i, T and S_i > 0 (half the draws: 3 modes, 2-3 states, T near a 3-cycle, A "
+              "scaled to put the premise's radius just below 1); Q solved from each form; if Q > "
+              "0, mean-square stability decided by the dense eigenvalues of the second-moment map, "
+              "its matrix built from the map's action on a basis.",
+              check_3_1, "T transposed in both Lyapunov equations (on 3 modes, 2-3 states, T near "
+              "a 3-cycle run in the direction where the transposition understates the radius: with "
+              "n_x = 1 or M = 2 the spectra coincide, and reversing the cycle is what T^T does)"),
     Statement("statement_3_2", "Corollary 3.2",
-              r"$\rho(\mathbf M)<1$ with $\mathbf M=\mathrm{diag}[\mathbf A_i\otimes\mathbf A_i]"
-              r"(\mathbf T^\top\otimes\mathbf I_{n_x^2})$ implies (and, as the text adds after [112], is "
-              r"implied by) mean-square stability.",
-              "rho of M as printed (np.kron) against mean-square stability decided by the dense eigenvalues of the "
-              "second-moment map, its matrix built from the map's action on a basis; both directions; half the "
-              "draws at the printed matrix's boundary (3 modes, 2-3 states, T near a 3-cycle).",
-              check_3_2, "M built with T in place of T^T (T transposed; draws as for Thm. 3.1's mutant)"),
+              r"$\rho(\mathbf M)<1$ with $\mathbf M=\mathrm{diag}[\mathbf A_i\otimes\mathbf "
+              r"A_i](\mathbf T^\top\otimes\mathbf I_{n_x^2})$ implies (and, as the text adds after "
+              r"[112], is implied by) mean-square stability.",
+              "rho of M as printed (np.kron) against mean-square stability decided by the dense "
+              "eigenvalues of the second-moment map, its matrix built from the map's action on a "
+              "basis; both directions; half the draws at the printed matrix's boundary (3 modes, "
+              "2-3 states, T near a 3-cycle).",
+              check_3_2,
+              "M built with T in place of T^T (T transposed; draws as for Thm. 3.1's mutant)"),
     Statement("statement_3_5", "Proposition 3.5",
               r"The optimal cost-to-go at $K-1$ is $\mathbf x^\top\boldsymbol\Psi\mathbf x+\Delta$ (the step "
               r"that makes $K-2$ intractable).",
@@ -68,10 +70,11 @@ STATEMENTS = [
     Statement("statement_3_8", "Lemma 3.8",
               r"Any $(\mathbf L,\mathbf G,\mathbf Y)$ satisfying the BMI (3.15) gives an objective that bounds "
               r"(3.14) from above.",
-              "Half the draws: Y_i and G random SPD at random scales, with no relation to L's Lyapunov equation; "
-              "half at the BMI's boundary: Y = s Acl D(Y) Acl^T + mu H H^T + delta I, G from D(Y), s on [0.5, 1.5]; "
-              "premise: the BMI (3.15) by eigenvalues; conclusion: P = D(Y) satisfies (3.14)'s constraint, L "
-              "stabilises, and the objective >= ||G||_2^2 of L.",
+              "Half the draws: Y_i and G random SPD at random scales, with no relation to L's "
+              "Lyapunov equation; half at the BMI's boundary: Y = s Acl D(Y) Acl^T + mu H H^T + "
+              "delta I, G from D(Y), s on [0.5, 1.5]; premise: the BMI (3.15) by eigenvalues; "
+              "conclusion: P = D(Y) satisfies (3.14)'s constraint, L stabilises, and the objective "
+              ">= ||G||_2^2 of L.",
               check_3_8, "the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)"),
     Statement("statement_3_9", "Theorem 3.9",
               r"If the LMIs are feasible, $\mathbf L=\mathbf F\mathbf M^{-1}$ stabilises the MJLS in the "
@@ -95,8 +98,8 @@ STATEMENTS = [
               r"MJLS with mode feedback.",
               "LMIs solved (Clarabel); feasibility from the verified certificate; rho of A_i + B_i L_i C_i by the "
               "dense second-moment map.",
-              check_3_12, "the gains recovered with a sign error, L_i = -F_i M_i^{-1}", expensive=True,
-              why_not=WHY_NOT_LMI),
+              check_3_12, "the gains recovered with a sign error, L_i = -F_i M_i^{-1}",
+              expensive=True, why_not=WHY_NOT_LMI),
     Statement("statement_3_14", "Proposition 3.14",
               r"The second moments $\mathbf X_k^i$ follow the recursion (3.29).",
               "Recursion against Monte Carlo E{x_k x_k^T 1(theta_k=i)} (10000 runs, k = 1..3, Gaussian-mixture x_0, "
@@ -176,16 +179,17 @@ STATEMENTS = [
     Statement("statement_3_30", "Lemma 3.30",
               r"$\mathbf X\geq\mathbf A\geq 0$ and $\mathbf Y\geq\mathbf B\geq 0$ imply "
               r"$\mathrm{tr}[\mathbf A\mathbf B]\leq\mathrm{tr}[\mathbf X\mathbf Y]$.",
-              "Random positive semidefinite A, B and increments at scales down to 0.01 (rank-deficient included).",
+              "Random positive semidefinite A, B and increments at scales down to 0.01 "
+              "(rank-deficient included).",
               check_3_30, "the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative)"),
     Statement("statement_3_31", "Theorem 3.31",
               r"For fixed gains, the exact cost $J_k$ is bounded above by $\bar{\mathcal J}_k$ (3.65).",
               "Exact J_0 (moment recursion) against Jbar_0 from (3.66)-(3.69), random gains, horizons 2-8.",
               check_3_31, "Jbar_0 without the noise's share omega", summarise=summarise_3_31,
-              why_not=("Caught only where the dropped noise share omega exceeds the bound's slack Jbar_0 - J_0; "
-                       "where the initial state dominates the noise, omega is small against the slack. Open: "
-                       "draws with a larger noise share would raise the count (the theorem itself fails, "
-                       "see the diagnosis).")),
+              why_not=("Caught only where the dropped noise share omega exceeds the bound's slack "
+                       "Jbar_0 - J_0; where the initial state dominates the noise, omega is small "
+                       "against the slack. Open: draws with a larger noise share would raise the "
+                       "count (the theorem itself fails, see the diagnosis).")),
     Statement("statement_3_32", "Theorem 3.32",
               r"A minimiser of the bound (3.65) satisfies the linear conditions (3.70).",
               "At one step, the solution of (3.70) against random perturbations of (F_k, K_k, L_k) in Jbar_k "

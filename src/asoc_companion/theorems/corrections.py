@@ -24,8 +24,8 @@ from asoc.mjls import (augmented_closed_loop, dynamic_output_feedback, finite_ho
 from asoc.progress import progress_bar
 
 from . import bounds
-from .counterexamples import (kernel_example, mcvmd_integral, prop_3_26_example, thm_3_19_example, thm_3_19_noiseless_example,
-                              thm_3_27_fixed_points, thm_3_31_example)
+from .counterexamples import (kernel_example, mcvmd_integral, prop_3_26_example, thm_3_19_example,
+                              thm_3_19_noiseless_example, thm_3_27_fixed_points, thm_3_31_example)
 from .instances import draw_system, random_spd_stack, rescaled
 
 __all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "check_kernels", "check_3_19",
@@ -59,12 +59,12 @@ def _l2_gaussians(m, s):
     return np.sqrt(np.maximum(own[:, None] + own[None, :] - 2 * cross, 0.0))
 
 
-SPREAD = 100.0          # the spread-out Dirac sets: means on [0, 4 SPREAD], beyond 2 b_max of gp.mcvmd
+SPREAD = 100.0          # spread-out Dirac sets: means on [0, 4 SPREAD], beyond 2 b_max of gp.mcvmd
 
 
 def _gram_verdict(D, name, relative_scale, reference=None):
-    """(verdict, lowest eigenvalue) of the Gram matrix at relative_scale times the median of the positive
-    distances of ``reference`` (default ``D``)."""
+    """(verdict, lowest eigenvalue) of the Gram matrix at relative_scale times the median of the
+    positive distances of ``reference`` (default ``D``)."""
     reference = D if reference is None else reference
     gram = gp.COVARIANCES[name](D, relative_scale * np.median(reference[reference > 0]))
     lowest = _min_eig(gram)
@@ -73,16 +73,16 @@ def _gram_verdict(D, name, relative_scale, reference=None):
 
 def check_kernels(rng):
     """Corrected Sec. 2.6.3 on 3-7 random 1-D Gaussians: a Hilbert-embeddable distance (usual Hellinger,
-    L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the definition on sets
-    spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a PSD Gram matrix; the
-    mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule. Third entry, on the
-    spread sets only: (verdict, lowest eigenvalue) of the closed form with b_max = 100 (``gp.mcvmd``),
-    which the corrected statement excludes."""
+    L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the definition on
+    sets spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a PSD Gram matrix;
+    the mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule. Third entry, on
+    the spread sets only: (verdict, lowest eigenvalue) of the closed form with b_max = 100
+    (``gp.mcvmd``), which the corrected statement excludes."""
     n = int(rng.integers(3, 8))
     m, s = np.sort(rng.uniform(0.0, 4.0, n)), rng.uniform(0.5, 1.5, n)
     kind = ("hellinger", "l2", "mcvmd", "mcvmd_spread")[rng.integers(4)]
     name = sorted(gp.COVARIANCES)[rng.integers(len(gp.COVARIANCES))]
-    relative_scale = np.exp(rng.uniform(np.log(0.01), 0.0))
+    relative_scale = np.exp(rng.uniform(np.log(0.1), np.log(3.0)))   # below 0.1 the Gram is ~ I
     bc = _bhattacharyya(m, s)
     closed_form = None
     if kind == "hellinger":
@@ -97,8 +97,8 @@ def check_kernels(rng):
         if kind == "mcvmd_spread":
             D, closed = pairwise(mcvmd_integral), D
             closed_form = _gram_verdict(closed, name, relative_scale, reference=D)
-    return _gram_verdict(D, name, relative_scale)[0], _gram_verdict((1 - bc) ** 2, name, relative_scale)[0], \
-        closed_form
+    verdicts = [_gram_verdict(distance, name, relative_scale)[0] for distance in (D, (1 - bc) ** 2)]
+    return (*verdicts, closed_form)
 
 
 def _record_kernels(outcomes, spread):
@@ -110,40 +110,48 @@ def _record_kernels(outcomes, spread):
         "'admissible distance'. The printed Hellinger expression (1 - int sqrt(p1 p2))^2 and the "
         "Jensen-Shannon divergence are not such distances: N(0,1), N(1,1), N(2,1) with the printed "
         f"Hellinger and the SE kernel at l = {ex['length_scale']} give the Gram eigenvalue {ex['printed']:.3f} "
-        f"(with the usual Hellinger sqrt(1 - BC): {ex['usual']:.3f}). Nor is the thesis's closed form of the "
-        "mCvMd with a finite b_max (gp.mcvmd, b_max = 100), a large-b_max expansion of its integral, once "
-        f"the points spread beyond about 2 b_max: on Dirac sets spread over about {4 * SPREAD:.0f} its Gram "
-        f"matrices fail in {sum(v == 'fails' for v, _ in spread)} of {len(spread)} draws (lowest eigenvalue "
-        f"{lowest:.2f}), while the integral itself (exact, mcvmd_integral) gives PSD Gram matrices. The "
-        "study's failure count is the yield of an adversarial search over distances, covariances and "
-        "length scales, not a failure rate."),
+        f"(with the usual Hellinger sqrt(1 - BC): {ex['usual']:.3f}). Nor is the thesis's closed "
+        f"form of the "
+        "mCvMd with a finite b_max (gp.mcvmd, b_max = 100), a large-b_max expansion of its "
+        "integral, once "
+        f"the points spread beyond about 2 b_max: on Dirac sets spread over about {4 * SPREAD:.0f} "
+        f"its Gram "
+        f"matrices fail in {sum(v == 'fails' for v, _ in spread)} of {len(spread)} draws (lowest "
+        f"eigenvalue "
+        f"{lowest:.2f}), while the integral itself (exact, mcvmd_integral) gives PSD Gram "
+        f"matrices. The "
+        "study's failure count is the yield of an adversarial search over distances, covariances "
+        "and length scales, not a failure rate."),
         "corrected": {**_tally(outcomes, (
-            "If D embeds isometrically in a Hilbert space (the mCvMd defined by its integral, for every "
-            "b_max; the L2 distance of densities; the Hellinger distance sqrt(1 - int sqrt(p1 p2))), every "
-            "covariance of Table 2.1 (gamma <= 2) of Delta = D is positive semidefinite at every length "
-            "scale. The thesis's closed form of the mCvMd equals the integral only as b_max -> infinity; "
-            "with a finite b_max it is covered only while all points lie within about 2 b_max of each "
-            "other. Proof: each covariance is a scale mixture int exp(-t Delta^2) dmu(t) (t Delta^2 for SE, "
-            "Gamma mixtures for RQ and Matern, Bernstein's theorem for exp(-(Delta/l)^gamma)), and "
-            "exp(-t D^2) is PSD for all t > 0 iff D^2 is conditionally negative definite, i.e. D is "
-            "Hilbertian (Schoenberg); the mCvMd integral is an L2 norm of P_1 - P_2 over (m, b)."),
-            "the printed Hellinger expression (1 - BC)^2 as D, with the same covariances and length scales"),
+            "If D embeds isometrically in a Hilbert space (the mCvMd defined by its integral, for "
+            "every b_max; the L2 distance of densities; the Hellinger distance sqrt(1 - int "
+            "sqrt(p1 p2))), every covariance of Table 2.1 (gamma <= 2) of Delta = D is positive "
+            "semidefinite at every length scale. The thesis's closed form of the mCvMd equals the "
+            "integral only as b_max -> infinity; with a finite b_max it is covered only while all "
+            "points lie within about 2 b_max of each other. Proof: each covariance is a scale "
+            "mixture int exp(-t Delta^2) dmu(t) (t Delta^2 for SE, Gamma mixtures for RQ and "
+            "Matern, Bernstein's theorem for exp(-(Delta/l)^gamma)), and exp(-t D^2) is PSD for "
+            "all t > 0 iff D^2 is conditionally negative definite, i.e. D is Hilbertian "
+            "(Schoenberg); the mCvMd integral is an L2 norm of P_1 - P_2 over (m, b)."),
+            "the printed Hellinger expression (1 - BC)^2 as D, with the same covariances and "
+            "length scales"),
             "closed_form_spread_excluded": {
-                "description": f"gp.mcvmd's closed form (b_max = 100) on Dirac sets spread over about "
-                               f"{4 * SPREAD:.0f}, outside the corrected statement",
+                "description": f"gp.mcvmd's closed form (b_max = 100) on Dirac sets spread over "
+                               f"about {4 * SPREAD:.0f}, outside the corrected statement",
                 **_counts([v for v, _ in spread]), "lowest_eigenvalue": lowest}}}
 
 
 # ------------------------------------------------------------------ Thm. 3.19: Alg. 3.1
 
-SINGULAR_NOISE_SHARE = 0.25       # share of the corrected Thm. 3.19's draws with H = 0 (outside its hypothesis)
+SINGULAR_NOISE_SHARE = 0.25    # share of the corrected Thm. 3.19's draws with H = 0 (not covered)
 
 
 def check_3_19(rng):
-    """Corrected Thm. 3.19 (M = 1, C = I, H H^T > 0): Alg. 3.1 converges to the LQ gain of the Riccati
-    equation. Premise: the DARE has a stabilising solution (Q > 0). Mutant: the limit is the LQ gain for
-    2 R. A quarter of the draws have H = 0: the hypothesis excludes them (``not_applicable``), and the
-    third entry says whether Alg. 3.1 still reached the LQ gain there (None on the others)."""
+    """Corrected Thm. 3.19 (M = 1, C = I, H H^T > 0): Alg. 3.1 converges to the LQ gain of the
+    Riccati equation. Premise: the DARE has a stabilising solution (Q > 0). Mutant: the limit is the
+    LQ gain for 2 R. A quarter of the draws have H = 0: the hypothesis excludes them
+    (``not_applicable``), and the third entry says whether Alg. 3.1 still reached the LQ gain there
+    (None on the others)."""
     singular = rng.random() < SINGULAR_NOISE_SHARE
     sys = draw_system(rng, max_modes=1)
     sys = sys.replace(C=np.eye(sys.nx)[None], J=None, H=0 * sys.H if singular else sys.H)
@@ -157,7 +165,7 @@ def check_3_19(rng):
         gains = lq_gain(R), lq_gain(2 * R)
     except (np.linalg.LinAlgError, ValueError):
         return "not_applicable", "not_applicable", None
-    with warnings.catch_warnings():                     # H = 0 drives the moments' scales to overflow
+    with warnings.catch_warnings():                  # H = 0 drives the moments' scales to overflow
         warnings.simplefilter("ignore", RuntimeWarning)
         run = static_output_feedback(sys, warn=False, moments="step")
     L = np.asarray(run.L).reshape(gains[0].shape)
@@ -178,24 +186,27 @@ def _record_3_19(outcomes, singular_verdicts):
         "homotopy from the mode-observed problem and degree theory that the solution is unique and that "
         "the recursion (3.34)-(3.35) reaches it; neither follows: the degree counts solutions with sign, "
         "and the fixed-point map (3.34)-(3.35) is not a contraction. Smallest counterexample: one mode "
-        f"(plain output feedback), two states (one-decimal data): from X = P = {starts} Alg. 3.1 ends in a "
-        f"period-2 cycle of the gain, {cycle['gains'][0]:.4f} <-> {cycle['gains'][1]:.4f} (rho "
-        f"{cycle['rho'][0]:.2f} and {cycle['rho'][1]:.2f}), although L = {ex['best_gain']:.3f} gives rho "
-        f"{ex['best_rho']:.3f}. Even with state feedback (C = I) the noise must be non-degenerate: with "
-        f"H = 0, A = {noiseless['A']}, B = {noiseless['B']}, Q = I, R = 1, X_0 = I, P_0 = 0, X_1 = A A^T has "
-        f"smallest eigenvalue {noiseless['min_eig_X1']:.1e}, (3.34) no longer fixes L, and Alg. 3.1 (the "
-        f"library's) stops with status '{noiseless['status']}' instead of the LQ gain "
-        f"{noiseless['lq_gain']} (with H = 0.1 I: '{noiseless['status_with_noise']}', the LQ gain)."),
+        f"(plain output feedback), two states (one-decimal data): from X = P = {starts} Alg. 3.1 "
+        f"ends in a period-2 cycle of the gain, {cycle['gains'][0]:.4f} <-> "
+        f"{cycle['gains'][1]:.4f} (rho {cycle['rho'][0]:.2f} and {cycle['rho'][1]:.2f}), although "
+        f"L = {ex['best_gain']:.3f} gives rho {ex['best_rho']:.3f}. Even with state feedback (C = "
+        f"I) the noise must be non-degenerate: with H = 0, A = {noiseless['A']}, B = "
+        f"{noiseless['B']}, Q = I, R = 1, X_0 = I, P_0 = 0, X_1 = A A^T has smallest eigenvalue "
+        f"{noiseless['min_eig_X1']:.1e}, (3.34) no longer fixes L, and Alg. 3.1 (the library's) "
+        f"stops with status '{noiseless['status']}' instead of the LQ gain {noiseless['lq_gain']} "
+        f"(with H = 0.1 I: '{noiseless['status_with_noise']}', the LQ gain)."),
         "corrected": {**_tally(outcomes, (
-            "If M = 1 and C = I (state feedback), H H^T > 0, (A, B) is stabilisable and Q > 0, Alg. 3.1 "
-            "converges from every X_0 > 0, P_0 >= 0 to the LQ gain. Proof: H H^T > 0 keeps X_k > 0, so the "
-            "X-factors cancel in (3.34), L = -(R + B^T P B)^{-1} B^T P A, and (3.35) for P is the Riccati "
-            "value iteration, which converges to the stabilising solution (Kalman; Bertsekas, Vol. 1, Prop. "
-            "4.4.1); X then follows a converging Lyapunov recursion. Without H H^T > 0, X_k can become "
-            "singular and (3.34) leaves L undetermined."),
+            "If M = 1 and C = I (state feedback), H H^T > 0, (A, B) is stabilisable and Q > 0, "
+            "Alg. 3.1 converges from every X_0 > 0, P_0 >= 0 to the LQ gain. Proof: H H^T > 0 "
+            "keeps X_k > 0, so the X-factors cancel in (3.34), L = -(R + B^T P B)^{-1} B^T P A, "
+            "and (3.35) for P is the Riccati value iteration, which converges to the stabilising "
+            "solution (Kalman; Bertsekas, Vol. 1, Prop. 4.4.1); X then follows a converging "
+            "Lyapunov recursion. Without H H^T > 0, X_k can become singular and (3.34) leaves L "
+            "undetermined."),
             "the limit compared with the LQ gain for 2 R instead of R"),
-            "singular_noise_excluded": {"description": "draws with H = 0, outside the hypothesis H H^T > 0: "
-                                        "Alg. 3.1's limit against the LQ gain", **_counts(singular_verdicts)}}}
+            "singular_noise_excluded": {"description": "draws with H = 0, outside the hypothesis "
+                                        "H H^T > 0: Alg. 3.1's limit against the LQ "
+                                        "gain", **_counts(singular_verdicts)}}}
 
 
 # ------------------------------------------------------------------ Prop. 3.26
@@ -284,13 +295,19 @@ def _record_3_27(outcomes):
         "App. A.1 rewrites the Hamiltonian of (3.42) 'if we use (3.43)', which replaces X12 by X2 and P12 by "
         "-P2; (3.49) is the stationarity condition of that approximate Hamiltonian (A.7), not of (3.42). The "
         "two agree where X12 = X2 and P12 = -P2, as at the one-mode LQG optimum; with M >= 2 the fixed point "
-        "of Alg. 3.2 is in general not a stationary point of the exact cost (3.42). Nor is it unique: the "
-        f"study's instance {ex['index']} (M = {ex['M']}, nx = {ex['nx']}, nu = {ex['nu']}, ny = {ex['ny']}) has "
-        f"{len(ex['fixed_points'])} stabilising fixed points of Alg. 3.2: from {low['starts'][0]} (exact cost "
-        f"{low['cost']:.3f}) and from {len(high['starts'])} of {ex['random_starts']} random starts (cost "
-        f"{high['cost']:.3f}). Both solve (3.45)-(3.48) to {worst('residual_3_45_3_48'):.0e} and (3.49) to "
+        "of Alg. 3.2 is in general not a stationary point of the exact cost (3.42). Nor is it "
+        "unique: the "
+        f"study's instance {ex['index']} (M = {ex['M']}, nx = {ex['nx']}, nu = {ex['nu']}, ny = "
+        f"{ex['ny']}) has "
+        f"{len(ex['fixed_points'])} stabilising fixed points of Alg. 3.2: from {low['starts'][0]} "
+        f"(exact cost "
+        f"{low['cost']:.3f}) and from {len(high['starts'])} of {ex['random_starts']} random starts "
+        f"(cost "
+        f"{high['cost']:.3f}). Both solve (3.45)-(3.48) to {worst('residual_3_45_3_48'):.0e} and "
+        f"(3.49) to "
         f"{worst('residual_3_49'):.0e} (relative), with Xu and Pu invertible (smallest eigenvalues "
-        f"{min(p['min_eig_Xu'] for p in ex['fixed_points']):.3f} and {min(p['min_eig_Pu'] for p in ex['fixed_points']):.1f}), "
+        f"{min(p['min_eig_Xu'] for p in ex['fixed_points']):.3f} and "
+        f"{min(p['min_eig_Pu'] for p in ex['fixed_points']):.1f}), "
         "so the equations do not determine the controller."),
         "fixed_points": ex,
         "corrected": _tally(outcomes, (
@@ -349,7 +366,10 @@ def _record_3_31(outcomes, ratios):
             "x^_{k+1} = K C e + (F + K C) x^ + K J v; (a + b)(a + b)^T <= 2 a a^T + 2 b b^T and monotonicity give "
             "the blocks' bounds by induction, and Prop. 3.26 corrected gives X~_k <= 2 [[Xbar + Xu, Xu], [Xu, Xu]]. "
             "Valid, but loose: the factor 2 compounds over the horizon."),
-            "factor 1, i.e. the printed recursions (3.66)-(3.67) summed forward as a cost"),
+            "factor 1, i.e. the printed recursions (3.66)-(3.67) summed forward as a cost",
+            "The mutant is the printed bound, so it is caught exactly where Thm. 3.31 as printed "
+            "fails on these draws, a minority; the exact counterexample of the diagnosis fails it "
+            "always."),
             "bound_over_exact": {q: float(np.quantile(ratios, p)) for q, p in (("median", 0.5), ("max", 1.0))}}}
 
 
@@ -455,12 +475,16 @@ def _counts(verdicts):
     return {"fails": sum(v == "fails" for v in verdicts), "instances": len(verdicts)}
 
 
-def _tally(outcomes, statement, mutant):
-    """``outcomes``: (corrected verdict, mutant verdict or None) per instance."""
+def _tally(outcomes, statement, mutant, why_not=""):
+    """``outcomes``: (corrected verdict, mutant verdict or None) per instance; ``why_not``: why the
+    mutant cannot be caught in half of its draws (recorded with it)."""
     corrected = [c for c, _ in outcomes if c != "not_applicable"]
     holds = sum(c == "holds" for c in corrected)
+    record = {"description": mutant, **_counts([m for _, m in outcomes if m is not None])}
+    if why_not:
+        record["why_not"] = why_not
     return {"statement": statement, "holds": holds, "fails": len(corrected) - holds, "instances": len(corrected),
-            "mutant": {"description": mutant, **_counts([m for _, m in outcomes if m is not None])}}
+            "mutant": record}
 
 
 def _run(check, seed_sequence, n, mutants):
@@ -501,7 +525,8 @@ def correction_records(seed_sequence, n_instances=200, mutant_instances=100, pro
     count = lambda key: min(n_instances, EXPENSIVE.get(key, n_instances))
     records = {}
     bar = progress_bar(total=len(STATEMENT_IDS), enabled=progress, desc="corrections", unit="statement")
-    pairs, full = _run(check_kernels, children["2_6_3_kernels"], count("2_6_3_kernels"), mutant_instances)
+    pairs, full = _run(check_kernels, children["2_6_3_kernels"], count("2_6_3_kernels"),
+                       mutant_instances)
     records["2_6_3_kernels"] = _record_kernels(pairs, [r[2] for r in full if r[2] is not None])
     bar.update()
     pairs, full = _run(check_3_19, children["3_19"], count("3_19"), mutant_instances)

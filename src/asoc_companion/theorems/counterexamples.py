@@ -162,13 +162,14 @@ def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
     return {"cycles": cycles, "best_gain": float(candidates[best]), "best_rho": float(radii[best])}
 
 
-THM_3_19_NOISELESS = dict(A=[[0.3364, 0.1107], [-1.3845, -0.4556]], B=[[0.8825], [0.5804]])   # issue 30
+THM_3_19_NOISELESS = dict(A=[[0.3364, 0.1107], [-1.3845, -0.4556]],   # issue 30's example
+                          B=[[0.8825], [0.5804]])
 
 
 def thm_3_19_noiseless_example():
-    """Alg. 3.1 with state feedback (C = I, one mode) on :data:`THM_3_19_NOISELESS`, Q = I, R = 1, without
-    noise (H = 0) and with H = 0.1 I: the library's status and gain against the LQ gain, and the smallest
-    eigenvalue of X_1 = A X_0 A^T from X_0 = I (the first gain is 0 when P_0 = 0).
+    """Alg. 3.1 with state feedback (C = I, one mode) on :data:`THM_3_19_NOISELESS`, Q = I, R = 1,
+    without noise (H = 0) and with H = 0.1 I: the library's status and gain against the LQ gain, and
+    the smallest eigenvalue of X_1 = A X_0 A^T from X_0 = I (the first gain is 0 when P_0 = 0).
 
     Examples
     --------
@@ -182,15 +183,19 @@ def thm_3_19_noiseless_example():
     lq = -np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
     runs = []
     for H in (np.zeros((2, 2)), 0.1 * np.eye(2)):
-        sys = MJLS(A=A[None], B=B[None], C=np.eye(2)[None], H=H[None], Q=Q[None], R=R[None], T=np.eye(1), J=None)
+        sys = MJLS(A=A[None], B=B[None], C=np.eye(2)[None], H=H[None], Q=Q[None], R=R[None],
+                   T=np.eye(1), J=None)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             run = static_output_feedback(sys, warn=False, moments="step", init=1.0)
-        reached = bool(run.converged and np.abs(np.asarray(run.L).reshape(lq.shape) - lq).max() <= 1e-6)
+        gap = np.abs(np.asarray(run.L).reshape(lq.shape) - lq).max()
+        reached = bool(run.converged and gap <= 1e-6)
         runs.append((run.status, reached))
-    return {"A": THM_3_19_NOISELESS["A"], "B": THM_3_19_NOISELESS["B"], "lq_gain": np.round(lq, 4).tolist(),
-            "min_eig_X1": float(np.linalg.eigvalsh(A @ A.T).min()), "status": runs[0][0],
-            "reaches_lq_gain": runs[0][1], "status_with_noise": runs[1][0], "reaches_lq_gain_with_noise": runs[1][1]}
+    return {"A": THM_3_19_NOISELESS["A"], "B": THM_3_19_NOISELESS["B"],
+            "lq_gain": np.round(lq, 4).tolist(),
+            "min_eig_X1": float(np.linalg.eigvalsh(A @ A.T).min()),
+            "status": runs[0][0], "reaches_lq_gain": runs[0][1],
+            "status_with_noise": runs[1][0], "reaches_lq_gain_with_noise": runs[1][1]}
 
 
 # ------------------------------------------------------------------ Sec. 2.6.3: kernels
@@ -213,12 +218,12 @@ def kernel_example(length_scale=0.03):
 
 # ------------------------------------------------------------------ Thm. 3.27: two fixed points
 
-THM_3_27_INSTANCE = 13           # the study's saved counterexample of Thm. 3.27 (seed 2017): M = 2, nx = 1
+THM_3_27_INSTANCE = 13     # the study's saved counterexample of Thm. 3.27 (seed 2017): M = 2
 
 
 def fixed_point_residuals(sys, run):
-    """How well Alg. 3.2's last iterate solves (3.45)-(3.49): the largest relative change of Xbar, Xu,
-    Pbar, Pu under one more step (3.45)-(3.48) with the iterate's gains, the relative residual
+    """How well Alg. 3.2's last iterate solves (3.45)-(3.49): the largest relative change of Xbar,
+    Xu, Pbar, Pu under one more step (3.45)-(3.48) with the iterate's gains, the relative residual
     ||H z + rho|| / ||rho|| of (3.49) (z = [vec F; vec K; vec L], column-stacking), and the smallest
     eigenvalues of Xu and Pu (both invertible where positive)."""
     Xbar, Xunder, Pbar, Punder = run.Xbar, run.Xunder, run.Pbar, run.Punder
@@ -237,10 +242,11 @@ def fixed_point_residuals(sys, run):
 
 
 def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, tol=1e-14):
-    """Alg. 3.2 on instance ``index`` of the study's Thm. 3.27 (drawn as the study draws it) from the
-    author's start 1e-4 I and from ``random_starts`` random SPD starts of scale 1 (seeds 0, 1, ...):
-    the distinct converged, stabilising fixed points (costs equal to 1e-9 relative merged), each with
-    its exact cost (3.42), how many starts reach it, its gains and :func:`fixed_point_residuals`.
+    """Alg. 3.2 on instance ``index`` of the study's Thm. 3.27 (drawn as the study draws it) from
+    the author's start 1e-4 I and from ``random_starts`` random SPD starts of scale 1 (seeds 0, 1,
+    ...): the distinct converged, stabilising fixed points (costs equal to 1e-9 relative merged),
+    each with its exact cost (3.42), how many starts reach it, its gains and
+    :func:`fixed_point_residuals`.
 
     Examples
     --------
@@ -250,12 +256,13 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
     >>> [round(p["cost"], 3) for p in ex["fixed_points"]]
     [1.952, 2.424]
     """
-    from .engine import instance_seed                    # engine imports the statements, which import this
+    from .engine import instance_seed         # engine imports the statements, which import this
 
-    sys = draw_system(np.random.default_rng(instance_seed("statement_3_27", seed, index)), max_states=2,
-                      max_modes=2)
-    starts = [("1e-4 I", dict(init=1e-4))] + [(f"random SPD, seed {s}", dict(init=1.0, rng=np.random.default_rng(s)))
-                                                for s in range(random_starts)]
+    rng = np.random.default_rng(instance_seed("statement_3_27", seed, index))
+    sys = draw_system(rng, max_states=2, max_modes=2)
+    starts = [("1e-4 I", dict(init=1e-4))] + [
+        (f"random SPD, seed {s}", dict(init=1.0, rng=np.random.default_rng(s)))
+        for s in range(random_starts)]
     points = []
     for name, kwargs in starts:
         run = dynamic_output_feedback(sys, tol=tol, max_iter=20000, warn=False, **kwargs)
@@ -265,26 +272,30 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
         if same:
             same[0]["starts"].append(name)
             continue
-        points.append({"cost": float(run.cost), "starts": [name], "F": run.F.tolist(), "K": run.K.tolist(),
-                       "L": run.L.tolist(), "rho": float(run.rho), **fixed_point_residuals(sys, run)})
+        points.append({"cost": float(run.cost), "starts": [name], "F": run.F.tolist(),
+                       "K": run.K.tolist(), "L": run.L.tolist(), "rho": float(run.rho),
+                       **fixed_point_residuals(sys, run)})
     return {"seed": seed, "index": index, "M": sys.M, "nx": sys.nx, "nu": sys.nu, "ny": sys.ny,
             "random_starts": random_starts, "fixed_points": sorted(points, key=lambda p: p["cost"])}
 
 
 def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
-    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly, for finite ``b_max``.
+    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly, for finite
+    ``b_max``.
 
-    With the LCD kernel, :math:`\int (P_1 - P_2)^2 dm = \sqrt\pi\, b \sum_{kl} c_k c_l e^{-\Delta_{kl}^2/(4b^2)}`
-    (``c``: the weights, those of ``y`` negative), and :math:`\int_0^{b_{\max}} b e^{-a/b^2} db =
-    \tfrac12 (S e^{-a/S} - a E_1(a/S))`, :math:`S = b_{\max}^2`. Unlike the closed form of the thesis
-    (``gp.mcvmd``, its large-``b_max`` expansion), this is an L2 distance for every ``b_max``.
+    With the LCD kernel, :math:`\int (P_1 - P_2)^2 dm = \sqrt\pi\, b \sum_{kl} c_k c_l
+    e^{-\Delta_{kl}^2/(4b^2)}` (``c``: the weights, those of ``y`` negative), and
+    :math:`\int_0^{b_{\max}} b e^{-a/b^2} db = \tfrac12 (S e^{-a/S} - a E_1(a/S))`, :math:`S =
+    b_{\max}^2`. Unlike the closed form of the thesis (``gp.mcvmd``, its large-``b_max`` expansion),
+    this is an L2 distance for every ``b_max``.
 
     Examples
     --------
     >>> round(mcvmd_integral([0.0], [0.3], 10.0), 3)         # gp.mcvmd_quadrature: 0.593
     0.593
-    >>> round(mcvmd_integral([0.0, 1.0], [300.0], 100.0), 1), gp.mcvmd([0.0, 1.0], None, [300.0], None)
-    (93.1, 0.0)
+    >>> x, y = [0.0, 1.0], [300.0]
+    >>> round(mcvmd_integral(x, y, 100.0), 1), gp.mcvmd(x, None, y, None)   # closed form: clipped
+    (131.3, 0.0)
     """
     points = np.concatenate([np.ravel(x), np.ravel(y)])
     c = np.concatenate([np.full(np.size(x), 1 / np.size(x)), np.full(np.size(y), -1 / np.size(y))])

@@ -72,9 +72,9 @@ def check_3_29(rng, mutant=False):
 
 
 def check_3_30(rng, mutant=False):
-    """Lemma 3.30: X >= A >= 0 and Y >= B >= 0 imply tr[AB] <= tr[XY] (rank-deficient draws included,
-    increments X - A, Y - B at a scale log-uniform on [0.01, 1]: near the equality X = A, Y = B).
-    Mutant: the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative)."""
+    """Lemma 3.30: X >= A >= 0 and Y >= B >= 0 imply tr[AB] <= tr[XY] (rank-deficient draws
+    included, increments X - A, Y - B at a scale log-uniform on [0.01, 1]: near the equality X = A,
+    Y = B). Mutant: the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative)."""
     n = int(rng.integers(1, 5))
 
     def psd():

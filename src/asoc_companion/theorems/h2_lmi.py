@@ -74,11 +74,12 @@ BOUNDARY_SHARE = 0.5     # share of the lemmas' draws at the BMI's boundary (all
 
 
 def boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
-    """(Y, G) near the boundary of the BMI (3.15): Y solves Y_i = s Acl_i D_i(Y) Acl_i^T + mu_i H_i H_i^T
-    + delta I and G_i = D_i(Y) (Lemma 3.8, one G: the largest multiple of sum_i mu_i D_i(Y) below every
-    D_i(Y)), so that with G_i = D_i(Y) the BMI's Schur
-    complement is (1 - s) Acl_i D_i(Y) Acl_i^T + delta I: s uniform on [0.5, min(1.5, 0.999 / rho)] puts the
-    draws on both sides of the boundary s = 1, delta = 1e-3 tr(mean H H^T) / n (a thin margin)."""
+    """(Y, G) near the boundary of the BMI (3.15): Y solves Y_i = s Acl_i D_i(Y) Acl_i^T + mu_i H_i
+    H_i^T + delta I and G_i = D_i(Y) (Lemma 3.8, one G: the largest multiple of sum_i mu_i D_i(Y)
+    below every D_i(Y)), so that with G_i = D_i(Y) the BMI's Schur
+    complement is (1 - s) Acl_i D_i(Y) Acl_i^T + delta I: s uniform on [0.5, min(1.5, 0.999 / rho)]
+    puts the draws on both sides of the boundary s = 1, delta = 1e-3 tr(mean H H^T) / n (a thin
+    margin)."""
     M, n, mu = sys.M, sys.nx, sys.mu_inf
     s = rng.uniform(0.5, min(1.5, 0.999 / rho))
     delta = 1e-3 * float(np.trace(HHt.mean(axis=0)) / n)
@@ -92,15 +93,16 @@ def boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
         return Y, P, s
     average = np.einsum("i,iab->ab", mu, P)
     root = np.linalg.cholesky(average)
-    below = min(np.linalg.eigvalsh(np.linalg.solve(root, np.linalg.solve(root, Pi).T)).min() for Pi in P)
+    relative = lambda Pi: np.linalg.solve(root, np.linalg.solve(root, Pi).T)   # root^-1 Pi root^-T
+    below = min(np.linalg.eigvalsh(relative(Pi)).min() for Pi in P)
     return Y, below * average[None], s
 
 
 def _lemma_bmi(rng, mode_dependent, mutant):
-    """Lemmas 3.8 / 3.11: a point (L, G, Y) satisfying the BMI (3.15) gives D(Y) feasible for (3.14),
-    hence a stabilising L, and an objective >= ||G||_2^2 of L. Half the draws (all of the mutant's) lie
-    near the BMI's boundary (:func:`boundary_point`), the others draw Y and G independently of L's
-    Lyapunov equation; the BMI decides the premise.
+    """Lemmas 3.8 / 3.11: a point (L, G, Y) satisfying the BMI (3.15) gives D(Y) feasible for
+    (3.14), hence a stabilising L, and an objective >= ||G||_2^2 of L. Half the draws (all of the
+    mutant's) lie near the BMI's boundary (:func:`boundary_point`), the others draw Y and G
+    independently of L's Lyapunov equation; the BMI decides the premise.
     Mutant: the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)."""
     sys = draw_system(rng)
     shape = (sys.M, sys.nu, sys.ny) if mode_dependent else (sys.nu, sys.ny)
@@ -116,8 +118,9 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     else:
         scale = float(np.trace(HHt.mean(axis=0)) / n) * np.exp(rng.uniform(1.0, 4.0))
         Y = _random_scaled_spd(rng, M, n, scale)
-        P = np.einsum("ji,jab->iab", sys.T, Y)                              # D_i(Y) = sum_j p_ji Y_j
-        G = _random_scaled_spd(rng, M if mode_dependent else 1, n, float(np.trace(P.mean(axis=0)) / n))
+        P = np.einsum("ji,jab->iab", sys.T, Y)                     # D_i(Y) = sum_j p_ji Y_j
+        G = _random_scaled_spd(rng, M if mode_dependent else 1, n,
+                               float(np.trace(P.mean(axis=0)) / n))
     G = np.broadcast_to(G, P.shape)
     corner = G + transpose(G) - (0 if mutant else P)
     blocks = np.block([[Y - mu[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G), corner]])
@@ -209,11 +212,11 @@ MARGIN_AGREEMENT = 1e-4       # two solvers' optimal margins agree to this (SCS 
 
 
 def lmi_margin(sys, solver="CLARABEL"):
-    """The optimal margin of Thm. 3.9's LMIs without the noise term and the objective's LMI: the largest
-    t with [[Y_i, A_i G + B_i F C_i], [., G + G^T - D_i(Y)]] >= t I, Y_i >= t I, G >= t I, M >= t I,
-    M C_i = C_i G, normalised by tr G + sum_i tr Y_i = 1. These LMIs are homogeneous and implied by the
-    printed ones (dropping mu_i H_i H_i^T >= 0 only enlarges the corner), so a negative optimal margin
-    certifies that the printed LMIs are infeasible for every eps > 0.
+    """The optimal margin of Thm. 3.9's LMIs without the noise term and the objective's LMI: the
+    largest t with [[Y_i, A_i G + B_i F C_i], [., G + G^T - D_i(Y)]] >= t I, Y_i >= t I, G >= t I, M
+    >= t I, M C_i = C_i G, normalised by tr G + sum_i tr Y_i = 1. These LMIs are homogeneous and
+    implied by the printed ones (dropping mu_i H_i H_i^T >= 0 only enlarges the corner), so a
+    negative optimal margin certifies that the printed LMIs are infeasible for every eps > 0.
 
     Examples
     --------
@@ -226,14 +229,17 @@ def lmi_margin(sys, solver="CLARABEL"):
     """
     nx, ny, nu = sys.nx, sys.ny, sys.nu
     t = cp.Variable()
-    F, G, Mv = cp.Variable((nu, ny)), cp.Variable((nx, nx), symmetric=True), cp.Variable((ny, ny), symmetric=True)
+    F = cp.Variable((nu, ny))
+    G, Mv = cp.Variable((nx, nx), symmetric=True), cp.Variable((ny, ny), symmetric=True)
     Y = [cp.Variable((nx, nx), symmetric=True) for _ in range(sys.M)]
-    cons = [G >> t * np.eye(nx), Mv >> t * np.eye(ny), cp.trace(G) + sum(cp.trace(Yi) for Yi in Y) == 1]
+    cons = [G >> t * np.eye(nx), Mv >> t * np.eye(ny),
+            cp.trace(G) + sum(cp.trace(Yi) for Yi in Y) == 1]
     for i in range(sys.M):
         DY = sum(sys.T[j, i] * Y[j] for j in range(sys.M))
         mid = sys.A[i] @ G + sys.B[i] @ F @ sys.C[i]
         block = cp.bmat([[Y[i], mid], [mid.T, 2 * G - DY]])
-        cons += [0.5 * (block + block.T) >> t * np.eye(2 * nx), Y[i] >> t * np.eye(nx), Mv @ sys.C[i] == sys.C[i] @ G]
+        cons += [0.5 * (block + block.T) >> t * np.eye(2 * nx), Y[i] >> t * np.eye(nx),
+                 Mv @ sys.C[i] == sys.C[i] @ G]
     problem = cp.Problem(cp.Maximize(t), cons)
     status = solve_quietly(problem, solver)
     if status != cp.OPTIMAL:
@@ -242,9 +248,9 @@ def lmi_margin(sys, solver="CLARABEL"):
 
 
 def certified_margins(sys):
-    """:func:`lmi_margin` by each of :data:`MARGIN_SOLVERS` and the verdict: "infeasible" when all are
-    negative beyond :data:`MARGIN_AGREEMENT` and agree to it, "feasible" when all are positive beyond it,
-    else "undecided"."""
+    """:func:`lmi_margin` by each of :data:`MARGIN_SOLVERS` and the verdict: "infeasible" when all
+    are negative beyond :data:`MARGIN_AGREEMENT` and agree to it, "feasible" when all are positive
+    beyond it, else "undecided"."""
     margins = {solver: lmi_margin(sys, solver) for solver in MARGIN_SOLVERS}
     values = np.array(list(margins.values()))
     agree = np.ptp(values) <= MARGIN_AGREEMENT
@@ -254,6 +260,6 @@ def certified_margins(sys):
 
 
 def lmi_C12_margin():
-    """:func:`certified_margins` for the example of Sec. 3.5.4 with C1 = [1 2], C2 = [2 1], per T: the
-    thesis says Thm. 3.9's LMIs are feasible there (``sec3_5.lmi_C12_T1``, ``_T2``)."""
+    """:func:`certified_margins` for the example of Sec. 3.5.4 with C1 = [1 2], C2 = [2 1], per T:
+    the thesis says Thm. 3.9's LMIs are feasible there (``sec3_5.lmi_C12_T1``, ``_T2``)."""
     return {f"T{t}": certified_margins(sec354_system(t, "C1=[1 2], C2=[2 1]")) for t in (1, 2)}

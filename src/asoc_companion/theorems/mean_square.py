@@ -52,12 +52,13 @@ def moment_map_radius(A, T):
     return float(np.max(np.abs(np.linalg.eigvals(moment_map_matrix(A, T)))))
 
 
-BOUNDARY_SHARE = 0.5  # share of the checks' own draws from :func:`boundary_system` (all of the mutants')
+BOUNDARY_SHARE = 0.5  # share of the checks' draws from boundary_system (all of the mutants')
 
 
 def near_cycle(rng, M, reverse=False):
     """A random asymmetric transition matrix: one random M-cycle of the modes (run backwards when
-    ``reverse``), mixed with Dirichlet(1) rows at a weight uniform on [0, 0.3] (T^T is far from T)."""
+    ``reverse``), mixed with Dirichlet(1) rows at a weight uniform on [0, 0.3] (T^T is far from
+    T)."""
     order = rng.permutation(M)
     cycle = np.zeros((M, M))
     cycle[order, np.roll(order, -1)] = 1.0                      # order[k] -> order[k + 1]
@@ -67,12 +68,13 @@ def near_cycle(rng, M, reverse=False):
 
 
 def boundary_system(rng, radius_of, against=None):
-    """Mode matrices A_i (3 modes, 2-3 states, standard normal) and a :func:`near_cycle` T, with A scaled
-    so that ``radius_of(A, T)`` (homogeneous of degree 2 in A) is log-uniform on [0.97, 1): the draws where
-    a statement about mean-square stability is decided by small differences of spectra. With ``against``
-    (a mutant's radius), the cycle runs in the direction in which ``against`` understates the library's
-    ``ms_spectral_radius`` more (reversing the cycle is what transposing T does, so in a family symmetric
-    under reversal the mutant's premise errs on the safe side in half the draws)."""
+    """Mode matrices A_i (3 modes, 2-3 states, standard normal) and a :func:`near_cycle` T, with A
+    scaled so that ``radius_of(A, T)`` (homogeneous of degree 2 in A) is log-uniform on [0.97, 1):
+    the draws where a statement about mean-square stability is decided by small differences of
+    spectra. With ``against`` (a mutant's radius), the cycle runs in the direction in which
+    ``against`` understates the library's ``ms_spectral_radius`` more (reversing the cycle is what
+    transposing T does, so in a family symmetric under reversal the mutant's premise errs on the
+    safe side in half the draws)."""
     M, n = 3, int(rng.integers(2, 4))
     A, candidates = rng.standard_normal((M, n, n)), near_cycle(rng, M)
     T = candidates[0] if against is None else max(
@@ -82,7 +84,8 @@ def boundary_system(rng, radius_of, against=None):
 
 
 def coupled_lyapunov_solutions(A, T, S):
-    """Q of the two forms of Thm. 3.1 for S: A_i^T E_i(Q) A_i - Q_i = -S_i and D_j(A Q A^T) - Q_j = -S_j."""
+    """Q of the two forms of Thm. 3.1 for S: A_i^T E_i(Q) A_i - Q_i = -S_i and
+    D_j(A Q A^T) - Q_j = -S_j."""
     M, n, _ = A.shape
     op = ms_operator(A, T, check=False)
     eye = np.eye(M * n * n)
@@ -92,9 +95,9 @@ def coupled_lyapunov_solutions(A, T, S):
 
 def check_3_1(rng, mutant=False):
     """Thm. 3.1: PD solutions Q of the coupled Lyapunov equations (either form) for PD S imply MSS.
-    Half the draws (all of the mutant's) come from :func:`boundary_system`, scaled at the premise's own
-    boundary. Mutant: the equations solved with T^T in place of T (nx >= 2, a 3-cycle T: with nx = 1 or
-    M = 2 the two spectra coincide)."""
+    Half the draws (all of the mutant's) come from :func:`boundary_system`, scaled at the premise's
+    own boundary. Mutant: the equations solved with T^T in place of T (nx >= 2, a 3-cycle T: with nx
+    = 1 or M = 2 the two spectra coincide)."""
     premise_T = (lambda T: T.T) if mutant else (lambda T: T)
     premise_radius = lambda A, T: moment_map_radius(A, premise_T(T))
     if mutant or rng.random() < BOUNDARY_SHARE:
@@ -110,8 +113,8 @@ def check_3_1(rng, mutant=False):
         return outcome("not_applicable", sys, reason="singular coupled Lyapunov operator")
     eig_first, eig_second = min_eig(Q_first), min_eig(Q_second)
     rho = moment_map_radius(A, T)
-    numbers = dict(min_eig_Q_first_form=eig_first, min_eig_Q_second_form=eig_second, moment_map_radius=rho,
-                   **({} if sys is not None else dict(A=A, T=T)))
+    numbers = dict(min_eig_Q_first_form=eig_first, min_eig_Q_second_form=eig_second,
+                   moment_map_radius=rho, **({} if sys is not None else dict(A=A, T=T)))
     if not (eig_first > 0 or eig_second > 0) or abs(rho - 1) < DECISIVE:
         return outcome("not_applicable", sys, **numbers)
     return outcome(verdict(rho < 1), sys, **numbers)
@@ -136,7 +139,8 @@ def check_3_2(rng, mutant=False):
     """Cor. 3.2 with the text's remark ([112]: also necessary): rho(M) < 1 of the printed M iff MSS,
     decided by :func:`moment_map_radius`. Half the draws (all of the mutant's) come from
     :func:`boundary_system`, scaled at the printed matrix's boundary. Mutant: M built with T^T."""
-    printed = lambda A, T: float(np.max(np.abs(np.linalg.eigvals(printed_matrix(A, T.T if mutant else T)))))
+    radius = lambda matrix: float(np.max(np.abs(np.linalg.eigvals(matrix))))
+    printed = lambda A, T: radius(printed_matrix(A, T.T if mutant else T))
     if mutant or rng.random() < BOUNDARY_SHARE:
         A, T = boundary_system(rng, printed, against=printed if mutant else None)
         sys, data = None, dict(A=A, T=T)
