@@ -28,7 +28,8 @@ from .counterexamples import (kernel_example, mcvmd_integral, prop_3_26_example,
                               thm_3_19_noiseless_example, thm_3_27_fixed_points, thm_3_31_example)
 from .instances import draw_system, random_spd_stack, rescaled
 
-__all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "check_kernels", "check_3_19",
+__all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "SPREAD", "SINGULAR_NOISE_SHARE",
+           "check_kernels", "check_3_19",
            "check_3_26", "check_3_27", "check_3_31", "check_3_32", "check_3_33",
            "correction_records"]
 

@@ -16,14 +16,15 @@ import scipy.special
 from asoc import gp
 from asoc.gp.cramer_von_mises import DEFAULT_B_MAX
 from asoc.mjls import MJLS, dynamic_output_feedback, static_output_feedback, successor_average
-from asoc.mjls.bound import bound_costate_step, bound_moment_step
-from asoc.mjls.operators import noise_covariances
+from asoc.mjls.moment_bounds import bound_costate_step, bound_moment_step
+from asoc.mjls.closed_loops import noise_covariances
 from asoc.mjls.optimality import optimality_system
 
 from .instances import draw_system
 
 __all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "alg_3_1_one_mode",
-           "thm_3_19_example", "kernel_example"]
+           "thm_3_19_example", "THM_3_19_NOISELESS", "thm_3_19_noiseless_example", "kernel_example",
+           "THM_3_27_INSTANCE", "fixed_point_residuals", "thm_3_27_fixed_points", "mcvmd_integral"]
 
 
 # ------------------------------------------------------------------ exact 2 x 2 algebra
