@@ -20,7 +20,8 @@ from asoc.mjls.examples import sec354_system
 from asoc.mjls.lmi import performance_output, solve_quietly
 
 from .instances import (Z_SCORE, ModeOperator, best_scalar_gain, draw_system, initial_modes, min_eig, outcome,
-                        random_spd_stack, stabilised, stationary_average, trace_sum, verdict)
+                        random_spd_stack, rescaled, stabilised, stationary_average, trace_sum,
+                        verdict)
 from .mean_square import moment_map_radius
 
 __all__ = ["check_3_7", "check_3_10", "check_3_8", "check_3_11", "check_3_9", "decide_3_9",
@@ -110,7 +111,8 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     L = 0.5 * rng.standard_normal(shape)
     acl = lambda s: s.A + s.B @ L @ s.C
     boundary = mutant or rng.random() < BOUNDARY_SHARE
-    sys, target = stabilised(rng, sys, acl, *((0.3, 1.5) if boundary else (0.1, 1.6)))
+    target = rng.uniform(*((0.3, 1.5) if boundary else (0.1, 1.6)))      # rho of the closed loop
+    sys = rescaled(sys, float(np.sqrt(target / moment_map_radius(acl(sys), sys.T))))
     Acl, mu, M, n = acl(sys), sys.mu_inf, sys.M, sys.nx
     HHt = sys.H @ transpose(sys.H)
     if boundary:
