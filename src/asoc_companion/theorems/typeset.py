@@ -81,6 +81,19 @@ MUTANTS_TEX = {
         r"(B.4) with the factor 2 of $2\,\mathcal E(\bar{\mathbf P}+\underline{\mathbf P})\mathbf "
         r"B\mathbf L"
         r"\underline{\mathbf X}\mathbf A^\top$ dropped",
+    'T transposed in both Lyapunov equations (on 3 modes, 2-3 states, T near a 3-cycle run in '
+    'the direction where the transposition understates the radius: with n_x = 1 or M = 2 the '
+    'spectra coincide, and reversing the cycle is what T^T does)':
+        r"$\mathbf T$ transposed in both Lyapunov equations (on 3 modes, 2-3 states, $\mathbf "
+        r"T$ near a 3-cycle run in the direction where the transposition understates the radius: "
+        r"with $n_x=1$ or $M=2$ the spectra coincide, and reversing the cycle is what $\mathbf "
+        r"T^\top$ does)",
+    "M built with T in place of T^T (T transposed; draws as for Thm. 3.1's mutant)":
+        r"$\mathbf M$ built with $\mathbf T$ in place of $\mathbf T^\top$ ($\mathbf T$ "
+        r"transposed; draws as for Thm. 3.1's mutant)",
+    'the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative)':
+        r"the hypotheses $\mathbf A,\mathbf B\geq 0$ dropped ($\mathbf A$, $\mathbf B$ = psd "
+        r"$-\,4$ psd, mostly negative)",
 }
 """The mutants' descriptions (plain text in the study's records) with their math in LaTeX; a
 description not listed is shown as recorded."""
@@ -236,6 +249,43 @@ CORRECTIONS_TEX = {
         r"J\mathbf J^\top"
         r"\mathbf K^\top]\geq0$, so (B.4) is "
         r"convex, and its gradient is twice the residual of (3.70) (B.5).",
+    'If D embeds isometrically in a Hilbert space (the mCvMd defined by its integral, for every '
+    'b_max; the L2 distance of densities; the Hellinger distance sqrt(1 - int sqrt(p1 p2))), '
+    'every covariance of Table 2.1 (gamma <= 2) of Delta = D is positive semidefinite at every '
+    "length scale. The thesis's closed form of the mCvMd equals the integral only as b_max -> "
+    'infinity; with a finite b_max it is covered only while all points lie within about 2 b_max '
+    'of each other. Proof: each covariance is a scale mixture int exp(-t Delta^2) dmu(t) (t '
+    "Delta^2 for SE, Gamma mixtures for RQ and Matern, Bernstein's theorem for "
+    'exp(-(Delta/l)^gamma)), and exp(-t D^2) is PSD for all t > 0 iff D^2 is conditionally '
+    'negative definite, i.e. D is Hilbertian (Schoenberg); the mCvMd integral is an L2 norm of '
+    'P_1 - P_2 over (m, b).':
+        r"If $D$ embeds isometrically in a Hilbert space (the mCvMd defined by its integral, for "
+        r"every $b_{\max}$; the $L_2$ distance of densities; the Hellinger distance "
+        r"$\sqrt{1-\int\sqrt{p_1p_2}}$), every covariance of Table 2.1 ($\gamma\leq2$) of "
+        r"$\Delta=D$ is positive semidefinite at every length scale. The thesis's closed form of "
+        r"the mCvMd equals the integral only as $b_{\max}\to\infty$; with a finite $b_{\max}$ "
+        r"it is covered only while all points lie within about $2b_{\max}$ of each other. Proof: "
+        r"each covariance is a scale mixture $\int e^{-t\Delta^2}\,\mathrm d\mu(t)$ "
+        r"($t\Delta^2$ for SE, Gamma mixtures for RQ and Matérn, Bernstein's theorem for "
+        r"$e^{-(\Delta/l)^\gamma}$), and $e^{-tD^2}$ is PSD for all $t>0$ iff $D^2$ is "
+        r"conditionally negative definite, i.e. $D$ is Hilbertian (Schoenberg); the mCvMd "
+        r"integral is an $L_2$ norm of $P_1-P_2$ over $(m,b)$.",
+    'If M = 1 and C = I (state feedback), H H^T > 0, (A, B) is stabilisable and Q > 0, Alg. 3.1 '
+    'converges from every X_0 > 0, P_0 >= 0 to the LQ gain. Proof: H H^T > 0 keeps X_k > 0, so '
+    'the X-factors cancel in (3.34), L = -(R + B^T P B)^{-1} B^T P A, and (3.35) for P is the '
+    'Riccati value iteration, which converges to the stabilising solution (Kalman; Bertsekas, '
+    'Vol. 1, Prop. 4.4.1); X then follows a converging Lyapunov recursion. Without H H^T > 0, '
+    'X_k can become singular and (3.34) leaves L undetermined.':
+        r"If $M=1$ and $\mathbf C=\mathbf I$ (state feedback), $\mathbf H\mathbf "
+        r"H^\top\succ0$, $(\mathbf A,\mathbf B)$ is stabilisable and $\mathbf Q>0$, Alg. 3.1 "
+        r"converges from every $\mathbf X_0>0$, $\mathbf P_0\geq0$ to the LQ gain. Proof: "
+        r"$\mathbf H\mathbf H^\top\succ0$ keeps $\mathbf X_k\succ0$, so the $\mathbf "
+        r"X$-factors cancel in (3.34), $\mathbf L=-(\mathbf R+\mathbf B^\top\mathbf "
+        r"P\mathbf B)^{-1}\mathbf B^\top\mathbf P\mathbf A$, and (3.35) for $\mathbf P$ is "
+        r"the Riccati value iteration, which converges to the stabilising solution (Kalman; "
+        r"Bertsekas, Vol. 1, Prop. 4.4.1); $\mathbf X$ then follows a converging Lyapunov "
+        r"recursion. Without $\mathbf H\mathbf H^\top\succ0$, $\mathbf X_k$ can become "
+        r"singular and (3.34) leaves $\mathbf L$ undetermined.",
 }
 """The corrected statements (plain text in the study's records) with their math in LaTeX."""
 
@@ -392,6 +442,29 @@ CHECKS_TEX = {
         r"increases of $\bar{\mathcal J}_0$, convergence within 300 iterations, change of the "
         r"gains over 20 more "
         r"iterations.",
+    'Random A_i, T and S_i > 0 (half the draws: 3 modes, 2-3 states, T near a 3-cycle, A scaled '
+    "to put the premise's radius just below 1); Q solved from each form; if Q > 0, mean-square "
+    'stability decided by the dense eigenvalues of the second-moment map, its matrix built from '
+    "the map's action on a basis.":
+        r"Random $\mathbf A_i$, $\mathbf T$ and $\mathbf S_i>0$ (half the draws: 3 modes, 2-3 "
+        r"states, $\mathbf T$ near a 3-cycle, $\mathbf A$ scaled to put the premise's radius "
+        r"just below 1); $\mathbf Q$ solved from each form; if $\mathbf Q>0$, mean-square "
+        r"stability decided by the dense eigenvalues of the second-moment map, its matrix built "
+        r"from the map's action on a basis.",
+    "Half the draws: Y_i and G random SPD at random scales, with no relation to L's Lyapunov "
+    "equation; half at the BMI's boundary: Y = s Acl D(Y) Acl^T + mu H H^T + delta I, G from "
+    'D(Y), s on [0.5, 1.5]; premise: the BMI (3.15) by eigenvalues; conclusion: P = D(Y) '
+    "satisfies (3.14)'s constraint, L stabilises, and the objective >= ||G||_2^2 of L.":
+        r"Half the draws: $\mathbf Y_i$ and $\mathbf G$ random SPD at random scales, with no "
+        r"relation to $\mathbf L$'s Lyapunov equation; half at the BMI's boundary: $\mathbf "
+        r"Y=s\,\mathbf A_{cl}\mathcal D(\mathbf Y)\mathbf A_{cl}^\top+\mu\mathbf "
+        r"H\mathbf H^\top+\delta\mathbf I$, $\mathbf G$ from $\mathcal D(\mathbf Y)$, "
+        r"$s\in[0.5,1.5]$; premise: the BMI (3.15) by eigenvalues; conclusion: $\mathbf "
+        r"P=\mathcal D(\mathbf Y)$ satisfies (3.14)'s constraint, $\mathbf L$ stabilises, and "
+        r"the objective $\geq\|G\|_2^2$ of $\mathbf L$.",
+    'As Lemma 3.8 with mode-dependent G_i = D_i(Y) (at the boundary) and L_i.':
+        r"As Lemma 3.8 with mode-dependent $\mathbf G_i=\mathcal D_i(\mathbf Y)$ (at the "
+        r"boundary) and $\mathbf L_i$.",
 }
 """What one instance of each statement checks (plain text in ``Statement.checked``), math in
 LaTeX."""
