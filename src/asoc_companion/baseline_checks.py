@@ -23,15 +23,9 @@ import scipy.optimize
 from asoc.mjls import MJLS
 from asoc.mjls.baselines import do_val_h2_state_feedback, time_variant_feedback
 
-__all__ = [
-    "random_instance",
-    "exact_h2_cost",
-    "check_52",
-    "path_cost",
-    "brute_force_optimum",
-    "check_time_variant",
-    "baseline_checks",
-]
+__all__ = ["GRID", "POLISHED", "MAX_DRAWS", "random_instance", "exact_h2_cost", "check_52",
+           "path_cost", "brute_force_optimum", "check_time_variant", "baseline_checks"]
+
 
 GRID = np.linspace(-2.5, 2.5, 11)  # brute-force grid of every gain entry
 POLISHED = 4  # best grid points polished by Nelder-Mead

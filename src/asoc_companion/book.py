@@ -36,7 +36,8 @@ from . import paths, printing
 __all__ = ["MATHJAX_BUNDLE", "MATHJAX_FONTS", "API_BLOCK", "LAYOUT_MARKER", "mathjax_source",
            "install_mathjax", "unused_script", "THEBE_BODY", "THESIS", "LATEX_ELEMENTS",
            "title_page", "SUMMARY_WIDTH", "module_summary", "layout_tree", "public_names",
-           "attribute_docs", "documented", "api_markdown", "setup", "prepare"]
+           "attribute_docs", "documented", "api_markdown", "THESIS_ABBREVIATIONS",
+           "use_abbreviations", "setup", "prepare"]
 
 
 MATHJAX_BUNDLE = "tex-chtml-full.js"

@@ -19,7 +19,8 @@ from pathlib import Path
 from . import manifest, paths
 from . import notebooks as nbs
 
-__all__ = ["rel", "terminate", "run_one", "run_and_record", "reproduce", "longest_first"]
+__all__ = ["rel", "terminate", "run_one", "written_since", "run_and_record", "reproduce",
+           "longest_first"]
 
 
 def rel(path) -> str:

@@ -27,17 +27,10 @@ import numpy as np
 from asoc.mjls.intractability import hessian_min_eigenvalue, quadratic_fit_residual
 from asoc.stats import settling_iteration
 
-__all__ = [
-    "settles_about",
-    "not_quadratic",
-    "not_convex",
-    "converged_not_stabilizing",
-    "non_increasing",
-    "bounded",
-    "lmi_separates",
-    "ordered",
-    "almost_equal_then_slightly_worse",
-]
+__all__ = ["BANDS", "ROUNDING", "settles_about", "relative_rms_difference", "not_quadratic",
+           "not_convex", "converged_not_stabilizing", "non_increasing", "bounded", "lmi_separates",
+           "ordered", "almost_equal_then_slightly_worse"]
+
 
 BANDS = (0.01, 0.02, 0.05, 0.1)
 ROUNDING = 2.5  # half the spacing of the round counts (multiples of five)

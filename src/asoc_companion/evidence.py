@@ -15,18 +15,11 @@ mapping ``{verdict, n, estimate, ci_low, ci_high, test}``; its verdict ``holds``
 ``not resolved`` gives the ledger status ``reproduced``, ``deviates`` or ``not-resolved``.
 """
 
-__all__ = [
-    "EVIDENCE_NEEDS",
-    "evidence_problems",
-    "evidence_badge",
-    "evidence_text",
-    "section_link",
-    "statistic_status",
-    "statistic_text",
-    "is_statistic",
-    "evidence_counts",
-    "evidence_badges",
-]
+__all__ = ["EVIDENCE_NEEDS", "EVIDENCE_BADGE", "STATISTIC_FIELDS", "VERDICT_STATUS",
+           "evidence_problems", "evidence_badge", "section_link", "evidence_text",
+           "statistic_status", "is_statistic", "statistic_text", "evidence_counts",
+           "evidence_badges"]
+
 
 EVIDENCE_NEEDS = {
     "thesis-error": ("certificate", "section"),

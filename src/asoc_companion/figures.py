@@ -15,7 +15,8 @@ import matplotlib.pyplot as plt
 
 from .atomic_files import atomic_write_bytes, atomic_write_text
 
-__all__ = ["STYLE", "SAVE_METADATA", "apply_style", "NUMBER", "file_stem", "save_figure",
+__all__ = ["PALETTE", "PRINT_WIDTH_INCHES", "MIN_FONT_POINTS", "STYLE", "SAVE_METADATA",
+           "apply_style", "colour_name", "fit_for_print", "NUMBER", "file_stem", "save_figure",
            "markdown_table", "save_table", "close"]
 
 

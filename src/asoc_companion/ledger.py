@@ -12,7 +12,7 @@ import math
 import re
 
 
-from .anchors import heading_anchor, section_links
+from .anchors import section_links
 from .evidence import evidence_badge, evidence_badges, evidence_text, is_statistic, statistic_text
 from .figures import markdown_table
 from .atomic_files import atomic_write_text
@@ -23,10 +23,9 @@ from .reference import load_reference, status
 from .values import load_all_values
 
 __all__ = ["STATUS_TEXT", "BADGE", "SHORT", "SHARED_PREFIX", "SUMMARY", "FINDINGS", "VERDICT",
-           "badge", "decimals", "ledger_rows", "note_groups", "FIELDS", "heading_anchor",
-           "section_links", "counts", "ledger_label", "ledger_markdown", "totals_markdown",
-           "verdict_markdown", "summary_markdown", "findings_markdown", "intro_markdown",
-           "write_summary", "write_ledger"]
+           "badge", "decimals", "ledger_rows", "note_groups", "FIELDS", "counts", "ledger_label",
+           "ledger_markdown", "totals_markdown", "verdict_markdown", "summary_markdown",
+           "findings_markdown", "intro_markdown", "write_summary", "write_ledger"]
 
 
 STATUS_TEXT = {"reproduced": "reproduced", "deviates": "deviates", "not-resolved": "not resolved",

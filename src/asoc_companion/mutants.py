@@ -17,7 +17,8 @@ from . import paths
 from .atomic_files import atomic_write_text
 from .reference import load_reference
 
-__all__ = ["ledger_mutants", "mutants_path", "write_ledger_mutants"]
+__all__ = ["NOT_PLANTED", "ledger_mutants", "mutants_path", "write_ledger_mutants"]
+
 
 NOT_PLANTED = (
     "no planted variant: the notebook does not decide this claim through a predicate "

@@ -38,10 +38,10 @@ from .staging import commit, one_blas_thread, remove_stage
 from .values import FIDELITIES
 
 __all__ = ["HARNESS_PARAMETERS", "KERNEL_ARGUMENTS", "NotebookInfo", "notebooks", "find",
-           "build_order", "by_name", "parameter_specs", "default_parameters", "parse_value",
-           "check_value", "parse_overrides", "check_overrides", "run_folder", "harness_parameters",
-           "default_output_dir", "executed_path", "run", "PAPERMILL_TIMES", "KERNEL_CELL_FILE",
-           "normalise", "parameters_reaching"]
+           "natural_key", "build_order", "by_name", "parameter_specs", "default_parameters",
+           "parse_value", "check_value", "parse_overrides", "check_overrides", "run_folder",
+           "harness_parameters", "default_output_dir", "executed_path", "run", "PAPERMILL_TIMES",
+           "KERNEL_CELL_FILE", "normalise", "parameters_reaching"]
 
 
 HARNESS_PARAMETERS = ("fidelity", "output_dir")   # set by the harness, not by -p

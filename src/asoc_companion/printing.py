@@ -26,6 +26,11 @@ from docutils import nodes
 
 from . import paths
 
+__all__ = ["INJECTED_TAG", "OVERFULL", "OVERFULL_LIMIT", "is_setup_cell", "setup_note",
+           "prune_cells", "TEXT_WIDTH_CHARACTERS", "COLUMN_CAP", "column_widths", "fit_wide_tables",
+           "prune_doctree", "LATEX_PREAMBLE", "overfull_boxes", "build_pdf"]
+
+
 INJECTED_TAG = "injected-parameters"
 """papermill's tag of the cell it inserts below the parameters cell."""
 OVERFULL = re.compile(r"^Overfull \\hbox \((?P<points>[\d.]+)pt too wide\)", re.M)

@@ -161,25 +161,6 @@ def test_verdict_text():
     assert verdict_text({"holds": 993, "fails": 7, "not_applicable": 0}) == "fails in 7 of 1000"
 
 
-def test_statements_table_escapes_claims_and_links_counterexample_and_finding():
-    from asoc_companion.theorems.statement import Statement
-    from asoc_companion.theorems.report import statements_table
-
-    keys = ["statement_3_26", "statement_3_30"]
-    results = run_study(2, seed=1, only=keys, n_jobs=1, progress=False, mutants=2)
-    records = {key: res.recorded_value() for key, res in results.items()}
-    records["statement_3_26"]["no_correction"] = "tried <b>"
-    lemma = Statement("statement_3_0", "Lemma 3.0", "a | b", "nothing", not_checkable="a definition")
-    rows = [st for st in STATEMENTS if st.key in keys] + [lemma]
-    table = statements_table(rows, records, {"statement_3_26": "finding-bound"})
-    assert table.count("<tr>") == len(rows) + 1 and table.count("<td>") == 6 * len(rows)
-    assert '<a href="#statement-3-26">counterexample</a>, <a href="findings.html#finding-bound">finding</a>' in table
-    assert "<code>finite_horizon.check_3_30</code>" in table and "none found: tried &lt;b&gt;" in table
-    assert "<td>caught in 2 of 2<br><small>the hypotheses A, B &gt;= 0 dropped" in table and r"\(\mathrm{tr}[\mathbf A\mathbf B]" in table
-    assert ("<strong>Lemma 3.0.</strong> a | b</td><td>nothing</td><td>not checkable: a definition</td>"
-            "<td>-</td><td>-</td><td>-</td>") in table
-
-
 def test_unknown_statement_key_is_named():
     with pytest.raises(ValueError, match="only: expected statement keys"):
         run_study(1, only=["statement_9_9"], progress=False)

@@ -25,7 +25,7 @@ from .mean_square import check_3_1, check_3_2, check_3_5
 from .static_feedback import (check_3_14, check_3_15, check_3_16, check_3_17, check_3_18, check_3_19,
                               summarise_3_15, summarise_3_19)
 
-__all__ = ["MC", "STATEMENTS", "SHOW", "MARGIN"]
+__all__ = ["MC", "WHY_NOT_LMI", "STATEMENTS", "SHOW", "MARGIN"]
 
 
 MC = "within 6 standard errors"

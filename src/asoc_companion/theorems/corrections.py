@@ -28,10 +28,9 @@ from .counterexamples import (kernel_example, mcvmd_integral, prop_3_26_example,
                               thm_3_19_noiseless_example, thm_3_27_fixed_points, thm_3_31_example)
 from .instances import draw_system, random_spd_stack, rescaled
 
-__all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "SPREAD", "SINGULAR_NOISE_SHARE",
-           "check_kernels", "check_3_19",
-           "check_3_26", "check_3_27", "check_3_31", "check_3_32", "check_3_33",
-           "correction_records"]
+__all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "SPREAD", "check_kernels",
+           "SINGULAR_NOISE_SHARE", "check_3_19", "check_3_26", "check_3_27", "check_3_31",
+           "check_3_32", "check_3_33", "correction_records"]
 
 
 STATEMENT_IDS = ("2_6_3_kernels", "3_19", "3_26", "3_27", "3_31", "3_32", "3_33")

@@ -24,9 +24,10 @@ from .instances import (Z_SCORE, ModeOperator, best_scalar_gain, draw_system, in
                         verdict)
 from .mean_square import moment_map_radius
 
-__all__ = ["check_3_7", "check_3_10", "check_3_8", "check_3_11", "check_3_9", "decide_3_9",
-           "failure_kind", "check_3_12", "summarise_lmi", "BOUNDARY_SHARE", "boundary_point",
-           "MARGIN_SOLVERS", "MARGIN_AGREEMENT", "lmi_margin", "certified_margins", "lmi_C12_margin"]
+__all__ = ["check_3_7", "check_3_10", "BOUNDARY_SHARE", "boundary_point", "check_3_8", "check_3_11",
+           "check_3_9", "decide_3_9", "failure_kind", "check_3_12", "summarise_lmi",
+           "MARGIN_SOLVERS", "MARGIN_AGREEMENT", "lmi_margin", "certified_margins",
+           "lmi_C12_margin"]
 
 
 def _stationary_check(rng, mode_dependent, mutant):

@@ -17,9 +17,9 @@ from asoc.mjls.moment_operator import ms_operator
 
 from .instances import draw_system, min_eig, outcome, random_spd, random_spd_stack, verdict
 
-__all__ = ["DECISIVE", "moment_map_matrix", "moment_map_radius", "check_3_1", "printed_matrix",
-           "check_3_2", "check_3_5", "BOUNDARY_SHARE", "near_cycle", "boundary_system",
-           "coupled_lyapunov_solutions"]
+__all__ = ["DECISIVE", "moment_map_matrix", "moment_map_radius", "BOUNDARY_SHARE", "near_cycle",
+           "boundary_system", "coupled_lyapunov_solutions", "check_3_1", "printed_matrix",
+           "check_3_2", "check_3_5"]
 
 
 DECISIVE = 1e-9       # |rho - 1| below this leaves mean-square stability undecided by rounding

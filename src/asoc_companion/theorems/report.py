@@ -1,6 +1,5 @@
 """Counterexamples of the theorems study: saved as data, the one to show chosen, printed rounded."""
 
-import html
 import re
 import json
 from pathlib import Path
@@ -15,7 +14,8 @@ from .typeset import CHECKS_TEX, CORRECTIONS_TEX, MUTANTS_TEX
 
 __all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "trim_systems",
            "load_counterexamples", "margin", "shown_counterexample", "describe", "system_from",
-           "COLUMNS", "math_html", "statements_table", "mutant_text", "corrected_text"]
+           "mutant_text", "markdown_text", "typeset", "mutant_markdown", "statements_markdown",
+           "StatementsPage"]
 
 
 COUNTEREXAMPLES = "theorems_counterexamples.json"
@@ -90,88 +90,12 @@ def system_from(numbers):
     return MJLS(**{k: np.array(v) for k, v in numbers["system"].items() if v is not None})
 
 
-# the table's columns and their share of the page's width (fixed layout: it never widens the page)
-COLUMNS = (("Statement", 25), ("What one instance checks", 29), ("Verdict", 13), ("Mutant", 11),
-           ("Corrected statement", 12), ("Evidence", 10))
-
-
-def math_html(text) -> str:
-    """``text`` escaped for HTML, its ``$...$`` math turned into MathJax's inline ``\\(...\\)`` (MathJax 3 reads
-    no dollars in raw HTML).
-
-    Examples
-    --------
-    >>> math_html("$a<b$ and |x|")
-    '\\\\(a&lt;b\\\\) and |x|'
-    """
-    parts = html.escape(text, quote=False).split("$")
-    if len(parts) % 2 == 0:
-        raise ValueError(f"text: expected paired $ signs, found {text!r}")
-    return "".join(part if k % 2 == 0 else f"\\({part}\\)" for k, part in enumerate(parts))
-
-
-def statements_table(statements, records, findings) -> str:
-    """The theorems page's table as HTML: per statement its claim (typeset by MathJax), its check, the
-    verdict, whether the check caught its mutant, the corrected statement and its verdict (when the
-    record has ``corrected`` or ``no_correction``), and links to the counterexample on the page and to
-    the finding (``findings`` maps a statement key to an anchor of findings.html). ``records`` maps a key
-    to its recorded value (``StatementResult.recorded_value()``). HTML, not Markdown: claims contain ``|`` and the
-    links must leave the page.
-
-    Examples
-    --------
-    >>> from asoc_companion.theorems.statement import Statement
-    >>> lemma = Statement("statement_3_0", "Lemma 3.0", "$|x| >= 0$", "nothing",
-    ...                   not_checkable="a definition")
-    >>> table = statements_table([lemma], {}, {})
-    >>> table.count("<tr>"), "<strong>Lemma 3.0.</strong> \\\\(|x| &gt;= 0\\\\)" in table
-    (2, True)
-    """
-    head = "".join(f"<th>{name}</th>" for name, _ in COLUMNS)
-    widths = "".join(f'<col style="width:{share}%">' for _, share in COLUMNS)
-    rows = "\n".join(_statement_row(st, records, findings) for st in statements)
-    return (f'<div class="tex2jax_process"><table class="table asoc-statements"><colgroup>{widths}</colgroup>'
-            f"<thead><tr>{head}</tr></thead><tbody>\n{rows}\n</tbody></table></div>")
-
-
 def mutant_text(record) -> str:
     """"caught in 37 of 100" (or "NOT caught in 0 of 100", "-" when the mutant was not run)."""
     mutant = record.get("mutant")
     if not mutant:
         return "-"
     return f"{'caught' if mutant['fails'] else 'NOT caught'} in {mutant['fails']} of {mutant['instances']}"
-
-
-def corrected_text(record) -> str:
-    """The corrected statement and its verdict, or why there is none ("-" when the record has neither)."""
-    if record.get("corrected"):
-        corrected = record["corrected"]
-        text = f"{math_html(corrected['statement'])}: {html.escape(verdict_text({**corrected, 'not_applicable': 0}))}"
-        if corrected.get("mutant"):
-            text += f"; mutant {mutant_text(corrected)}"
-        return text
-    if record.get("no_correction"):
-        return f"none found: {html.escape(record['no_correction'])}"
-    return "-"
-
-
-def _statement_row(st, records, findings) -> str:
-    claim = f"<strong>{html.escape(st.label)}.</strong> {math_html(st.summary)}"
-    if st.check is None:
-        cells = (claim, html.escape(st.checked), f"not checkable: {html.escape(st.not_checkable)}", "-", "-", "-")
-        return "<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"
-    record = records[st.key]
-    evidence = f"<code>{st.check.__module__.rsplit('.', 1)[-1]}.{st.check.__name__}</code>"
-    if record["fails"]:
-        evidence = f'<a href="#{st.key.replace("_", "-")}">counterexample</a>'
-        if st.key in findings:
-            evidence += f', <a href="findings.html#{findings[st.key]}">finding</a>'
-    mutant = mutant_text(record)
-    if record.get("mutant"):
-        mutant = f'{mutant}<br><small>{html.escape(record["mutant"]["description"])}</small>'
-    cells = (claim, html.escape(st.checked), html.escape(verdict_text(record)), mutant, corrected_text(record),
-             evidence)
-    return "<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"
 
 
 # The Theorems page as MyST Markdown: rendered by the HTML and the LaTeX builders alike (math

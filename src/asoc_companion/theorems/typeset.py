@@ -5,6 +5,9 @@ A text the study changes is no longer found here and is shown as recorded (plain
 tests/companion/test_theorems_page.py lists the records without a typeset form.
 """
 
+__all__ = ["MUTANTS_TEX", "CORRECTIONS_TEX", "CHECKS_TEX"]
+
+
 MUTANTS_TEX = {
     "the reference without the measurement update (the prediction P: the Schur complement dropped)":
         r"the reference without the measurement update (the prediction $\mathbf P$: the Schur "
