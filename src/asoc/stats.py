@@ -150,3 +150,72 @@ def settling_iteration(series, band: float = 0.02) -> int:
     ok = np.all(dev <= band * dev.max(axis=1, keepdims=True), axis=0)
     bad = np.flatnonzero(~ok)
     return int(bad[-1] + 1) if bad.size else 0
+
+
+#: Verdicts of :func:`decide_claim`, the vocabulary the ledger reads (asoc_companion.evidence).
+VERDICTS = ("holds", "fails", "not resolved")
+
+
+def decide_claim(samples, above=None, below=None, level: float = 0.95, what: str = "samples") -> dict:
+    """Decide a claim "above < median < below" from paired samples by a bootstrap interval.
+
+    The claim is about the median of ``samples`` (e.g. paired differences of two methods over
+    seeds, one per seed). Its exact percentile-bootstrap interval (:func:`bootstrap_median_ci`)
+    decides: ``"holds"`` if the interval lies inside (``above``, ``below``), ``"fails"`` if
+    it lies entirely outside, and ``"not resolved"`` if it straddles a bound: the data cannot
+    tell the two apart at this confidence, which is a status of its own, not a deviation.
+
+    Parameters
+    ----------
+    samples : array_like, (n,)
+        One finite value per seed (n >= 1).
+    above, below : float, optional
+        The claimed bounds of the median (at least one).
+    level : float
+        Confidence level in (0, 1).
+    what : str
+        What the samples are, for the ``test`` sentence.
+
+    Returns
+    -------
+    dict
+        ``verdict``, ``n``, ``estimate`` (the median), ``ci_low``, ``ci_high``, ``test``.
+
+    Raises
+    ------
+    ValueError
+        If no bound is given, ``above >= below``, the samples are empty or non-finite, or
+        ``level`` is outside (0, 1).
+
+    Examples
+    --------
+    A clearly negative difference holds "below 0"; a zero-mean one is not resolved:
+
+    >>> rng = np.random.default_rng(0)
+    >>> decide_claim(-1.0 + 0.1 * rng.standard_normal(30), below=0.0)["verdict"]
+    'holds'
+    >>> decide_claim(rng.standard_normal(30), below=0.0)["verdict"]
+    'not resolved'
+    >>> decide_claim([1.2, 1.5, 1.1, 1.4, 1.3, 1.6, 1.2, 1.3, 1.5], above=0.0, below=1.0)["verdict"]
+    'fails'
+    """
+    if above is None and below is None:
+        raise ValueError("above, below: give at least one bound of the claimed median")
+    lo_bound = -np.inf if above is None else float(above)
+    hi_bound = np.inf if below is None else float(below)
+    if not lo_bound < hi_bound:
+        raise ValueError(f"above must be smaller than below, found above={above}, below={below}")
+    ci = bootstrap_median_ci(samples, level)
+    low, high = ci["ci"]
+    if lo_bound < low and high < hi_bound:
+        verdict = "holds"
+    elif high < lo_bound or low > hi_bound:
+        verdict = "fails"
+    else:
+        verdict = "not resolved"
+    bounds = " and ".join(text for text in (None if above is None else f"> {above:g}",
+                                             None if below is None else f"< {below:g}") if text)
+    test = (f"claim: median of the {what} {bounds}; exact percentile-bootstrap {level:.0%} interval of "
+            f"the median over n = {ci['n']}: inside holds, outside fails, straddling not resolved")
+    return {"verdict": verdict, "n": ci["n"], "estimate": ci["value"], "ci_low": float(low),
+            "ci_high": float(high), "test": test}

@@ -19,7 +19,10 @@ from ..progress import progress_bar
 from .models import NonlinearModel, cost_for
 from .policy import AffinePolicy, MeanAffineController
 from .simulate import simulate
+from .damped import optimize_damped
+from .planning import bend_toward_landmark
 from .trajectory import optimize_belief_trajectory
+from .ukf import UKF
 
 __all__ = ["Sweep", "distribution", "perturbation_sweep"]
 
@@ -28,11 +31,15 @@ __all__ = ["Sweep", "distribution", "perturbation_sweep"]
 class Sweep:
     """Per member: ``iterations``, ``converged``, ``costs`` (mean cost (2.19) of the final policy
     on the evaluation draws), ``diverged_iterates`` (fraction of iterates eta >= 1 with J^[eta] >
-    J^[0]); ``baseline`` the mean cost of the zero policy on the evaluation draws.
+    J^[0]); ``baseline`` the mean cost of the zero policy on the evaluation draws; ``bends``
+    the bend of the final reference toward the landmark (:func:`~asoc.belief.planning.bend_toward_landmark`,
+    NaN without a landmark); ``increases`` the largest relative increase of J^[eta] between
+    iterations (<= 0 when J never rose).
 
     Examples
     --------
-    >>> s = Sweep(np.array([3, 5]), np.array([True, True]), np.array([1.0, 9.0]), np.zeros(2), 5.0)
+    >>> s = Sweep(np.array([3, 5]), np.array([True, True]), np.array([1.0, 9.0]), np.zeros(2), 5.0,
+    ...           np.zeros(2), np.zeros(2))
     >>> s.diverged.tolist()
     [False, True]
     """
@@ -42,6 +49,8 @@ class Sweep:
     costs: np.ndarray
     diverged_iterates: np.ndarray
     baseline: float
+    bends: np.ndarray
+    increases: np.ndarray
 
     @property
     def diverged(self) -> np.ndarray:
@@ -70,7 +79,7 @@ def distribution(samples) -> dict:
 
 
 def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False, n_jobs=1,
-                       **options) -> Sweep:
+                       landmark=None, **options) -> Sweep:
     """Algorithm 2.2 from ``n_members`` perturbed zero policies; costs on the draws ``noise``.
 
     Parameters
@@ -85,7 +94,11 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     progress : show a progress bar.
     n_jobs : worker processes for the members (joblib's convention: -1 all cores); 1 runs them
         in this process. The result does not depend on it.
-    options : further arguments of :func:`~asoc.belief.trajectory.optimize_belief_trajectory`.
+    landmark : array_like (2,), optional
+        For ``bends``: the landmark of Sec. 2.5.3 (the line runs from ``mean0`` to the target).
+    options : further arguments of :func:`~asoc.belief.trajectory.optimize_belief_trajectory`;
+        ``step_control="levenberg-marquardt"`` runs :func:`~asoc.belief.damped.optimize_damped`
+        (exact Hessian) with the remaining options instead.
 
     Returns
     -------
@@ -119,15 +132,17 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
              noise)                                                 # checks mean0, cov0 and noise before the runs
 
     children = rng.spawn(n_members)
+    options = {**options, "landmark": None if landmark is None else check.vector(landmark, "landmark", 2)}
     if n_jobs == 1:
         outputs = [_member(model, cost, mean0, cov0, noise, child, scale, options)
                    for child in progress_bar(children, progress, desc="perturbed Alg. 2.2")]
     else:
         outputs = _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs, progress)
     rows = _reissued(outputs)
-    it, conv, costs, div = (np.array(c) for c in zip(*rows))
+    it, conv, costs, div, bends, increases = (np.array(c) for c in zip(*rows))
     return Sweep(it, conv.astype(bool), costs, div,
-                 _mean_cost(model, cost, mean0, cov0, noise, AffinePolicy.zero(cost.K, model.n_u, model.n_x)))
+                 _mean_cost(model, cost, mean0, cov0, noise, AffinePolicy.zero(cost.K, model.n_u, model.n_x)),
+                 bends, increases)
 
 
 def _mean_cost(model, cost, mean0, cov0, noise, policy) -> float:
@@ -141,10 +156,19 @@ def _member(model, cost, mean0, cov0, noise, child, scale, options):
         warnings.simplefilter("always")
         zero = AffinePolicy.zero(cost.K, model.n_u, model.n_x)
         start = AffinePolicy(zero.L, scale * child.standard_normal(zero.d.shape))
-        res = optimize_belief_trajectory(model, cost, mean0, cov0, policy=start, rng=child, **options)
+        options = dict(options)
+        landmark = options.pop("landmark")
+        if options.pop("step_control", None) == "levenberg-marquardt":
+            options.pop("covariance_hessian", None)
+            res = optimize_damped(model, cost, mean0, cov0, policy=start, rng=child, **options)
+        else:
+            res = optimize_belief_trajectory(model, cost, mean0, cov0, policy=start, rng=child, **options)
         J = np.asarray(res.costs)
+        means = [UKF.mean(e) for e in res.reference.estimates] if res.reference is not None else None
+        bend = (np.nan if landmark is None or means is None
+                else bend_toward_landmark(means, mean0, cost.x_target, landmark))
         row = (res.iterations, res.converged, _mean_cost(model, cost, mean0, cov0, noise, res.policy),
-               float(np.mean(J[1:] > J[0])))
+               float(np.mean(J[1:] > J[0])), bend, float(np.max(np.diff(J) / J[:-1])) if J.size > 1 else 0.0)
     return row, [(w.message, w.category) for w in caught]
 
 

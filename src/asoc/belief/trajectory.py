@@ -7,7 +7,7 @@ u_k = L_k E{x_k} + d_k (2.18).
 """
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -214,8 +214,14 @@ def _options(derivatives, alpha_min, covariance_hessian, covariance_term):
             check.boolean(covariance_term, "covariance_term"))
 
 
+class IndefiniteStep(np.linalg.LinAlgError):
+    """R~_k + mu I is not positive definite at some step of a damped backward pass."""
+
+
 def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, alpha_min, covariance_hessian,
-                   covariance_term):
+                   covariance_term, damping=None):
+    """Steps 3-8 of Alg. 2.2; ``damping`` mu adds mu I to every R_k^i (so to R~_k) and raises
+    :class:`IndefiniteStep` where R~_k + mu I is still indefinite (the damped variant)."""
     K = ref.u_bar.shape[0]
     value = terminal_value(cost, filt.mixture(ref.estimates[K]))
     L_new, d_new = policy.L.copy(), policy.d.copy()
@@ -224,7 +230,11 @@ def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, 
         stage = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta, covariance_hessian,
                              covariance_term)
         exp = stage.expansion(ref.u_bar[k], derivatives)
+        if damping is not None:
+            exp = replace(exp, R=exp.R + damping * np.eye(exp.R.shape[-1]))
         lam = np.linalg.eigvalsh(exp.tilde[3]).min()
+        if not lam > 0 and damping is not None:
+            raise IndefiniteStep(f"R~_{k} + {damping:g} I is indefinite (minimal eigenvalue {lam:.3g})")
         if not lam > 0:
             warnings.warn(f"Assumption 2.3 fails at k={k}: R~_k is not positive definite "
                           f"(minimal eigenvalue {lam:.3g}); keeping the policy", RuntimeWarning, stacklevel=3)
