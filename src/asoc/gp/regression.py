@@ -52,6 +52,10 @@ NOISE_FLOOR = 1e-3
 #: Polishing restarts of L-BFGS-B from its own end point when the projected gradient is above the
 #: tolerance (a fresh start discards the curvature pairs that stalled the line search).
 POLISH_RESTARTS = 3
+#: Log-likelihood difference below which two starts' optima are not told apart (a likelihood
+#: ratio of 1.001): among such near-best optima a converged one is preferred to an unconverged
+#: one whose gradient the conditioning of Sigma_y does not let L-BFGS-B reduce further.
+LOG_ML_TIE = 1e-3
 
 
 @dataclass(kw_only=True)
@@ -59,7 +63,8 @@ class FitResult(IterativeResult):
     """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum and why it stopped.
 
     ``converged`` when the projected gradient of the log marginal likelihood in
-    log-parameters is below ``config.defaults["gp.gradient_tol"]`` at the best start (status ``converged``);
+    log-parameters is below ``config.defaults["gp.gradient_tol"]`` at the chosen start (the best
+    one, or a converged one within ``LOG_ML_TIE`` of it; status ``converged``);
     otherwise ``max_iterations`` or ``no_progress`` (L-BFGS-B stopped earlier).
 
     Examples
@@ -225,6 +230,8 @@ class _LikelihoodGP:
             runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= tolerance, iterations,
                          gradient))
         best = max(runs, key=lambda run: run[2])
+        tied = [run for run in runs if run[3] and run[2] >= best[2] - LOG_ML_TIE]
+        best = max(tied, key=lambda run: run[2]) if tied else best
         alpha, l, sn = best[1]
         status, message = _status(best[5], best[4], tolerance, max_iterations)
         self.result = FitResult(alpha=float(alpha), l=float(l), sigma_n=float(sn), log_ml=best[2],
