@@ -24,8 +24,7 @@ from .models import NonlinearModel, cost_for
 from .policy import AffinePolicy, MeanAffineController, policy_for
 from .simulate import draw_noise, simulate
 from .stage import filter_for
-from .trajectory import (IndefiniteStep, TrajectoryOptimizationResult, _backward_pass, _options,
-                         _reference_trajectory)
+from .trajectory import IndefiniteStep, TrajectoryOptimizationResult, backward_pass, reference_trajectory
 
 
 @dataclass(kw_only=True)
@@ -90,7 +89,9 @@ def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterat
     mu_min = check.real_scalar(mu_min, "mu_min", low=0, low_open=True)
     mu_max = check.real_scalar(mu_max, "mu_max", low=mu_min)
     factor = check.real_scalar(factor, "factor", low=1, low_open=True)
-    options = _options(derivatives, alpha_min, "exact", True)
+    options = {"derivatives": check.choice(derivatives, "derivatives", ("analytic", "numdifftools")),
+               "alpha_min": check.real_scalar(alpha_min, "alpha_min", low=0, high=1, low_open=True),
+               "covariance_hessian": "exact"}
     w_points, beta = sigma_points(model.w.mean, model.w.cov, KAPPA)
     noise = draw_noise(model, mean0, cov0, cost.K, check.integer(n_cost_runs, "n_cost_runs", minimum=1),
                        check.generator(rng))
@@ -101,10 +102,10 @@ def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterat
     policies, costs, predicted, damping = [policy], [J(policy)], [], []
     mu, passes, status, ref = 0.0, 0, "max_iterations", None
     while passes < max_iterations:
-        ref = ref or _reference_trajectory(model, filt, policy, mean0, cov0, "nominal", None)
+        ref = ref or reference_trajectory(model, filt, policy, mean0, cov0)
         passes += 1
         try:
-            new, value, _, _ = _backward_pass(model, cost, filt, ref, policy, w_points, beta, *options, damping=mu)
+            new, value, _, _ = backward_pass(model, cost, filt, ref, policy, w_points, beta, damping=mu, **options)
             new_cost = J(new)
         except (IndefiniteStep, ValueError):
             new_cost = np.inf
@@ -125,8 +126,7 @@ def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterat
                 "no_progress": f"no damped step with mu <= mu_max = {mu_max:g} decreased J ({passes} passes)",
                 "max_iterations": f"stopped after max_iterations = {max_iterations} backward passes"}
     result = DampedResult(policy=policy, policies=policies, costs=costs, predicted=predicted,
-                          iterations=len(costs) - 1, reference=_reference_trajectory(
-                              model, filt, policy, mean0, cov0, "nominal", None),
+                          iterations=len(costs) - 1, reference=reference_trajectory(model, filt, policy, mean0, cov0),
                           converged=status == "converged", status=status, message=messages[status],
                           passes=passes, damping=damping)
     if not result.converged:

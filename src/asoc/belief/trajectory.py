@@ -148,7 +148,8 @@ class TrajectoryOptimizationResult(IterativeResult):
 
 
 def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_points, beta,
-                  derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True):
+                  derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True,
+                  damping=None):
     """Steps 3-8 of Algorithm 2.2 along ``ref``; returns (new policy, V_0, eps, rejected).
 
     Parameters
@@ -168,6 +169,9 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     covariance_hessian : {"psd", "exact", "shift"}
     covariance_term : bool
         False drops 1/2 tr[S_{k+1} C_{k+1}(u)] from phi_k (2.13): no dual effect.
+    damping : float, optional
+        Levenberg-Marquardt damping mu >= 0 added to every R_k^i; then an indefinite
+        R~_k + mu I raises :class:`IndefiniteStep` instead of keeping the old policy.
 
     Returns
     -------
@@ -203,8 +207,10 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     policy = policy_for(policy, K, model)
     w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
     beta = check.probability_vector(beta, "beta", w_points.shape[0])
+    if damping is not None:
+        damping = check.real_scalar(damping, "damping", low=0)
     return _backward_pass(model, cost, filt, ref, policy, w_points, beta, *_options(
-        derivatives, alpha_min, covariance_hessian, covariance_term))
+        derivatives, alpha_min, covariance_hessian, covariance_term), damping=damping)
 
 
 def _options(derivatives, alpha_min, covariance_hessian, covariance_term):
