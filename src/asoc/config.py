@@ -170,11 +170,14 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         "The line search of asoc.optimize.bfgs gives up below this step length (then restarts "
         "from a gradient step, or stops with no_progress)."),
     "gp.gradient_tol": (
-        1e-2,
+        5e-2,
         "The likelihood maximisation of the GPs of Sec. 2.6 has converged when every component of "
         "the projected gradient of log p(y | X) in log-parameters is below this: a 1 % change of "
-        "any hyperparameter then changes log p(y | X) by less than 1e-4 (reachable on the flat "
-        "ridges where L-BFGS-B's own line search gives up)."),
+        "any hyperparameter then changes log p(y | X) by less than 5e-4 (a likelihood ratio of "
+        "1.0005). It is what the computation can reach: with the default bounds cond(Sigma_y) <= "
+        "M 1e10, so for M = 200 the gradient's terms of size ~1e2 carry rounding errors of about "
+        "cond * eps * 1e2 ~ 4e-2 (the OMAT fits of Sec. 2.6.4 stall at 1e-2 to 4e-2; 1e-2 was "
+        "below that)."),
     "gp.max_iterations": (
         500,
         "Iteration cap of L-BFGS-B per start of the GP likelihood maximisation."),
