@@ -2,7 +2,7 @@
 
 import numpy as np
 
-__all__ = ["bootstrap_ci", "bootstrap_median_ci", "settling_iteration"]
+__all__ = ["bootstrap_ci", "bootstrap_median_ci", "settling_iteration", "VERDICTS", "decide_claim"]
 
 
 def _check_samples(samples, level):

@@ -26,6 +26,8 @@ from .simulate import draw_noise, simulate
 from .stage import filter_for
 from .trajectory import IndefiniteStep, TrajectoryOptimizationResult, backward_pass, reference_trajectory
 
+__all__ = ["DampedResult", "optimize_damped"]
+
 
 @dataclass(kw_only=True)
 class DampedResult(TrajectoryOptimizationResult):

@@ -15,6 +15,8 @@ from scipy.optimize import minimize
 from .. import validation as check
 from .models import LandmarkExample
 
+__all__ = ["bend_toward_landmark", "ekf_belief_plan", "belief_cost", "covariance_aware_optimum"]
+
 
 def bend_toward_landmark(means, start, target, landmark) -> float:
     """Largest signed distance of a path from the line start-target, toward the landmark (Fig. 2.3).

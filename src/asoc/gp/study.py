@@ -21,6 +21,8 @@ from .regression import DistributionGP, MeanKernelGP
 from .sampling import gaussian_dirac_mixtures
 from .transport import omat_matrix
 
+__all__ = ["GPS", "FUNCTIONS", "KernelStudy", "kernel_study"]
+
 GPS = ("mcvmd", "omat", "mean_kernel")
 FUNCTIONS = {"v1": quadratic_function, "v2": modified_rosenbrock}
 
