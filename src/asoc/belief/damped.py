@@ -24,7 +24,12 @@ from .models import NonlinearModel, cost_for
 from .policy import AffinePolicy, MeanAffineController, policy_for
 from .simulate import draw_noise, simulate
 from .stage import filter_for
-from .trajectory import IndefiniteStep, TrajectoryOptimizationResult, backward_pass, reference_trajectory
+from .trajectory import (
+    IndefiniteStep,
+    TrajectoryOptimizationResult,
+    backward_pass,
+    reference_trajectory,
+)
 
 __all__ = ["DampedResult", "optimize_damped"]
 
@@ -42,7 +47,8 @@ class DampedResult(TrajectoryOptimizationResult):
     --------
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=3)
-    >>> res = optimize_damped(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0), n_cost_runs=10)
+    >>> res = optimize_damped(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+    ...                       n_cost_runs=10)
     >>> res.status, bool(np.all(np.diff(res.costs) <= 0)), res.passes >= res.iterations
     ('converged', True, True)
     """
@@ -51,9 +57,23 @@ class DampedResult(TrajectoryOptimizationResult):
     damping: list = field(default_factory=list)
 
 
-def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterations=60, rtol=1e-4,
-                    n_cost_runs=200, rng=None, mu_min=1e-3, mu_max=1e3, factor=4.0,
-                    derivatives="analytic", alpha_min=2.0 ** -10) -> DampedResult:
+def optimize_damped(
+    model,
+    cost,
+    mean0,
+    cov0,
+    filt=None,
+    policy=None,
+    max_iterations=60,
+    rtol=1e-4,
+    n_cost_runs=200,
+    rng=None,
+    mu_min=1e-3,
+    mu_max=1e3,
+    factor=4.0,
+    derivatives="analytic",
+    alpha_min=2.0**-10,
+) -> DampedResult:
     """Algorithm 2.2 with the exact covariance Hessian and Levenberg-Marquardt damping of R~_k.
 
     Parameters
@@ -85,21 +105,35 @@ def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterat
     cost = cost_for(cost, model)
     mean0, cov0 = check.vector(mean0, "mean0", model.n_x), check.covariance(cov0, "cov0", model.n_x)
     filt = filter_for(filt, model)
-    policy = AffinePolicy.zero(cost.K, model.n_u, model.n_x) if policy is None else policy_for(policy, cost.K, model)
+    policy = (
+        AffinePolicy.zero(cost.K, model.n_u, model.n_x)
+        if policy is None
+        else policy_for(policy, cost.K, model)
+    )
     max_iterations = check.integer(max_iterations, "max_iterations", minimum=1)
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     mu_min = check.real_scalar(mu_min, "mu_min", low=0, low_open=True)
     mu_max = check.real_scalar(mu_max, "mu_max", low=mu_min)
     factor = check.real_scalar(factor, "factor", low=1, low_open=True)
-    options = {"derivatives": check.choice(derivatives, "derivatives", ("analytic", "numdifftools")),
-               "alpha_min": check.real_scalar(alpha_min, "alpha_min", low=0, high=1, low_open=True),
-               "covariance_hessian": "exact"}
+    options = {
+        "derivatives": check.choice(derivatives, "derivatives", ("analytic", "numdifftools")),
+        "alpha_min": check.real_scalar(alpha_min, "alpha_min", low=0, high=1, low_open=True),
+        "covariance_hessian": "exact",
+    }
     w_points, beta = sigma_points(model.w.mean, model.w.cov, KAPPA)
-    noise = draw_noise(model, mean0, cov0, cost.K, check.integer(n_cost_runs, "n_cost_runs", minimum=1),
-                       check.generator(rng))
+    noise = draw_noise(
+        model,
+        mean0,
+        cov0,
+        cost.K,
+        check.integer(n_cost_runs, "n_cost_runs", minimum=1),
+        check.generator(rng),
+    )
 
     def J(pol):
-        return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, pol), noise).costs.mean())
+        return float(
+            simulate(model, cost, mean0, cov0, MeanAffineController(model, pol), noise).costs.mean()
+        )
 
     policies, costs, predicted, damping = [policy], [J(policy)], [], []
     mu, passes, status, ref = 0.0, 0, "max_iterations", None
@@ -107,7 +141,9 @@ def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterat
         ref = ref or reference_trajectory(model, filt, policy, mean0, cov0)
         passes += 1
         try:
-            new, value, _, _ = backward_pass(model, cost, filt, ref, policy, w_points, beta, damping=mu, **options)
+            new, value, _, _ = backward_pass(
+                model, cost, filt, ref, policy, w_points, beta, damping=mu, **options
+            )
             new_cost = J(new)
         except (IndefiniteStep, ValueError):
             new_cost = np.inf
@@ -118,19 +154,39 @@ def optimize_damped(model, cost, mean0, cov0, filt=None, policy=None, max_iterat
                 break
             continue
         policy, ref = new, None
-        policies.append(new), costs.append(new_cost), predicted.append(value.at(mean0, cov0)), damping.append(mu)
+        (
+            policies.append(new),
+            costs.append(new_cost),
+            predicted.append(value.at(mean0, cov0)),
+            damping.append(mu),
+        )
         mu = mu / factor if mu / factor >= mu_min else 0.0
         if costs[-2] - costs[-1] <= rtol * abs(costs[-2]):
             status = "converged"
             break
-    messages = {"converged": f"the relative decrease of J met rtol = {rtol:g} after {len(costs) - 1} accepted "
-                             f"steps ({passes} backward passes)",
-                "no_progress": f"no damped step with mu <= mu_max = {mu_max:g} decreased J ({passes} passes)",
-                "max_iterations": f"stopped after max_iterations = {max_iterations} backward passes"}
-    result = DampedResult(policy=policy, policies=policies, costs=costs, predicted=predicted,
-                          iterations=len(costs) - 1, reference=reference_trajectory(model, filt, policy, mean0, cov0),
-                          converged=status == "converged", status=status, message=messages[status],
-                          passes=passes, damping=damping)
+    messages = {
+        "converged": f"the relative decrease of J met rtol = {rtol:g} after "
+        f"{len(costs) - 1} accepted "
+        f"steps ({passes} backward passes)",
+        "no_progress": f"no damped step with mu <= mu_max = {mu_max:g} decreased J "
+        f"({passes} passes)",
+        "max_iterations": f"stopped after max_iterations = {max_iterations} backward passes",
+    }
+    result = DampedResult(
+        policy=policy,
+        policies=policies,
+        costs=costs,
+        predicted=predicted,
+        iterations=len(costs) - 1,
+        reference=reference_trajectory(model, filt, policy, mean0, cov0),
+        converged=status == "converged",
+        status=status,
+        message=messages[status],
+        passes=passes,
+        damping=damping,
+    )
     if not result.converged:
-        warnings.warn(f"damped Algorithm 2.2 did not converge: {result.message}", RuntimeWarning, stacklevel=2)
+        warnings.warn(
+            f"damped Algorithm 2.2 did not converge: {result.message}", RuntimeWarning, stacklevel=2
+        )
     return result

@@ -116,32 +116,40 @@ def belief_cost(u, example: LandmarkExample, covariance=True, **noise):
     --------
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=1)
-    >>> round(float(belief_cost(np.array([[5.0, 0.0]]), ex, covariance=False)), 6)   # 25 + 0.1 * 25 + 0
+    >>> round(float(belief_cost(np.array([[5.0, 0.0]]), ex, covariance=False)), 6)  # 25 + 2.5
     27.5
     """
     u = check.real_array(u, "u")
     means, covs = ekf_belief_plan(u, example, **noise)
     c = example.cost
     err = means - c.x_target
-    total = (np.einsum("...ki,ij,...kj->...", err[..., :-1, :], c.Q, err[..., :-1, :])
-             + np.einsum("...i,ij,...j->...", err[..., -1, :], c.Q_K, err[..., -1, :])
-             + np.einsum("...ki,ij,...kj->...", u, c.R, u))
+    total = (
+        np.einsum("...ki,ij,...kj->...", err[..., :-1, :], c.Q, err[..., :-1, :])
+        + np.einsum("...i,ij,...j->...", err[..., -1, :], c.Q_K, err[..., -1, :])
+        + np.einsum("...ki,ij,...kj->...", u, c.R, u)
+    )
     if covariance:
-        total = total + np.einsum("ij,...kji->...", c.Q, covs[..., :-1, :, :]) + np.einsum(
-            "ij,...ji->...", c.Q_K, covs[..., -1, :, :])
+        total = (
+            total
+            + np.einsum("ij,...kji->...", c.Q, covs[..., :-1, :, :])
+            + np.einsum("ij,...ji->...", c.Q_K, covs[..., -1, :, :])
+        )
     return total
 
 
 def _cost_and_gradient(z, example, covariance, noise, step=1e-6):
     """(2.20) of the flat input sequence z and its central-difference gradient, in one batch."""
     K = z.size // 2
-    probes = z + np.concatenate([step * np.eye(z.size), -step * np.eye(z.size), np.zeros((1, z.size))])
+    probes = z + np.concatenate(
+        [step * np.eye(z.size), -step * np.eye(z.size), np.zeros((1, z.size))]
+    )
     values = belief_cost(probes.reshape(-1, K, 2), example, covariance, **noise)
-    return float(values[-1]), (values[:z.size] - values[z.size:-1]) / (2 * step)
+    return float(values[-1]), (values[: z.size] - values[z.size : -1]) / (2 * step)
 
 
-def covariance_aware_optimum(example: LandmarkExample, offsets=(0.0, -0.5, -1.0, -2.0, 1.0), gtol=1e-6,
-                             **noise) -> dict:
+def covariance_aware_optimum(
+    example: LandmarkExample, offsets=(0.0, -0.5, -1.0, -2.0, 1.0), gtol=1e-6, **noise
+) -> dict:
     """Minimise (2.20) over the whole input sequence, EKF belief, BFGS from several starts.
 
     Starts: the certainty-equivalent plan (minimiser of (2.20) without the tr C_k terms, the
@@ -166,8 +174,14 @@ def covariance_aware_optimum(example: LandmarkExample, offsets=(0.0, -0.5, -1.0,
     example = check.instance(example, LandmarkExample, "example")
     K = example.cost.K
     zero = np.zeros(2 * K)
-    straight = minimize(_cost_and_gradient, zero, args=(example, False, noise), jac=True, method="BFGS",
-                        options={"gtol": gtol}).x
+    straight = minimize(
+        _cost_and_gradient,
+        zero,
+        args=(example, False, noise),
+        jac=True,
+        method="BFGS",
+        options={"gtol": gtol},
+    ).x
     starts = []
     for offset in offsets:
         start = straight.reshape(K, 2).copy()
@@ -175,15 +189,31 @@ def covariance_aware_optimum(example: LandmarkExample, offsets=(0.0, -0.5, -1.0,
         if K // 2 + 1 < K:
             start[K // 2 + 1, 1] -= offset
         starts.append(start.ravel())
-    runs = [minimize(_cost_and_gradient, s, args=(example, True, noise), jac=True, method="BFGS",
-                     options={"gtol": gtol}) for s in starts]
+    runs = [
+        minimize(
+            _cost_and_gradient,
+            s,
+            args=(example, True, noise),
+            jac=True,
+            method="BFGS",
+            options={"gtol": gtol},
+        )
+        for s in starts
+    ]
     best = min(runs, key=lambda r: r.fun)
     u = best.x.reshape(K, 2)
     means, covs = ekf_belief_plan(u, example, **noise)
     line = (example.mean0, example.cost.x_target, example.landmark)
-    return {"u": u, "means": means, "covs": covs, "cost": float(best.fun),
-            "cost_straight": float(belief_cost(straight.reshape(K, 2), example, True, **noise)),
-            "bend": bend_toward_landmark(means, *line),
-            "bend_straight": bend_toward_landmark(ekf_belief_plan(straight.reshape(K, 2), example, **noise)[0],
-                                                  *line),
-            "gradient_norm": float(np.max(np.abs(best.jac))), "costs": [float(r.fun) for r in runs]}
+    return {
+        "u": u,
+        "means": means,
+        "covs": covs,
+        "cost": float(best.fun),
+        "cost_straight": float(belief_cost(straight.reshape(K, 2), example, True, **noise)),
+        "bend": bend_toward_landmark(means, *line),
+        "bend_straight": bend_toward_landmark(
+            ekf_belief_plan(straight.reshape(K, 2), example, **noise)[0], *line
+        ),
+        "gradient_norm": float(np.max(np.abs(best.jac))),
+        "costs": [float(r.fun) for r in runs],
+    }

@@ -16,7 +16,13 @@ import numpy as np
 from .. import validation as check
 from ..progress import progress_bar
 from .cramer_von_mises import mcvmd_matrix
-from .experiment import error_metrics, evaluation_grid, modified_rosenbrock, quadratic_function, training_gaussians
+from .experiment import (
+    error_metrics,
+    evaluation_grid,
+    modified_rosenbrock,
+    quadratic_function,
+    training_gaussians,
+)
 from .regression import DistributionGP, MeanKernelGP
 from .sampling import gaussian_dirac_mixtures
 from .transport import omat_matrix
@@ -54,8 +60,17 @@ class KernelStudy:
         return len(next(iter(self.rmse.values())))
 
 
-def kernel_study(n_seeds, rng, n_train=200, grid_step=0.5, n_dirac=10, b_max=100.0, n_restarts=0,
-                 n_jobs=1, progress=False) -> KernelStudy:
+def kernel_study(
+    n_seeds,
+    rng,
+    n_train=200,
+    grid_step=0.5,
+    n_dirac=10,
+    b_max=100.0,
+    n_restarts=0,
+    n_jobs=1,
+    progress=False,
+) -> KernelStudy:
     """Sec. 2.6.4 for ``n_seeds`` independent training sets; errors on the grid of ``grid_step``.
 
     Parameters
@@ -92,20 +107,42 @@ def kernel_study(n_seeds, rng, n_train=200, grid_step=0.5, n_dirac=10, b_max=100
     n_train = check.integer(n_train, "n_train", minimum=3)
     grid_step = check.real_scalar(grid_step, "grid_step", low=0, low_open=True)
     n_jobs = check.integer(n_jobs, "n_jobs")
-    settings = (n_train, grid_step, check.integer(n_dirac, "n_dirac", minimum=1), float(b_max),
-                check.integer(n_restarts, "n_restarts", minimum=0))
+    settings = (
+        n_train,
+        grid_step,
+        check.integer(n_dirac, "n_dirac", minimum=1),
+        float(b_max),
+        check.integer(n_restarts, "n_restarts", minimum=0),
+    )
     children = rng.spawn(n_seeds)
     if n_jobs == 1:
-        rows = [_seed(child, *settings) for child in progress_bar(children, progress, desc="training sets")]
+        rows = [
+            _seed(child, *settings)
+            for child in progress_bar(children, progress, desc="training sets")
+        ]
     else:
         import joblib
+
         tasks = (joblib.delayed(_seed)(child, *settings) for child in children)
-        rows = list(progress_bar(joblib.Parallel(n_jobs=n_jobs, return_as="generator")(tasks), progress,
-                                 desc="training sets", total=n_seeds))
-    metrics = {name: {key: np.array([row[0][key][name] for row in rows]) for key in rows[0][0]}
-               for name in ("rmse", "nrmse", "r2")}
-    return KernelStudy(metrics["rmse"], metrics["nrmse"], metrics["r2"],
-                       int(sum(row[1] for row in rows)), int(sum(row[2] for row in rows)))
+        rows = list(
+            progress_bar(
+                joblib.Parallel(n_jobs=n_jobs, return_as="generator")(tasks),
+                progress,
+                desc="training sets",
+                total=n_seeds,
+            )
+        )
+    metrics = {
+        name: {key: np.array([row[0][key][name] for row in rows]) for key in rows[0][0]}
+        for name in ("rmse", "nrmse", "r2")
+    }
+    return KernelStudy(
+        metrics["rmse"],
+        metrics["nrmse"],
+        metrics["r2"],
+        int(sum(row[1] for row in rows)),
+        int(sum(row[2] for row in rows)),
+    )
 
 
 def _seed(rng, n_train, grid_step, n_dirac, b_max, n_restarts):
@@ -113,17 +150,26 @@ def _seed(rng, n_train, grid_step, n_dirac, b_max, n_restarts):
     mu_tr, var_tr = training_gaussians(n_train, rng)
     mu_axis, var_axis = evaluation_grid(grid_step)
     MU, VAR = (a.ravel() for a in np.meshgrid(mu_axis, var_axis))
-    X_tr, X_te = gaussian_dirac_mixtures(mu_tr, var_tr, n_dirac, b_max), gaussian_dirac_mixtures(MU, VAR, n_dirac, b_max)
-    inputs = {"mcvmd": (mcvmd_matrix(X_tr, b_max=b_max), mcvmd_matrix(X_te, X_tr, b_max=b_max)),
-              "omat": (omat_matrix(X_tr), omat_matrix(X_te, X_tr)), "mean_kernel": (X_tr, X_te)}
+    X_tr, X_te = (
+        gaussian_dirac_mixtures(mu_tr, var_tr, n_dirac, b_max),
+        gaussian_dirac_mixtures(MU, VAR, n_dirac, b_max),
+    )
+    inputs = {
+        "mcvmd": (mcvmd_matrix(X_tr, b_max=b_max), mcvmd_matrix(X_te, X_tr, b_max=b_max)),
+        "omat": (omat_matrix(X_tr), omat_matrix(X_te, X_tr)),
+        "mean_kernel": (X_tr, X_te),
+    }
     out, unconverged, fits = {}, 0, 0
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)        # counted below, reported by the caller
+        warnings.simplefilter("ignore", RuntimeWarning)  # counted below, reported by the caller
         for fname, f in FUNCTIONS.items():
             y_tr, y_te = f(mu_tr, var_tr), f(MU, VAR)
             for name, (train, test) in inputs.items():
-                model = (MeanKernelGP(n_restarts=n_restarts) if name == "mean_kernel"
-                         else DistributionGP("se", n_restarts=n_restarts))
+                model = (
+                    MeanKernelGP(n_restarts=n_restarts)
+                    if name == "mean_kernel"
+                    else DistributionGP("se", n_restarts=n_restarts)
+                )
                 model.fit(train, y_tr, rng)
                 out[fname, name] = error_metrics(model.predict(test), y_te)
                 unconverged += not model.result.converged

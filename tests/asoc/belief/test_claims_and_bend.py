@@ -1,16 +1,21 @@
-"""The statistical decision of Secs. 2.5/2.6 claims, the damped Alg. 2.2 and the covariance-aware planner."""
+"""Statistical decision of the Secs. 2.5/2.6 claims, damped Alg. 2.2, covariance-aware planner."""
 
 import numpy as np
 import pytest
 
 from asoc.belief import UKF, landmark_example
 from asoc.belief.damped import optimize_damped
-from asoc.belief.planning import (belief_cost, bend_toward_landmark, covariance_aware_optimum,
-                                  ekf_belief_plan)
+from asoc.belief.planning import (
+    belief_cost,
+    bend_toward_landmark,
+    covariance_aware_optimum,
+    ekf_belief_plan,
+)
 from asoc.stats import decide_claim
 
 
-# -- decide_claim: a planted false variant must not pass --------------------------------------------
+# -- decide_claim: a planted false variant must not pass
+
 
 def test_zero_mean_difference_is_not_resolved():
     rng = np.random.default_rng(1)
@@ -27,7 +32,7 @@ def test_clearly_positive_difference_holds_and_its_reversal_fails():
     rng = np.random.default_rng(2)
     gain = 1.0 + 0.2 * rng.standard_normal(30)
     assert decide_claim(gain, above=0.0)["verdict"] == "holds"
-    assert decide_claim(-gain, above=0.0)["verdict"] == "fails"     # planted: the reversed ordering
+    assert decide_claim(-gain, above=0.0)["verdict"] == "fails"  # planted: the reversed ordering
 
 
 def test_record_has_the_ledger_fields():
@@ -38,17 +43,22 @@ def test_record_has_the_ledger_fields():
 
 
 def test_interval_claim_straddling_a_bound_is_not_resolved():
-    assert decide_claim(np.linspace(1.5, 2.5, 31), above=1.0, below=2.0)["verdict"] == "not resolved"
+    assert (
+        decide_claim(np.linspace(1.5, 2.5, 31), above=1.0, below=2.0)["verdict"] == "not resolved"
+    )
 
 
-@pytest.mark.parametrize("kwargs, message", [({}, "at least one bound"),
-                                             ({"above": 1.0, "below": 0.0}, "above must be smaller")])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [({}, "at least one bound"), ({"above": 1.0, "below": 0.0}, "above must be smaller")],
+)
 def test_decide_claim_rejects_bad_bounds(kwargs, message):
     with pytest.raises(ValueError, match=message):
         decide_claim([1.0, 2.0], **kwargs)
 
 
-# -- bend and planner -------------------------------------------------------------------------------
+# -- bend and planner
+
 
 def test_bend_is_signed_toward_the_landmark():
     line = ([-5.0, 3.0], [0.0, 3.0], [-3.0, 0.0])
@@ -81,18 +91,26 @@ def test_batched_cost_equals_single_costs():
 
 def test_covariance_aware_optimum_beats_the_straight_plan_and_bends():
     res = covariance_aware_optimum(landmark_example())
-    assert res["cost"] < 0.9 * res["cost_straight"]          # the model rewards leaving the line
+    assert res["cost"] < 0.9 * res["cost_straight"]  # the model rewards leaving the line
     assert res["bend"] > 0.5 > res["bend_straight"]
     assert res["gradient_norm"] < 1e-4
 
 
-# -- damped Alg. 2.2 ----------------------------------------------------------------------------------
+# -- damped Alg. 2.2
+
 
 def test_damped_iteration_is_monotone_and_keeps_a_finite_reference():
     ex = landmark_example(K=6)
-    res = optimize_damped(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0), n_cost_runs=20,
-                          max_iterations=15)
-    assert np.all(np.diff(res.costs) < 0)                     # accepted steps only decrease J
+    res = optimize_damped(
+        ex.model,
+        ex.cost,
+        ex.mean0,
+        ex.cov0,
+        rng=np.random.default_rng(0),
+        n_cost_runs=20,
+        max_iterations=15,
+    )
+    assert np.all(np.diff(res.costs) < 0)  # accepted steps only decrease J
     assert res.passes >= res.iterations >= 1 and len(res.damping) == res.iterations
     means = [UKF.mean(e) for e in res.reference.estimates]
     assert np.isfinite(bend_toward_landmark(means, ex.mean0, ex.cost.x_target, ex.landmark))
@@ -101,4 +119,6 @@ def test_damped_iteration_is_monotone_and_keeps_a_finite_reference():
 def test_damped_rejects_bad_factor():
     ex = landmark_example(K=2)
     with pytest.raises(ValueError, match="factor"):
-        optimize_damped(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0), factor=1.0)
+        optimize_damped(
+            ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0), factor=1.0
+        )

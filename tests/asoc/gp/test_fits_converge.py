@@ -1,4 +1,4 @@
-"""The likelihood maximisations of Sec. 2.6.4 reach their tolerance; the study over training sets."""
+"""The likelihood maximisations of Sec. 2.6.4 reach their tolerance; the study over seeds."""
 
 import warnings
 
@@ -21,13 +21,15 @@ def omat_problem():
 def test_omat_fits_of_sec_2_6_4_converge(omat_problem, function):
     D, mu, var = omat_problem
     with warnings.catch_warnings():
-        warnings.simplefilter("error", RuntimeWarning)          # an unconverged fit warns: fail here
-        g = gp.DistributionGP("se", n_restarts=1).fit(D, function(mu, var), np.random.default_rng(7))
+        warnings.simplefilter("error", RuntimeWarning)  # an unconverged fit warns: fail here
+        g = gp.DistributionGP("se", n_restarts=1).fit(
+            D, function(mu, var), np.random.default_rng(7)
+        )
     assert g.result.converged and g.result.gradient_norm <= config.defaults["gp.gradient_tol"]
 
 
 def test_planted_old_bounds_leave_the_omat_fit_unconverged(omat_problem):
-    """The bounds before the fix (alpha up to 1e3 std(y), sigma_n down to 1e-4 std(y)): cond ~ 1e18."""
+    """The bounds before the fix (alpha <= 1e3 std(y), sigma_n >= 1e-4 std(y)): cond ~ 1e18."""
     D, mu, var = omat_problem
     y = gp.quadratic_function(mu, var)
     sy, med = y.std(), np.median(D[D > 0])
@@ -40,7 +42,9 @@ def test_planted_old_bounds_leave_the_omat_fit_unconverged(omat_problem):
 
 def test_default_bounds_bound_the_condition_number():
     x = np.linspace(-2, 2, 30)
-    g = gp.DistributionGP("se", n_restarts=0).fit(np.abs(x[:, None] - x[None]), x**2, np.random.default_rng(0))
+    g = gp.DistributionGP("se", n_restarts=0).fit(
+        np.abs(x[:, None] - x[None]), x**2, np.random.default_rng(0)
+    )
     r, sy = g.result, float(np.std(x**2))
     assert r.alpha <= ALPHA_CAP * sy * (1 + 1e-9) and r.sigma_n >= NOISE_FLOOR * sy * (1 - 1e-9)
 
