@@ -6,10 +6,14 @@ around it certify a bracket (:mod:`asoc.mjls.certificate`, which explains them);
 follows the bracket: stable iff its upper end is below 1, unstable iff its lower end is at least 1,
 undecided otherwise. Calls run one way: stability -> certificate -> spectral_estimate.
 
-Before any eigen-solve the modes are balanced, A_i -> D^-1 A_i D with one diagonal D (powers
-of 2, from ``scipy.linalg.matrix_balance`` of sum_i |A_i|) and scaled by a power of 2: both are
-exact in floating point, leave rho unchanged (up to the known factor) and keep A_i (x) A_i from
-overflowing.
+Before any eigen-solve the modes are balanced (:func:`asoc.mjls.spectral_estimate.balance`):
+A_i -> D^-1 A_i D with one diagonal D (powers of 2, from ``scipy.linalg.matrix_balance`` of
+sum_i |A_i|) and scaled by a power of 2; where the modes' scales differ by more than
+2^``mjls.mode_scale_spread``, each mode by its own power of 2 with a similarity of the stack
+X_i -> 2^{t_i} X_i that rescales p_ij by 2^{t_i - t_j}. Every factor is a power of 2, so this is
+exact in floating point unless an entry under- or overflows; that is checked, and where it
+happens the bracket is [0, inf] (not certified), never the bracket of another operator. The
+bracket is scaled back outwards where it becomes subnormal.
 """
 
 import enum
@@ -257,28 +261,41 @@ def perron_pair(A, T, method="auto"):
     (0.45, array([0.8742, 0.4856]), array([0.4856, 0.8742]))
     """
     check_method(method)
-    Ab, d, s = balance(A)
-    _, _, rho, X, estimate = certify(Ab, T, method)
-    P = left_perron_stack(Ab, T, rho, estimate.method)
-    with np.errstate(over="ignore"):
-        rho = (rho * s) * s
-    X = d[:, None] * X * d[None, :]
-    P = P / d[:, None] / d[None, :]
+    balanced = balance(A, T)
+    _, _, rho, X, estimate = certify(balanced.A, balanced.W, method)
+    P = left_perron_stack(balanced.A, balanced.W, rho, estimate.method)
+    rho = np.ldexp(rho, balanced.g)
+    X, P = balanced.to_stack(X), balanced.to_stack(P, adjoint=True)
     return float(rho), X / np.linalg.norm(X), P / np.linalg.norm(P)
 
 
 def _certified(A, T, method):
-    """MeanSquareStability of (A, T): balance, estimate, bracket, scale back."""
+    """MeanSquareStability of (A, T): balance, estimate, bracket, scale back.
+
+    Where balancing cannot hold (A, T) exactly (an entry under- or overflows), the estimate is
+    returned with the bracket [0, inf]: not certified, never a bound of another operator.
+    """
     check_method(method)
-    Ab, _, s = balance(A)
-    lower, upper, rho, _, estimate = certify(Ab, T, method)
-    with np.errstate(over="ignore"):
-        lower, upper, rho = ((value * s) * s for value in (lower, upper, rho))
+    balanced = balance(A, T)
+    lower, upper, rho, _, estimate = certify(balanced.A, balanced.W, method, unit=np.ldexp(1.0, -balanced.g))
+    if not balanced.exact:
+        lower, upper = 0.0, np.inf
+    lower, upper = _scaled(lower, balanced.g, -np.inf), _scaled(upper, balanced.g, np.inf)
+    rho = float(np.clip(np.ldexp(rho, balanced.g), lower, upper))
     if upper < 1:
         verdict = Verdict.STABLE
     elif lower >= 1:
         verdict = Verdict.UNSTABLE
     else:
         verdict = Verdict.UNDECIDED
-    return MeanSquareStability(rho=float(rho), rho_lower=float(lower), rho_upper=float(upper), verdict=verdict,
+    return MeanSquareStability(rho=rho, rho_lower=lower, rho_upper=upper, verdict=verdict,
                                method=estimate.method)
+
+
+def _scaled(value, g, direction):
+    """2^g value, rounded outwards (towards ``direction``) where it leaves the normal range:
+    ldexp is exact except for subnormal results, whose rounding must not cut the bracket."""
+    result = float(np.ldexp(value, g))
+    if result < np.finfo(float).tiny and value != 0:
+        result = max(0.0, float(np.nextafter(result, direction)))
+    return result
