@@ -264,7 +264,8 @@ def perron_pair(A, T, method="auto"):
     balanced = balance(A, T)
     _, _, rho, X, estimate = certify(balanced.A, balanced.W, method)
     P = left_perron_stack(balanced.A, balanced.W, rho, estimate.method)
-    rho = np.ldexp(rho, balanced.g)
+    with np.errstate(over="ignore"):
+        rho = np.ldexp(rho, balanced.g)
     X, P = balanced.to_stack(X), balanced.to_stack(P, adjoint=True)
     return float(rho), X / np.linalg.norm(X), P / np.linalg.norm(P)
 
@@ -277,11 +278,13 @@ def _certified(A, T, method):
     """
     check_method(method)
     balanced = balance(A, T)
-    lower, upper, rho, _, estimate = certify(balanced.A, balanced.W, method, unit=np.ldexp(1.0, -balanced.g))
-    if not balanced.exact:
-        lower, upper = 0.0, np.inf
-    lower, upper = _scaled(lower, balanced.g, -np.inf), _scaled(upper, balanced.g, np.inf)
-    rho = float(np.clip(np.ldexp(rho, balanced.g), lower, upper))
+    with np.errstate(over="ignore"):                    # 2^g beyond the doubles: inf is the right answer
+        unit = float(np.ldexp(1.0, -balanced.g))
+        lower, upper, rho, _, estimate = certify(balanced.A, balanced.W, method, unit=unit)
+        if not balanced.exact:
+            lower, upper = 0.0, np.inf
+        lower, upper = _scaled(lower, balanced.g, -np.inf), _scaled(upper, balanced.g, np.inf)
+        rho = float(np.clip(np.ldexp(rho, balanced.g), lower, upper))
     if upper < 1:
         verdict = Verdict.STABLE
     elif lower >= 1:
