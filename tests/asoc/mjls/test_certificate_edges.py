@@ -225,3 +225,25 @@ def test_many_scalar_modes_on_a_cyclic_chain(M, lazy):
     assert result.rho_lower <= truth * (1 + 1e-11) and truth * (1 - 1e-11) <= result.rho_upper
     assert result.verdict is not Verdict.UNDECIDED and result.stabilizing is bool(truth < 1)
     assert elapsed <= 10.0
+
+
+# ------------------------------------------------------------------ errors name the user's argument
+
+@pytest.mark.parametrize("seed", [0, 6])
+def test_exact_dynamic_design_on_a_plant_at_rho_one_says_why(seed):
+    """rho = 1 up to rounding and B = 0: no controller can stabilise. The start search took an estimate of
+    rho below 1 for a certificate, and BFGS raised "z0: the start is outside the domain" (z0 is not the
+    user's argument); now the design stops with a status and a message."""
+    from asoc.mjls import MJLS
+    from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
+    from test_adversarial import random_chain, random_stack
+
+    rng = np.random.default_rng(seed)
+    T = random_chain(rng, 2)
+    A = random_stack(rng, 2, 2, 1.0, T)
+    eye = np.broadcast_to(np.eye(2), (2, 2, 2))
+    system = MJLS(A=A, B=np.zeros((2, 2, 1)), C=np.ones((2, 1, 2)), H=eye, Q=eye, R=np.ones((2, 1, 1)), T=T,
+                  J=np.ones((2, 1, 1)))
+    with pytest.warns(RuntimeWarning, match="no mean-square stabilising start"):
+        result = exact_dynamic_output_feedback(system)
+    assert result.status == "no_progress" and not np.isfinite(result.cost)
