@@ -135,9 +135,11 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         "defective spectra, where r just above rho is not: a Jordan mode at 0.25 with "
         "off-diagonal 1e3 was bracketed in [0.21, 30.4] from r near rho alone."),
     "mjls.lyapunov_certificate_restarts": (
-        20,
+        5,
         "Restarts (of 60 GMRES steps) for the Lyapunov certificate's solve above "
-        "mjls.dense_fallback_radius: an inexact solution only loosens its bound."),
+        "mjls.dense_fallback_radius (scalar modes: a sparse LU instead), tried only where the "
+        "bracket straddles 1: an inexact solution only loosens its bound, and at n = M = 100 "
+        "each matrix-vector product costs about 20 ms (300 of them: 6 s)."),
     "mjls.noda_max_steps": (
         60,
         "Steps of Noda's inverse iteration for scalar modes (n = 1, L an M x M nonnegative sparse "

@@ -23,6 +23,7 @@ import warnings
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse
 import scipy.sparse.linalg
 
 from .. import config
@@ -36,6 +37,9 @@ __all__ = ["EPS", "certified_upper_bound", "Bracket", "refine", "deflated_resolv
 
 
 EPS = np.finfo(float).eps
+#: The smallest normal double: gamma n TINY bounds, with the safety factor 10, the absolute rounding of the
+#: (2 n + M) subnormal operations behind an entry of L(X) (each off by at most 2^-1075).
+TINY = np.finfo(float).tiny
 #: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector estimate
 #: into the interior of the cone for the Collatz-Wielandt bounds: the first valid one gives the bounds.
 _SHIFTS = (0.0, 1e-12, 1e-9, 1e-6, 1e-3)
@@ -88,6 +92,7 @@ class Bracket:
         self.A, self.T = A, T
         self.lower, self.upper, self.margin = 0.0, np.inf, 0.0
         self.gamma = 10.0 * (2 * n + M) * EPS
+        self.underflow = n * TINY                       # absolute rounding of subnormal partial results
         self.norm_A2 = np.einsum("iab,iab->i", A, A)
         self.identity = np.broadcast_to(np.eye(n), (M, n, n))
         self.L_identity = None
@@ -137,7 +142,7 @@ class Bracket:
         alpha, beta = lam[:, 0], lam[:, -1]
         inv_norm2 = np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp else np.einsum("iab,iab->i", Ci, Ci)
         norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
-        rounding = self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
+        rounding = self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y)) + self.underflow
         margin = self.gamma * (rounding + np.maximum(abs(alpha), abs(beta)) * norm_X) * inv_norm2
         lower, upper = float(np.max([0.0, (alpha - margin).min()])), float((beta + margin).max())
         if upper < self.upper:
@@ -287,7 +292,7 @@ def residual_lower_bound(A, T, rho, X, P, upper):
     """
     M, n, _ = A.shape
     norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
-    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X)
+    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X + n * TINY)
     residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
     error = (residual + np.linalg.norm(rounding)) / np.linalg.norm(X)         # with its own rounding
     inner = float(np.einsum("iab,iab->", P, X))
@@ -299,8 +304,8 @@ def residual_lower_bound(A, T, rho, X, P, upper):
 
 def _resolvent_stacks(A, T, radii):
     """Solutions X of r X - L(X) = I for each r: X > 0 iff r > rho(L), and then L(X) < r X. Dense up to
-    M n^2 = ``mjls.dense_fallback_radius`` (one mode: the Lyapunov solver), else restarted GMRES on the
-    matrix-free operator (an approximate X only costs tightness: its bounds are computed from L(X))."""
+    M n^2 = ``mjls.dense_fallback_radius`` (one mode: the Lyapunov solver), a sparse LU for scalar modes,
+    else restarted GMRES on the matrix-free operator (an approximate X only costs tightness: its bounds are computed from L(X))."""
     M, n, _ = A.shape
     dim = M * n * n
     eye = np.broadcast_to(np.eye(n), (M, n, n))
@@ -314,12 +319,16 @@ def _resolvent_stacks(A, T, radii):
                     X = scipy.linalg.solve_discrete_lyapunov(A[0] / np.sqrt(r), np.eye(n) / r)[None]
                 elif dense:
                     X = scipy.linalg.solve(r * np.eye(dim) - K, eye.ravel()).reshape(M, n, n)
+                elif n == 1:                                # scalar modes: L is a sparse M x M matrix
+                    K_r = scipy.sparse.identity(M, format="csc") * r - scipy.sparse.csc_matrix(
+                        (T * A[:, 0, 0, None] ** 2).T)
+                    X = scipy.sparse.linalg.splu(K_r).solve(np.ones(M)).reshape(M, 1, 1)
                 else:
                     x, _ = scipy.sparse.linalg.gmres(linear_operator(A, T, identity=r), eye.ravel(),
                                                      rtol=config.defaults["mjls.solve_tolerance"], restart=60,
                                                      maxiter=config.defaults["mjls.lyapunov_certificate_restarts"])
                     X = x.reshape(M, n, n)
-            except (np.linalg.LinAlgError, ValueError):     # r is an eigenvalue of L: no bound from it
+            except (np.linalg.LinAlgError, ValueError, RuntimeError):   # r is an eigenvalue of L
                 continue
         if np.all(np.isfinite(X)):
             yield r, sym(X)
@@ -362,7 +371,7 @@ def _residual_upper_bound(A, T, X, r):
     R = r * X_l - (T.T.astype(wide) @ Y.reshape(M, -1)).reshape(M, n, n)
     norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
     rounding = 10.0 * (2 * n + M) * float(np.finfo(wide).eps) * (
-        T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + r * norm_X)
+        T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + r * norm_X + n * TINY)
     R = R.astype(float)
     delta = np.linalg.eigvalsh(sym(R))[:, 0] - rounding - 10.0 * n * EPS * np.sqrt(np.einsum("iab,iab->i", R, R))
     if not np.all(delta > 0):

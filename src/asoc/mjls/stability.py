@@ -218,7 +218,14 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     (tests/asoc/mjls/test_certified.py). This is a first-order bound with a safety factor of 10,
     not interval arithmetic. The bracket is tight where the Perron stack is positive definite or its
     resolvent candidates are; where neither holds (e.g. defective spectra) the bracket can stay
-    wide, and the verdict is then undecided rather than wrong.
+    wide. Where it then straddles 1 with an estimate below 1, the Lyapunov certificate decides a
+    margin: X_r = (r I - L)^-1 (I) for r between the estimate and 1 (r = 1: X = L(X) + I,
+    Thm. 3.1), with r X_r - L(X_r) >= delta I proven from a residual in extended precision
+    (:func:`asoc.mjls.certificate.lyapunov_upper_bound`); otherwise the verdict is undecided
+    rather than wrong. A subnormal partial result adds an absolute rounding of n 2^-1022 to the
+    rounding term, and the modes are balanced exactly before any of this (module docstring). T is
+    used as given (rows summing to 1 within the validation's tolerance, not renormalised): for one
+    mode, rho = p_11 rho(A)^2.
 
     Examples
     --------
