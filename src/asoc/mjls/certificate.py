@@ -37,8 +37,8 @@ __all__ = ["EPS", "certified_upper_bound", "Bracket", "refine", "deflated_resolv
 
 
 EPS = np.finfo(float).eps
-#: The smallest normal double: gamma n TINY bounds, with the safety factor 10, the absolute rounding of the
-#: (2 n + M) subnormal operations behind an entry of L(X) (each off by at most 2^-1075).
+#: The smallest normal double: gamma n TINY bounds, with the safety factor 10, the absolute rounding
+#: of the (2 n + M) subnormal operations behind an entry of L(X) (each off by at most 2^-1075).
 TINY = np.finfo(float).tiny
 #: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector estimate
 #: into the interior of the cone for the Collatz-Wielandt bounds: the first valid one gives the bounds.
@@ -92,7 +92,7 @@ class Bracket:
         self.A, self.T = A, T
         self.lower, self.upper, self.margin = 0.0, np.inf, 0.0
         self.gamma = 10.0 * (2 * n + M) * EPS
-        self.underflow = n * TINY                       # absolute rounding of subnormal partial results
+        self.underflow = n * TINY                   # absolute rounding of subnormal partial results
         self.norm_A2 = np.einsum("iab,iab->i", A, A)
         self.identity = np.broadcast_to(np.eye(n), (M, n, n))
         self.L_identity = None
@@ -142,7 +142,8 @@ class Bracket:
         alpha, beta = lam[:, 0], lam[:, -1]
         inv_norm2 = np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp else np.einsum("iab,iab->i", Ci, Ci)
         norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
-        rounding = self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y)) + self.underflow
+        rounding = (self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
+                    + self.underflow)
         margin = self.gamma * (rounding + np.maximum(abs(alpha), abs(beta)) * norm_X) * inv_norm2
         lower, upper = float(np.max([0.0, (alpha - margin).min()])), float((beta + margin).max())
         if upper < self.upper:
@@ -197,7 +198,7 @@ def _power_steps(bracket, X, Y, rho, rtol):
             break
         X = Y + rho * X
         top = np.abs(X).max()
-        if not top > 0:                                     # L(X) = 0 (nilpotent modes): nothing to scale
+        if not top > 0:                             # L(X) = 0 (nilpotent modes): nothing to scale
             break
         X /= top
         Y = bracket.consider(X, rtol)
@@ -209,8 +210,8 @@ def _power_steps(bracket, X, Y, rho, rtol):
 
 def _power_method(bracket, X, Y, rtol):
     """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of rho,
-    until the bracket is narrow, or X has converged (to ``mjls.power_tol``, e.g. to a singular Perron stack,
-    where the bracket stays wide), or L(X) = 0, or ``mjls.power_max_steps``."""
+    until the bracket is narrow, or X has converged (to ``mjls.power_tol``, e.g. to a singular
+    Perron stack, where the bracket stays wide), or L(X) = 0, or ``mjls.power_max_steps``."""
     rho = np.inf
     for _ in range(config.defaults["mjls.power_max_steps"]):
         rho = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum())
@@ -238,7 +239,8 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     X shifted by a multiple of I, stay wide. Z is only a candidate: its bounds are computed from L(Z)
     with the (sharp) rounding margin, so an inexact Z_c costs tightness, never validity. The gaps
     r / rho - 1 go down while the upper bound improves (the margin grows like 1 / (r - rho)).
-    Nothing is done for rho = 0 (nilpotent modes: the lower end 0 is exact, and no gap is relative to it).
+    Nothing is done for rho = 0 (nilpotent modes: the lower end 0 is exact, and no gap is relative
+    to it).
     Arguments are not validated (the caller, :func:`asoc.mjls.mean_square_stability`, has).
 
     Examples
@@ -260,7 +262,8 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     Z_c = B / rho
     for _ in range(config.defaults["mjls.deflated_resolvent_steps"]):
         Z_next = (B + second_moment_map(bracket.A, bracket.T, Z_c)) / rho
-        converged = np.abs(Z_next - Z_c).max() <= config.defaults["mjls.power_tol"] * np.abs(Z_next).max()
+        change = np.abs(Z_next - Z_c).max()
+        converged = change <= config.defaults["mjls.power_tol"] * np.abs(Z_next).max()
         Z_c = Z_next
         if converged:
             break
@@ -292,7 +295,8 @@ def residual_lower_bound(A, T, rho, X, P, upper):
     """
     M, n, _ = A.shape
     norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
-    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X + n * TINY)
+    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X)
+                                           + rho * norm_X + n * TINY)
     residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
     error = (residual + np.linalg.norm(rounding)) / np.linalg.norm(X)         # with its own rounding
     inner = float(np.einsum("iab,iab->", P, X))
@@ -303,9 +307,10 @@ def residual_lower_bound(A, T, rho, X, P, upper):
 
 
 def _resolvent_stacks(A, T, radii):
-    """Solutions X of r X - L(X) = I for each r: X > 0 iff r > rho(L), and then L(X) < r X. Dense up to
-    M n^2 = ``mjls.dense_fallback_radius`` (one mode: the Lyapunov solver), a sparse LU for scalar modes,
-    else restarted GMRES on the matrix-free operator (an approximate X only costs tightness: its bounds are computed from L(X))."""
+    """(r, X) with X the solution of r X - L(X) = I, for each r: X > 0 iff r > rho(L), and then
+    L(X) < r X. Dense up to M n^2 = ``mjls.dense_fallback_radius`` (one mode: the Lyapunov solver),
+    a sparse LU for scalar modes, else restarted GMRES on the matrix-free operator (an approximate
+    X only costs tightness: its bounds are computed from L(X))."""
     M, n, _ = A.shape
     dim = M * n * n
     eye = np.broadcast_to(np.eye(n), (M, n, n))
@@ -319,14 +324,15 @@ def _resolvent_stacks(A, T, radii):
                     X = scipy.linalg.solve_discrete_lyapunov(A[0] / np.sqrt(r), np.eye(n) / r)[None]
                 elif dense:
                     X = scipy.linalg.solve(r * np.eye(dim) - K, eye.ravel()).reshape(M, n, n)
-                elif n == 1:                                # scalar modes: L is a sparse M x M matrix
+                elif n == 1:                        # scalar modes: L is a sparse M x M matrix
                     K_r = scipy.sparse.identity(M, format="csc") * r - scipy.sparse.csc_matrix(
                         (T * A[:, 0, 0, None] ** 2).T)
                     X = scipy.sparse.linalg.splu(K_r).solve(np.ones(M)).reshape(M, 1, 1)
                 else:
-                    x, _ = scipy.sparse.linalg.gmres(linear_operator(A, T, identity=r), eye.ravel(),
-                                                     rtol=config.defaults["mjls.solve_tolerance"], restart=60,
-                                                     maxiter=config.defaults["mjls.lyapunov_certificate_restarts"])
+                    restarts = config.defaults["mjls.lyapunov_certificate_restarts"]
+                    x, _ = scipy.sparse.linalg.gmres(
+                        linear_operator(A, T, identity=r), eye.ravel(), restart=60,
+                        maxiter=restarts, rtol=config.defaults["mjls.solve_tolerance"])
                     X = x.reshape(M, n, n)
             except (np.linalg.LinAlgError, ValueError, RuntimeError):   # r is an eigenvalue of L
                 continue
@@ -338,7 +344,7 @@ def lyapunov_upper_bound(A, T, rho, unit=1.0):
     """An upper bound of rho from X_r = (r I - L)^-1 (I) for r = rho + f (unit - rho), f from
     ``mjls.lyapunov_certificate_radii``: f = 1 is the Lyapunov certificate X = L(X) + I of Thm. 3.1
     (at unit = 1). If X_r > 0 and r X_r - L(X_r) >= delta I with delta > 0, then
-    L(X_r)_j <= (r - delta / lambda_max(X_r,j)) X_r,j, so rho <= r - min_j delta / lambda_max(X_r,j).
+    L(X_r)_j <= (r - delta / lambda_max(X_r,j)) X_r,j: rho <= r - min_j delta / lambda_max(X_r,j).
     The residual r X - L(X) is formed in extended precision (``numpy.longdouble``) with its rounding
     bounded as in :func:`asoc.mjls.mean_square_stability` (first order, safety factor 10, with the
     longdouble's own epsilon: where that is double, the bound is as strict as double allows). Far
@@ -373,7 +379,8 @@ def _residual_upper_bound(A, T, X, r):
     rounding = 10.0 * (2 * n + M) * float(np.finfo(wide).eps) * (
         T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + r * norm_X + n * TINY)
     R = R.astype(float)
-    delta = np.linalg.eigvalsh(sym(R))[:, 0] - rounding - 10.0 * n * EPS * np.sqrt(np.einsum("iab,iab->i", R, R))
+    eig_rounding = 10.0 * n * EPS * np.sqrt(np.einsum("iab,iab->i", R, R))
+    delta = np.linalg.eigvalsh(sym(R))[:, 0] - rounding - eig_rounding
     if not np.all(delta > 0):
         return np.inf
     return float(np.max(r - delta / lam_X[:, -1]) * (1 + 4 * EPS))
@@ -406,7 +413,7 @@ def _certify_estimates(A, T, method, unit):
         rho = float(np.clip(rho, lower, upper))
         if lower < estimate.lower <= upper:
             lower = estimate.lower
-        if lower < unit <= upper and rho < unit:                # a verdict is open: the Lyapunov certificate
+        if lower < unit <= upper and rho < unit:        # the verdict is open: Lyapunov certificate
             upper = max(lower, min(upper, lyapunov_upper_bound(A, T, rho, unit)))
             rho = min(rho, upper)
         if best is None or upper - lower < best[1] - best[0]:

@@ -6,7 +6,8 @@ one mode (``"single_mode"``); the dense eigenvalues of the Kronecker matrix for 
 (``"dense"``); ARPACK on the matrix-free operator above (``"arnoldi"``, falling back to dense
 eigenvalues up to M n^2 = ``mjls.dense_fallback_radius``, ``"arnoldi+dense"``, else to the
 shifted cone power method, ``"power"``); for many scalar modes (n = 1), where L is a sparse
-nonnegative M x M matrix, Noda's inverse iteration (``"noda"``). An estimate is never reported alone:
+nonnegative M x M matrix, Noda's inverse iteration (``"noda"``).
+An estimate is never reported alone:
 :mod:`asoc.mjls.certificate` brackets rho around it and :mod:`asoc.mjls.stability` gives the verdict.
 Calls run one way: stability -> certificate -> spectral_estimate.
 """
@@ -24,7 +25,8 @@ from ..threads import single_threaded
 from .moment_operator import costate_map, kronecker_stack, linear_operator
 
 __all__ = ["METHODS", "Estimate", "check_method", "resolve_method", "fallback_method",
-           "adjoint_method", "left_perron_stack", "Balanced", "balance", "psd_stack", "estimates", "estimate"]
+           "adjoint_method", "left_perron_stack", "Balanced", "balance", "psd_stack", "estimates",
+           "estimate"]
 
 
 _EPS = np.finfo(float).eps
@@ -170,13 +172,15 @@ class Balanced:
     def to_stack(self, X, adjoint=False):
         """The stack X_i -> 2^{t_i} D X_i D of (A, T) (adjoint: P_i -> 2^{-t_i} D^-1 P_i D^-1)."""
         d = 1.0 / self.d if adjoint else self.d
-        return np.ldexp(X * d[:, None] * d[None, :], (-self.t if adjoint else self.t)[:, None, None])
+        t = -self.t if adjoint else self.t
+        return np.ldexp(X * d[:, None] * d[None, :], t[:, None, None])
 
 
 def balance(A, T):
     """(A, T) balanced exactly (:class:`Balanced`): one common diagonal D and one power of 2 for all
-    modes, or, where the modes' scales differ by more than 2^``mjls.mode_scale_spread``, a power of 2
-    per mode and a per-mode similarity that balances the weights (Osborne's iteration on log2 W).
+    modes, or, where the modes' scales differ by more than 2^``mjls.mode_scale_spread``, a power
+    of 2 per mode and a per-mode similarity that balances the weights (Osborne's iteration on
+    log2 W).
 
     Examples
     --------
@@ -214,7 +218,8 @@ def balance(A, T):
         e = np.full(M, 0 if top == 0.0 or not np.isfinite(top) else int(np.round(np.log2(top))))
         W, g, exact = T, 2 * int(e[0]), True
     Ab = np.ldexp(Ad, -e[:, None, None])
-    exact = exact and bool(np.array_equal(np.ldexp(Ab, e[:, None, None]) * d[:, None] / d[None, :], A))
+    restored = np.ldexp(Ab, e[:, None, None]) * d[:, None] / d[None, :]
+    exact = exact and bool(np.array_equal(restored, A))
     return Balanced(Ab, W, d, t, g, exact)
 
 
@@ -325,21 +330,21 @@ def estimate(A, T, method, adjoint=False):
 
 def _single_mode(A, p, adjoint):
     """M = 1: rho = p rho(A)^2 with eigenvector Re(v v^H) for A v = lambda v (A^T for the adjoint);
-    p = T[0, 0] as given (1 up to the row-sum tolerance of the validation: used, not rounded to 1)."""
+    p = T[0, 0] as given (1 up to the row-sum tolerance of the validation: used, not rounded)."""
     A = A.T if adjoint else A
     lam, left, right = scipy.linalg.eig(A, left=True, right=True)
     k = np.argmax(np.abs(lam))
     v = right[:, k]
     lower = _first_order_lower(A, lam, left, right)
-    return Estimate(p * float(abs(lam[k])) ** 2, psd_stack(np.outer(v, np.conj(v)), 1, len(A)), "single_mode",
-                     p * lower * lower)
+    return Estimate(p * float(abs(lam[k])) ** 2, psd_stack(np.outer(v, np.conj(v)), 1, len(A)),
+                    "single_mode", p * lower * lower)
 
 
 def _noda(a, T, adjoint):
     """Scalar modes: L is the nonnegative M x M matrix K = (diag(a^2) T)^T (its transpose for L*).
     Noda's inverse iteration x <- (r I - K)^-1 x with r = max_j (K x)_j / x_j, the Collatz-Wielandt
     upper bound, which stays >= rho and falls to it superlinearly, also on periodic chains (Noda,
-    Numer. Math. 17, 1971); x stays positive because (r I - K)^-1 >= I / r. One sparse LU per step."""
+    Numer. Math. 17, 1971); x stays positive because (r I - K)^-1 >= I / r. One sparse LU a step."""
     K = scipy.sparse.csr_matrix((T * (a * a)[:, None]) if adjoint else (T * (a * a)[:, None]).T)
     x = np.ones(len(a))
     eye = scipy.sparse.identity(len(a), format="csc")
@@ -354,7 +359,7 @@ def _noda(a, T, adjoint):
             break
         try:
             z = scipy.sparse.linalg.splu((upper * eye - K).tocsc()).solve(x)
-        except RuntimeError:                                   # r is an eigenvalue: x is the Perron vector
+        except RuntimeError:                        # r is an eigenvalue: x is the Perron vector
             break
         if not np.all(z > 0) or not np.all(np.isfinite(z)):
             break
@@ -386,11 +391,13 @@ def _arnoldi(A, T, adjoint):
         try:
             with single_threaded():
                 for _ in range(2):
-                    lam, V = scipy.sparse.linalg.eigs(linear_operator(A, T, adjoint, shift=shift), k=1, which="LM",
-                                                      tol=config.defaults["mjls.arnoldi_tol"], ncv=min(dim - 1, ncv),
-                                                      maxiter=max(1000, dim), v0=v0)
+                    lam, V = scipy.sparse.linalg.eigs(
+                        linear_operator(A, T, adjoint, shift=shift), k=1, which="LM", v0=v0,
+                        tol=config.defaults["mjls.arnoldi_tol"], ncv=min(dim - 1, ncv),
+                        maxiter=max(1000, dim))
                     lam = complex(lam[0]) - shift
-                    if abs(lam.imag) <= config.defaults["mjls.arnoldi_real_rtol"] * abs(lam) and lam.real >= 0:
+                    real = abs(lam.imag) <= config.defaults["mjls.arnoldi_real_rtol"] * abs(lam)
+                    if real and lam.real >= 0:
                         break
                     shift = abs(lam)
             yield Estimate(abs(lam), psd_stack(V[:, 0], M, n), "arnoldi")

@@ -285,7 +285,7 @@ def _certified(A, T, method):
     """
     check_method(method)
     balanced = balance(A, T)
-    with np.errstate(over="ignore"):                    # 2^g beyond the doubles: inf is the right answer
+    with np.errstate(over="ignore"):                # 2^g beyond the doubles: inf is right
         unit = float(np.ldexp(1.0, -balanced.g))
         lower, upper, rho, _, estimate = certify(balanced.A, balanced.W, method, unit=unit)
         if not balanced.exact:

@@ -58,10 +58,10 @@ def test_rho_exactly_one_is_never_stabilising(name):
 
 
 def test_rho_one_up_to_rounding_is_undecided_where_the_estimate_rounds_below_one():
-    """A / sqrt(rho): rho = 1 to within rounding; the estimates that come out below 1 (0.9999999999999998, as
-    in issue 24) must not make the verdict stable unless it is: a decided verdict agrees with the exact
-    decision on the float data (X - L(X) = I solved in rationals, test_certificate_edges.exactly_stable);
-    the Lyapunov certificate decides some of them (issue 33)."""
+    """A / sqrt(rho): rho = 1 to within rounding; the estimates that come out below 1
+    (0.9999999999999998, as in issue 24) must not make the verdict stable unless it is: a decided
+    verdict agrees with the exact decision on the float data (X - L(X) = I solved in rationals,
+    test_certificate_edges.exactly_stable); the Lyapunov certificate decides some (issue 33)."""
     from test_certificate_edges import exactly_stable
 
     below = []
