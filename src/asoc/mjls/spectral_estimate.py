@@ -358,8 +358,9 @@ def _noda(a, T, adjoint):
         if upper - ratio.min() <= rtol * upper or upper == 0.0:
             break
         try:
-            z = scipy.sparse.linalg.splu((upper * eye - K).tocsc()).solve(x)
-        except RuntimeError:                        # r is an eigenvalue: x is the Perron vector
+            shift = upper * (1 + 4 * _EPS)          # above rho also where upper is (reducible K)
+            z = scipy.sparse.linalg.splu((shift * eye - K).tocsc()).solve(x)
+        except RuntimeError:                        # shift rounds to an eigenvalue: x is Perron's
             break
         if not np.all(z > 0) or not np.all(np.isfinite(z)):
             break

@@ -297,3 +297,12 @@ def test_exact_dynamic_design_on_a_plant_at_rho_one_says_why(seed):
     with pytest.warns(RuntimeWarning, match="no mean-square stabilising start"):
         result = exact_dynamic_output_feedback(system)
     assert result.status == "no_progress" and not np.isfinite(result.cost)
+
+
+def test_many_independent_scalar_modes():
+    """T = I (reducible): rho = max_i a_i^2, the Perron vector is a unit vector; Noda's shift sits on
+    that eigenvalue unless moved just above it. Certified unstable, the truth inside."""
+    a = np.random.default_rng(0).uniform(0.5, 1.2, 1000)
+    truth = float((a * a).max())
+    result = mean_square_stability(a[:, None, None], np.eye(1000))
+    assert result.rho_lower <= truth <= result.rho_upper and result.stabilizing is False
