@@ -200,7 +200,7 @@ def balance(A, T):
     if n > 1:
         with np.errstate(invalid="ignore"):                        # scipy casts its unused permutation
             d = np.diag(scipy.linalg.matrix_balance(np.abs(A).sum(axis=0), permute=False)[1]).copy()
-    Ad = A / d[:, None] * d[None, :]
+    Ad = A * (d[None, :] / d[:, None])                  # one product by a power of 2 per entry
     with np.errstate(divide="ignore"):
         e = np.round(np.log2(np.abs(Ad).max(axis=(1, 2))))
     live = np.isfinite(e)
@@ -212,15 +212,22 @@ def balance(A, T):
             exponents = np.where(T > 0, 2 * e[:, None] + t[:, None] - t[None, :], 0)
             g = int(np.max(np.where(T > 0, np.floor(np.log2(T)) + exponents, -np.inf)))
         W = np.ldexp(T, exponents - g)
-        exact = bool(np.array_equal(np.ldexp(W, g - exponents), T))
+        exact = _normal(W, T)
     else:
         top = float(np.abs(Ad).max())
         e = np.full(M, 0 if top == 0.0 or not np.isfinite(top) else int(np.round(np.log2(top))))
         W, g, exact = T, 2 * int(e[0]), True
     Ab = np.ldexp(Ad, -e[:, None, None])
-    restored = np.ldexp(Ab, e[:, None, None]) * d[:, None] / d[None, :]
-    exact = exact and bool(np.array_equal(restored, A))
+    exact = exact and _normal(Ad, A) and _normal(Ab, A)
     return Balanced(Ab, W, d, t, g, exact)
+
+
+def _normal(scaled, A):
+    """A product by a power of 2 is exact iff it neither overflows nor lands below the normal range:
+    every entry finite, and every nonzero entry of A still nonzero and at least the smallest normal."""
+    live = A != 0
+    magnitude = np.abs(scaled)
+    return bool(np.all(np.isfinite(scaled)) and np.all(magnitude[live] >= np.finfo(float).tiny))
 
 
 def _osborne_exponents(T, e):
