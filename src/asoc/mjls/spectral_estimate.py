@@ -45,7 +45,7 @@ class Estimate:
     X : numpy.ndarray, shape (M, n, n)
         Positive semidefinite eigenvector estimate (the identity stack for the power method).
     method : str
-        "single_mode", "dense", "arnoldi", "arnoldi+dense" or "power".
+        "single_mode", "noda", "dense", "arnoldi", "arnoldi+dense" or "power".
     lower : float
         First-order perturbation lower bound of rho (dense eigenvalues only, else 0).
 

@@ -61,8 +61,8 @@ class MeanSquareStability:
     verdict : Verdict
         STABLE iff rho_upper < 1, UNSTABLE iff rho_lower >= 1, else UNDECIDED.
     method : str
-        How the estimate was obtained: "single_mode", "dense", "arnoldi", "arnoldi+dense" or
-        "power".
+        How the estimate was obtained: "single_mode", "noda" (many scalar modes), "dense",
+        "arnoldi", "arnoldi+dense" or "power".
 
     Examples
     --------
@@ -173,8 +173,9 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
         ``"arnoldi"``, ARPACK on the matrix-free operator (Krylov spaces of
         ``config.defaults["mjls.arnoldi_subspaces"]`` vectors in turn; when none converges,
         dense up to M n^2 = ``mjls.dense_fallback_radius``, else ``"power"``); ``"power"``: the
-        shifted cone power method alone. ``"auto"``: rho(A)^2 for one mode, dense up to
-        M n^2 = ``mjls.dense_max_radius``, else Arnoldi.
+        shifted cone power method alone. ``"auto"``: p_11 rho(A)^2 for one mode, Noda's
+        iteration on the sparse M x M matrix of L for scalar modes from M =
+        ``mjls.scalar_sparse_from``, dense up to M n^2 = ``mjls.dense_max_radius``, else Arnoldi.
     check : bool
         Validate the arguments.
 
