@@ -96,6 +96,59 @@ _REGISTRY: dict[str, tuple[object, str]] = {
         "Iterations for the non-Perron part of the resolvent stack that tightens the upper bound of "
         "rho where the Perron stack is singular (asoc.mjls.certificate.deflated_resolvent_bounds): they "
         "contract at the second-largest eigenvalue modulus over rho; Alg. 3.2's closed loop at n = 32, M = 8 needs 45 (0.012 s)."),
+    # --- the certified rho (asoc.mjls.stability -> certificate -> spectral_estimate), issue 33
+    "mjls.mode_scale_spread": (
+        64,
+        "Modes whose scales (largest entry, in powers of 2) differ by more than this many binary "
+        "orders are balanced one by one, with the similarity X_i -> 2^t_i X_i that rescales p_ij "
+        "by 2^(t_i - t_j); below it one common power of 2 (bit for bit the earlier results). Gains "
+        "1e80 and 1e-80 on a 2-cycle (531 orders) made the small mode's A X A^T subnormal under "
+        "one common scale, and the bracket wrong."),
+    "mjls.mode_balance_sweeps": (
+        50,
+        "Sweeps of Osborne's iteration on the log2 weights when modes are balanced one by one; it "
+        "stops earlier when a sweep moves no exponent (a 2-cycle needs 2)."),
+    "mjls.perron_tie_rtol": (
+        1e-8,
+        "Dense eigenvalues within this relative distance of the largest modulus count as its "
+        "ties, among which the real one (the Perron eigenvalue) is taken: periodic chains have "
+        "several of equal modulus, computed within a few hundred units of rounding of each other."),
+    "mjls.arnoldi_tol": (
+        1e-14,
+        "ARPACK's relative accuracy for the estimate of rho; the estimate only seeds the "
+        "certificate, whose bracket (mjls.bracket_rtol) does not depend on it."),
+    "mjls.arnoldi_real_rtol": (
+        1e-8,
+        "An Arnoldi eigenvalue of largest modulus whose imaginary part is below this times its "
+        "modulus counts as real (the Perron eigenvalue); otherwise the chain is periodic and "
+        "Arnoldi is rerun on L + |lambda| I."),
+    "mjls.bracket_power_shrink": (
+        0.9,
+        "A cone power step that tightens the bracket of rho must narrow it to below this fraction "
+        "of its width, else the steps stop (more of them will not help)."),
+    "mjls.lyapunov_certificate_radii": (
+        (1.0, 0.5, 0.25),
+        "Where the bracket of rho straddles 1 and rho's estimate rho_hat is below 1, the "
+        "Collatz-Wielandt upper bound is also evaluated at the solutions of r X - L(X) = I for "
+        "r = rho_hat + f (1 - rho_hat), f from this tuple (f = 1: the Lyapunov certificate "
+        "X = L(X) + I of Thm. 3.1). Away from rho the solution is well conditioned even for "
+        "defective spectra, where r just above rho is not: a Jordan mode at 0.25 with "
+        "off-diagonal 1e3 was bracketed in [0.21, 30.4] from r near rho alone."),
+    "mjls.lyapunov_certificate_restarts": (
+        5,
+        "Restarts (of 60 GMRES steps) for the Lyapunov certificate's solve above "
+        "mjls.dense_fallback_radius (scalar modes: a sparse LU instead), tried only where the "
+        "bracket straddles 1: an inexact solution only loosens its bound, and at n = M = 100 "
+        "each matrix-vector product costs about 20 ms (300 of them: 6 s)."),
+    "mjls.noda_max_steps": (
+        60,
+        "Steps of Noda's inverse iteration for scalar modes (n = 1, L an M x M nonnegative sparse "
+        "matrix); it converges superlinearly, in under 10 steps on the cyclic chains tested."),
+    "mjls.scalar_sparse_from": (
+        64,
+        "Scalar modes (n = 1) from this many modes on get rho from Noda's iteration on the sparse "
+        "M x M matrix of L (one sparse LU per step), not dense eigenvalues or Arnoldi: 1,100 modes "
+        "on a cyclic chain took 88 s and ended undecided with Arnoldi and the power method."),
     "mjls.bracket_warn_rtol": (
         1e-4,
         "ms_spectral_radius warns when the certified bracket of rho is relatively wider than "

@@ -241,6 +241,10 @@ def function(value, name: str):
 def stochastic_matrix(value, name: str, size: int | None = None) -> np.ndarray:
     """A row-stochastic (transition) matrix: square, at least 1 x 1, rows are probability weights.
 
+    Rows must sum to 1 within ``WEIGHT_ATOL``; the matrix is returned as given, not renormalised,
+    and the library uses it as given everywhere (e.g. rho = p_11 rho(A)^2 for one mode), so that
+    every result is that of the matrix the caller passed.
+
     Examples
     --------
     >>> stochastic_matrix([[0.9, 0.1], [0.2, 0.8]], "T").shape

@@ -23,18 +23,23 @@ import warnings
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse
+import scipy.sparse.linalg
 
 from .. import config
 from ..linalg import sym, transpose
 from ..threads import single_threaded
-from .moment_operator import kronecker_stack, second_moment_map
+from .moment_operator import kronecker_stack, linear_operator, second_moment_map
 from .spectral_estimate import estimates, left_perron_stack
 
 __all__ = ["EPS", "certified_upper_bound", "Bracket", "refine", "deflated_resolvent_bounds",
-           "residual_lower_bound", "certify"]
+           "residual_lower_bound", "lyapunov_upper_bound", "certify"]
 
 
 EPS = np.finfo(float).eps
+#: The smallest normal double: gamma n TINY bounds, with the safety factor 10, the absolute rounding
+#: of the (2 n + M) subnormal operations behind an entry of L(X) (each off by at most 2^-1075).
+TINY = np.finfo(float).tiny
 #: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector estimate
 #: into the interior of the cone for the Collatz-Wielandt bounds: the first valid one gives the bounds.
 _SHIFTS = (0.0, 1e-12, 1e-9, 1e-6, 1e-3)
@@ -87,6 +92,7 @@ class Bracket:
         self.A, self.T = A, T
         self.lower, self.upper, self.margin = 0.0, np.inf, 0.0
         self.gamma = 10.0 * (2 * n + M) * EPS
+        self.underflow = n * TINY                   # absolute rounding of subnormal partial results
         self.norm_A2 = np.einsum("iab,iab->i", A, A)
         self.identity = np.broadcast_to(np.eye(n), (M, n, n))
         self.L_identity = None
@@ -136,7 +142,8 @@ class Bracket:
         alpha, beta = lam[:, 0], lam[:, -1]
         inv_norm2 = np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp else np.einsum("iab,iab->i", Ci, Ci)
         norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
-        rounding = self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
+        rounding = (self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
+                    + self.underflow)
         margin = self.gamma * (rounding + np.maximum(abs(alpha), abs(beta)) * norm_X) * inv_norm2
         lower, upper = float(np.max([0.0, (alpha - margin).min()])), float((beta + margin).max())
         if upper < self.upper:
@@ -173,7 +180,8 @@ def refine(A, T, X0, rho):
 def _resolvent_bounds(bracket, rho, rtol):
     """Bounds at solutions of r X - L(X) = I for r from 2 rho down towards rho, while they improve."""
     previous = np.inf
-    for X_r in _resolvent_stacks(bracket.A, bracket.T, rho):
+    radii = [max(rho, 1e-300) * (1 + gap) for gap in _RESOLVENT_GAPS]
+    for _, X_r in _resolvent_stacks(bracket.A, bracket.T, radii):
         own = Bracket(bracket.A, bracket.T)
         own.consider(X_r, rtol)
         bracket.merge(own)
@@ -189,9 +197,12 @@ def _power_steps(bracket, X, Y, rho, rtol):
         if bracket.width_reached(rtol):
             break
         X = Y + rho * X
-        X /= np.abs(X).max()
+        top = np.abs(X).max()
+        if not top > 0:                             # L(X) = 0 (nilpotent modes): nothing to scale
+            break
+        X /= top
         Y = bracket.consider(X, rtol)
-        if not bracket.upper - bracket.lower < 0.9 * width:          # stalled: more steps will not help
+        if not bracket.upper - bracket.lower < config.defaults["mjls.bracket_power_shrink"] * width:
             break
         width = bracket.upper - bracket.lower
     return X
@@ -199,16 +210,19 @@ def _power_steps(bracket, X, Y, rho, rtol):
 
 def _power_method(bracket, X, Y, rtol):
     """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of rho,
-    until the bracket is narrow, or X has converged (to 1e-13, e.g. to a singular Perron stack, where the
-    bracket stays wide), or ``mjls.power_max_steps``."""
+    until the bracket is narrow, or X has converged (to ``mjls.power_tol``, e.g. to a singular
+    Perron stack, where the bracket stays wide), or L(X) = 0, or ``mjls.power_max_steps``."""
     rho = np.inf
     for _ in range(config.defaults["mjls.power_max_steps"]):
         rho = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum())
         if bracket.width_reached(rtol):
             break
         X, previous = Y + rho * X, X
-        X /= np.abs(X).max()
-        if np.abs(X - previous).max() <= 1e-13:
+        top = np.abs(X).max()
+        if not top > 0:
+            return previous, rho
+        X /= top
+        if np.abs(X - previous).max() <= config.defaults["mjls.power_tol"]:
             break
         Y = bracket.consider(X, rtol)
     return X, rho
@@ -225,6 +239,8 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     X shifted by a multiple of I, stay wide. Z is only a candidate: its bounds are computed from L(Z)
     with the (sharp) rounding margin, so an inexact Z_c costs tightness, never validity. The gaps
     r / rho - 1 go down while the upper bound improves (the margin grows like 1 / (r - rho)).
+    Nothing is done for rho = 0 (nilpotent modes: the lower end 0 is exact, and no gap is relative
+    to it).
     Arguments are not validated (the caller, :func:`asoc.mjls.mean_square_stability`, has).
 
     Examples
@@ -238,12 +254,16 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
     >>> bool(0.81 <= bracket.upper < 0.81 * (1 + 1e-5))
     True
     """
-    weight = float(np.einsum("iab,iab->", P, bracket.identity) / np.einsum("iab,iab->", P, X))
+    inner = float(np.einsum("iab,iab->", P, X))
+    if not (rho > 0 and inner > 0):
+        return
+    weight = float(np.einsum("iab,iab->", P, bracket.identity)) / inner
     B = bracket.identity - weight * X
     Z_c = B / rho
     for _ in range(config.defaults["mjls.deflated_resolvent_steps"]):
         Z_next = (B + second_moment_map(bracket.A, bracket.T, Z_c)) / rho
-        converged = np.abs(Z_next - Z_c).max() <= 1e-13 * np.abs(Z_next).max()
+        change = np.abs(Z_next - Z_c).max()
+        converged = change <= config.defaults["mjls.power_tol"] * np.abs(Z_next).max()
         Z_c = Z_next
         if converged:
             break
@@ -275,7 +295,8 @@ def residual_lower_bound(A, T, rho, X, P, upper):
     """
     M, n, _ = A.shape
     norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
-    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + rho * norm_X)
+    rounding = 10.0 * (2 * n + M) * EPS * (T.T @ (np.einsum("iab,iab->i", A, A) * norm_X)
+                                           + rho * norm_X + n * TINY)
     residual = np.linalg.norm(second_moment_map(A, T, X) - rho * X)
     error = (residual + np.linalg.norm(rounding)) / np.linalg.norm(X)         # with its own rounding
     inner = float(np.einsum("iab,iab->", P, X))
@@ -285,27 +306,88 @@ def residual_lower_bound(A, T, rho, X, P, upper):
     return float(bound) if 0 < bound <= upper else 0.0
 
 
-def _resolvent_stacks(A, T, rho):
-    """Solutions X of r X - L(X) = I for r just above rho: X > 0 iff r > rho(L), and then L(X) < r X."""
+def _resolvent_stacks(A, T, radii):
+    """(r, X) with X the solution of r X - L(X) = I, for each r: X > 0 iff r > rho(L), and then
+    L(X) < r X. Dense up to M n^2 = ``mjls.dense_fallback_radius`` (one mode: the Lyapunov solver),
+    a sparse LU for scalar modes, else restarted GMRES on the matrix-free operator (an approximate
+    X only costs tightness: its bounds are computed from L(X))."""
     M, n, _ = A.shape
+    dim = M * n * n
     eye = np.broadcast_to(np.eye(n), (M, n, n))
-    K = kronecker_stack(A[None], T)[0] if M > 1 else None
-    for gap in _RESOLVENT_GAPS:
-        r = max(rho, 1e-300) * (1 + gap)
+    dense = M > 1 and dim <= config.defaults["mjls.dense_fallback_radius"]
+    K = kronecker_stack(A[None], T)[0] if dense else None
+    for r in radii:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
-                if K is None:
+                if M == 1:
                     X = scipy.linalg.solve_discrete_lyapunov(A[0] / np.sqrt(r), np.eye(n) / r)[None]
+                elif dense:
+                    X = scipy.linalg.solve(r * np.eye(dim) - K, eye.ravel()).reshape(M, n, n)
+                elif n == 1:                        # scalar modes: L is a sparse M x M matrix
+                    K_r = scipy.sparse.identity(M, format="csc") * r - scipy.sparse.csc_matrix(
+                        (T * A[:, 0, 0, None] ** 2).T)
+                    X = scipy.sparse.linalg.splu(K_r).solve(np.ones(M)).reshape(M, 1, 1)
                 else:
-                    X = scipy.linalg.solve(r * np.eye(M * n * n) - K, eye.ravel()).reshape(M, n, n)
-            except np.linalg.LinAlgError:                   # r is an eigenvalue of L: no bound from it
+                    restarts = config.defaults["mjls.lyapunov_certificate_restarts"]
+                    x, _ = scipy.sparse.linalg.gmres(
+                        linear_operator(A, T, identity=r), eye.ravel(), restart=60,
+                        maxiter=restarts, rtol=config.defaults["mjls.solve_tolerance"])
+                    X = x.reshape(M, n, n)
+            except (np.linalg.LinAlgError, ValueError, RuntimeError):   # r is an eigenvalue of L
                 continue
         if np.all(np.isfinite(X)):
-            yield sym(X)
+            yield r, sym(X)
 
 
-def certify(A, T, method):
+def lyapunov_upper_bound(A, T, rho, unit=1.0):
+    """An upper bound of rho from X_r = (r I - L)^-1 (I) for r = rho + f (unit - rho), f from
+    ``mjls.lyapunov_certificate_radii``: f = 1 is the Lyapunov certificate X = L(X) + I of Thm. 3.1
+    (at unit = 1). If X_r > 0 and r X_r - L(X_r) >= delta I with delta > 0, then
+    L(X_r)_j <= (r - delta / lambda_max(X_r,j)) X_r,j: rho <= r - min_j delta / lambda_max(X_r,j).
+    The residual r X - L(X) is formed in extended precision (``numpy.longdouble``) with its rounding
+    bounded as in :func:`asoc.mjls.mean_square_stability` (first order, safety factor 10, with the
+    longdouble's own epsilon: where that is double, the bound is as strict as double allows). Far
+    from rho, X_r is well conditioned even where rho's eigenvalue is defective, where the
+    Collatz-Wielandt bounds near rho are not; inf where no X_r passes.
+
+    Examples
+    --------
+    A Jordan block at 0.5 (rho = 0.25) with off-diagonal 100, in a dense basis (1e3 needs the
+    extended precision, where numpy.longdouble has it):
+
+    >>> S = np.array([[2.0, 1.0], [1.0, 1.0]]); S_inv = np.array([[1.0, -1.0], [-1.0, 2.0]])
+    >>> A = (S @ np.array([[0.5, 100.0], [0.0, 0.5]]) @ S_inv)[None]
+    >>> bool(0.25 <= lyapunov_upper_bound(A, np.eye(1), 0.25) < 1)
+    True
+    """
+    radii = [rho + f * (unit - rho) for f in config.defaults["mjls.lyapunov_certificate_radii"]]
+    bounds = [_residual_upper_bound(A, T, X, r) for r, X in _resolvent_stacks(A, T, radii)]
+    return min(bounds, default=np.inf)
+
+
+def _residual_upper_bound(A, T, X, r):
+    """r - min_j delta_j / lambda_max(X_j) where r X - L(X) >= delta I is proven (inf where not)."""
+    M, n, _ = A.shape
+    lam_X = np.linalg.eigvalsh(X)
+    if not np.all(lam_X[:, 0] > 10.0 * n * EPS * lam_X[:, -1]):
+        return np.inf
+    wide = np.longdouble
+    A_l, X_l = A.astype(wide), X.astype(wide)
+    Y = A_l @ X_l @ transpose(A_l)
+    R = r * X_l - (T.T.astype(wide) @ Y.reshape(M, -1)).reshape(M, n, n)
+    norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
+    rounding = 10.0 * (2 * n + M) * float(np.finfo(wide).eps) * (
+        T.T @ (np.einsum("iab,iab->i", A, A) * norm_X) + r * norm_X + n * TINY)
+    R = R.astype(float)
+    eig_rounding = 10.0 * n * EPS * np.sqrt(np.einsum("iab,iab->i", R, R))
+    delta = np.linalg.eigvalsh(sym(R))[:, 0] - rounding - eig_rounding
+    if not np.all(delta > 0):
+        return np.inf
+    return float(np.max(r - delta / lam_X[:, -1]) * (1 + 4 * EPS))
+
+
+def certify(A, T, method, unit=1.0):
     """(lower, upper, rho, X, estimate) of the balanced (A, T): ``_certify_estimates`` with BLAS on one thread: its work is small products and M small
     eigenproblems, where threads only cost (a stack of 8 eigh of 32 x 32: 0.49 s with threads on a
     loaded 2-core machine, 1 ms without).
@@ -318,10 +400,10 @@ def certify(A, T, method):
     (True, 'dense')
     """
     with single_threaded():
-        return _certify_estimates(A, T, method)
+        return _certify_estimates(A, T, method, unit)
 
 
-def _certify_estimates(A, T, method):
+def _certify_estimates(A, T, method, unit):
     """(lower, upper, rho, X, estimate) for the balanced (A, T): the first estimate inside a narrow bracket
     (relative width ``mjls.bracket_warn_rtol``), else the narrowest (a subdominant eigenvalue from a small
     Krylov space fails the test: the bracket holds rho, not it)."""
@@ -332,6 +414,9 @@ def _certify_estimates(A, T, method):
         rho = float(np.clip(rho, lower, upper))
         if lower < estimate.lower <= upper:
             lower = estimate.lower
+        if lower < unit <= upper and rho < unit:        # the verdict is open: Lyapunov certificate
+            upper = max(lower, min(upper, lyapunov_upper_bound(A, T, rho, unit)))
+            rho = min(rho, upper)
         if best is None or upper - lower < best[1] - best[0]:
             best = lower, upper, rho, X, estimate
         if lower <= estimate.rho <= upper and _narrow(lower, upper):

@@ -218,7 +218,9 @@ def _stabilising_start(sys, starts, costs, shapes):
     """The first start of finite cost (it stabilises: the coupled Lyapunov test of
     :func:`asoc.mjls.gradients.average_cost_and_gradient`); else the averaged LQG compensator
     is added, and rho is minimised from each candidate (in order of rho) until it falls below
-    ``mjls.rho_start``. Returns (z, stabilising), the smallest rho reached when none stabilises."""
+    ``mjls.rho_start`` and the exact cost there is finite (an estimate of rho below 1 is not a
+    certificate: rho exactly 1 rounds either way). Returns (z, stabilising), the smallest rho
+    reached when none stabilises."""
     for z, cost in zip(starts, costs):
         if np.isfinite(cost):
             return z, True
@@ -232,8 +234,8 @@ def _stabilising_start(sys, starts, costs, shapes):
             continue
         zi, rho = _min_radius(sys, starts[i], shapes, config.defaults["mjls.radius_max_iter"],
                               target=config.defaults["mjls.rho_start"])[:2]
-        if rho < 1:
-            return zi, True
+        if rho < 1 and np.isfinite(average_cost_and_gradient(sys, *unpack(zi, shapes))[0]):
+            return zi, True                     # certified (finite exact cost), not rho's estimate
         best = min(best, (zi, rho), key=lambda b: b[1])
     return best[0], False
 

@@ -5,7 +5,9 @@ The methods (:data:`METHODS`, one table resolved by :func:`resolve_method`): rho
 one mode (``"single_mode"``); the dense eigenvalues of the Kronecker matrix for small M n^2
 (``"dense"``); ARPACK on the matrix-free operator above (``"arnoldi"``, falling back to dense
 eigenvalues up to M n^2 = ``mjls.dense_fallback_radius``, ``"arnoldi+dense"``, else to the
-shifted cone power method, ``"power"``). An estimate is never reported alone:
+shifted cone power method, ``"power"``); for many scalar modes (n = 1), where L is a sparse
+nonnegative M x M matrix, Noda's inverse iteration (``"noda"``).
+An estimate is never reported alone:
 :mod:`asoc.mjls.certificate` brackets rho around it and :mod:`asoc.mjls.stability` gives the verdict.
 Calls run one way: stability -> certificate -> spectral_estimate.
 """
@@ -14,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse
 import scipy.sparse.linalg
 
 from .. import config
@@ -22,7 +25,8 @@ from ..threads import single_threaded
 from .moment_operator import costate_map, kronecker_stack, linear_operator
 
 __all__ = ["METHODS", "Estimate", "check_method", "resolve_method", "fallback_method",
-           "adjoint_method", "left_perron_stack", "balance", "psd_stack", "estimates", "estimate"]
+           "adjoint_method", "left_perron_stack", "Balanced", "balance", "psd_stack", "estimates",
+           "estimate"]
 
 
 _EPS = np.finfo(float).eps
@@ -41,7 +45,7 @@ class Estimate:
     X : numpy.ndarray, shape (M, n, n)
         Positive semidefinite eigenvector estimate (the identity stack for the power method).
     method : str
-        "single_mode", "dense", "arnoldi", "arnoldi+dense" or "power".
+        "single_mode", "noda", "dense", "arnoldi", "arnoldi+dense" or "power".
     lower : float
         First-order perturbation lower bound of rho (dense eigenvalues only, else 0).
 
@@ -74,17 +78,22 @@ def check_method(method):
 def resolve_method(method, M, n):
     """The eigen-solver that ``method`` means for M modes of size n: the one resolution table.
 
-    ``"auto"`` is "single_mode" for one mode, "dense" up to M n^2 = ``mjls.dense_max_radius``,
-    else "arnoldi"; "arnoldi" on M n^2 <= 3 is "dense"; every other name stands for itself.
+    ``"auto"`` is "single_mode" for one mode, "noda" for scalar modes (n = 1) from
+    M = ``mjls.scalar_sparse_from`` on, "dense" up to M n^2 = ``mjls.dense_max_radius``, else
+    "arnoldi"; "arnoldi" on M n^2 <= 3 is "dense"; every other name stands for itself.
 
     Examples
     --------
     >>> resolve_method("auto", 1, 3), resolve_method("auto", 2, 3), resolve_method("auto", 100, 100)
     ('single_mode', 'dense', 'arnoldi')
+    >>> resolve_method("auto", 1000, 1)
+    'noda'
     """
     if method == "auto":
         if M == 1:
             return "single_mode"
+        if n == 1 and M >= config.defaults["mjls.scalar_sparse_from"]:
+            return "noda"
         return "dense" if M * n * n <= config.defaults["mjls.dense_max_radius"] else "arnoldi"
     return "dense" if method == "arnoldi" and M * n * n <= 3 else method
 
@@ -128,24 +137,127 @@ def left_perron_stack(A, T, rho, method):
     return left.X if left.method != "power" else _adjoint_power(A, T, rho)
 
 
-def balance(A):
-    """D^-1 A_i D / s with one diagonal D and scalar s, both powers of 2 (exact): returns (A', d, s).
+@dataclass(frozen=True)
+class Balanced:
+    """Modes and weights similar to (A, T) up to a power of 2: rho(L_{A,T}) = 2^g rho(L_{A', W}).
+
+    With one diagonal D (powers of 2, ``scipy.linalg.matrix_balance`` of sum_i |A_i|), mode
+    exponents e_i and similarity exponents t_i,
+    A_i = 2^{e_i} D A'_i D^-1 and W_ij = p_ij 2^{2 e_i + t_i - t_j - g}, because the similarity
+    X_i -> 2^{t_i} D X_i D of the stack turns L(X)_j = sum_i p_ij A_i X_i A_i^T into
+    2^g sum_i W_ij A'_i X_i A'_i^T. Every factor is a power of 2, so the map is exact unless an
+    entry leaves the range of doubles: ``exact`` says whether (A', W) reproduce (A, T) exactly.
+
+    Attributes
+    ----------
+    A, W : numpy.ndarray
+        The balanced modes (largest entry of each about 1) and weights (not row-stochastic).
+    d : numpy.ndarray, shape (n,)
+        The diagonal of D.
+    t : numpy.ndarray, shape (M,)
+        The similarity exponents t_i of the modes.
+    g : int
+        rho(L_{A,T}) = 2^g rho(L_{A', W}).
+    exact : bool
+        (A', W) hold (A, T) without underflow: bounds on them are bounds of (A, T).
+    """
+
+    A: np.ndarray
+    W: np.ndarray
+    d: np.ndarray
+    t: np.ndarray
+    g: int
+    exact: bool
+
+    def to_stack(self, X, adjoint=False):
+        """The stack X_i -> 2^{t_i} D X_i D of (A, T) (adjoint: P_i -> 2^{-t_i} D^-1 P_i D^-1)."""
+        d = 1.0 / self.d if adjoint else self.d
+        t = -self.t if adjoint else self.t
+        return np.ldexp(X * d[:, None] * d[None, :], t[:, None, None])
+
+
+def balance(A, T):
+    """(A, T) balanced exactly (:class:`Balanced`): one common diagonal D and one power of 2 for all
+    modes, or, where the modes' scales differ by more than 2^``mjls.mode_scale_spread``, a power
+    of 2 per mode and a per-mode similarity that balances the weights (Osborne's iteration on
+    log2 W).
 
     Examples
     --------
-    >>> Ab, d, s = balance(np.array([[[8.0, 64.0], [0.0, 4.0]]]))
-    >>> d.tolist(), s, bool(np.abs(Ab).max() <= 2.0)
-    ([4.0, 0.5], 8.0, True)
+    >>> b = balance(np.array([[[8.0, 64.0], [0.0, 4.0]]]), np.eye(1))
+    >>> b.d.tolist(), b.g, bool(np.abs(b.A).max() <= 2.0), b.W.tolist(), b.exact
+    ([4.0, 0.5], 6, True, [[1.0]], True)
+
+    Scalar modes a_1 = 1e80, a_2 = 1e-80 on a 2-cycle: L is [[0, a_2^2], [a_1^2, 0]] with
+    rho = |a_1 a_2|; balanced, both weights are about |a_1 a_2| / 2^g:
+
+    >>> b = balance(np.array([[[1e80]], [[1e-80]]]), np.array([[0.0, 1.0], [1.0, 0.0]]))
+    >>> bool(np.all(b.W.sum(axis=1) > 0.25) and np.all(b.W.sum(axis=1) < 4)), b.exact
+    (True, True)
     """
     M, n, _ = A.shape
     d = np.ones(n)
     if n > 1:
         with np.errstate(invalid="ignore"):                        # scipy casts its unused permutation
             d = np.diag(scipy.linalg.matrix_balance(np.abs(A).sum(axis=0), permute=False)[1]).copy()
-    Ab = A / d[:, None] * d[None, :]
-    top = float(np.abs(Ab).max())
-    s = 1.0 if top == 0.0 or not np.isfinite(top) else float(2.0 ** np.round(np.log2(top)))
-    return Ab / s, d, s
+    Ad = A * (d[None, :] / d[:, None])                  # one product by a power of 2 per entry
+    with np.errstate(divide="ignore"):
+        e = np.round(np.log2(np.abs(Ad).max(axis=(1, 2))))
+    live = np.isfinite(e)
+    t = np.zeros(M, dtype=int)
+    if live.any() and np.ptp(e[live]) > config.defaults["mjls.mode_scale_spread"]:
+        e = np.where(live, e, np.median(e[live])).astype(int)
+        t = _osborne_exponents(T, e)
+        with np.errstate(divide="ignore"):
+            exponents = np.where(T > 0, 2 * e[:, None] + t[:, None] - t[None, :], 0)
+            g = int(np.max(np.where(T > 0, np.floor(np.log2(T)) + exponents, -np.inf)))
+        W = np.ldexp(T, exponents - g)
+        exact = _normal(W, T)
+    else:
+        top = float(np.abs(Ad).max())
+        e = np.full(M, 0 if top == 0.0 or not np.isfinite(top) else int(np.round(np.log2(top))))
+        W, g, exact = T, 2 * int(e[0]), True
+    Ab = np.ldexp(Ad, -e[:, None, None])
+    exact = exact and _normal(Ad, A) and _normal(Ab, A)
+    return Balanced(Ab, W, d, t, g, exact)
+
+
+def _normal(scaled, A):
+    """A product by a power of 2 is exact iff it neither overflows nor lands below the normal range:
+    every entry finite, and every nonzero entry of A still nonzero and at least the smallest normal."""
+    live = A != 0
+    magnitude = np.abs(scaled)
+    return bool(np.all(np.isfinite(scaled)) and np.all(magnitude[live] >= np.finfo(float).tiny))
+
+
+def _osborne_exponents(T, e):
+    """Integer t balancing the weights w_ij = log2 p_ij + 2 e_i + t_i - t_j (i != j): Osborne's
+    iteration equates, mode by mode, the log-sums of each mode's outgoing and incoming weights
+    (exact in the log domain: no weight is formed before it is balanced)."""
+    M = len(T)
+    with np.errstate(divide="ignore"):
+        w = np.log2(T) + 2.0 * e[:, None]
+    np.fill_diagonal(w, -np.inf)
+    t = np.zeros(M)
+    for _ in range(config.defaults["mjls.mode_balance_sweeps"]):
+        moved = False
+        for k in range(M):
+            out = w[k] + t[k] - t
+            into = w[:, k] + t - t[k]
+            if np.isneginf(out.max()) or np.isneginf(into.max()):
+                continue
+            step = np.round((_log2_sum(into) - _log2_sum(out)) / 2)
+            if step != 0:
+                t[k] += step
+                moved = True
+        if not moved:
+            break
+    return t.astype(int)
+
+
+def _log2_sum(x):
+    top = x.max()
+    return top + np.log2(np.exp2(x - top).sum())
 
 
 def psd_stack(v, M, n):
@@ -200,7 +312,9 @@ def estimate(A, T, method, adjoint=False):
     dim = M * n * n
     method = resolve_method(method, M, n)
     if method == "single_mode":
-        return _single_mode(A[0], adjoint)
+        return _single_mode(A[0], T[0, 0], adjoint)
+    if method == "noda":
+        return _noda(A[:, 0, 0], T, adjoint)
     if method == "arnoldi" and dim > 3:
         estimate = next(_arnoldi(A, T, adjoint), None)
         if estimate is not None:
@@ -215,21 +329,50 @@ def estimate(A, T, method, adjoint=False):
     else:                                               # the fallback, up to M n^2 = 1024: no left vectors
         lam, right = scipy.linalg.eig(K)
     rho = float(np.max(np.abs(lam)))
-    top = np.flatnonzero(np.abs(lam) >= rho * (1 - 1e-8))
+    top = np.flatnonzero(np.abs(lam) >= rho * (1 - config.defaults["mjls.perron_tie_rtol"]))
     k = top[np.argmax(lam[top].real)]                             # the real Perron eigenvalue
     return Estimate(rho, psd_stack(right[:, k], M, n), method,
                      _first_order_lower(K, lam, left, right) if method == "dense" else 0.0)
 
 
-def _single_mode(A, adjoint):
-    """M = 1: rho = rho(A)^2 with eigenvector Re(v v^H) for A v = lambda v (A^T for the adjoint)."""
+def _single_mode(A, p, adjoint):
+    """M = 1: rho = p rho(A)^2 with eigenvector Re(v v^H) for A v = lambda v (A^T for the adjoint);
+    p = T[0, 0] as given (1 up to the row-sum tolerance of the validation: used, not rounded)."""
     A = A.T if adjoint else A
     lam, left, right = scipy.linalg.eig(A, left=True, right=True)
     k = np.argmax(np.abs(lam))
     v = right[:, k]
     lower = _first_order_lower(A, lam, left, right)
-    return Estimate(float(abs(lam[k])) ** 2, psd_stack(np.outer(v, np.conj(v)), 1, len(A)), "single_mode",
-                     lower * lower)
+    return Estimate(p * float(abs(lam[k])) ** 2, psd_stack(np.outer(v, np.conj(v)), 1, len(A)),
+                    "single_mode", p * lower * lower)
+
+
+def _noda(a, T, adjoint):
+    """Scalar modes: L is the nonnegative M x M matrix K = (diag(a^2) T)^T (its transpose for L*).
+    Noda's inverse iteration x <- (r I - K)^-1 x with r = max_j (K x)_j / x_j, the Collatz-Wielandt
+    upper bound, which stays >= rho and falls to it superlinearly, also on periodic chains (Noda,
+    Numer. Math. 17, 1971); x stays positive because (r I - K)^-1 >= I / r. One sparse LU a step."""
+    K = scipy.sparse.csr_matrix((T * (a * a)[:, None]) if adjoint else (T * (a * a)[:, None]).T)
+    x = np.ones(len(a))
+    eye = scipy.sparse.identity(len(a), format="csc")
+    rtol = config.defaults["mjls.bracket_rtol"]
+    upper = np.inf
+    for _ in range(config.defaults["mjls.noda_max_steps"]):
+        ratio = K @ x / x
+        if not ratio.max() < upper:                            # stalled (rounding)
+            break
+        upper = float(ratio.max())
+        if upper - ratio.min() <= rtol * upper or upper == 0.0:
+            break
+        try:
+            shift = upper * (1 + 4 * _EPS)          # above rho also where upper is (reducible K)
+            z = scipy.sparse.linalg.splu((shift * eye - K).tocsc()).solve(x)
+        except RuntimeError:                        # shift rounds to an eigenvalue: x is Perron's
+            break
+        if not np.all(z > 0) or not np.all(np.isfinite(z)):
+            break
+        x = z / z.max()
+    return Estimate(upper, x[:, None, None], "noda")
 
 
 def _first_order_lower(K, lam, left, right):
@@ -256,10 +399,13 @@ def _arnoldi(A, T, adjoint):
         try:
             with single_threaded():
                 for _ in range(2):
-                    lam, V = scipy.sparse.linalg.eigs(linear_operator(A, T, adjoint, shift=shift), k=1, which="LM",
-                                                      tol=1e-14, ncv=min(dim - 1, ncv), maxiter=max(1000, dim), v0=v0)
+                    lam, V = scipy.sparse.linalg.eigs(
+                        linear_operator(A, T, adjoint, shift=shift), k=1, which="LM", v0=v0,
+                        tol=config.defaults["mjls.arnoldi_tol"], ncv=min(dim - 1, ncv),
+                        maxiter=max(1000, dim))
                     lam = complex(lam[0]) - shift
-                    if abs(lam.imag) <= 1e-8 * abs(lam) and lam.real >= 0:
+                    real = abs(lam.imag) <= config.defaults["mjls.arnoldi_real_rtol"] * abs(lam)
+                    if real and lam.real >= 0:
                         break
                     shift = abs(lam)
             yield Estimate(abs(lam), psd_stack(V[:, 0], M, n), "arnoldi")

@@ -58,15 +58,21 @@ def test_rho_exactly_one_is_never_stabilising(name):
 
 
 def test_rho_one_up_to_rounding_is_undecided_where_the_estimate_rounds_below_one():
-    """A / sqrt(rho): rho = 1 to within rounding; the estimates that come out below 1 (0.9999999999999998, as
-    in issue 24) must not make the verdict stable."""
+    """A / sqrt(rho): rho = 1 to within rounding; the estimates that come out below 1
+    (0.9999999999999998, as in issue 24) must not make the verdict stable unless it is: a decided
+    verdict agrees with the exact decision on the float data (X - L(X) = I solved in rationals,
+    test_certificate_edges.exactly_stable); the Lyapunov certificate decides some (issue 33)."""
+    from test_certificate_edges import exactly_stable
+
     below = []
     for seed in range(20):
         rng = np.random.default_rng(seed)
         T = random_chain(rng, 2)
         A = random_stack(rng, 2, 2, 1.0, T)
         result = mean_square_stability(A, T)
-        assert result.stabilizing is None and result.rho_lower <= 1 <= result.rho_upper
+        assert result.rho_lower <= 1 and 1 - 1e-12 <= result.rho_upper
+        if result.stabilizing is not None:
+            assert result.stabilizing is exactly_stable(A, T)
         if result.rho < 1:
             below.append(result.rho)
     assert below                                                          # the hard case occurred
