@@ -25,8 +25,10 @@ from .simulate import ClosedLoop, Noise, draw_noise, simulate
 from .stage import Expansion, StageProblem, Value, terminal_value
 from .taylor import (QuadraticExpansion, sigma_point_linearizations, statistical_taylor_expansion,
                      statistical_taylor_linearization_error)
-from .trajectory import (Reference, TrajectoryOptimizationResult, backward_pass, optimize_belief_trajectory,
-                         reference_trajectory)
+from .trajectory import (IndefiniteStep, Reference, TrajectoryOptimizationResult, backward_pass,
+                         optimize_belief_trajectory, reference_trajectory)
+from .damped import DampedResult, optimize_damped
+from .planning import bend_toward_landmark, covariance_aware_optimum
 from .ukf import UKF
 from .vdberg import BeliefAffineController, BeliefDynamics, BeliefILQGResult, belief_ilqg, belief_vector
 
@@ -38,4 +40,5 @@ __all__ = ["UKF", "BeliefFilter", "DiracMixture", "ParticleFilter", "ekf_step", 
            "LineSearch", "Reference", "StageProblem", "TrajectoryOptimizationResult", "Value",
            "affine_policy_value", "backward_pass", "improved_policy_value", "line_search", "policy_step",
            "optimize_belief_trajectory", "reference_trajectory", "terminal_value", "BeliefDynamics",
-           "BeliefILQGResult", "belief_ilqg", "belief_vector"]
+           "BeliefILQGResult", "belief_ilqg", "belief_vector", "IndefiniteStep", "DampedResult", "optimize_damped",
+           "bend_toward_landmark", "covariance_aware_optimum"]

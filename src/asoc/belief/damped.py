@@ -78,14 +78,36 @@ def optimize_damped(
 
     Parameters
     ----------
-    model, cost, mean0, cov0, filt, policy, rtol, n_cost_runs, rng, derivatives, alpha_min :
-        As for :func:`~asoc.belief.optimize_belief_trajectory` (nominal reference, Alg. 2.3
-        line search inside every damped pass).
+    model : NonlinearModel
+        The system.
+    cost : QuadraticCost
+        The cost; its ``K`` is the horizon.
+    mean0, cov0 : array_like, (n_x,) and (n_x, n_x)
+        The initial estimate p_0^x (Gaussian); ``cov0`` positive semidefinite.
+    filt : BeliefFilter, optional
+        The filter (default :class:`~asoc.belief.UKF`); its Dirac mixture is the expansion point.
+    policy : AffinePolicy, optional
+        The initial policy (default L = 0, d = 0).
     max_iterations : int
         Limit on the backward passes (accepted or not), >= 1.
-    mu_min, mu_max, factor : float
-        Smallest non-zero damping, the damping beyond which the search stops (``no_progress``), and
-        its growth/shrink factor (> 1).
+    rtol : float
+        Stop when abs(J^[eta+1] - J^[eta]) <= rtol abs(J^[eta]) (Step 9), rtol > 0.
+    n_cost_runs : int
+        J^[eta] is the mean cost of ``n_cost_runs`` (>= 1) closed-loop runs with common random
+        numbers from ``rng``.
+    rng : numpy.random.Generator
+        The source of those draws.
+    mu_min : float
+        The smallest non-zero damping, > 0.
+    mu_max : float
+        The damping beyond which the search stops (``no_progress``), >= ``mu_min``.
+    factor : float
+        The damping's growth and shrink factor, > 1.
+    derivatives : {"analytic", "numdifftools"}
+        Model and cost derivatives where available, or numerical ones.
+    alpha_min : float
+        The constant alpha of Alg. 2.3 below which a step is rejected, in (0, 1]; the line search
+        runs inside every damped pass (nominal reference).
 
     Returns
     -------

@@ -43,6 +43,7 @@ from .cramer_von_mises import lcd_dirac, lcd_gaussian, mcvmd, mcvmd_constant, mc
 from .regression import DistributionGP, FitResult, MeanKernelGP
 from .sampling import (DiracApproximation, gaussian_dirac_mixtures, mcvmd_standard_normal_dirac,
                        standard_normal_dirac_approximation)
+from .study import KernelStudy, kernel_study
 from .transport import omat, omat_matrix, ospa, ospa_matrix, wasserstein_gaussian, wasserstein_gaussian_matrix
 
 __all__ = ["hellinger", "hellinger_gaussian", "hellinger_gaussian_matrix", "hellinger_matrix", "jensen_shannon",
@@ -53,4 +54,4 @@ __all__ = ["hellinger", "hellinger_gaussian", "hellinger_gaussian_matrix", "hell
            "bilinear_product", "exponential", "gamma_exponential", "matern", "mean_kernel_dirac",
            "mean_kernel_gaussian", "rational_quadratic", "squared_exponential", "DistributionGP", "FitResult",
            "MeanKernelGP", "DiracApproximation", "gaussian_dirac_mixtures", "mcvmd_standard_normal_dirac",
-           "standard_normal_dirac_approximation"]
+           "standard_normal_dirac_approximation", "KernelStudy", "kernel_study"]

@@ -78,18 +78,26 @@ def kernel_study(
     n_seeds : int
         Number of training sets (>= 1); seed i uses the child ``rng.spawn`` i.
     rng : numpy.random.Generator
-    n_train, n_dirac, b_max : as in the thesis (200, 10) and our reading of b_max (100).
+        The source of the training sets and of the restarts.
+    n_train : int
+        Training inputs per set (200 in the thesis), >= 3.
     grid_step : float
         Step of the test grid in mean and variance (0.1 in the thesis; coarser for speed).
+    n_dirac : int
+        Dirac components per input distribution (10 in the thesis).
+    b_max : float
+        The mCvMd's largest kernel width (our reading of the thesis: 100).
     n_restarts : int
         Random restarts of each likelihood maximisation besides the data-based start.
     n_jobs : int
         Worker processes (joblib; -1 all cores); the result does not depend on it.
     progress : bool
+        Show a progress bar.
 
     Returns
     -------
     KernelStudy
+        The errors per seed, test function and GP, and the fits that did not converge.
 
     Raises
     ------
