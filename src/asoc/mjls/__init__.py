@@ -69,8 +69,9 @@ from .moments import h2_cost, second_moment_step, second_moments, steady_state_s
 from .observed_mode_feedback import ObservedModeResult, observed_mode_state_feedback
 from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
 from .random import random_mjls
-from .monte_carlo import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
-                       StaticGain, TimeVariantGain, simulate)
+from .controllers import (Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain,
+                          TimeVariantGain)
+from .monte_carlo import SimulationResult, simulate
 from .closed_loops import closed_loop
 from .moment_operator import ms_operator
 from .stability import mean_square_stability, MeanSquareStability, ms_spectral_radius, Verdict

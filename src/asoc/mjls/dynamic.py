@@ -46,11 +46,12 @@ import numpy as np
 
 from .. import config
 from ..linalg import relative_change
-from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_scalar
 from .moment_bounds import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
 from .moments import certified_second_moment
 from .closed_loops import augmented_closed_loop, noise_covariances
+from .controllers import DynamicOutputFeedback
+from .design_result import CertifiedDesignResult
 from .stability import mean_square_stability
 from .optimality import METHODS, GainSolve, solve_gains
 from .system import check_system, successor_average
@@ -59,7 +60,7 @@ __all__ = ["steady_state_cost", "certified_steady_state_cost", "DynamicOutputFee
            "StoppingRule", "dynamic_output_feedback", "iterate_bounds"]
 
 
-def steady_state_cost(sys, F, K, L):
+def steady_state_cost(sys, F, K=None, L=None):
     """True average cost (3.38) of (3.37): sum_i tr[Q~_i X~_inf^i] by Prop. 3.24.
 
     X~_inf solves the coupled Lyapunov equations of Prop. 3.23 with mu = mu_inf.
@@ -68,7 +69,10 @@ def steady_state_cost(sys, F, K, L):
     ----------
     sys : MJLS
     F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
-        Gains of the controller (3.37).
+        Gains of the controller (3.37); or F a time-invariant
+        :class:`asoc.mjls.DynamicOutputFeedback` or a dynamic design's result, and K, L
+        omitted (as :func:`asoc.mjls.augmented_closed_loop`). For any time-invariant
+        controller, static ones too, :func:`asoc.mjls.average_cost` gives the cost alone.
 
     Returns
     -------
@@ -84,6 +88,9 @@ def steady_state_cost(sys, F, K, L):
     ------
     ValueError
         If a gain has the wrong shape or non-finite entries.
+    TypeError
+        If F is a controller other than a time-invariant DynamicOutputFeedback (or a result
+        holding one).
 
     Examples
     --------
@@ -91,14 +98,14 @@ def steady_state_cost(sys, F, K, L):
     >>> sys = sec373_system(1)
     >>> r = dynamic_output_feedback(sys)
     >>> cost, X, rho = steady_state_cost(sys, r.F, r.K, r.L)
-    >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1)
-    (True, True)
+    >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1), steady_state_cost(sys, r)[0] == cost
+    (True, True, True)
     """
     cost, X, stability = certified_steady_state_cost(sys, F, K, L)
     return cost, X, stability.rho
 
 
-def certified_steady_state_cost(sys, F, K, L):
+def certified_steady_state_cost(sys, F, K=None, L=None):
     """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place of
     its rho, for callers that report the bracket too: one spectral radius per controller.
 
@@ -120,7 +127,7 @@ def certified_steady_state_cost(sys, F, K, L):
 
 
 @dataclass(kw_only=True)
-class DynamicOutputFeedbackResult(IterativeResult):
+class DynamicOutputFeedbackResult(CertifiedDesignResult):
     """Result of Algorithm 3.2 (:func:`dynamic_output_feedback`).
 
     Attributes
@@ -134,14 +141,10 @@ class DynamicOutputFeedbackResult(IterativeResult):
         repeat), ``"max_iterations"``, ``"diverged"`` (the bounds grew beyond
         ``mjls.divergence_threshold``) or ``"linalg_error"`` (solving (3.51) failed).
     iterations : int
-    rho : float
-        Mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2).
-    stabilizing : bool or None
-        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
-        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
-        (undecided).
-    rho_bracket : tuple of float
-        (rho_lower, rho_upper), the certified bracket of rho.
+    stability : MeanSquareStability
+        The certificate of the augmented closed loop (3.39) (Cor. 3.2); ``rho``,
+        ``rho_bracket`` and ``stabilizing`` read it
+        (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float
         True average cost (3.38) from Prop. 3.24 (inf if not stabilizing).
     bound : float
@@ -176,10 +179,10 @@ class DynamicOutputFeedbackResult(IterativeResult):
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
+    controller_type = DynamicOutputFeedback
+    controller_fields = ("F", "K", "L")
+
     iterations: int
-    rho: float
-    rho_bracket: tuple = (np.nan, np.nan)
-    stabilizing: bool | None
     cost: float
     bound: float
     Xbar: np.ndarray
@@ -191,16 +194,6 @@ class DynamicOutputFeedbackResult(IterativeResult):
     solve: GainSolve = None
     worst_residual: float = 0.0
     period: int = 1
-
-    @property
-    def controller(self):
-        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
-        :func:`asoc.mjls.average_cost`."""
-        from .monte_carlo import DynamicOutputFeedback
-
-        return DynamicOutputFeedback(self.F, self.K, self.L)
-
-
 
 
 class StoppingRule:
@@ -416,8 +409,7 @@ def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
                       f"in the mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=3)
     history = {f"trace_{k}": run["traces"][:, j] for j, k in enumerate(("Xbar", "Xunder", "Pbar", "Punder"))}
     return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=status == "converged", status=status,
-                                       message=message, iterations=it, rho=rho, rho_bracket=stability.bracket,
-                                       stabilizing=stabilizing, cost=cost, bound=bound, Xbar=Xbar,
+                                       message=message, iterations=it, stability=stability, cost=cost, bound=bound, Xbar=Xbar,
                                        Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history,
                                        seconds=seconds, solve=solve, worst_residual=run["worst_residual"],
                                        period=stopping.period)

@@ -26,23 +26,24 @@ import numpy as np
 
 from ..linalg import transpose
 from ..progress import progress_bar
-from ..result import IterativeResult
 from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
 from .moment_bounds import bound_costate_step, bound_moment_step
 from .dynamic import dynamic_output_feedback
 from .moments import second_moment_step
 from .closed_loops import noise_covariances
+from .controllers import DynamicOutputFeedback
+from .design_result import DesignResult
 from .optimality import METHODS, gains_from_bounds
 from .system import MJLS, successor_average
 
-__all__ = ["FiniteHorizonResult", "time_variant_controller", "Stages", "stages",
+__all__ = ["FiniteHorizonResult", "Stages", "stages",
            "check_initial_state", "initial_bounds", "mode_distributions",
            "augmented_initial_moment", "augmented_cost", "finite_horizon_cost", "initial_gains",
            "finite_horizon_dynamic_output_feedback"]
 
 
 @dataclass(kw_only=True)
-class FiniteHorizonResult(IterativeResult):
+class FiniteHorizonResult(DesignResult):
     """Result of Algorithm 3.3 (:func:`finite_horizon_dynamic_output_feedback`).
 
     Attributes
@@ -77,6 +78,9 @@ class FiniteHorizonResult(IterativeResult):
     ('converged', (6, 2, 2, 2), True)
     """
 
+    controller_type = DynamicOutputFeedback
+    controller_fields = ("F", "K", "L", "xhat0")
+
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
@@ -90,28 +94,6 @@ class FiniteHorizonResult(IterativeResult):
     Punder: np.ndarray = field(repr=False)
     rejected: int = 0
     seconds: float = 0.0
-
-    @property
-    def controller(self):
-        """The controller (3.55) as a time-variant :class:`asoc.mjls.DynamicOutputFeedback`."""
-        return time_variant_controller(self)
-
-
-def time_variant_controller(result):
-    """The controller (3.55) of a finite-horizon result (F, K, L per step, xhat0) for simulate.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
-    >>> time_variant_controller(res).xhat0.tolist()
-    [5.0, 0.0]
-    """
-    from .monte_carlo import DynamicOutputFeedback
-
-    return DynamicOutputFeedback(result.F, result.K, result.L, xhat0=result.xhat0)
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ from ..linalg import transpose
 from ..validation import real_array
 from .finite_horizon import (augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions,
                              stages)
-from .monte_carlo import Controller
+from .controllers import Controller
 from .system import check_system
 
 __all__ = ["ModeObservedResult", "ModeObservedLQG", "control_riccati", "markov_jump_filter",
