@@ -33,7 +33,7 @@ def is_controller(value):
     >>> is_controller(StaticGain([[1.0]])), is_controller(np.eye(2))
     (True, False)
     """
-    return isinstance(value, Controller) or hasattr(value, "controller")
+    return isinstance(value, Controller) or hasattr(type(value), "controller")   # not evaluated
 
 
 def _gains(value, name, kind):

@@ -117,7 +117,9 @@ def _certificate(stability):
 def _statespace(F, K, L, D, dt, name):
     """``control.ss(F, K, L, D, dt)`` from y to u, its signals named y[j], u[i], xhat[k]."""
     control = import_control()
-    if dt is not True:
+    if dt is None:
+        dt = True
+    elif dt is not True:
         dt = real_scalar(dt, "dt", low=0, low_open=True)
     (nu, ny), nc = D.shape, F.shape[0]
     return control.ss(F, K, L, D, dt, name=name, inputs=[f"y[{j}]" for j in range(ny)],
@@ -166,8 +168,9 @@ class StaticGain(Controller):
 
         Parameters
         ----------
-        dt : float or True
-            Sampling time (True: discrete, unspecified, as python-control).
+        dt : float, True or None
+            Sampling time (True or None: discrete, period unspecified, as python-control's
+            True).
 
         Raises
         ------
@@ -275,12 +278,14 @@ class DynamicOutputFeedback(Controller):
     def __init__(self, F, K, L, xhat0=None, *, stability=None):
         self.F, self.K, self.L = (real_array(a, name) for a, name in ((F, "F"), (K, "K"), (L, "L")))
         if self.F.ndim not in (2, 3) or self.F.shape[-1] != self.F.shape[-2]:
-            raise ValueError(f"F: expected shape (nc, nc) or (horizon, nc, nc), found shape {self.F.shape}")
+            raise ValueError(f"F: expected shape (nc, nc) or (horizon, nc, nc), found shape "
+                             f"{self.F.shape}")
         self.time_variant = self.F.ndim == 3
         nc = self.F.shape[-1]
         self.xhat0 = np.zeros(nc) if xhat0 is None else real_array(xhat0, "xhat0")
         if self.xhat0.shape != (nc,):
-            raise ValueError(f"xhat0: expected shape ({nc},) (nc = {nc} from F), found shape {self.xhat0.shape}")
+            raise ValueError(f"xhat0: expected shape ({nc},) (nc = {nc} from F), found shape "
+                             f"{self.xhat0.shape}")
         self.stability = _certificate(stability)
 
     def check(self, sys):
@@ -311,8 +316,9 @@ class DynamicOutputFeedback(Controller):
 
         Parameters
         ----------
-        dt : float or True
-            Sampling time (True: discrete, unspecified, as python-control).
+        dt : float, True or None
+            Sampling time (True or None: discrete, period unspecified, as python-control's
+            True).
 
         Raises
         ------

@@ -161,9 +161,9 @@ def _bounded_alg32(sys, nc):
     """Alg. 3.2's controller after at most ``mjls.exact_warm_start_iterations`` iterations,
     padded with zeros or cut to nc states (None when Alg. 3.2 fails at once)."""
     run = iterate_bounds(sys, 1e-10, config.defaults["mjls.exact_warm_start_iterations"])
-    if run["best"] is None:
+    if run.best is None:
         return None
-    F0, K0, L0 = run["best"][1]
+    F0, K0, L0 = run.best.gains
     F, K, L = np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu, nc))
     m = min(nc, sys.nx)
     F[:m, :m], K[:m], L[:, :m] = F0[:m, :m], K0[:m], L0[:, :m]

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..result import Status
 from ..validation import boolean, integer, real_scalar
 from .controllers import ModeDependentGain
 from .design_result import CertifiedDesignResult
@@ -135,21 +136,21 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
     warn = boolean(warn, "warn")
     start = time.perf_counter()
     P = np.zeros((sys.M, sys.nx, sys.nx))
-    status, delta = "max_iterations", np.inf
+    status, delta = Status.MAX_ITERATIONS, np.inf
     it = 0
     for it in range(1, max_iter + 1):
         try:
             L, P_new = riccati_step(sys, P)
         except np.linalg.LinAlgError:
-            status = "linalg_error"
+            status = Status.LINALG_ERROR
             break
         if not np.abs(P_new).max() <= DIVERGED:
-            status = "diverged"
+            status = Status.DIVERGED
             break
         delta = np.abs(P_new - P).max() / (1 + np.abs(P_new).max())
         P = P_new
         if delta < tol:
-            status = "converged"
+            status = Status.CONVERGED
             break
     try:
         L, _ = riccati_step(sys, P)
@@ -162,10 +163,10 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
                "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "
                            f"stabilisable even with observed mode",
                "linalg_error": f"stopped at step {it}: R_i + B_i^T E_i(P) B_i is singular"}[status]
-    if warn and status != "converged":
+    if warn and status is not Status.CONVERGED:
         warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning,
                       stacklevel=2)
-    return ObservedModeResult(L=L, P=P, stability=stability, converged=status == "converged",
+    return ObservedModeResult(L=L, P=P, stability=stability, converged=status is Status.CONVERGED,
                               status=status, message=message, iterations=it, seconds=time.perf_counter() - start)
