@@ -178,12 +178,12 @@ class DynamicOutputFeedbackResult(CertifiedDesignResult):
     (True, 'converged', (2, 2, 2), (2, 2))
     """
 
-    F: np.ndarray
-    K: np.ndarray
-    L: np.ndarray
     controller_type = DynamicOutputFeedback
     controller_fields = ("F", "K", "L")
 
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
     iterations: int
     cost: float
     bound: float

@@ -69,12 +69,12 @@ class ExactDynamicOutputFeedbackResult(CertifiedDesignResult):
     ('max_iterations', 3, ['cost'], (2, 2))
     """
 
-    F: np.ndarray
-    K: np.ndarray
-    L: np.ndarray
     controller_type = DynamicOutputFeedback
     controller_fields = ("F", "K", "L")
 
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
     iterations: int
     cost: float
     history: dict = field(repr=False)
@@ -109,12 +109,12 @@ class ExactFiniteHorizonResult(DesignResult):
     ('max_iterations', (5, 2, 2), 4, True)
     """
 
-    F: np.ndarray
-    K: np.ndarray
-    L: np.ndarray
     controller_type = DynamicOutputFeedback
     controller_fields = ("F", "K", "L", "xhat0")
 
+    F: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
     xhat0: np.ndarray
     iterations: int
     cost: float
