@@ -141,13 +141,13 @@ def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_resi
     """
     rho = np.nan if stability is None else stability.rho
     common = dict(solver_status=solver_status, margin=margin, equality_residual=equality_residual,
-                  variables=variables or {}, stability=stability)
+                  variables=variables or {})
     verified = (L is not None and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
                 and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
     if not verified:
         status, message = _not_feasible(solver_status, L, margin, equality_residual, eps)
         return LMIResult(feasible=False, L=None, bound=np.inf, converged=False, status=status, message=message,
-                         **(common | dict(stability=None)))
+                         **common)                     # no gain, no certificate
     stabilizing = False if stability is None else stability.stabilizing
     text = f"the LMIs hold (margin {margin:.1e} >= {-eps / 2:.1e})" if not np.isnan(margin) else \
         f"the solver reports {solver_status!r}"
@@ -157,7 +157,7 @@ def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_resi
         message = (f"{text}, but the recovered gain is not certified to stabilise (rho = {rho:.4f}), which the theorem "
                    f"excludes: a numerical failure of the gain's recovery, or a counterexample")
     return LMIResult(feasible=True, L=L, bound=bound, converged=True, status="converged",
-                     message=message, **common)
+                     message=message, stability=stability, **common)
 
 
 def _not_feasible(solver_status, L, margin, residual, eps):
