@@ -43,7 +43,8 @@ def _gains(value, name, kind):
         what = "a time-variant " if getattr(controller, "time_variant", False) else "a "
         raise TypeError(f"{name}: expected a {kind.__name__} or its gains, found {what}"
                         f"{type(controller).__name__}; average_cost(sys, controller) and "
-                        f"controller_closed_loop(sys, controller) take any time-invariant controller")
+                        f"controller_closed_loop(sys, controller) take any time-invariant "
+                        f"controller")
     return controller
 
 
@@ -188,7 +189,8 @@ def augmented_closed_loop(sys, F, K=None, L=None):
 
     >>> from asoc.mjls import dynamic_output_feedback
     >>> res = dynamic_output_feedback(sys)
-    >>> bool(np.array_equal(augmented_closed_loop(sys, res)[0], augmented_closed_loop(sys, res.F, res.K, res.L)[0]))
+    >>> by_gains = augmented_closed_loop(sys, res.F, res.K, res.L)
+    >>> all(np.array_equal(a, b) for a, b in zip(augmented_closed_loop(sys, res), by_gains))
     True
     """
     F, K, L = _dynamic_gains(F, K, L)
@@ -213,8 +215,8 @@ def _dynamic_gains(F, K, L):
     """(F, K, L) as given, or those of the dynamic controller (or result) passed as F."""
     if is_controller(F):
         if K is not None or L is not None:
-            raise TypeError("K, L: expected to be omitted when F is a controller or a design result, "
-                            "found gains")
+            raise TypeError("K, L: expected to be omitted when F is a controller or a design "
+                            "result, found gains")
         controller = _gains(F, "F", DynamicOutputFeedback)
         return controller.F, controller.K, controller.L
     if K is None or L is None:
@@ -241,8 +243,10 @@ def controller_closed_loop(sys, controller, name="controller"):
 
     Returns
     -------
-    Acl, HHt_cl : numpy.ndarray, each (M, n, n)
-        n = nx, or nx + nc for the dynamic controller.
+    Acl : numpy.ndarray, shape (M, n, n)
+        The closed loop; n = nx, or nx + nc for the dynamic controller.
+    HHt_cl : numpy.ndarray, shape (M, n, n)
+        Its noise covariances.
 
     Raises
     ------
@@ -268,8 +272,9 @@ def controller_closed_loop(sys, controller, name="controller"):
     if isinstance(controller, DynamicOutputFeedback) and not controller.time_variant:
         return augmented_closed_loop(sys, controller.F, controller.K, controller.L)[:2]
     if not isinstance(controller, (StaticGain, ModeDependentGain)):
-        raise TypeError(f"{name}: expected a time-invariant controller (StaticGain, ModeDependentGain, "
-                        f"DynamicOutputFeedback) or a design result with one, found "
+        raise TypeError(f"{name}: expected a time-invariant controller (StaticGain, "
+                        f"ModeDependentGain, DynamicOutputFeedback) or a design result with one, "
+                        f"found "
                         f"{'a time-variant ' if getattr(controller, 'time_variant', False) else ''}"
                         f"{type(controller).__name__}")
     HHt, JJt = noise_covariances(sys)

@@ -23,7 +23,8 @@ from ..optimize import BFGS_STATUS, bfgs
 from ..validation import boolean, integer, real_scalar
 from .dynamic import iterate_bounds
 from .finite_horizon import (augmented_initial_moment, check_initial_state, finite_horizon_cost,
-                             finite_horizon_dynamic_output_feedback, initial_gains, mode_distributions, stages)
+                             finite_horizon_dynamic_output_feedback, initial_gains,
+                             mode_distributions, stages)
 from .gradients import (average_cost_and_gradient, closed_loop_radius, finite_horizon_cost_and_gradient,
                         radius_and_gradient)
 from .closed_loops import augmented_closed_loop
@@ -253,8 +254,9 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
     value = history[-1] if len(history) else np.inf
     return ExactDynamicOutputFeedbackResult(
         F=F, K=K, L=L, converged=status == "converged", status=status,
-        message=message or _bfgs_message(status, it, value, name), iterations=it, stability=stability,
-        cost=cost, history={name: history}, seconds=time.perf_counter() - start)
+        message=message or _bfgs_message(status, it, value, name), iterations=it,
+        stability=stability, cost=cost, history={name: history},
+        seconds=time.perf_counter() - start)
 
 
 def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False):

@@ -135,7 +135,8 @@ def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_resi
     'the LMIs hold (margin 1.0e-03 >= -5.0e-07), but the '
     >>> lmi_result("infeasible_inaccurate").status
     'inaccurate'
-    >>> miss = lmi_result("optimal_inaccurate", np.array([[1.0]]), 2.0, margin=-1e-3, equality_residual=0.0)
+    >>> miss = lmi_result("optimal_inaccurate", np.array([[1.0]]), 2.0, margin=-1e-3,
+    ...                   equality_residual=0.0)
     >>> miss.feasible, miss.status, miss.L is None
     (False, 'inaccurate', True)
     """

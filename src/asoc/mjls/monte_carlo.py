@@ -182,7 +182,8 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     ----------
     sys : MJLS
     controller : Controller or a design result
-        E.g. :class:`asoc.mjls.StaticGain`, :class:`asoc.mjls.DynamicOutputFeedback`, :class:`asoc.mjls.ModeDependentGain`,
+        E.g. :class:`asoc.mjls.StaticGain`, :class:`asoc.mjls.DynamicOutputFeedback`,
+        :class:`asoc.mjls.ModeDependentGain`,
         or the result of a design (``static_output_feedback(sys)``, ...), whose
         ``.controller`` is used.
     x0 : array_like, (nx,) or (M, nx)

@@ -157,7 +157,8 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
         stability = mean_square_stability(sys.A + sys.B @ L, sys.T)
     except np.linalg.LinAlgError:
         L, stability = np.full((sys.M, sys.nu, sys.nx), np.nan), None
-    rho, stabilizing = (np.inf, False) if stability is None else (stability.rho, stability.stabilizing)
+    rho, stabilizing = ((np.inf, False) if stability is None else
+                        (stability.rho, stability.stabilizing))
     message = {"converged": f"converged after {it} steps (relative change {delta:.2g} < tol = {tol:.2g})",
                "max_iterations": f"did not converge in {it} steps (relative change {delta:.2g} >= tol = {tol:.2g})",
                "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "

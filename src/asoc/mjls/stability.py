@@ -266,7 +266,8 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     >>> mean_square_stability(res.controller)
     Traceback (most recent call last):
     ...
-    TypeError: A_stack: a controller's closed loop needs its system: mean_square_stability(sys, controller)
+    TypeError: A_stack: a controller's closed loop needs its system: \
+mean_square_stability(sys, controller)
     """
     loop = _loop(A_stack, T)
     if isinstance(loop, MeanSquareStability):
@@ -289,7 +290,8 @@ def _loop(A_stack, T):
                         f"{type(A_stack).__name__}; a controller or a design result comes second: "
                         f"mean_square_stability(sys, controller)")
     if isinstance(A_stack, Controller) or not hasattr(A_stack, "stability"):
-        what = ("a controller's closed loop needs its system" if isinstance(A_stack, Controller) else
+        alone = isinstance(A_stack, Controller)
+        what = ("a controller's closed loop needs its system" if alone else
                 f"a finite-horizon design ({type(A_stack).__name__}) has a time-variant controller")
         raise TypeError(f"A_stack: {what}: mean_square_stability(sys, controller)")
     if A_stack.stability is None:

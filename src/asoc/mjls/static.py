@@ -452,7 +452,8 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
                       f"mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=2)
     history = {"trace_X": run["trace_X"], "trace_P": run["trace_P"]}
     return StaticOutputFeedbackResult(L=L, converged=status == "converged", status=status,
-                                      message=message, iterations=run["iterations"], stability=stability, cost=cost, X=run["X"],
+                                      message=message, iterations=run["iterations"],
+                                      stability=stability, cost=cost, X=run["X"],
                                       P=run["P"], history=history, seconds=seconds)
 
 

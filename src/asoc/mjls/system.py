@@ -489,7 +489,7 @@ class MJLS:
 
 
 def import_control():
-    """The python-control module, or an ImportError that says how to install it (``asoc[control]``)."""
+    """The python-control module, or an ImportError saying how to install it (``asoc[control]``)."""
     try:
         import control
     except ImportError as err:
