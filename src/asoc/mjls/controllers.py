@@ -128,7 +128,7 @@ def _statespace(F, K, L, D, dt, name):
 
 
 def _gain_statespace(L, dt, name):
-    """u = L y as a StateSpace without states (D = L)."""
+    """The gain u = L y as a StateSpace without states (D = L)."""
     nu, ny = L.shape
     return _statespace(np.zeros((0, 0)), np.zeros((0, ny)), np.zeros((nu, 0)), L, dt, name)
 
@@ -158,13 +158,15 @@ class StaticGain(Controller):
         self.stability = _certificate(stability)
 
     def input(self, k, y, theta, state):
+        """``(u, state)`` at step k (:meth:`Controller.input`)."""
         return y @ self.L.T, state
 
     def check(self, sys):
+        """Raise a ValueError naming the gain that does not fit ``sys``."""
         _fit(self.L, "L", (sys.nu, sys.ny), sys)
 
     def to_statespace(self, dt=True):
-        """u = L y as a ``control.StateSpace`` without states (D = L), from y[j] to u[i].
+        """The gain u = L y as a ``control.StateSpace`` without states (D = L), from y[j] to u[i].
 
         Parameters
         ----------
@@ -211,9 +213,11 @@ class ModeDependentGain(Controller):
         self.stability = _certificate(stability)
 
     def input(self, k, y, theta, state):
+        """``(u, state)`` at step k (:meth:`Controller.input`)."""
         return np.einsum("nab,nb->na", self.L[theta], y), state
 
     def check(self, sys):
+        """Raise a ValueError naming the gain that does not fit ``sys``."""
         _fit(self.L, "L", (sys.M, sys.nu, sys.ny), sys)
 
     def to_statespace(self, dt=True):
@@ -246,9 +250,11 @@ class TimeVariantGain(Controller):
         self.L = real_array(L, "L", ndim=3)
 
     def input(self, k, y, theta, state):
+        """``(u, state)`` at step k (:meth:`Controller.input`)."""
         return y @ self.L[min(k, len(self.L) - 1)].T, state
 
     def check(self, sys):
+        """Raise a ValueError naming the gain that does not fit ``sys``."""
         _fit(self.L, "L", (len(self.L), sys.nu, sys.ny), sys)
 
     def _sizes(self):
@@ -289,6 +295,7 @@ class DynamicOutputFeedback(Controller):
         self.stability = _certificate(stability)
 
     def check(self, sys):
+        """Raise a ValueError naming the gain that does not fit ``sys``."""
         lead = self.F.shape[:-2]
         nc = self.F.shape[-1]
         _fit(self.K, "K", lead + (nc, sys.ny), sys)
@@ -301,9 +308,11 @@ class DynamicOutputFeedback(Controller):
         return self.F[k], self.K[k], self.L[k]
 
     def start(self, n_runs):
+        """The initial controller state x^_0 for ``n_runs`` runs, (n_runs, nc)."""
         return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
 
     def input(self, k, y, theta, xhat):
+        """``(u, state)`` at step k (:meth:`Controller.input`)."""
         F, K, L = self._at(k)
         u = xhat @ L.T
         return u, xhat @ F.T + y @ K.T

@@ -11,8 +11,14 @@ import pytest
 import asoc.mjls as mjls
 from asoc.mjls.closed_loops import controller_closed_loop
 from asoc.mjls.design_result import CertifiedDesignResult, DesignResult
-from asoc.mjls.examples import (SEC373_COV0, SEC373_MEAN0, SEC373_MU0, networked_loop,
-                                sec354_system, sec373_system)
+from asoc.mjls.examples import (
+    SEC373_COV0,
+    SEC373_MEAN0,
+    SEC373_MU0,
+    networked_loop,
+    sec354_system,
+    sec373_system,
+)
 from asoc.result import STATUS_CODES, IterativeResult, Status
 
 control = pytest.importorskip("control")
