@@ -12,7 +12,8 @@ from asoc.mjls.examples import (SEC354_X0, SEC373_COV0, SEC373_MEAN0, SEC373_MU0
                                 sec373_system)
 from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
 from asoc.mjls.finite_horizon import finite_horizon_dynamic_output_feedback
-from asoc.mjls.monte_carlo import DynamicOutputFeedback, StaticGain, simulate
+from asoc.mjls.controllers import DynamicOutputFeedback, StaticGain
+from asoc.mjls.monte_carlo import simulate
 from asoc_companion.timing import alternating_medians
 
 

@@ -27,8 +27,13 @@ Compare
     (Table 3.2's Monte Carlo comparison), :func:`mode_observed_lqg` (the mode-observing
     optimum, a lower bound).
 
-Every design returns a result with ``.controller``, ``.cost``, ``.stabilizing``, ``.status``
-and ``.message``. Example, a loop that loses input packets:
+Every design returns a result with ``.controller``, ``.cost``, ``.status`` and ``.message``;
+a time-invariant design's also holds ``.stability``, the certificate of its closed loop
+(``.rho``, ``.rho_bracket``, ``.stabilizing``). The analysis functions take a result or its
+controller in place of gains: ``mean_square_stability(sys, result)``,
+``augmented_closed_loop(sys, result)``, ``steady_state_cost(sys, result)``, ``simulate``;
+``result.controller.to_statespace(dt)`` hands it to python-control. Example, a loop that loses
+input packets:
 
 >>> import numpy as np
 >>> from asoc.mjls.examples import networked_loop
@@ -39,6 +44,10 @@ and ``.message``. Example, a loop that loses input packets:
 >>> dynamic = exact_dynamic_output_feedback(sys)
 >>> static.status, dynamic.status, bool(dynamic.cost < static.cost)
 ('converged', 'converged', True)
+>>> mean_square_stability(dynamic) is dynamic.stability
+True
+>>> dynamic.controller.to_statespace(0.1).nstates
+3
 >>> runs = simulate(sys, dynamic, np.zeros(3), 100, 500, np.random.default_rng(0))
 >>> bool(abs(runs.average_cost.mean() - dynamic.cost) < 0.1 * dynamic.cost)
 True
@@ -53,7 +62,8 @@ bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations)
 mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
 ``gradients`` and ``exact_cost_design`` (exact-cost optimisation of (3.37) and (3.55), not in the
 thesis), ``costs`` (the exact average cost (3.9)), ``monte_carlo`` (simulation),
-``monte_carlo_comparison`` (Table 3.2), ``examples`` (the thesis's examples), ``random``.
+``monte_carlo_comparison`` (Table 3.2), ``controllers`` and ``design_result`` (the controllers
+and what every design's result shares), ``examples`` (the thesis's examples), ``random``.
 """
 
 from .costs import average_cost
@@ -69,8 +79,9 @@ from .moments import h2_cost, second_moment_step, second_moments, steady_state_s
 from .observed_mode_feedback import ObservedModeResult, observed_mode_state_feedback
 from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
 from .random import random_mjls
-from .monte_carlo import (Controller, DynamicOutputFeedback, ModeDependentGain, SimulationResult,
-                       StaticGain, TimeVariantGain, simulate)
+from .controllers import (Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain,
+                          TimeVariantGain)
+from .monte_carlo import SimulationResult, simulate
 from .closed_loops import closed_loop
 from .moment_operator import ms_operator
 from .stability import mean_square_stability, MeanSquareStability, ms_spectral_radius, Verdict

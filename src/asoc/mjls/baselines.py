@@ -25,8 +25,9 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
-from ..result import IterativeResult
 from ..validation import boolean, integer, probability_vector, real_array, real_scalar, semidefinite
+from .controllers import TimeVariantGain
+from .design_result import DesignResult
 from .lmi import EPS, certificate, check_solver, lmi_result, performance_output, solve_quietly
 from .stability import mean_square_stability
 from .system import check_system
@@ -103,7 +104,7 @@ def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):
 
 
 @dataclass(kw_only=True)
-class TimeVariantResult(IterativeResult):
+class TimeVariantResult(DesignResult):
     """Result of :func:`time_variant_feedback` ([163], [165]).
 
     Attributes
@@ -117,14 +118,20 @@ class TimeVariantResult(IterativeResult):
         (the cost became non-finite).
     iterations : int
     seconds : float
+    controller : TimeVariantGain
+        u_k = G_k y_k, for :func:`asoc.mjls.simulate`
+        (:class:`asoc.mjls.design_result.DesignResult`).
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec354_system
     >>> res = time_variant_feedback(sec354_system(1, "state"), 5, [3.0, 0.0])
-    >>> res.status, res.G.shape
-    ('converged', (5, 1, 2))
+    >>> res.status, res.G.shape, res.controller
+    ('converged', (5, 1, 2), TimeVariantGain(horizon=5, nu=1, ny=2))
     """
+
+    controller_type = TimeVariantGain
+    controller_fields = ("G",)
 
     G: np.ndarray
     costs: np.ndarray

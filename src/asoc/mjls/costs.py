@@ -1,7 +1,7 @@
 """The exact average cost (3.9) of a time-invariant controller without mode observation."""
 
 from .dynamic import steady_state_cost
-from .monte_carlo import DynamicOutputFeedback, StaticGain, as_controller
+from .controllers import DynamicOutputFeedback, StaticGain, as_controller
 from .static import static_cost
 from .system import check_system
 

@@ -46,20 +46,23 @@ import numpy as np
 
 from .. import config
 from ..linalg import relative_change
-from ..result import IterativeResult
+from ..result import Status
 from ..validation import boolean, choice, integer, real_scalar
 from .moment_bounds import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
 from .moments import certified_second_moment
 from .closed_loops import augmented_closed_loop, noise_covariances
+from .controllers import DynamicOutputFeedback
+from .design_result import CertifiedDesignResult
 from .stability import mean_square_stability
 from .optimality import METHODS, GainSolve, solve_gains
 from .system import check_system, successor_average
 
 __all__ = ["steady_state_cost", "certified_steady_state_cost", "DynamicOutputFeedbackResult",
-           "StoppingRule", "dynamic_output_feedback", "iterate_bounds"]
+           "StoppingRule", "BoundIterate", "BoundIteration", "dynamic_output_feedback",
+           "iterate_bounds"]
 
 
-def steady_state_cost(sys, F, K, L):
+def steady_state_cost(sys, F, K=None, L=None):
     """True average cost (3.38) of (3.37): sum_i tr[Q~_i X~_inf^i] by Prop. 3.24.
 
     X~_inf solves the coupled Lyapunov equations of Prop. 3.23 with mu = mu_inf.
@@ -68,7 +71,10 @@ def steady_state_cost(sys, F, K, L):
     ----------
     sys : MJLS
     F, K, L : array_like, shapes (nc, nc), (nc, ny), (nu, nc)
-        Gains of the controller (3.37).
+        Gains of the controller (3.37); or F a time-invariant
+        :class:`asoc.mjls.DynamicOutputFeedback` or a dynamic design's result, and K, L
+        omitted (as :func:`asoc.mjls.augmented_closed_loop`). For any time-invariant
+        controller, static ones too, :func:`asoc.mjls.average_cost` gives the cost alone.
 
     Returns
     -------
@@ -84,6 +90,9 @@ def steady_state_cost(sys, F, K, L):
     ------
     ValueError
         If a gain has the wrong shape or non-finite entries.
+    TypeError
+        If F is a controller other than a time-invariant DynamicOutputFeedback (or a result
+        holding one).
 
     Examples
     --------
@@ -91,14 +100,14 @@ def steady_state_cost(sys, F, K, L):
     >>> sys = sec373_system(1)
     >>> r = dynamic_output_feedback(sys)
     >>> cost, X, rho = steady_state_cost(sys, r.F, r.K, r.L)
-    >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1)
-    (True, True)
+    >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1), steady_state_cost(sys, r)[0] == cost
+    (True, True, True)
     """
     cost, X, stability = certified_steady_state_cost(sys, F, K, L)
     return cost, X, stability.rho
 
 
-def certified_steady_state_cost(sys, F, K, L):
+def certified_steady_state_cost(sys, F, K=None, L=None):
     """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place of
     its rho, for callers that report the bracket too: one spectral radius per controller.
 
@@ -120,7 +129,7 @@ def certified_steady_state_cost(sys, F, K, L):
 
 
 @dataclass(kw_only=True)
-class DynamicOutputFeedbackResult(IterativeResult):
+class DynamicOutputFeedbackResult(CertifiedDesignResult):
     """Result of Algorithm 3.2 (:func:`dynamic_output_feedback`).
 
     Attributes
@@ -134,14 +143,10 @@ class DynamicOutputFeedbackResult(IterativeResult):
         repeat), ``"max_iterations"``, ``"diverged"`` (the bounds grew beyond
         ``mjls.divergence_threshold``) or ``"linalg_error"`` (solving (3.51) failed).
     iterations : int
-    rho : float
-        Mean-square spectral radius of the augmented closed loop (3.39) (Cor. 3.2).
-    stabilizing : bool or None
-        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
-        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
-        (undecided).
-    rho_bracket : tuple of float
-        (rho_lower, rho_upper), the certified bracket of rho.
+    stability : MeanSquareStability
+        The certificate of the augmented closed loop (3.39) (Cor. 3.2); ``rho``,
+        ``rho_bracket`` and ``stabilizing`` read it
+        (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float
         True average cost (3.38) from Prop. 3.24 (inf if not stabilizing).
     bound : float
@@ -173,13 +178,13 @@ class DynamicOutputFeedbackResult(IterativeResult):
     (True, 'converged', (2, 2, 2), (2, 2))
     """
 
+    controller_type = DynamicOutputFeedback
+    controller_fields = ("F", "K", "L")
+
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
     iterations: int
-    rho: float
-    rho_bracket: tuple = (np.nan, np.nan)
-    stabilizing: bool | None
     cost: float
     bound: float
     Xbar: np.ndarray
@@ -191,16 +196,6 @@ class DynamicOutputFeedbackResult(IterativeResult):
     solve: GainSolve = None
     worst_residual: float = 0.0
     period: int = 1
-
-    @property
-    def controller(self):
-        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
-        :func:`asoc.mjls.average_cost`."""
-        from .monte_carlo import DynamicOutputFeedback
-
-        return DynamicOutputFeedback(self.F, self.K, self.L)
-
-
 
 
 class StoppingRule:
@@ -228,6 +223,8 @@ class StoppingRule:
     >>> a, b = np.ones((4, 1, 1, 1)), 2 * np.ones((4, 1, 1, 1))
     >>> [rule.status(it, x) for it, x in enumerate((a, b, a), start=1)], rule.period
     ([None, None, 'cycle'], 2)
+    >>> rule.status(4, b) is Status.CYCLE
+    True
     """
 
     def __init__(self, tol, max_iter):
@@ -239,7 +236,8 @@ class StoppingRule:
         self.change, self.period, self.predicted = np.inf, 1, np.inf
 
     def status(self, it, bounds):
-        """The status after iteration ``it`` with the new ``bounds`` (a tuple of four stacks), or None."""
+        """The :class:`asoc.result.Status` after iteration ``it`` with the new ``bounds`` (a
+        tuple of four stacks), or None to go on."""
         new = np.reshape(bounds, (4, -1))
         if not self.recent:
             self.recent.append(new)
@@ -249,11 +247,11 @@ class StoppingRule:
         self.recent.append(new)
         self.change = changes[0]
         if it > 1 and changes[0] < self.tol:
-            return "converged"
+            return Status.CONVERGED
         for period, change in enumerate(changes[1:], start=2):
             if change < self.tol and changes[0] > np.sqrt(self.tol):
                 self.change, self.period = change, period
-                return "cycle"
+                return Status.CYCLE
         self.smallest.append(min(changes))
         self.norms.append(float(np.linalg.norm(new)))
         w = self.window
@@ -261,11 +259,11 @@ class StoppingRule:
             return None
         before, last = min(self.smallest[-2 * w:-w]), min(self.smallest[-w:])
         if self.norms[-1] > 1e6 * self.norms[-w]:
-            return "diverged"
+            return Status.DIVERGED
         if not last < before:
-            return "no_progress"
+            return Status.NO_PROGRESS
         self.predicted = w * np.log(self.tol / last) / np.log(last / before)
-        return "no_progress" if self.predicted > self.max_iter - it else None
+        return Status.NO_PROGRESS if self.predicted > self.max_iter - it else None
 
 
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
@@ -344,21 +342,72 @@ def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None,
     return _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn)
 
 
+@dataclass(frozen=True)
+class BoundIterate:
+    """One iterate of Alg. 3.2: the gains of Step 2 and the bounds of Step 4 they give.
+
+    Attributes
+    ----------
+    bound : float
+        The cost of the bounded second moments (:func:`asoc.mjls.moment_bounds.bound_cost`).
+    gains : tuple of numpy.ndarray
+        (F, K, L) of (3.37).
+    bounds : tuple of numpy.ndarray
+        (Xbar, Xunder, Pbar, Punder), each (M, nx, nx).
+    solve : GainSolve
+        How (3.51) was solved.
+    """
+
+    bound: float
+    gains: tuple
+    bounds: tuple
+    solve: GainSolve
+
+
+@dataclass(frozen=True)
+class BoundIteration:
+    """A run of Alg. 3.2 (:func:`iterate_bounds`) to its stopping rule.
+
+    Attributes
+    ----------
+    status : Status
+        Why it stopped (:class:`StoppingRule`, or ``"max_iterations"``, ``"linalg_error"``).
+    iterations : int
+    stopping : StoppingRule
+        The rule, with its last change and period.
+    best : BoundIterate or None
+        The returned iterate: the smallest bound of the last period; None when the first
+        iteration failed.
+    traces : numpy.ndarray, shape (iterations + 1, 4, M)
+        Traces of Xbar_i, Xunder_i, Pbar_i, Punder_i per iteration.
+    worst_residual : float
+        Largest relative residual of (3.51) over the iterations.
+    failure : str
+        The error message of a failed solve of (3.51), else empty.
+    """
+
+    status: Status
+    iterations: int
+    stopping: StoppingRule
+    best: BoundIterate | None
+    traces: np.ndarray
+    worst_residual: float
+    failure: str
+
+
 def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
     """The iteration of Alg. 3.2 (Steps 2-4) until its stopping rule; arguments not validated.
 
-    Returns a dict: ``status``, ``iterations``, ``stopping`` (the :class:`StoppingRule` rule,
-    with its last change and period), ``best`` (bound, (F, K, L), (Xbar, Xunder, Pbar,
-    Punder), GainSolve) of the returned iterate (the smallest bound of the last period),
-    ``traces`` (iterations + 1, 4, M), ``worst_residual`` and ``failure`` (the error message of
-    a failed solve); ``best`` is None when the first iteration failed.
+    Returns
+    -------
+    BoundIteration
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> run = iterate_bounds(sec373_system(1), 1e-10, 20)
-    >>> run["status"], run["iterations"], run["traces"].shape
-    ('max_iterations', 20, (21, 4, 2))
+    >>> run.status, run.iterations, run.traces.shape, run.best.gains[0].shape
+    ('max_iterations', 20, (21, 4, 2), (2, 2))
     """
     HHt, JJt = noise_covariances(sys)
     mu = sys.mu_inf
@@ -367,60 +416,64 @@ def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
     traces = [np.trace(np.array(bounds), axis1=-2, axis2=-1)]
     stopping = StoppingRule(tol, max_iter)
     stopping.status(0, bounds)
-    iterates = deque(maxlen=stopping.max_period)         # (bound, gains, bounds, solve) of the last iterations
-    worst_residual, failure, status, it = 0.0, "", "max_iterations", 0
+    iterates = deque(maxlen=stopping.max_period)         # BoundIterate of the last iterations
+    worst_residual, failure, status, it = 0.0, "", Status.MAX_ITERATIONS, 0
     for it in range(1, max_iter + 1):
         Xbar, Xunder, Pbar, Punder = bounds
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
         try:
             F, K, L, solve = solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, rank_rtol)
         except np.linalg.LinAlgError as error:
-            status, failure = "linalg_error", str(error)
+            status, failure = Status.LINALG_ERROR, str(error)
             break
         worst_residual = max(worst_residual, solve.residual) if np.isfinite(solve.residual) else np.nan
         new = (*bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt),
                *bound_costate_step(sys, F, K, L, EPbar, EPunder))
         if not all(np.abs(v).max() < divergence for v in new):
-            status = "diverged"                     # the bounds diverge: not stabilisable this way
+            status = Status.DIVERGED                # the bounds diverge: not stabilisable this way
             break
         bounds = new
         traces.append(np.trace(np.array(bounds), axis1=-2, axis2=-1))
-        iterates.append((bound_cost(sys, L, bounds[0], bounds[1]), (F, K, L), bounds, solve))
+        bound = bound_cost(sys, L, bounds[0], bounds[1])
+        iterates.append(BoundIterate(bound, (F, K, L), bounds, solve))
         verdict = stopping.status(it, bounds)
         if verdict is not None:
             status = verdict
             break
-    best = min(list(iterates)[-stopping.period:], key=lambda m: m[0]) if iterates else None
-    return dict(status=status, iterations=it, stopping=stopping, best=best, traces=np.array(traces),
-                worst_residual=worst_residual, failure=failure)
+    best = min(list(iterates)[-stopping.period:], key=lambda m: m.bound) if iterates else None
+    return BoundIteration(status=status, iterations=it, stopping=stopping, best=best,
+                          traces=np.array(traces), worst_residual=worst_residual, failure=failure)
 
 
 def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
     start = time.perf_counter()
     run = iterate_bounds(sys, tol, max_iter, init, rng, method)
     seconds = time.perf_counter() - start
-    status, it, stopping, failure = run["status"], run["iterations"], run["stopping"], run["failure"]
-    if run["best"] is None:
-        raise FloatingPointError(f"Algorithm 3.2: {'(3.51) could not be solved' if status == 'linalg_error' else 'the bounds diverged'} "
-                                 f"in the first iteration{': ' + failure if failure else ''}")
-    bound, (F, K, L), (Xbar, Xunder, Pbar, Punder), solve = run["best"]
+    status, it, stopping, failure = run.status, run.iterations, run.stopping, run.failure
+    if run.best is None:
+        what = ("(3.51) could not be solved" if status is Status.LINALG_ERROR else
+                "the bounds diverged")
+        raise FloatingPointError(f"Algorithm 3.2: {what} in the first iteration"
+                                 f"{': ' + failure if failure else ''}")
+    best = run.best
+    (F, K, L), (Xbar, Xunder, Pbar, Punder) = best.gains, best.bounds
     cost, _, stability = certified_steady_state_cost(sys, F, K, L)
     rho = stability.rho
     stabilizing = stability.stabilizing
-    message = _message(status, it, stopping, tol, rho, failure, solve, run["worst_residual"])
-    if warn and status != "converged":
+    message = _message(status, it, stopping, tol, rho, failure, best.solve, run.worst_residual)
+    if warn and status is not Status.CONVERGED:
         warnings.warn(f"Algorithm 3.2 {message}", RuntimeWarning, stacklevel=3)
     elif warn and not stabilizing:
         verb = "does not stabilise" if stabilizing is False else "is not certified to stabilise"
         warnings.warn(f"Algorithm 3.2 converged, but the controller {verb} the MJLS "
                       f"in the mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=3)
-    history = {f"trace_{k}": run["traces"][:, j] for j, k in enumerate(("Xbar", "Xunder", "Pbar", "Punder"))}
-    return DynamicOutputFeedbackResult(F=F, K=K, L=L, converged=status == "converged", status=status,
-                                       message=message, iterations=it, rho=rho, rho_bracket=stability.bracket,
-                                       stabilizing=stabilizing, cost=cost, bound=bound, Xbar=Xbar,
-                                       Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history,
-                                       seconds=seconds, solve=solve, worst_residual=run["worst_residual"],
-                                       period=stopping.period)
+    names = ("Xbar", "Xunder", "Pbar", "Punder")
+    history = {f"trace_{k}": run.traces[:, j] for j, k in enumerate(names)}
+    return DynamicOutputFeedbackResult(
+        F=F, K=K, L=L, converged=status is Status.CONVERGED, status=status, message=message,
+        iterations=it, stability=stability, cost=cost, bound=best.bound, Xbar=Xbar,
+        Xunder=Xunder, Pbar=Pbar, Punder=Punder, history=history, seconds=seconds,
+        solve=best.solve, worst_residual=run.worst_residual, period=stopping.period)
 
 
 _EXACT = "; exact_dynamic_output_feedback minimises the true cost and converges where Alg. 3.2 does not"

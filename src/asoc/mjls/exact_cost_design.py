@@ -20,15 +20,16 @@ import scipy.linalg
 from .. import config
 from ..linalg import pack, transpose, unpack
 from ..optimize import BFGS_STATUS, bfgs
-from ..result import IterativeResult
 from ..validation import boolean, integer, real_scalar
 from .dynamic import iterate_bounds
 from .finite_horizon import (augmented_initial_moment, check_initial_state, finite_horizon_cost,
-                             finite_horizon_dynamic_output_feedback, initial_gains, mode_distributions, stages,
-                             time_variant_controller)
+                             finite_horizon_dynamic_output_feedback, initial_gains,
+                             mode_distributions, stages)
 from .gradients import (average_cost_and_gradient, closed_loop_radius, finite_horizon_cost_and_gradient,
                         radius_and_gradient)
 from .closed_loops import augmented_closed_loop
+from .controllers import DynamicOutputFeedback
+from .design_result import CertifiedDesignResult, DesignResult
 from .stability import mean_square_stability
 from .system import check_system
 
@@ -38,7 +39,7 @@ __all__ = ["ExactDynamicOutputFeedbackResult", "ExactFiniteHorizonResult", "aver
 
 
 @dataclass(kw_only=True)
-class ExactDynamicOutputFeedbackResult(IterativeResult):
+class ExactDynamicOutputFeedbackResult(CertifiedDesignResult):
     """A time-invariant controller (3.37) found by BFGS: :func:`exact_dynamic_output_feedback`
     (on the exact cost (3.42)) or :func:`min_radius_dynamic_output_feedback` (on rho, Cor. 3.2).
 
@@ -51,14 +52,9 @@ class ExactDynamicOutputFeedbackResult(IterativeResult):
         tol * objective, or rho fell below its target), ``"max_iterations"`` or
         ``"no_progress"`` (no descent step, or no mean-square stabilising start was found).
     iterations : int
-    rho : float
-        Mean-square spectral radius of the closed loop (Cor. 3.2).
-    stabilizing : bool or None
-        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
-        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
-        (undecided).
-    rho_bracket : tuple of float
-        (rho_lower, rho_upper), the certified bracket of rho.
+    stability : MeanSquareStability
+        The closed loop's certificate (Cor. 3.2); ``rho``, ``rho_bracket`` and ``stabilizing``
+        read it (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float
         Exact average cost (3.42) (Prop. 3.24); inf if not stabilizing.
     history : dict
@@ -74,28 +70,20 @@ class ExactDynamicOutputFeedbackResult(IterativeResult):
     ('max_iterations', 3, ['cost'], (2, 2))
     """
 
+    controller_type = DynamicOutputFeedback
+    controller_fields = ("F", "K", "L")
+
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
     iterations: int
-    rho: float
-    rho_bracket: tuple = (np.nan, np.nan)
-    stabilizing: bool | None
     cost: float
     history: dict = field(repr=False)
     seconds: float = 0.0
 
-    @property
-    def controller(self):
-        """The controller (3.37) as a :class:`asoc.mjls.DynamicOutputFeedback`, for :func:`asoc.mjls.simulate` and
-        :func:`asoc.mjls.average_cost`."""
-        from .monte_carlo import DynamicOutputFeedback
-
-        return DynamicOutputFeedback(self.F, self.K, self.L)
-
 
 @dataclass(kw_only=True)
-class ExactFiniteHorizonResult(IterativeResult):
+class ExactFiniteHorizonResult(DesignResult):
     """Result of :func:`exact_finite_horizon_dynamic_output_feedback` (L-BFGS on J_0 (3.56)).
 
     Attributes
@@ -122,6 +110,9 @@ class ExactFiniteHorizonResult(IterativeResult):
     ('max_iterations', (5, 2, 2), 4, True)
     """
 
+    controller_type = DynamicOutputFeedback
+    controller_fields = ("F", "K", "L", "xhat0")
+
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
@@ -130,11 +121,6 @@ class ExactFiniteHorizonResult(IterativeResult):
     cost: float
     costs: np.ndarray = field(repr=False)
     seconds: float = 0.0
-
-    @property
-    def controller(self):
-        """The controller (3.55) as a time-variant :class:`asoc.mjls.DynamicOutputFeedback`."""
-        return time_variant_controller(self)
 
 
 def averaged_lqg(sys, nc):
@@ -176,9 +162,9 @@ def _bounded_alg32(sys, nc):
     """Alg. 3.2's controller after at most ``mjls.exact_warm_start_iterations`` iterations,
     padded with zeros or cut to nc states (None when Alg. 3.2 fails at once)."""
     run = iterate_bounds(sys, 1e-10, config.defaults["mjls.exact_warm_start_iterations"])
-    if run["best"] is None:
+    if run.best is None:
         return None
-    F0, K0, L0 = run["best"][1]
+    F0, K0, L0 = run.best.gains
     F, K, L = np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu, nc))
     m = min(nc, sys.nx)
     F[:m, :m], K[:m], L[:, :m] = F0[:m, :m], K0[:m], L0[:, :m]
@@ -264,13 +250,13 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
     the final controller and its exact cost."""
     F, K, L = unpack(z, shapes)
     stability = mean_square_stability(augmented_closed_loop(sys, F, K, L)[0], sys.T)
-    stabilizing = stability.stabilizing
     cost = average_cost_and_gradient(sys, F, K, L)[0] if stability.stable else np.inf
     value = history[-1] if len(history) else np.inf
     return ExactDynamicOutputFeedbackResult(
         F=F, K=K, L=L, converged=status == "converged", status=status,
-        message=message or _bfgs_message(status, it, value, name), iterations=it, rho=stability.rho, rho_bracket=stability.bracket,
-        stabilizing=stabilizing, cost=cost, history={name: history}, seconds=time.perf_counter() - start)
+        message=message or _bfgs_message(status, it, value, name), iterations=it,
+        stability=stability, cost=cost, history={name: history},
+        seconds=time.perf_counter() - start)
 
 
 def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False):

@@ -26,23 +26,25 @@ import numpy as np
 
 from ..linalg import transpose
 from ..progress import progress_bar
-from ..result import IterativeResult
+from ..result import Status
 from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
 from .moment_bounds import bound_costate_step, bound_moment_step
 from .dynamic import dynamic_output_feedback
 from .moments import second_moment_step
 from .closed_loops import noise_covariances
+from .controllers import DynamicOutputFeedback
+from .design_result import DesignResult
 from .optimality import METHODS, gains_from_bounds
 from .system import MJLS, successor_average
 
-__all__ = ["FiniteHorizonResult", "time_variant_controller", "Stages", "stages",
+__all__ = ["FiniteHorizonResult", "Stages", "StackedStages", "stages",
            "check_initial_state", "initial_bounds", "mode_distributions",
            "augmented_initial_moment", "augmented_cost", "finite_horizon_cost", "initial_gains",
            "finite_horizon_dynamic_output_feedback"]
 
 
 @dataclass(kw_only=True)
-class FiniteHorizonResult(IterativeResult):
+class FiniteHorizonResult(DesignResult):
     """Result of Algorithm 3.3 (:func:`finite_horizon_dynamic_output_feedback`).
 
     Attributes
@@ -77,6 +79,9 @@ class FiniteHorizonResult(IterativeResult):
     ('converged', (6, 2, 2, 2), True)
     """
 
+    controller_type = DynamicOutputFeedback
+    controller_fields = ("F", "K", "L", "xhat0")
+
     F: np.ndarray
     K: np.ndarray
     L: np.ndarray
@@ -90,28 +95,6 @@ class FiniteHorizonResult(IterativeResult):
     Punder: np.ndarray = field(repr=False)
     rejected: int = 0
     seconds: float = 0.0
-
-    @property
-    def controller(self):
-        """The controller (3.55) as a time-variant :class:`asoc.mjls.DynamicOutputFeedback`."""
-        return time_variant_controller(self)
-
-
-def time_variant_controller(result):
-    """The controller (3.55) of a finite-horizon result (F, K, L per step, xhat0) for simulate.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
-    >>> time_variant_controller(res).xhat0.tolist()
-    [5.0, 0.0]
-    """
-    from .monte_carlo import DynamicOutputFeedback
-
-    return DynamicOutputFeedback(result.F, result.K, result.L, xhat0=result.xhat0)
 
 
 @dataclass(frozen=True)
@@ -138,19 +121,40 @@ class Stages:
         return len(self.systems)
 
     @cached_property
-    def stacked(self) -> dict:
-        """The matrices of all steps stacked over k, computed once: A, B, C, Q, R (horizon, M, ., .),
-        T (horizon, M, M), HHt and JJt (horizon, M, ., .).
+    def stacked(self) -> "StackedStages":
+        """The matrices of all steps stacked over k, computed once (:class:`StackedStages`).
 
         Examples
         --------
         >>> from asoc.mjls.examples import sec373_system
         >>> st = stages(sec373_system(1), 4)
-        >>> st.stacked["A"].shape, st.stacked["HHt"].shape, st.stacked is st.stacked
+        >>> st.stacked.A.shape, st.stacked.HHt.shape, st.stacked is st.stacked
         ((4, 2, 2, 2), (4, 2, 2, 2), True)
         """
         stacked = {name: np.stack([getattr(s, name) for s in self.systems]) for name in "ABCQRT"}
-        return {**stacked, "HHt": np.stack(self.HHt), "JJt": np.stack(self.JJt)}
+        return StackedStages(**stacked, HHt=np.stack(self.HHt), JJt=np.stack(self.JJt))
+
+
+@dataclass(frozen=True)
+class StackedStages:
+    """The matrices of the time-variant MJLS (3.54) stacked over the steps k = 0..K-1.
+
+    Attributes
+    ----------
+    A, B, C, Q, R : numpy.ndarray, shape (horizon, M, ., .)
+    T : numpy.ndarray, shape (horizon, M, M)
+    HHt, JJt : numpy.ndarray, shape (horizon, M, ., .)
+        The noise covariances H_i H_i^T and J_i J_i^T per step.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    T: np.ndarray
+    HHt: np.ndarray
+    JJt: np.ndarray
 
 
 def stages(sys, horizon):
@@ -485,7 +489,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     Punder = np.empty_like(Xbar)
     Xbar[0], Xunder[0] = Xbar0, Xunder0
     bounds = []
-    status = "max_iterations"
+    status = Status.MAX_ITERATIONS
     rejected = 0
     it = 0
 
@@ -514,11 +518,11 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         J0 = float(np.einsum("iab,iba->", Pbar[0], Xbar[0] + Xunder[0])
                    + np.einsum("iab,iba->", Punder[0], Xbar[0]) + mu0 @ omega)   # Step 7, (3.72)
         if not np.isfinite(J0):
-            status = "diverged"
+            status = Status.DIVERGED
             break
         bounds.append(J0)
         if len(bounds) > 1 and abs(bounds[-2] - J0) <= tol * max(1.0, abs(J0)):
-            status = "converged"
+            status = Status.CONVERGED
             break
     bounds = np.array(bounds)
     seconds = time.perf_counter() - start
@@ -527,7 +531,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
                "max_iterations": f"did not converge within {it} iterations (change of Jbar_0 {change:.2g} "
                                  f"> tol = {tol:.2g})",
                "diverged": f"stopped at iteration {it}: the bound Jbar_0 became non-finite"}[status]
-    if warn and status != "converged":
+    if warn and status is not Status.CONVERGED:
         warnings.warn(f"Algorithm 3.3 {message}", RuntimeWarning, stacklevel=2)
     increases = np.diff(bounds) > 1e-8 * np.maximum(1.0, np.abs(bounds[1:]))   # beyond rounding
     if warn and np.any(increases):
@@ -535,6 +539,6 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
                       f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
     cost = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
     return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds,
-                               converged=status == "converged", status=status, message=message,
+                               converged=status is Status.CONVERGED, status=status, message=message,
                                iterations=it, cost=cost, Xbar=Xbar, Xunder=Xunder, Pbar=Pbar,
                                Punder=Punder, rejected=rejected, seconds=seconds)

@@ -241,37 +241,37 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     (True, (3, 1, 2))
     """
     m = st.stacked
-    HHt, JJt = m["HHt"], m["JJt"]
+    HHt, JJt = m.HHt, m.JJt
     nx, nc, M = st.systems[0].nx, F.shape[1], X0.shape[0]
     n = nx + nc
     horizon = st.horizon
     A = np.zeros((horizon, M, n, n))                                  # A~_{i,k} of (3.59)
-    A[:, :, :nx, :nx], A[:, :, :nx, nx:] = m["A"], m["B"] @ L[:, None]
-    A[:, :, nx:, :nx], A[:, :, nx:, nx:] = K[:, None] @ m["C"], F[:, None]
+    A[:, :, :nx, :nx], A[:, :, :nx, nx:] = m.A, m.B @ L[:, None]
+    A[:, :, nx:, :nx], A[:, :, nx:, nx:] = K[:, None] @ m.C, F[:, None]
     W = np.zeros_like(A)                                              # mu_k,i H~ H~^T (3.60)
     W[:, :, :nx, :nx], W[:, :, nx:, nx:] = HHt, K[:, None] @ JJt @ np.swapaxes(K, 1, 2)[:, None]
     W *= mu[:-1, :, None, None]
-    LRL = np.swapaxes(L, 1, 2)[:, None] @ m["R"] @ L[:, None]
+    LRL = np.swapaxes(L, 1, 2)[:, None] @ m.R @ L[:, None]
     At = np.swapaxes(A, 2, 3)
     X = np.empty((horizon + 1, M, n, n))
     X[0] = X0
     for k in range(horizon):
-        X[k + 1] = predecessor_sum(m["T"][k], A[k] @ X[k] @ At[k] + W[k])
+        X[k + 1] = predecessor_sum(m.T[k], A[k] @ X[k] @ At[k] + W[k])
     P = np.zeros((M, n, n))
     P[:, :nx, :nx] = st.Q_final
     cost = float(np.einsum("iab,iba->", P, X[-1]))
     EP = np.empty_like(A)
     for k in range(horizon - 1, -1, -1):
-        EP[k] = successor_average(m["T"][k], P)
+        EP[k] = successor_average(m.T[k], P)
         P = At[k] @ EP[k] @ A[k]
-        P[:, :nx, :nx] += m["Q"][k]
+        P[:, :nx, :nx] += m.Q[k]
         P[:, nx:, nx:] += LRL[k]
-    cost += float(np.einsum("kiab,kiba->", m["Q"], X[:-1, :, :nx, :nx])
+    cost += float(np.einsum("kiab,kiba->", m.Q, X[:-1, :, :nx, :nx])
                   + np.einsum("kiab,kiba->", LRL, X[:-1, :, nx:, nx:]))
     G = 2.0 * EP @ A @ X[:-1]                                         # dJ/dA~_{i,k}
     gF = G[:, :, nx:, nx:].sum(axis=1)
-    gK = (G[:, :, nx:, :nx] @ np.swapaxes(m["C"], 2, 3)).sum(axis=1)
+    gK = (G[:, :, nx:, :nx] @ np.swapaxes(m.C, 2, 3)).sum(axis=1)
     gK += 2.0 * (mu[:-1, :, None, None] * EP[:, :, nx:, nx:] @ K[:, None] @ JJt).sum(axis=1)
-    gL = (np.swapaxes(m["B"], 2, 3) @ G[:, :, :nx, nx:]).sum(axis=1)
-    gL += 2.0 * (m["R"] @ L[:, None] @ X[:-1, :, nx:, nx:]).sum(axis=1)
+    gL = (np.swapaxes(m.B, 2, 3) @ G[:, :, :nx, nx:]).sum(axis=1)
+    gL += 2.0 * (m.R @ L[:, None] @ X[:-1, :, nx:, nx:]).sum(axis=1)
     return cost, (gF, gK, gL)

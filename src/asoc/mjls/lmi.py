@@ -22,9 +22,10 @@ import numpy as np
 
 from .. import config
 from ..linalg import sym
-from ..result import IterativeResult
 from ..validation import boolean, real_scalar
-from .stability import mean_square_stability
+from .controllers import ModeDependentGain, StaticGain
+from .design_result import CertifiedDesignResult
+from .stability import MeanSquareStability, mean_square_stability
 from .system import check_system
 
 __all__ = ["EPS", "LMIResult", "certificate", "lmi_result", "performance_output",
@@ -39,7 +40,7 @@ _CHECKED = (cp.OPTIMAL, cp.OPTIMAL_INACCURATE)
 
 
 @dataclass(kw_only=True)
-class LMIResult(IterativeResult):
+class LMIResult(CertifiedDesignResult):
     """Result of :func:`static_output_lmi` (and of the LMI baseline [52]).
 
     Attributes
@@ -57,13 +58,11 @@ class LMIResult(IterativeResult):
         sum_i tr W_i, an upper bound of the H2 cost (3.23); inf if not feasible.
     solver_status : str
         The solver's own status string (e.g. "optimal", "infeasible").
-    rho : float
-        Mean-square spectral radius of the closed loop with L (nan without a gain).
-    stabilizing : bool or None
-        The gain's certified verdict (:func:`asoc.mjls.mean_square_stability`): True, False, or
-        None when the bracket of rho straddles 1 (False without a gain).
-    rho_bracket : tuple of float
-        (rho_lower, rho_upper), the certified bracket of rho.
+    stability : MeanSquareStability or None
+        The certificate of the closed loop with L (Cor. 3.2), None without a gain; ``rho``
+        (nan without a gain), ``rho_bracket`` and ``stabilizing`` (False without a gain) read
+        it (:class:`asoc.mjls.design_result.CertifiedDesignResult`). ``controller`` is a
+        :class:`asoc.mjls.StaticGain`, or a :class:`asoc.mjls.ModeDependentGain` for Thm. 3.12.
     margin : float
         Smallest eigenvalue over the constraints, each minus its imposed floor (>= -eps/2 for a
         certificate; nan when the solver returned no matrices).
@@ -85,12 +84,15 @@ class LMIResult(IterativeResult):
     L: np.ndarray | None
     bound: float
     solver_status: str
-    rho: float = np.nan
-    rho_bracket: tuple = (np.nan, np.nan)
-    stabilizing: bool | None = False
+    stability: MeanSquareStability | None = None
     margin: float = np.nan
     equality_residual: float = np.nan
     variables: dict = field(default_factory=dict)
+
+    @property
+    def controller_type(self):
+        """StaticGain for one gain, ModeDependentGain for gains per mode (Thm. 3.12)."""
+        return ModeDependentGain if self.L is not None and np.ndim(self.L) == 3 else StaticGain
 
 
 def certificate(constraints):
@@ -117,36 +119,37 @@ def certificate(constraints):
     return min(margins), max(residuals)
 
 
-def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, equality_residual=np.nan,
+def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_residual=np.nan,
                eps=EPS, variables=None, stability=None):
     """The LMIResult of a solve: feasible iff the matrices satisfy the constraints (``margin >= -eps/2``,
     ``equality_residual <= config.defaults["mjls.lmi_equality_rtol"]``); rho reported on its own.
-    Without a margin (nan), the solver's status "optimal" stands for the certificate. With
-    ``stability`` (the gain's :func:`asoc.mjls.mean_square_stability`), rho, its certified bracket
-    and ``stabilizing`` (True, False or None for undecided) come from it; else from ``rho`` as given.
+    Without a margin (nan), the solver's status "optimal" stands for the certificate. ``stability``
+    is the gain's :func:`asoc.mjls.mean_square_stability` (rho, its certified bracket and
+    ``stabilizing``); without it the gain is not certified to stabilise.
 
     Examples
     --------
-    >>> lmi_result("optimal", np.array([[1.0]]), 2.0, rho=1.2, margin=1e-3, equality_residual=0.0).message[:52]
+    >>> unstable = mean_square_stability(np.array([[[1.1]]]), [[1.0]])
+    >>> lmi_result("optimal", np.array([[1.0]]), 2.0, margin=1e-3, equality_residual=0.0,
+    ...            stability=unstable).message[:52]
     'the LMIs hold (margin 1.0e-03 >= -5.0e-07), but the '
     >>> lmi_result("infeasible_inaccurate").status
     'inaccurate'
-    >>> miss = lmi_result("optimal_inaccurate", np.array([[1.0]]), 2.0, rho=0.5, margin=-1e-3, equality_residual=0.0)
+    >>> miss = lmi_result("optimal_inaccurate", np.array([[1.0]]), 2.0, margin=-1e-3,
+    ...                   equality_residual=0.0)
     >>> miss.feasible, miss.status, miss.L is None
     (False, 'inaccurate', True)
     """
-    if stability is not None:
-        rho = stability.rho
-    common = dict(solver_status=solver_status, rho=rho, margin=margin, equality_residual=equality_residual,
-                  variables=variables or {},
-                  rho_bracket=stability.bracket if stability is not None else (rho, rho))
+    rho = np.nan if stability is None else stability.rho
+    common = dict(solver_status=solver_status, margin=margin, equality_residual=equality_residual,
+                  variables=variables or {})
     verified = (L is not None and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
                 and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
     if not verified:
         status, message = _not_feasible(solver_status, L, margin, equality_residual, eps)
         return LMIResult(feasible=False, L=None, bound=np.inf, converged=False, status=status, message=message,
-                         **common)
-    stabilizing = stability.stabilizing if stability is not None else bool(rho < 1)
+                         **common)                     # no gain, no certificate
+    stabilizing = False if stability is None else stability.stabilizing
     text = f"the LMIs hold (margin {margin:.1e} >= {-eps / 2:.1e})" if not np.isnan(margin) else \
         f"the solver reports {solver_status!r}"
     if stabilizing:
@@ -154,8 +157,8 @@ def lmi_result(solver_status, L=None, bound=np.inf, rho=np.nan, margin=np.nan, e
     else:
         message = (f"{text}, but the recovered gain is not certified to stabilise (rho = {rho:.4f}), which the theorem "
                    f"excludes: a numerical failure of the gain's recovery, or a counterexample")
-    return LMIResult(feasible=True, L=L, bound=bound, stabilizing=stabilizing, converged=True, status="converged",
-                     message=message, **common)
+    return LMIResult(feasible=True, L=L, bound=bound, converged=True, status="converged",
+                     message=message, stability=stability, **common)
 
 
 def _not_feasible(solver_status, L, margin, residual, eps):

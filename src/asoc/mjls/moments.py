@@ -5,10 +5,10 @@ import numpy as np
 from ..linalg import transpose
 from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
 from .lyapunov import solve_coupled_lyapunov
-from .closed_loops import gain_matrix
+from .closed_loops import controller_closed_loop, gain_matrix, is_controller
 from .moment_operator import second_moment_map
 from .stability import mean_square_stability, MeanSquareStability
-from .system import check_system, predecessor_sum
+from .system import MJLS, check_system, predecessor_sum
 
 __all__ = ["second_moment_step", "second_moments", "steady_state_second_moment",
            "certified_second_moment", "h2_cost"]
@@ -130,7 +130,7 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
     return X, mu
 
 
-def steady_state_second_moment(Acl, HHt, T, mu_inf):
+def steady_state_second_moment(Acl, HHt, T=None, mu_inf=None):
     """X_inf^i solving the coupled Lyapunov equations of Prop. 3.7 / (3.32) directly.
 
     Vectorised: vec X^j = sum_i p_ij [(Acl_i (x) Acl_i) vec X^i + mu_i vec(H_i H_i^T)], solved
@@ -142,7 +142,11 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     Parameters
     ----------
     Acl, HHt : numpy.ndarray, shape (M, n, n)
-        Closed-loop matrices and noise covariances.
+        Closed-loop matrices and noise covariances; or an MJLS and a time-invariant controller
+        or design result, whose closed loop and noise
+        (:func:`asoc.mjls.closed_loops.controller_closed_loop`) are used with the system's T
+        and mu_inf (then ``T`` and ``mu_inf`` are omitted). For a dynamic controller the
+        moments are those of x~ = [x; x^] (Prop. 3.23).
     T : numpy.ndarray, shape (M, M)
         Transition matrix.
     mu_inf : numpy.ndarray, shape (M,)
@@ -156,7 +160,8 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     Raises
     ------
     TypeError, ValueError
-        As :func:`second_moment_step` (``mu_inf`` a distribution).
+        As :func:`second_moment_step` (``mu_inf`` a distribution), and for a controller that is
+        not time-invariant or does not fit the MJLS.
     numpy.linalg.LinAlgError
         If mean-square stability is not certified (rho >= 1, or its bracket straddles 1, e.g.
         rho = 1 exactly: I - M is singular), or the solution misses the residual
@@ -175,7 +180,21 @@ def steady_state_second_moment(Acl, HHt, T, mu_inf):
     Traceback (most recent call last):
     ...
     numpy.linalg.LinAlgError: no stationary second moment: the closed loop is not certified mean-square stable (rho = 1 in [1, 1], undecided; Cor. 3.2)
+
+    The stationary moments of a design's closed loop:
+
+    >>> from asoc.mjls import static_output_feedback
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> X = steady_state_second_moment(sys, static_output_feedback(sys))
+    >>> X.shape, bool(np.all(np.linalg.eigvalsh(X) > 0))
+    ((2, 2, 2), True)
     """
+    if isinstance(Acl, MJLS) and is_controller(HHt):
+        if T is not None or mu_inf is not None:
+            raise TypeError("T, mu_inf: expected to be omitted with an MJLS and a controller (the "
+                            "system's own are used), found arrays")
+        Acl, HHt, T, mu_inf = (*controller_closed_loop(Acl, HHt, "HHt"), Acl.T, Acl.mu_inf)
     Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
     return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False), check=False)
 

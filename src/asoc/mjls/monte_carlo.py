@@ -14,174 +14,10 @@ from threadpoolctl import threadpool_limits
 from ..progress import progress_bar
 
 from ..validation import boolean, generator, integer, probability_vector, real_array, semidefinite
+from .controllers import as_controller
 from .system import check_system
 
-__all__ = ["Controller", "as_controller", "StaticGain", "ModeDependentGain", "TimeVariantGain",
-           "DynamicOutputFeedback", "SimulationResult", "GROUPED_MIN_NX", "simulate"]
-
-
-class Controller:
-    """Protocol of a controller in :func:`simulate`.
-
-    ``start(n_runs)`` returns the initial controller state; ``input(k, y, theta, state)``
-    returns ``(u, state)`` for measurements ``y`` (N, ny). ``theta`` (N,) is passed to
-    every controller, but only controllers with ``observes_mode = True`` may use it.
-    ``check(sys)`` raises a ValueError when the controller does not fit the system; it runs
-    before the simulation.
-
-    Examples
-    --------
-    A user-defined controller: u = -0.5 y.
-
-    >>> class Proportional(Controller):
-    ...     def input(self, k, y, theta, state):
-    ...         return -0.5 * y, state
-    >>> Proportional().start(3) is None
-    True
-    """
-
-    observes_mode = False
-
-    def start(self, n_runs):
-        """The initial controller state for ``n_runs`` runs (None: stateless)."""
-        return None
-
-    def input(self, k, y, theta, state):
-        """``(u, state)`` at step k for measurements ``y`` (N, ny) and modes ``theta`` (N,)."""
-        raise NotImplementedError
-
-    def check(self, sys):
-        """Raise a ValueError when the controller does not fit ``sys`` (default: accept)."""
-
-
-def as_controller(controller, name="controller"):
-    """The Controller itself, or the ``.controller`` of a design result; else a TypeError.
-
-    Examples
-    --------
-    >>> from asoc.mjls import static_output_feedback
-    >>> from asoc.mjls.examples import sec354_system
-    >>> as_controller(static_output_feedback(sec354_system(1))).L.round(4)
-    array([[-0.635]])
-    """
-    if not isinstance(controller, Controller) and isinstance(getattr(controller, "controller", None), Controller):
-        controller = controller.controller
-    if not isinstance(controller, Controller):
-        raise TypeError(f"{name}: expected an asoc.mjls.Controller (e.g. StaticGain) or a design result "
-                        f"with .controller, found {type(controller).__name__}")
-    return controller
-
-
-def _fit(array, name, shape, sys):
-    if array.shape != shape:
-        raise ValueError(f"{name}: expected shape {shape} for the system (M={sys.M}, nx={sys.nx}, "
-                         f"nu={sys.nu}, ny={sys.ny}), found shape {array.shape}")
-
-
-class StaticGain(Controller):
-    """u_k = L y_k, mode-independent (3.8).
-
-    Examples
-    --------
-    >>> StaticGain([[-0.5]]).input(0, np.array([[2.0]]), None, None)[0]
-    array([[-1.]])
-    """
-
-    def __init__(self, L):
-        self.L = np.atleast_2d(real_array(L, "L"))
-
-    def input(self, k, y, theta, state):
-        return y @ self.L.T, state
-
-    def check(self, sys):
-        _fit(self.L, "L", (sys.nu, sys.ny), sys)
-
-
-class ModeDependentGain(Controller):
-    """u_k = L_{theta_k} y_k (3.24): requires the mode, e.g. the optimal controller of [38].
-
-    Examples
-    --------
-    >>> c = ModeDependentGain([[[-1.0]], [[-2.0]]])
-    >>> c.input(0, np.array([[1.0], [1.0]]), np.array([0, 1]), None)[0]
-    array([[-1.],
-           [-2.]])
-    """
-
-    observes_mode = True
-
-    def __init__(self, L):
-        self.L = real_array(L, "L", ndim=3)
-
-    def input(self, k, y, theta, state):
-        return np.einsum("nab,nb->na", self.L[theta], y), state
-
-    def check(self, sys):
-        _fit(self.L, "L", (sys.M, sys.nu, sys.ny), sys)
-
-
-class TimeVariantGain(Controller):
-    """u_k = L_k y_k with a gain sequence L of shape (horizon, nu, ny) (e.g. [165], [163]).
-
-    Examples
-    --------
-    >>> c = TimeVariantGain([[[-1.0]], [[-2.0]]])
-    >>> c.input(1, np.array([[1.0]]), None, None)[0]
-    array([[-2.]])
-    """
-
-    def __init__(self, L):
-        self.L = real_array(L, "L", ndim=3)
-
-    def input(self, k, y, theta, state):
-        return y @ self.L[min(k, len(self.L) - 1)].T, state
-
-    def check(self, sys):
-        _fit(self.L, "L", (len(self.L), sys.nu, sys.ny), sys)
-
-
-class DynamicOutputFeedback(Controller):
-    """x^_{k+1} = F_k x^_k + K_k y_k, u_k = L_k x^_k (3.37); F, K, L constant or (horizon, ...).
-
-    ``xhat0`` is the controller's initial state (nc,), default zero.
-
-    Examples
-    --------
-    >>> c = DynamicOutputFeedback([[0.5]], [[1.0]], [[-1.0]], xhat0=[2.0])
-    >>> u, xhat = c.input(0, np.array([[1.0]]), None, c.start(1))
-    >>> u, xhat
-    (array([[-2.]]), array([[2.]]))
-    """
-
-    def __init__(self, F, K, L, xhat0=None):
-        self.F, self.K, self.L = (real_array(a, name) for a, name in ((F, "F"), (K, "K"), (L, "L")))
-        if self.F.ndim not in (2, 3) or self.F.shape[-1] != self.F.shape[-2]:
-            raise ValueError(f"F: expected shape (nc, nc) or (horizon, nc, nc), found shape {self.F.shape}")
-        self.time_variant = self.F.ndim == 3
-        nc = self.F.shape[-1]
-        self.xhat0 = np.zeros(nc) if xhat0 is None else real_array(xhat0, "xhat0")
-        if self.xhat0.shape != (nc,):
-            raise ValueError(f"xhat0: expected shape ({nc},) (nc = {nc} from F), found shape {self.xhat0.shape}")
-
-    def check(self, sys):
-        lead = self.F.shape[:-2]
-        nc = self.F.shape[-1]
-        _fit(self.K, "K", lead + (nc, sys.ny), sys)
-        _fit(self.L, "L", lead + (sys.nu, nc), sys)
-
-    def _at(self, k):
-        if not self.time_variant:
-            return self.F, self.K, self.L
-        k = min(k, len(self.F) - 1)
-        return self.F[k], self.K[k], self.L[k]
-
-    def start(self, n_runs):
-        return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
-
-    def input(self, k, y, theta, xhat):
-        F, K, L = self._at(k)
-        u = xhat @ L.T
-        return u, xhat @ F.T + y @ K.T
+__all__ = ["SimulationResult", "GROUPED_MIN_NX", "simulate"]
 
 
 @dataclass
@@ -346,7 +182,8 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     ----------
     sys : MJLS
     controller : Controller or a design result
-        E.g. :class:`StaticGain`, :class:`DynamicOutputFeedback`, :class:`ModeDependentGain`,
+        E.g. :class:`asoc.mjls.StaticGain`, :class:`asoc.mjls.DynamicOutputFeedback`,
+        :class:`asoc.mjls.ModeDependentGain`,
         or the result of a design (``static_output_feedback(sys)``, ...), whose
         ``.controller`` is used.
     x0 : array_like, (nx,) or (M, nx)
@@ -387,6 +224,7 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
 
     Examples
     --------
+    >>> from asoc.mjls.controllers import StaticGain
     >>> from asoc.mjls.examples import sec354_system
     >>> sys = sec354_system(1)
     >>> res = simulate(sys, StaticGain([[-0.4]]), [3.0, 0.0], 50, 200, np.random.default_rng(1))
@@ -394,7 +232,7 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     ((200,), True)
     """
     check_system(sys)
-    controller = as_controller(controller)
+    controller = as_controller(controller, sys=sys)
     controller.check(sys)
     x0 = real_array(x0, "x0")
     if x0.shape not in ((sys.nx,), (sys.M, sys.nx)):

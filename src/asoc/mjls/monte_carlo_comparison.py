@@ -13,7 +13,8 @@ from ..validation import boolean, integer, real_scalar
 from .baselines import do_val_h2_state_feedback, time_variant_feedback
 from .examples import sec354_system
 from .observed_mode_feedback import observed_mode_state_feedback
-from .monte_carlo import ModeDependentGain, StaticGain, TimeVariantGain, simulate
+from .controllers import ModeDependentGain, StaticGain, TimeVariantGain
+from .monte_carlo import simulate
 from .static import static_output_feedback
 
 __all__ = ["TABLE_3_2_ROWS", "Design", "table_3_2_designs", "median_costs"]

@@ -19,8 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..result import IterativeResult
+from ..result import Status
 from ..validation import boolean, integer, real_scalar
+from .controllers import ModeDependentGain
+from .design_result import CertifiedDesignResult
 from .stability import mean_square_stability
 from .system import check_system
 
@@ -31,7 +33,7 @@ DIVERGED = 1e100     # the Riccati iteration diverges once |P| exceeds this (as 
 
 
 @dataclass(kw_only=True)
-class ObservedModeResult(IterativeResult):
+class ObservedModeResult(CertifiedDesignResult):
     """Result of :func:`observed_mode_state_feedback`.
 
     Attributes
@@ -40,14 +42,12 @@ class ObservedModeResult(IterativeResult):
         Mode-dependent state-feedback gains.
     P : numpy.ndarray, shape (M, nx, nx)
         Solution of the coupled algebraic Riccati equations.
-    rho : float
-        Mean-square spectral radius of the closed loop (Cor. 3.2).
-    stabilizing : bool or None
-        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
-        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
-        (undecided).
-    rho_bracket : tuple of float
-        (rho_lower, rho_upper), the certified bracket of rho.
+    stability : MeanSquareStability or None
+        The closed loop's certificate (Cor. 3.2), None when the last Riccati step failed;
+        ``rho``, ``rho_bracket`` and ``stabilizing`` read it
+        (:class:`asoc.mjls.design_result.CertifiedDesignResult`). ``controller`` is
+        u = L_theta x as a :class:`asoc.mjls.ModeDependentGain` (it observes the mode; the
+        state is the output of the systems this design is for, C = I).
     converged, status, message
         Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
         ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
@@ -62,21 +62,12 @@ class ObservedModeResult(IterativeResult):
     ('max_iterations', 5)
     """
 
+    controller_type = ModeDependentGain
+
     L: np.ndarray
     P: np.ndarray
-    rho: float
-    rho_bracket: tuple = (np.nan, np.nan)
-    stabilizing: bool | None
     iterations: int
     seconds: float
-
-    @property
-    def controller(self):
-        """u = L_theta x as a :class:`asoc.mjls.ModeDependentGain` (it observes the mode; the
-        state is the output of the systems this design is for, C = I)."""
-        from .monte_carlo import ModeDependentGain
-
-        return ModeDependentGain(self.L)
 
 
 def riccati_step(sys, P):
@@ -145,37 +136,38 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
     warn = boolean(warn, "warn")
     start = time.perf_counter()
     P = np.zeros((sys.M, sys.nx, sys.nx))
-    status, delta = "max_iterations", np.inf
+    status, delta = Status.MAX_ITERATIONS, np.inf
     it = 0
     for it in range(1, max_iter + 1):
         try:
             L, P_new = riccati_step(sys, P)
         except np.linalg.LinAlgError:
-            status = "linalg_error"
+            status = Status.LINALG_ERROR
             break
         if not np.abs(P_new).max() <= DIVERGED:
-            status = "diverged"
+            status = Status.DIVERGED
             break
         delta = np.abs(P_new - P).max() / (1 + np.abs(P_new).max())
         P = P_new
         if delta < tol:
-            status = "converged"
+            status = Status.CONVERGED
             break
     try:
         L, _ = riccati_step(sys, P)
         stability = mean_square_stability(sys.A + sys.B @ L, sys.T)
-        rho, stabilizing, bracket = stability.rho, stability.stabilizing, stability.bracket
     except np.linalg.LinAlgError:
-        L, rho, stabilizing, bracket = np.full((sys.M, sys.nu, sys.nx), np.nan), np.inf, False, (np.inf, np.inf)
+        L, stability = np.full((sys.M, sys.nu, sys.nx), np.nan), None
+    rho, stabilizing = ((np.inf, False) if stability is None else
+                        (stability.rho, stability.stabilizing))
     message = {"converged": f"converged after {it} steps (relative change {delta:.2g} < tol = {tol:.2g})",
                "max_iterations": f"did not converge in {it} steps (relative change {delta:.2g} >= tol = {tol:.2g})",
                "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "
                            f"stabilisable even with observed mode",
                "linalg_error": f"stopped at step {it}: R_i + B_i^T E_i(P) B_i is singular"}[status]
-    if warn and status != "converged":
+    if warn and status is not Status.CONVERGED:
         warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning,
                       stacklevel=2)
-    return ObservedModeResult(L=L, P=P, rho=rho, rho_bracket=bracket, stabilizing=stabilizing, converged=status == "converged",
+    return ObservedModeResult(L=L, P=P, stability=stability, converged=status is Status.CONVERGED,
                               status=status, message=message, iterations=it, seconds=time.perf_counter() - start)

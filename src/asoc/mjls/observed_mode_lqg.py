@@ -38,7 +38,7 @@ from ..linalg import transpose
 from ..validation import real_array
 from .finite_horizon import (augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions,
                              stages)
-from .monte_carlo import Controller
+from .controllers import Controller
 from .system import check_system
 
 __all__ = ["ModeObservedResult", "ModeObservedLQG", "control_riccati", "markov_jump_filter",
@@ -102,8 +102,8 @@ class ModeObservedLQG(Controller):
     >>> sys = sec373_system(1)
     >>> res = mode_observed_lqg(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
     >>> controller = res.controller(sys)
-    >>> controller.observes_mode, controller.start(3).shape
-    (True, (3, 2))
+    >>> controller.observes_mode, controller.start(3).shape, controller
+    (True, (3, 2), ModeObservedLQG(horizon=5, M=2, nx=2, ny=1, nu=1))
     """
 
     observes_mode = True
@@ -133,6 +133,10 @@ class ModeObservedLQG(Controller):
         xhat = (np.einsum("nab,nb->na", self.A[theta], xhat) + np.einsum("nab,nb->na", self.B[theta], u)
                 + np.einsum("nab,nb->na", self.Mf[k][theta], innovation))
         return u, xhat
+
+    def _sizes(self):
+        return dict(zip(("horizon", "M", "nx", "ny", "nu"), (len(self.F), *self._dims[:2],
+                                                             self._dims[3], self._dims[2])))
 
 
 def control_riccati(st):

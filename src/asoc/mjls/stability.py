@@ -24,8 +24,11 @@ import numpy as np
 
 from .. import config
 from .certificate import certify
+from .closed_loops import controller_closed_loop, is_controller
+from .controllers import Controller
 from .moment_operator import mode_stack
 from .spectral_estimate import balance, check_method, left_perron_stack
+from .system import MJLS
 
 __all__ = ["Verdict", "MeanSquareStability", "ms_spectral_radius", "mean_square_stability",
            "perron_pair"]
@@ -114,11 +117,12 @@ def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
 
     Parameters
     ----------
-    A_stack : MJLS or array_like, shape (M, n, n)
-        An open-loop MJLS (its A stack and T), or per-mode (closed-loop) matrices, e.g. from
-        :func:`asoc.mjls.closed_loop`.
-    T : array_like, shape (M, M), optional
-        Row-stochastic transition matrix; None with an MJLS.
+    A_stack : MJLS, array_like of shape (M, n, n), or design result
+        As :func:`mean_square_stability`: an MJLS (open loop, or closed by the controller
+        ``T``), per-mode (closed-loop) matrices, or a design result (its certified rho).
+    T : array_like of shape (M, M), Controller or design result, optional
+        Row-stochastic transition matrix with a stack; with an MJLS, None or the controller
+        that closes its loop.
     method : {"auto", "dense", "arnoldi", "power"}
         As :func:`mean_square_stability`.
     check : bool
@@ -147,9 +151,7 @@ def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
     >>> round(ms_spectral_radius(SEC32_A, SEC32_T), 4), round(ms_spectral_radius(sec32_system()), 4)
     (1.4198, 1.4198)
     """
-    if check:
-        A_stack, T = mode_stack(A_stack, T)
-    result = _certified(A_stack, T, method)
+    result = mean_square_stability(A_stack, T, method=method, check=check)
     width = result.rho_upper - result.rho_lower
     if not width <= config.defaults["mjls.bracket_warn_rtol"] * result.rho_upper:
         warnings.warn(f"the spectral radius {result.rho:.6g} is only known to lie in "
@@ -163,11 +165,19 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
 
     Parameters
     ----------
-    A_stack : MJLS or array_like, shape (M, n, n)
-        An open-loop MJLS, or per-mode (closed-loop) matrices, e.g. the augmented closed loop
-        of a dynamic controller (:func:`asoc.mjls.augmented_closed_loop`).
-    T : array_like, shape (M, M), optional
-        Row-stochastic transition matrix; None with an MJLS.
+    A_stack : MJLS, array_like of shape (M, n, n), or design result
+        An MJLS: its open loop, or its loop closed by the controller passed as ``T``.
+        Per-mode (closed-loop) matrices, e.g. the augmented closed loop of a dynamic controller
+        (:func:`asoc.mjls.augmented_closed_loop`), with their ``T``. A design result alone
+        (e.g. of :func:`asoc.mjls.static_output_feedback`): the certificate of its closed loop
+        that the design computed, ``result.stability`` (``method`` does not apply; pass
+        ``(sys, result)`` to compute it again).
+    T : array_like of shape (M, M), Controller or design result, optional
+        With a stack, its row-stochastic transition matrix. With an MJLS, None (open loop) or
+        a time-invariant controller (:class:`asoc.mjls.StaticGain`,
+        :class:`asoc.mjls.ModeDependentGain`, :class:`asoc.mjls.DynamicOutputFeedback`) or a
+        design result whose closed loop (:func:`asoc.mjls.closed_loops.controller_closed_loop`)
+        is certified.
     method : {"auto", "dense", "arnoldi", "power"}
         The estimate: ``"dense"``, the eigenvalues of :func:`asoc.mjls.ms_operator`;
         ``"arnoldi"``, ARPACK on the matrix-free operator (Krylov spaces of
@@ -188,7 +198,9 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     Raises
     ------
     ValueError, TypeError
-        As :func:`ms_spectral_radius`, and for an unknown ``method``.
+        As :func:`ms_spectral_radius`, and for an unknown ``method``; a TypeError for a
+        controller without its system, or a time-variant one; a ValueError for a design result
+        without a gain (nothing to certify).
 
     Notes
     -----
@@ -239,10 +251,53 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
 
     >>> mean_square_stability(np.array([[[1.0]]]), [[1.0]]).stabilizing is None
     True
+
+    A design's closed loop, from the system and the result (or its controller), or from the
+    result alone:
+
+    >>> from asoc.mjls import static_output_feedback
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> res = static_output_feedback(sys)
+    >>> mean_square_stability(sys, res).sentence()
+    'rho = 0.8178, certified in [0.81776, 0.81776]: stable'
+    >>> mean_square_stability(res) == res.stability == mean_square_stability(sys, res.controller)
+    True
+    >>> mean_square_stability(res.controller)
+    Traceback (most recent call last):
+    ...
+    TypeError: A_stack: a controller's closed loop needs its system: \
+mean_square_stability(sys, controller)
     """
+    loop = _loop(A_stack, T)
+    if isinstance(loop, MeanSquareStability):
+        return loop
+    A_stack, T = loop
     if check:
         A_stack, T = mode_stack(A_stack, T)
     return _certified(A_stack, T, method)
+
+
+def _loop(A_stack, T):
+    """(A_stack, T) as given, the closed loop of (sys, controller), or the certificate a design
+    result holds."""
+    if isinstance(A_stack, MJLS) and is_controller(T):
+        return controller_closed_loop(A_stack, T, "T")[0], A_stack.T
+    if not is_controller(A_stack):
+        return A_stack, T
+    if T is not None:
+        raise TypeError(f"A_stack: expected an MJLS or a stack of matrices, found "
+                        f"{type(A_stack).__name__}; a controller or a design result comes second: "
+                        f"mean_square_stability(sys, controller)")
+    if isinstance(A_stack, Controller) or not hasattr(A_stack, "stability"):
+        alone = isinstance(A_stack, Controller)
+        what = ("a controller's closed loop needs its system" if alone else
+                f"a finite-horizon design ({type(A_stack).__name__}) has a time-variant controller")
+        raise TypeError(f"A_stack: {what}: mean_square_stability(sys, controller)")
+    if A_stack.stability is None:
+        raise ValueError(f"A_stack: the design returned no gain to certify ({A_stack.status}: "
+                         f"{A_stack.message})")
+    return A_stack.stability
 
 
 def perron_pair(A, T, method="auto"):

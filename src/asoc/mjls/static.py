@@ -21,12 +21,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..result import IterativeResult
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .. import config
 from ..linalg import relative_change, transpose
 from .lyapunov import coupled_lyapunov_solver
 from .closed_loops import closed_loop, gain_matrix, noise_covariances
+from .design_result import CertifiedDesignResult
 from .stability import mean_square_stability
 from .static_iterates import Cycle, ScaledPair
 from .system import check_system, predecessor_sum, successor_average
@@ -36,7 +36,7 @@ __all__ = ["StaticOutputFeedbackResult", "gain_from_moments", "MOMENTS", "static
 
 
 @dataclass(kw_only=True)
-class StaticOutputFeedbackResult(IterativeResult):
+class StaticOutputFeedbackResult(CertifiedDesignResult):
     """Result of Algorithm 3.1 (:func:`static_output_feedback`).
 
     Attributes
@@ -48,14 +48,9 @@ class StaticOutputFeedbackResult(IterativeResult):
         ``"converged"``, ``"max_iterations"``, ``"diverged"`` (an iterate became
         non-finite) or ``"linalg_error"`` (the gain equation (3.34) was singular).
     iterations : int
-    rho : float
-        Mean-square spectral radius of the closed loop (Cor. 3.2).
-    stabilizing : bool or None
-        The certified verdict of :func:`asoc.mjls.mean_square_stability`: True when the certified
-        bracket of rho lies below 1, False when it lies at or above 1, None when it straddles 1
-        (undecided).
-    rho_bracket : tuple of float
-        (rho_lower, rho_upper), the certified bracket of rho.
+    stability : MeanSquareStability
+        The closed loop's certificate (Cor. 3.2); ``rho``, ``rho_bracket`` and ``stabilizing``
+        read it (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float
         H2 cost (Prop. 3.7) of L; inf when not stabilizing.
     X, P : numpy.ndarray, shape (M, nx, nx)
@@ -75,21 +70,11 @@ class StaticOutputFeedbackResult(IterativeResult):
 
     L: np.ndarray
     iterations: int
-    rho: float
-    rho_bracket: tuple = (np.nan, np.nan)
-    stabilizing: bool | None
     cost: float
     X: np.ndarray
     P: np.ndarray
     history: dict = field(repr=False)
     seconds: float = 0.0
-
-    @property
-    def controller(self):
-        """u = L y as a :class:`asoc.mjls.StaticGain`, for :func:`asoc.mjls.simulate` and :func:`asoc.mjls.average_cost`."""
-        from .monte_carlo import StaticGain
-
-        return StaticGain(self.L)
 
 
 def gain_from_moments(sys, X, P, method="vec"):
@@ -467,8 +452,8 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
                       f"mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=2)
     history = {"trace_X": run["trace_X"], "trace_P": run["trace_P"]}
     return StaticOutputFeedbackResult(L=L, converged=status == "converged", status=status,
-                                      message=message, iterations=run["iterations"], rho=rho, rho_bracket=stability.bracket,
-                                      stabilizing=stabilizing, cost=cost, X=run["X"],
+                                      message=message, iterations=run["iterations"],
+                                      stability=stability, cost=cost, X=run["X"],
                                       P=run["P"], history=history, seconds=seconds)
 
 

@@ -16,7 +16,7 @@ from scipy.sparse.csgraph import connected_components
 from ..validation import probability_vector, real_array, real_scalar, semidefinite, stochastic_matrix
 
 __all__ = ["STATIONARY_ATOL", "check_system", "closed_classes", "stationary_distribution",
-           "successor_average", "predecessor_sum", "MJLS"]
+           "successor_average", "predecessor_sum", "MJLS", "import_control"]
 
 
 STATIONARY_ATOL = 1e-8     # |mu T - mu| allowed for a given stationary distribution
@@ -410,7 +410,7 @@ class MJLS:
         >>> plain.Q.ravel().tolist(), round(ms_spectral_radius(plain.A, plain.T), 4)
         ([1.0, 1.0], 1.3056)
         """
-        control = _import_control()
+        control = import_control()
         T = stochastic_matrix(T, "T")
         if isinstance(systems, control.StateSpace) or not isinstance(systems, (list, tuple)):
             raise TypeError(f"systems: expected a list of {T.shape[0]} control.StateSpace, "
@@ -475,7 +475,7 @@ class MJLS:
         >>> len(modes), modes[1].dt, float(modes[1].A[0, 0])
         (2, 0.1, 0.5)
         """
-        control = _import_control()
+        control = import_control()
         if dt is None:
             dt = True if self.dt is None else self.dt
         dt = _sampling_time(dt)
@@ -488,7 +488,8 @@ class MJLS:
                 for i in range(self.M)]
 
 
-def _import_control():
+def import_control():
+    """The python-control module, or an ImportError saying how to install it (``asoc[control]``)."""
     try:
         import control
     except ImportError as err:
