@@ -10,12 +10,13 @@ Nocedal and Wright, Numerical Optimization, 2nd ed., 2006: Alg. 6.1 (BFGS), Alg.
 (two-loop recursion), Alg. 3.1 (backtracking).
 """
 
-from typing import NamedTuple
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import config
 from .progress import progress_bar
+from .result import IterativeResult
 from .validation import boolean, integer, real_array, real_scalar
 
 __all__ = ["BFGS_STATUS", "BFGSResult", "bfgs"]
@@ -24,32 +25,42 @@ __all__ = ["BFGS_STATUS", "BFGSResult", "bfgs"]
 #: Why :func:`bfgs` stopped, by status code (codes of :data:`asoc.result.STATUS_CODES`).
 BFGS_STATUS = {"converged": "the decrease the quasi-Newton model predicts fell below tol * |f|",
                "max_iterations": "the iteration limit was reached",
-               "no_progress": "the line search found no decrease even along the gradient"}
+               "no_progress": "the line search found no decrease even along the gradient, or the "
+                              "last patience steps lowered f by less than stall * |f|"}
 
 
-class BFGSResult(NamedTuple):
-    """What :func:`bfgs` returns (a tuple: ``z, f, status, iterations, history = bfgs(...)``).
+@dataclass(kw_only=True)
+class BFGSResult(IterativeResult):
+    """What :func:`bfgs` returns: an :class:`asoc.result.IterativeResult` with the last point.
 
-    ``z`` is the last accepted point, ``f`` the function value there, ``status`` a key of
-    :data:`BFGS_STATUS`, ``iterations`` the number of passes of the iteration (at most ``max_iter``;
-    a pass that ends in a stop test or a line-search restart counts too) and ``history`` the function
-    value at the start and after each accepted step (``len(history) - 1`` accepted steps).
+    Attributes
+    ----------
+    z : numpy.ndarray
+        The last accepted point.
+    f : float
+        The function value there.
+    converged, status, message
+        ``status`` a key of :data:`BFGS_STATUS`, ``message`` its sentence with the iterations.
+    iterations : int
+        Passes of the iteration (at most ``max_iter``; a pass that ends in a stop test or a
+        line-search restart counts too).
+    history : numpy.ndarray
+        The function value at the start and after each accepted step (``len(history) - 1``
+        accepted steps).
 
     Examples
     --------
     >>> result = bfgs(lambda z: (float((z[0] - 3) ** 2), 2 * (z - 3)), [0.0])
     >>> result.status, result.z.round(9), result.history.round(9)
     ('converged', array([3.]), array([9., 4., 0.]))
-    >>> z, f, status, iterations, history = result
-    >>> round(f, 9), iterations, len(history) - 1
-    (0.0, 3, 2)
+    >>> round(result.f, 9), result.iterations, result.converged
+    (0.0, 3, True)
     """
 
     z: np.ndarray
     f: float
-    status: str
     iterations: int
-    history: np.ndarray
+    history: np.ndarray = field(repr=False)
 
 
 class _InverseHessian:
@@ -97,15 +108,16 @@ class _InverseHessian:
         self.dense += np.column_stack([s, Hy]) @ np.column_stack([a * s - Hy / sy, -s / sy]).T
 
 
-def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=None, target=-np.inf):
+def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=None,
+         target=-np.inf, gtol=0.0, patience=None, stall=1e-4):
     """Minimise ``fun`` (z -> (f, grad); f = inf outside the domain) by BFGS or L-BFGS.
 
     The line search backtracks from the full quasi-Newton step until the Armijo condition
     holds (constant ``config.defaults["optimize.armijo"]``, up to rounding of f), giving up
     below the step ``config.defaults["optimize.min_step"]``; a step out of the domain
     (f = inf) is rejected like any other. The iteration stops (converged) when the decrease
-    the quasi-Newton model predicts, g^T H^-1 g / 2, is below ``tol * |f|``, or once
-    f <= ``target``.
+    the quasi-Newton model predicts, g^T H^-1 g / 2, is below ``tol * |f|``, when the scaled
+    gradient ||g|| max(1, ||z||) / |f| is below ``gtol``, or once f <= ``target``.
 
     Parameters
     ----------
@@ -126,11 +138,17 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
         None for dense BFGS, else L-BFGS keeping that many pairs.
     target : float
         Stop as soon as f <= target.
+    gtol : float
+        Stop (converged) once ||g|| max(1, ||z||) / |f| < gtol (0: never).
+    patience, stall : int or None, float
+        Stop (``"no_progress"``) once the last ``patience`` accepted steps together lowered f
+        by less than ``stall * |f|`` (None: never): for objectives, like a spectral radius,
+        that are not smooth at their minimum and on which BFGS crawls.
 
     Returns
     -------
     BFGSResult
-        (z, f, status, iterations, history); status a key of :data:`BFGS_STATUS`.
+        z, f, status (a key of :data:`BFGS_STATUS`), message, iterations, history.
 
     Raises
     ------
@@ -142,8 +160,8 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
     --------
     >>> fun = lambda z: ((z[0] - 1) ** 2 + 10 * (z[1] - z[0] ** 2) ** 2,
     ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2), 20 * (z[1] - z[0] ** 2)]))
-    >>> z, f, status, iterations, history = bfgs(fun, [-1.0, 1.0], 1e-14, 200)
-    >>> status, z.round(4)
+    >>> result = bfgs(fun, [-1.0, 1.0], 1e-14, 200)
+    >>> result.status, result.z.round(4)
     ('converged', array([1., 1.]))
     """
     z0 = real_array(z0, "z0", ndim=1)
@@ -152,10 +170,15 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
     progress = boolean(progress, "progress")
     if memory is not None:
         memory = integer(memory, "memory", minimum=1)
-    return _bfgs(fun, z0, tol, max_iter, progress, desc, memory, target)
+    gtol = real_scalar(gtol, "gtol", low=0)
+    if patience is not None:
+        patience = integer(patience, "patience", minimum=1)
+    stall = real_scalar(stall, "stall", low=0)
+    return _bfgs(fun, z0, tol, max_iter, progress, desc, memory, target, gtol, patience, stall)
 
 
-def _bfgs(fun, z, tol, max_iter, progress, desc, memory, target):
+def _bfgs(fun, z, tol, max_iter, progress, desc, memory, target, gtol=0.0, patience=None,
+          stall=0.0):
     armijo, min_step = config.defaults["optimize.armijo"], config.defaults["optimize.min_step"]
     f, g = fun(z)
     if not np.isfinite(f):
@@ -168,7 +191,8 @@ def _bfgs(fun, z, tol, max_iter, progress, desc, memory, target):
         fresh = Hinv.empty
         d = -Hinv.apply(g)
         slope = float(g @ d)
-        if -0.5 * slope <= tol * abs(f) or f <= target:
+        stationary = gtol > 0 and np.linalg.norm(g) * max(1.0, np.linalg.norm(z)) < gtol * abs(f)
+        if -0.5 * slope <= tol * abs(f) or f <= target or stationary:
             status = "converged"
             break
         t = 1.0
@@ -187,4 +211,10 @@ def _bfgs(fun, z, tol, max_iter, progress, desc, memory, target):
         Hinv.update(z_new - z, g_new - g)
         z, f, g = z_new, f_new, g_new
         history.append(f)
-    return BFGSResult(z, f, status, it, np.array(history))
+        stalled = patience is not None and len(history) > patience
+        if stalled and history[-1 - patience] - f < stall * abs(f):
+            status = "no_progress"
+            break
+    return BFGSResult(z=z, f=f, converged=status == "converged", status=status,
+                      message=f"{BFGS_STATUS[status]} after {it} iterations (f = {f:.6g})",
+                      iterations=it, history=np.array(history))

@@ -8,8 +8,9 @@ from asoc.mjls import static_output_feedback
 from asoc.mjls.baselines import time_variant_feedback
 from asoc.mjls.monte_carlo_comparison import median_costs, table_3_2_designs
 from asoc.mjls.dynamic import dynamic_output_feedback
-from asoc.mjls.examples import (SEC354_X0, SEC373_COV0, SEC373_MEAN0, SEC373_MU0, networked_loop, sec354_system,
-                                sec373_system)
+from asoc.mjls.examples import (SEC354_X0, SEC373_COV0, SEC373_MEAN0, SEC373_MU0, networked_loop,
+                                networked_loop_lossy, sec354_system, sec373_system)
+from asoc.mjls.exact_static_design import exact_static_output_feedback
 from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
 from asoc.mjls.finite_horizon import finite_horizon_dynamic_output_feedback
 from asoc.mjls.controllers import DynamicOutputFeedback, StaticGain
@@ -84,6 +85,22 @@ def test_exact_design_networked_loop(benchmark):
     r = benchmark.pedantic(exact_dynamic_output_feedback, args=(networked_loop(),), rounds=5)
     assert r.converged
     benchmark.extra_info.update(target_s=0.2, iterations=r.iterations)
+
+
+def test_alg31_networked_loop_lossy(benchmark):
+    """Alg. 3.1 on the lossy networked loop: it stops on its 2-cycle (before: 20,000 iterations)."""
+    r = benchmark.pedantic(static_output_feedback, args=(networked_loop_lossy(),),
+                           kwargs={"warn": False}, rounds=5)
+    assert r.status == "cycle"
+    benchmark.extra_info.update(target_s=0.5, iterations=r.iterations)
+
+
+def test_exact_static_design_networked_loop_lossy(benchmark):
+    """exact_static_output_feedback on the lossy networked loop, from its default starts (Alg. 3.1's
+    run included): a stationary point of the exact cost in 0.5 s (issue 33)."""
+    r = benchmark.pedantic(exact_static_output_feedback, args=(networked_loop_lossy(),), rounds=5)
+    assert r.converged and r.stabilizing
+    benchmark.extra_info.update(target_s=0.5, iterations=r.iterations)
 
 
 def test_alg33_horizon_100(benchmark):

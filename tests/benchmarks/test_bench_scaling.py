@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from asoc.mjls import (StaticGain, dynamic_output_feedback, exact_dynamic_output_feedback,
-                       ms_spectral_radius, simulate, static_output_feedback)
+                       exact_static_output_feedback, ms_spectral_radius, simulate,
+                       static_output_feedback)
 from asoc_companion.scaling import published_size_system, scaling_system
 from asoc_companion.timing import fitted_exponent, time_call
 from asoc.mjls.moment_operator import ms_operator
@@ -85,8 +86,17 @@ def published():
 
 
 def test_alg31_n100_m100(benchmark, published):
-    """n = 100, M = 100: Alg. 3.1 (moments="auto") to its stopping rule under 30 s."""
+    """n = 100, M = 100: Alg. 3.1 (moments="auto") to its stopping rule under 4 s (issue 33)."""
     r = benchmark.pedantic(lambda: static_output_feedback(published, warn=False), rounds=1, iterations=1)
+    benchmark.extra_info.update(target_s=4.0, iterations=r.iterations, status=r.status)
+
+
+def test_exact_static_design_n100_m100(benchmark, published):
+    """n = 100, M = 100: exact_static_output_feedback from Alg. 3.1's converged gain (given, not
+    timed) and the averaged LQ gain, to a stationary point."""
+    alg31 = static_output_feedback(published, warn=False)
+    r = benchmark.pedantic(lambda: exact_static_output_feedback(published, alg31=alg31, warn=False),
+                           rounds=1, iterations=1)
     benchmark.extra_info.update(target_s=30.0, iterations=r.iterations, status=r.status)
 
 

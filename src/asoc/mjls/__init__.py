@@ -12,8 +12,10 @@ Analyse
     (a certified bracket of the spectral radius and its verdict), :func:`closed_loop`,
     :func:`second_moments`, :func:`steady_state_second_moment`.
 Design a static gain u = L y
-    :func:`static_output_feedback` (with ``moments="auto"`` it picks the faster of two
-    exact iterations), :func:`static_output_lmi` (a stabilising gain from LMIs).
+    :func:`exact_static_output_feedback` (smallest exact cost; the one to use),
+    :func:`static_output_feedback` (the thesis's Alg. 3.1, which may stop on a cycle; with
+    ``moments="auto"`` it picks the faster of two exact iterations), :func:`static_output_lmi`
+    (a stabilising gain from a sufficient LMI condition).
 Design a dynamic controller x^+ = F x^ + K y, u = L x^
     :func:`exact_dynamic_output_feedback` (smallest exact cost; the one to use),
     :func:`dynamic_output_feedback` (the thesis's Alg. 3.2, which minimises a bound and may
@@ -56,7 +58,9 @@ Modules, by the thesis's numbers: ``system`` (the model (3.7)), ``moment_operato
 second-moment operator L of (3.29) and its adjoint), ``closed_loops`` ((3.10), (3.39)-(3.40)),
 ``stability`` -> ``certificate`` -> ``spectral_estimate`` (Cor. 3.2: the verdict, the certified
 bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations), ``moments``
-(Prop. 3.7, 3.14), ``static`` and ``static_iterates`` (Alg. 3.1), ``lmi`` (Thms. 3.9, 3.12),
+(Prop. 3.7, 3.14), ``static`` and ``static_iterates`` (Alg. 3.1), ``stopping`` (the stopping rule of
+Algs. 3.1 and 3.2), ``exact_static_design`` (the exact-cost static gain, not in the thesis),
+``lmi`` (Thms. 3.9, 3.12),
 ``moment_bounds``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26, (3.49)-(3.51)),
 ``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg`` (the
 mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
@@ -86,6 +90,7 @@ from .closed_loops import closed_loop
 from .moment_operator import ms_operator
 from .stability import mean_square_stability, MeanSquareStability, ms_spectral_radius, Verdict
 from .static import StaticOutputFeedbackResult, gain_from_moments, static_cost, static_output_feedback
+from .exact_static_design import ExactStaticOutputFeedbackResult, exact_static_output_feedback
 from .system import MJLS, predecessor_sum, successor_average, stationary_distribution
 
 __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator", "ms_spectral_radius",
@@ -100,4 +105,5 @@ __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribut
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
            "min_radius_dynamic_output_feedback", "radius_and_gradient", "ExactDynamicOutputFeedbackResult",
-           "ExactFiniteHorizonResult", "random_mjls", "average_cost", "static_cost"]
+           "ExactFiniteHorizonResult", "random_mjls", "average_cost", "static_cost",
+           "exact_static_output_feedback", "ExactStaticOutputFeedbackResult"]

@@ -45,7 +45,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import config
-from ..linalg import relative_change
 from ..result import Status
 from ..validation import boolean, choice, integer, real_scalar
 from .moment_bounds import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
@@ -55,6 +54,7 @@ from .controllers import DynamicOutputFeedback
 from .design_result import CertifiedDesignResult
 from .stability import mean_square_stability
 from .optimality import METHODS, GainSolve, solve_gains
+from .stopping import StoppingRule
 from .system import check_system, successor_average
 
 __all__ = ["steady_state_cost", "certified_steady_state_cost", "DynamicOutputFeedbackResult",
@@ -196,74 +196,6 @@ class DynamicOutputFeedbackResult(CertifiedDesignResult):
     solve: GainSolve = None
     worst_residual: float = 0.0
     period: int = 1
-
-
-class StoppingRule:
-    """The stopping rule of :func:`dynamic_output_feedback` on the four bounds.
-
-    Keeps the last ``mjls.alg32_max_period`` iterates. After each, the relative change
-    (:func:`asoc.linalg.relative_change`, the largest over Xbar, Xunder, Pbar, Punder)
-    against the iterate p steps back, p = 1 .. max period, gives the verdict:
-
-    - ``"converged"`` when it is below tol for p = 1;
-    - ``"cycle"`` when it is for some p >= 2 while the change for p = 1 stays above
-      sqrt(tol) (an iteration converging with an oscillation, e.g. a contraction factor
-      near -1, has a small lag-2 change too, but its lag-1 change then follows it down);
-    - ``"diverged"`` when the bounds grow by more than 1e6 within a window of
-      w = ``mjls.alg32_patience`` iterations while not settling;
-    - ``"no_progress"`` when the smallest change (over p) of the last w iterations is not
-      below that of the w before, or when the rate between the two windows predicts that
-      tol would not be reached before ``max_iter``.
-
-    Examples
-    --------
-    Bounds that alternate between two values are a cycle of period 2:
-
-    >>> rule = StoppingRule(tol=1e-10, max_iter=100)
-    >>> a, b = np.ones((4, 1, 1, 1)), 2 * np.ones((4, 1, 1, 1))
-    >>> [rule.status(it, x) for it, x in enumerate((a, b, a), start=1)], rule.period
-    ([None, None, 'cycle'], 2)
-    >>> rule.status(4, b) is Status.CYCLE
-    True
-    """
-
-    def __init__(self, tol, max_iter):
-        self.tol, self.max_iter = tol, max_iter
-        self.max_period = config.defaults["mjls.alg32_max_period"]
-        self.window = config.defaults["mjls.alg32_patience"]
-        self.recent = deque(maxlen=self.max_period)
-        self.smallest, self.norms = [], []
-        self.change, self.period, self.predicted = np.inf, 1, np.inf
-
-    def status(self, it, bounds):
-        """The :class:`asoc.result.Status` after iteration ``it`` with the new ``bounds`` (a
-        tuple of four stacks), or None to go on."""
-        new = np.reshape(bounds, (4, -1))
-        if not self.recent:
-            self.recent.append(new)
-            return None
-        past = np.array(self.recent)[::-1]                                    # (periods, 4, M n^2)
-        changes = relative_change(past, new, axis=-1).max(axis=1).tolist()    # largest of the four, per lag
-        self.recent.append(new)
-        self.change = changes[0]
-        if it > 1 and changes[0] < self.tol:
-            return Status.CONVERGED
-        for period, change in enumerate(changes[1:], start=2):
-            if change < self.tol and changes[0] > np.sqrt(self.tol):
-                self.change, self.period = change, period
-                return Status.CYCLE
-        self.smallest.append(min(changes))
-        self.norms.append(float(np.linalg.norm(new)))
-        w = self.window
-        if len(self.smallest) < 2 * w:
-            return None
-        before, last = min(self.smallest[-2 * w:-w]), min(self.smallest[-w:])
-        if self.norms[-1] > 1e6 * self.norms[-w]:
-            return Status.DIVERGED
-        if not last < before:
-            return Status.NO_PROGRESS
-        self.predicted = w * np.log(self.tol / last) / np.log(last / before)
-        return Status.NO_PROGRESS if self.predicted > self.max_iter - it else None
 
 
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",

@@ -218,18 +218,28 @@ def _stabilising_start(sys, starts, costs, shapes):
     for i in np.argsort(radii):
         if not np.isfinite(radii[i]):
             continue
-        zi, rho = _min_radius(sys, starts[i], shapes, config.defaults["mjls.radius_max_iter"],
-                              target=config.defaults["mjls.rho_start"])[:2]
+        run = _min_radius(sys, starts[i], shapes, config.defaults["mjls.radius_max_iter"],
+                          target=config.defaults["mjls.rho_start"])
+        zi, rho = run.z, run.f
         if rho < 1 and np.isfinite(average_cost_and_gradient(sys, *unpack(zi, shapes))[0]):
             return zi, True                     # certified (finite exact cost), not rho's estimate
         best = min(best, (zi, rho), key=lambda b: b[1])
     return best[0], False
 
 
-def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False):
-    """BFGS on rho (Cor. 3.2) over (F, K, L) from z, stopping early once rho <= target."""
+def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False, patience=None):
+    """BFGS on rho (Cor. 3.2) over (F, K, L) from z, stopping early once rho <= target (or, with
+    ``patience``, once that many steps lowered rho by less than ``_RADIUS_STALL`` relative)."""
     fun = lambda v: _flat(radius_and_gradient(sys, *unpack(v, shapes)))
-    return bfgs(fun, z, 1e-12, max_iter, progress, "min rho", target=target)
+    return bfgs(fun, z, 1e-12, max_iter, progress, "min rho", target=target, patience=patience,
+                stall=_RADIUS_STALL)
+
+
+#: min_radius_dynamic_output_feedback stops (no_progress) when ``_RADIUS_PATIENCE`` BFGS steps
+#: lowered rho by less than ``_RADIUS_STALL`` relative: rho is not smooth at its minimum (Perron
+#: eigenvalues coalesce), BFGS then crawls, and each step costs a certified Perron pair
+#: (about 1 s on the networked loops at load 8 on 2 cores).
+_RADIUS_PATIENCE, _RADIUS_STALL = 10, 1e-5
 
 
 def _flat(out):
@@ -259,7 +269,8 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
         seconds=time.perf_counter() - start)
 
 
-def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False):
+def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False,
+                                       warn=True):
     """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the thesis.
 
     BFGS on rho over (F, K, L) with the gradient of
@@ -281,6 +292,10 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
         BFGS iteration limit (default ``config.defaults["mjls.radius_max_iter"]``).
     progress : bool
         Show a tqdm bar over iterations.
+    warn : bool
+        Warn (RuntimeWarning, with the status) when BFGS stops without converging: after
+        10 steps that together lowered rho by less than 1e-5 relative (``"no_progress"``), without a
+        descent step, or at max_iter.
 
     Returns
     -------
@@ -299,19 +314,23 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
     Examples
     --------
     >>> from asoc.mjls.examples import sec373_system
-    >>> res = min_radius_dynamic_output_feedback(sec373_system(1), max_iter=20)
+    >>> res = min_radius_dynamic_output_feedback(sec373_system(1), max_iter=20, warn=False)
     >>> res.stabilizing, bool(res.history["rho"][-1] <= res.history["rho"][0])
     (True, True)
     """
     check_system(sys)
     max_iter = integer(config.defaults["mjls.radius_max_iter"] if max_iter is None else max_iter, "max_iter",
                        minimum=1)
-    progress = boolean(progress, "progress")
+    progress, warn = boolean(progress, "progress"), boolean(warn, "warn")
     start = time.perf_counter()
     z, _, shapes = _starts(sys, init, _checked_order(nc))
-    z = z[0]
-    z, rho, status, it, history = _min_radius(sys, z, shapes, max_iter, progress=progress)
-    return _controller_result(sys, z, shapes, status, it, history, "rho", start)
+    run = _min_radius(sys, z[0], shapes, max_iter, progress=progress, patience=_RADIUS_PATIENCE)
+    result = _controller_result(sys, run.z, shapes, run.status, run.iterations, run.history, "rho",
+                                start)
+    if warn and result.status != "converged":
+        warnings.warn(f"min_radius_dynamic_output_feedback stopped with status {result.status!r}: "
+                      f"{result.message}", RuntimeWarning, stacklevel=2)
+    return result
 
 
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
@@ -384,9 +403,10 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
                           stacklevel=2)
         return _controller_result(sys, z, shapes, "no_progress", 0, np.array([np.inf]), "cost", start, message)
     fun = lambda v: _flat(average_cost_and_gradient(sys, *unpack(v, shapes)))
-    z, cost, status, it, history = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
-    result = _controller_result(sys, z, shapes, status, it, history, "cost", start)
-    if warn and status != "converged":
+    run = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
+    result = _controller_result(sys, run.z, shapes, run.status, run.iterations, run.history, "cost",
+                                start)
+    if warn and run.status != "converged":
         warnings.warn(f"exact_dynamic_output_feedback: {result.message}", RuntimeWarning, stacklevel=2)
     return result
 
@@ -460,10 +480,11 @@ def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0,
     mu = mode_distributions(st, mu0)
     shapes = (F.shape, K.shape, L.shape)
     fun = lambda v: _flat(finite_horizon_cost_and_gradient(st, *unpack(v, shapes), X0, mu))
-    z, cost, status, it, history = bfgs(fun, pack(F, K, L), tol, max_iter, progress, "exact (3.56)",
-                                        memory=config.defaults["mjls.lbfgs_memory"])
-    F, K, L = unpack(z, shapes)
-    message = _bfgs_message(status, it, cost, "J_0")
+    run = bfgs(fun, pack(F, K, L), tol, max_iter, progress, "exact (3.56)",
+               memory=config.defaults["mjls.lbfgs_memory"])
+    F, K, L = unpack(run.z, shapes)
+    status, it, history = run.status, run.iterations, run.history
+    message = _bfgs_message(status, it, run.f, "J_0")
     if warn and status != "converged":
         warnings.warn(f"exact_finite_horizon_dynamic_output_feedback: {message}", RuntimeWarning,
                       stacklevel=2)

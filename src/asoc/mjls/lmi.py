@@ -164,12 +164,19 @@ def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_resi
 def _not_feasible(solver_status, L, margin, residual, eps):
     """(status, message) of a solve without a verified certificate."""
     if solver_status == cp.INFEASIBLE:
-        return "infeasible", "the solver certifies that the LMIs are infeasible"
+        return "infeasible", ("the solver certifies that the LMIs of the sufficient condition are "
+                              "infeasible" + _MAY_EXIST)
     if solver_status in (cp.INFEASIBLE_INACCURATE, cp.OPTIMAL_INACCURATE) or L is not None:
         found = "" if L is None else f"; its matrices miss the LMIs (margin {margin:.1e}, equality residual {residual:.1e})"
         return "inaccurate", (f"the solver stopped short of its accuracy (status {solver_status!r}){found}: "
                               f"feasibility is undecided; rescale the system or try another solver")
-    return "infeasible", f"the solver found no solution (status {solver_status!r})"
+    return "infeasible", ("the solver found no solution of the sufficient condition "
+                          f"(status {solver_status!r})" + _MAY_EXIST)
+
+
+_MAY_EXIST = ("; stabilising static gains may still exist (the condition is sufficient only and "
+              "depends on the state coordinates, Sec. 3.5.2): exact_static_output_feedback "
+              "searches the gains directly")
 
 
 def performance_output(sys):

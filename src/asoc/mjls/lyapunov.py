@@ -146,13 +146,16 @@ def solve_coupled_lyapunov(A, T, W, adjoint=False, method="auto", tol=None):
 
 
 def coupled_lyapunov_solver(A, T, method="auto", tol=None):
-    """A function (W, adjoint=False, on_miss="fallback") -> :class:`LyapunovSolution` for one closed loop A.
+    """A function (W, adjoint=False, on_miss="fallback", x0=None) -> :class:`LyapunovSolution`
+    for one closed loop A.
 
     The dense method factorises I - L once for all right-hand sides and both directions.
     Arguments as :func:`solve_coupled_lyapunov`. ``on_miss="report"`` returns an iterative
     solution that misses ``mjls.solve_residual_max`` as it is (``accepted`` False), without the
     dense fallback or the warning: for callers that test stability by the solve and check
     ``accepted`` themselves (e.g. an exact design's line search through unstable gains).
+    ``x0`` starts an iterative solve (e.g. from the solution for a nearby closed loop; the
+    dense method ignores it).
 
     Examples
     --------
@@ -176,12 +179,12 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=None):
         X = sym(dense[0].solve(W, adjoint))
         return X, residual(A, T, X, W, adjoint)
 
-    def solve(W, adjoint=False, on_miss="fallback"):
+    def solve(W, adjoint=False, on_miss="fallback", x0=None):
         if method == "dense":
             X, res = dense_solve(W, adjoint)
             return LyapunovSolution(X=X, residual=res, method="dense", iterations=0)
         with single_threaded():
-            X, res, used, it = _iterative(A, T, W, adjoint, method, tol, auto)
+            X, res, used, it = _iterative(A, T, W, adjoint, method, tol, auto, x0)
         if on_miss == "fallback" and not res <= config.defaults["mjls.solve_residual_max"]:
             if M * n * n <= config.defaults["mjls.dense_fallback_solve"]:
                 X2, res2 = dense_solve(W, adjoint)
@@ -195,9 +198,10 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=None):
     return solve
 
 
-def _iterative(A, T, W, adjoint, method, tol, auto):
-    """X, its residual, the method(s) used and the iterations; BiCGSTAB continued by GMRES for ``auto``."""
-    X, it = _iterative_solve(A, T, W, adjoint, method, tol)
+def _iterative(A, T, W, adjoint, method, tol, auto, x0=None):
+    """X, its residual, the method(s) used and the iterations; BiCGSTAB continued by GMRES for
+    ``auto`` (from ``x0``, e.g. the solution for a nearby closed loop, when given)."""
+    X, it = _iterative_solve(A, T, W, adjoint, method, tol, x0=x0)
     X, used = sym(X), method
     res = residual(A, T, X, W, adjoint)
     if auto and not res <= 10 * tol:                  # BiCGSTAB stalled or broke down

@@ -1,31 +1,201 @@
-"""The iterates of Algorithm 3.1 in scaled variables, and the detection of an exact cycle.
+"""The iterations of Algorithm 3.1: the thesis's step (3.34)-(3.35) in scaled variables, and
+the alternation of (3.34) with exact moment solves.
 
 :func:`asoc.mjls.static_output_feedback` carries X^i = s_X Xs and P^i = s_P Ps so that
 iterates that grow geometrically (a gain that does not stabilise) do not overflow
-(:class:`ScaledPair`), and skips whole periods when its rounded state repeats exactly
-(:class:`Cycle`).
+(:class:`ScaledPair`), and stops on the rule of Alg. 3.2
+(:class:`asoc.mjls.stopping.StoppingRule`): converged, a cycle, no progress or divergence.
+Each iteration returns an :class:`IterationRun`.
 """
 
 import math
+from collections import deque
+from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
-__all__ = ["ScaledPair", "Cycle"]
+from .. import config
+from ..linalg import transpose
+from .closed_loops import closed_loop
+from .lyapunov import coupled_lyapunov_solver
+from .stability import mean_square_stability
+from .stopping import StoppingRule, StopStatus
+from .system import predecessor_sum, successor_average
+
+__all__ = [
+    "UntilStabilizing",
+    "IterationRun",
+    "Recursion",
+    "ScaledPair",
+    "gain_sdp",
+    "step_iteration",
+    "exact_iteration",
+    "lyapunov_certified",
+]
+
+
+#: The window of Alg. 3.1's progress test (:class:`asoc.mjls.stopping.StoppingRule`).
+ALG31_PATIENCE = 500
+
+
+class UntilStabilizing(str, Enum):
+    """When the thesis's iteration hands over to the exact one (``moments`` of
+    :func:`asoc.mjls.static_output_feedback`): ``NEVER`` ("step"), at the first stabilising
+    gain (``EACH``, "exact"), or at a stabilising gain once the iteration is slow (``SLOW``,
+    "auto").
+
+    Examples
+    --------
+    >>> UntilStabilizing.for_moments("auto")
+    <UntilStabilizing.SLOW: 'slow'>
+    """
+
+    NEVER = "never"
+    EACH = "each"
+    SLOW = "slow"
+
+    @classmethod
+    def for_moments(cls, moments):
+        """The mode of ``moments`` ("auto", "step" or "exact")."""
+        return {"auto": cls.SLOW, "exact": cls.EACH, "step": cls.NEVER}[moments]
+
+
+@dataclass
+class IterationRun:
+    """What one iteration of Alg. 3.1 returns.
+
+    Attributes
+    ----------
+    L : numpy.ndarray, shape (nu, ny)
+        The returned gain: the last, or on a cycle the member of the period of smallest exact cost.
+    X, P : numpy.ndarray, shape (M, nx, nx)
+        The (unscaled) moments of that iterate.
+    status : StopStatus
+    change : float
+        The relative change that decided the status.
+    iterations : int
+    period : int
+        The period of a cycle, else 1.
+    lag1_change : float
+        On a cycle, the relative change against the previous iterate (``change`` is the one
+        against the iterate a period back).
+    members : list of tuple
+        On a cycle, the (L, X, P) of each member of the period; else empty.
+    stabilized : bool
+        Whether the iteration stopped at a stabilising gain to hand over to the exact one
+        (step iteration), resp. every exact iterate stabilised (exact iteration).
+    trace_X, trace_P : numpy.ndarray, shape (iterations + 1, M)
+        tr X^i and tr P^i of every iterate.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> sys = sec354_system(1)
+    >>> run = step_iteration(sys, Recursion(sys), 1e-10, 20, 1e-4)
+    >>> run.status, run.iterations, run.trace_X.shape
+    (<StopStatus.MAX_ITERATIONS: 'max_iterations'>, 20, (21, 2))
+    """
+
+    L: np.ndarray
+    X: np.ndarray
+    P: np.ndarray
+    status: StopStatus
+    change: float
+    iterations: int
+    stabilized: bool
+    trace_X: np.ndarray
+    trace_P: np.ndarray
+    period: int = 1
+    members: list = None
+    lag1_change: float = np.nan
+
+
+class Recursion:
+    """One step of (3.34)-(3.35) in scaled variables, with the mode stacks precomputed.
+
+    Examples
+    --------
+    >>> from asoc.mjls.examples import sec354_system
+    >>> rec = Recursion(sec354_system(1))
+    >>> X = P = np.broadcast_to(np.eye(2), (2, 2, 2))
+    >>> rec.gain(X, successor_average(rec.T, P), 1.0, 1.0).round(4)
+    array([[-0.1447]])
+    """
+
+    def __init__(self, sys):
+        swap = lambda S: np.ascontiguousarray(np.swapaxes(S, 1, 2))
+        self.A, self.B, self.C, self.Bt, self.Ct = sys.A, sys.B, sys.C, swap(sys.B), swap(sys.C)
+        self.Q, self.R, self.T, self.Tt = sys.Q, sys.R, sys.T, np.ascontiguousarray(sys.T.T)
+        self.muHHt = sys.mu_inf[:, None, None] * (sys.H @ swap(sys.H))
+        self.muJJt = None if sys.J is None else sys.mu_inf[:, None, None] * (sys.J @ swap(sys.J))
+        self.nu, self.ny = sys.nu, sys.ny
+        self.scalar_gain = sys.nu == sys.ny == 1
+
+    def terms(self, Xs, EP, cX, cP):
+        """S_i = R_i cP + B_i^T E_i(P) B_i, W_i = C_i Xs_i C_i^T + cX mu_i J_i J_i^T and
+        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables."""
+        BtEP = self.Bt @ EP
+        S = cP * self.R + BtEP @ self.B
+        XCt = Xs @ self.Ct
+        W = self.C @ XCt if self.muJJt is None else self.C @ XCt + cX * self.muJJt
+        return S, W, (BtEP @ self.A @ XCt).sum(axis=0)
+
+    def gain(self, Xs, EP, cX, cP, method="vec"):
+        """(3.34) with R scaled by cP = 1 / s_P and the measurement noise by cX = 1 / s_X
+        (``method="sdp"``: the SDP of Prop. 3.18)."""
+        S, W, N = self.terms(Xs, EP, cX, cP)
+        if method == "sdp":
+            return gain_sdp(S, W, N)
+        if self.scalar_gain:
+            return -N / (W * S).sum()
+        lhs = np.einsum("iab,icd->acbd", W, S).reshape(self.ny * self.nu, -1)
+        return -np.linalg.solve(lhs, N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
+
+    def noise(self, L):
+        """mu_i (H_i H_i^T + B_i L J_i J_i^T L^T B_i^T): the constant term of (3.35) for the gain
+        L."""
+        if self.muJJt is None:
+            return self.muHHt
+        BL = self.B @ L
+        return self.muHHt + BL @ self.muJJt @ transpose(BL)
+
+    def moments(self, L, Xs, EP, cX, cP, out):
+        """(3.35) into out[0] (next X, constant term scaled by cX = 1 / s_X) and out[1] (next P, by
+        cP).
+
+        With one input and one output, the products B L C and C^T L^T R L C contract over
+        dimensions of size 1: each entry is one product, formed by broadcasting (the same
+        numbers as the matrix products, in fewer operations).
+        """
+        if self.scalar_gain:
+            gain = L[0, 0]
+            Acl = self.A + (self.B * gain) * self.C
+            LC = gain * self.C
+            LtRL = (LC.swapaxes(1, 2) * self.R) * LC
+        else:
+            Acl = self.A + (self.B @ L) @ self.C
+            LC = L @ self.C
+            LtRL = LC.swapaxes(1, 2) @ self.R @ LC
+        Aclt = Acl.swapaxes(1, 2)
+        Y = Acl @ Xs @ Aclt + cX * self.noise(L)
+        np.matmul(self.Tt, Y.reshape(len(Y), -1), out=out[0].reshape(len(Y), -1))
+        np.add(Aclt @ EP @ Acl, cP * (self.Q + LtRL), out=out[1])
 
 
 class ScaledPair:
     """The iterates of Alg. 3.1 in scaled variables, X^i = s_X Xs and P^i = s_P Ps, as one stack
     [Xs, Ps] of shape (2, M, nx, nx).
 
-    Keeps the log scales, the directions Xs / ||Xs||_F and Ps / ||Ps||_F of Step 4's test and
-    the diagonals of every iterate (the trace histories), so that each new pair is scaled,
-    checked and normalised once; ``next`` receives the unscaled pair of (3.35).
+    Keeps the log scales, the directions Xs / ||Xs||_F and Ps / ||Ps||_F (``units``, what Step
+    4's test compares) and the diagonals of every iterate (the trace histories), so that each
+    new pair is scaled, checked and normalised once; ``next`` receives the unscaled pair of (3.35).
 
     Examples
     --------
     >>> pair = ScaledPair(1e-4, 2, 3)
     >>> pair.next[:] = 5.0
-    >>> changes = pair.accept(pair.largest_entries())
+    >>> pair.accept(pair.largest_entries())
     >>> float(pair.stack.max()), round(float(pair.unscaled().max()), 12), pair.traces()[0].shape
     (1.0, 5.0, (2, 2))
     """
@@ -35,7 +205,7 @@ class ScaledPair:
         self.log_scales = np.zeros((2, 1, 1, 1))
         self.next = np.empty_like(self.stack)
         self._magnitudes = np.empty_like(self.stack)
-        self._units = _unit(self.stack[0]), _unit(self.stack[1])
+        self.units = _unit(self.stack[0]), _unit(self.stack[1])
         self._diagonals = [self.stack.diagonal(0, 2, 3).copy()]
         self._logs = [self.log_scales]
 
@@ -46,64 +216,249 @@ class ScaledPair:
         return np.where(largest == 0.0, 1.0, largest)
 
     def accept(self, scales):
-        """Make ``next / scales`` the current pair; return the changes of the directions of X and P."""
+        """Make ``next / scales`` the current pair (a new array: earlier stacks stay valid)."""
         self.stack = self.next / scales
         self.log_scales = self.log_scales + np.log(scales)
         self._diagonals.append(self.stack.diagonal(0, 2, 3).copy())
         self._logs.append(self.log_scales)
-        units = _unit(self.stack[0]), _unit(self.stack[1])
-        change_X, change_P = units[0] - self._units[0], units[1] - self._units[1]
-        self._units = units
-        return math.sqrt(change_X.dot(change_X)), math.sqrt(change_P.dot(change_P))
+        self.units = _unit(self.stack[0]), _unit(self.stack[1])
 
-    def repeat(self, period, times):
-        """Extend the histories by ``times`` repetitions of their last ``period`` iterates."""
-        self._diagonals.extend(self._diagonals[-period:] * times)
-        self._logs.extend(self._logs[-period:] * times)
-
-    def unscaled(self):
-        """X^i and P^i."""
-        return np.exp(self.log_scales) * self.stack
+    def unscaled(self, stack=None, log_scales=None):
+        """X^i and P^i (of the current pair, or of an earlier ``stack`` and ``log_scales``)."""
+        if stack is None:
+            stack, log_scales = self.stack, self.log_scales
+        return np.exp(log_scales) * stack
 
     def traces(self):
         """tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
-        traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(axis=3)
+        traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(
+            axis=3
+        )
         return traces[:, 0], traces[:, 1]
 
 
-class Cycle:
-    """Detects an exact cycle of the iteration's state (Brent's method: the state is compared
-    with a checkpoint that moves to the current state after 1, 2, 4, ... steps).
-
-    A step of the scaled iteration is a function of the state (L, Xs, Ps, log scales) alone.
-    When the state after step ``it`` equals, bit for bit, the state after an earlier step,
-    the iteration repeats that period forever: it cannot converge (no step of the period
-    did), and ``max_iter`` is reached with the iterates, changes and histories of the
-    period. Non-stabilising gains can make the rounded iterates cycle in this way.
+def gain_sdp(S, W, N):
+    """The SDP of Prop. 3.18: min lambda s.t. [[lambda I, L], [L^T, I]] >= 0 and (3.31), from
+    the terms S_i, W_i, N of (3.34) (:meth:`Recursion.terms`).
 
     Examples
     --------
-    A state that never changes repeats after any number of steps (here: after 1, then 2):
-
-    >>> pair, cycle, L = ScaledPair(1.0, 1, 1), Cycle(), np.zeros((1, 1))
-    >>> [cycle.period(it, L, pair) for it in (1, 2, 3)]
-    [None, 1, 2]
+    >>> S, W, N = np.ones((1, 1, 1)), np.ones((1, 1, 1)), np.array([[2.0]])
+    >>> gain_sdp(S, W, N).round(6)
+    array([[-2.]])
     """
+    import cvxpy as cp
 
-    def __init__(self):
-        self.state, self.step, self.window = None, 0, 1
-
-    def period(self, it, L, pair):
-        """The period if the state after step ``it`` repeats the checkpoint's, else None."""
-        if self.state is not None and L.flat[0] == self.state[0].flat[0] and all(
-                a.tobytes() == b.tobytes() for a, b in zip((L, pair.stack, pair.log_scales), self.state)):
-            return it - self.step
-        if it - self.step == self.window:
-            self.state, self.step, self.window = (L, pair.stack, pair.log_scales), it, 2 * self.window
-        return None
+    nu, ny = S.shape[1], W.shape[1]
+    L = cp.Variable((nu, ny))
+    lam = cp.Variable()
+    eq = sum(S[i] @ L @ W[i] for i in range(S.shape[0])) + N
+    block = cp.bmat([[lam * np.eye(nu), L], [L.T, np.eye(ny)]])
+    prob = cp.Problem(cp.Minimize(lam), [0.5 * (block + block.T) >> 0, eq == 0])
+    prob.solve(solver=cp.CLARABEL)
+    if L.value is None:
+        raise np.linalg.LinAlgError(f"SDP of Prop. 3.18 failed: {prob.status}")
+    return np.asarray(L.value)
 
 
 def _unit(S):
     """S / ||S||_F as a flat vector."""
     flat = S.ravel()
     return flat / math.sqrt(flat.dot(flat))
+
+
+def _finite(L):
+    """Whether every entry of the gain is finite."""
+    return math.isfinite(L[0, 0]) if L.size == 1 else bool(np.isfinite(L).all())
+
+
+def step_iteration(sys, rec, tol, max_iter, init, method="vec", until=UntilStabilizing.NEVER):
+    """The thesis's iteration (3.34)-(3.35) in scaled variables, to the stopping rule.
+
+    Stops as :class:`asoc.mjls.stopping.StoppingRule` says on (L, Xs / ||Xs||, Ps / ||Ps||)
+    (the relative changes of Step 4's test), at a non-finite iterate (``"diverged"``) or a
+    singular (3.34) (``"linalg_error"``). ``until``: stop at a stabilising gain to hand over
+    to :func:`exact_iteration` (:class:`UntilStabilizing`); then ``stabilized`` is True.
+    On a cycle, ``members`` holds (L, X, P) of each member of the period, the last first.
+    """
+    pair = ScaledPair(init, sys.M, sys.nx)
+    rule = StoppingRule(tol, max_iter, window=ALG31_PATIENCE, early_cycles=True)
+    L = np.zeros((sys.nu, sys.ny))
+    rule.status(0, (L, *pair.units))
+    recent = deque([(L, pair.stack, pair.log_scales)], maxlen=rule.max_period)
+    rate, stabilized, status, it = _Rate(tol), False, StopStatus.MAX_ITERATIONS, 0
+    for it in range(1, max_iter + 1):
+        cX, cP = np.exp(-pair.log_scales).ravel().tolist()
+        Xs, Ps = pair.stack
+        EP = (sys.T @ Ps.reshape(sys.M, -1)).reshape(Ps.shape)
+        try:
+            L_new = rec.gain(Xs, EP, cX, cP, method)
+        except np.linalg.LinAlgError:
+            status = StopStatus.LINALG_ERROR
+            break
+        rec.moments(L_new, Xs, EP, cX, cP, out=pair.next)
+        scales = pair.largest_entries()
+        if not (np.all(np.isfinite(scales)) and _finite(L_new)):
+            status = StopStatus.DIVERGED
+            break
+        pair.accept(scales)
+        L = L_new
+        recent.appendleft((L, pair.stack, pair.log_scales))
+        verdict = rule.status(it, (L, *pair.units))
+        if verdict is not None:
+            status = verdict
+            break
+        if until is UntilStabilizing.EACH or (
+            until is UntilStabilizing.SLOW and rate.slow(it, rule.change)
+        ):
+            stable, P_exact = _stabilizes(sys, L, pair.unscaled()[1])
+            if stable:
+                stabilized = True
+                break
+    trace_X, trace_P = pair.traces()
+    period = rule.period if status is StopStatus.CYCLE else 1
+    members = [(G, *pair.unscaled(stack, logs)) for G, stack, logs in list(recent)[:period]]
+    L, X, P = members[0]
+    if stabilized:
+        P = P_exact  # the solution of (3.33) for L, from the check
+    return IterationRun(
+        L=L,
+        X=X,
+        P=P,
+        status=status,
+        change=rule.change,
+        iterations=it,
+        stabilized=stabilized,
+        trace_X=trace_X,
+        trace_P=trace_P,
+        period=period,
+        members=members if period > 1 else [],
+        lag1_change=rule.lag1_change,
+    )
+
+
+class _Rate:
+    """When the thesis's iteration is slow: its change falls by a rate r per iteration,
+    estimated over the last ``window`` iterations; it is slow when log(tol / change) / log r,
+    the iterations still to go, exceeds ``mjls.auto_switch_iterations``. Checked after
+    ``window`` iterations, then at doubling intervals (each check may cost a spectral radius)."""
+
+    window = 10
+
+    def __init__(self, tol):
+        self.tol, self.changes, self.next_check = tol, [], self.window
+        self.threshold = config.defaults["mjls.auto_switch_iterations"]
+
+    def slow(self, it, change):
+        self.changes.append(change)
+        if it < self.next_check or len(self.changes) <= self.window:
+            return False
+        self.next_check = 2 * it
+        first, last = self.changes[-self.window - 1], self.changes[-1]
+        if not (0 < last < first):
+            return True  # not contracting: try the exact moments
+        remaining = np.log(self.tol / last) / np.log(last / first) * self.window
+        return remaining > self.threshold
+
+
+def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=None):
+    """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
+
+    Each step solves the two coupled linear equations X = predecessor_sum(Acl X Acl^T + mu H H^T)
+    and P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl
+    (:func:`asoc.mjls.lyapunov.coupled_lyapunov_solver`: one LU factorisation of size M nx^2
+    for both when small, else BiCGSTAB on the operator, started from the previous solutions
+    and first from ``guess`` = (X, P), e.g. the thesis's last iterates), and stops on the rule of
+    :class:`asoc.mjls.stopping.StoppingRule` on L (iterations counted from ``first``).
+    ``stabilized`` is False when an iterate does not stabilise (the moments have no solution
+    then). Each gain is first checked by the coupled Lyapunov certificate
+    (:func:`lyapunov_certified`:
+    P_i > 0 solving P = L*(P) + W with W_i > 0 proves mean-square stability, Costa, Fragoso and
+    Marques 2005, Thm. 3.9), and only where it does not apply by the spectral radius (at
+    n = 100, M = 100 one radius costs about 40 Lyapunov-operator products).
+    """
+    rule = StoppingRule(tol, first - 1 + max_iter)
+    rule.status(first - 1, (L,))
+    trace_X, trace_P = [], []
+    stabilized, status = True, StopStatus.MAX_ITERATIONS
+    X, P = guess if guess is not None else (None, None)
+    for it in range(first, first + max_iter):
+        Acl, solve, P_solution, weight = _costate(sys, L, x0=P)  # warm starts: the last solutions
+        if not (
+            lyapunov_certified(P_solution, weight)
+            or mean_square_stability(Acl, sys.T, check=False).rho < 1
+        ):
+            stabilized, status = False, StopStatus.DIVERGED
+            break
+        P = P_solution.X
+        X = solve(predecessor_sum(sys.T, rec.noise(L)), x0=X).X
+        trace_X.append(np.trace(X, axis1=1, axis2=2))
+        trace_P.append(np.trace(P, axis1=1, axis2=2))
+        try:
+            L_new = rec.gain(X, successor_average(sys.T, P), 1.0, 1.0, method)
+        except np.linalg.LinAlgError:
+            status = StopStatus.LINALG_ERROR
+            break
+        L = L_new
+        verdict = rule.status(it, (L,))
+        if verdict is not None:
+            status = verdict
+            break
+    return IterationRun(
+        L=L,
+        X=X,
+        P=P,
+        status=status,
+        change=rule.change,
+        iterations=it - first + 1,
+        stabilized=stabilized,
+        trace_X=np.array(trace_X).reshape(-1, sys.M),
+        trace_P=np.array(trace_P).reshape(-1, sys.M),
+        members=[],
+    )
+
+
+def _costate(sys, L, x0=None):
+    """The closed loop of L, its solver, and the solution P of P = L*(P) + Q + C^T L^T R L C with
+    its weight."""
+    Acl = closed_loop(sys, L, check=False)
+    solve = coupled_lyapunov_solver(Acl, sys.T)
+    LC = L @ sys.C
+    weight = sys.Q + transpose(LC) @ sys.R @ LC
+    return Acl, solve, solve(weight, adjoint=True, x0=x0), weight
+
+
+def _stabilizes(sys, L, P_guess):
+    """Whether L stabilises, and the solution P of (3.33) for it: the coupled Lyapunov
+    certificate (:func:`lyapunov_certified`, one solve from the iterate ``P_guess``), else
+    rho < 1 (Cor.
+    3.2). The same verdict as rho alone, since a certified P implies rho < 1, at the cost of a
+    solve (which the exact iteration reuses) instead of a certified spectral radius."""
+    Acl, _, P_solution, weight = _costate(sys, L, x0=P_guess)
+    stable = (
+        lyapunov_certified(P_solution, weight)
+        or mean_square_stability(Acl, sys.T, check=False).rho < 1
+    )
+    return stable, P_solution.X
+
+
+def lyapunov_certified(solution, weight):
+    """Whether P of ``solution`` (P = L*(P) + weight, solved to its stated residual) and every
+    weight_i are positive definite: then the closed loop is mean-square stable (Costa, Fragoso
+    and Marques 2005, Thm. 3.9).
+
+    Examples
+    --------
+    >>> W = np.ones((1, 1, 1))
+    >>> stable = coupled_lyapunov_solver(np.array([[[0.9]]]), np.eye(1))(W, adjoint=True)
+    >>> lyapunov_certified(stable, W)
+    True
+    """
+    if not solution.residual <= 10 * config.defaults["mjls.solve_tolerance"]:
+        return False
+    try:
+        np.linalg.cholesky(weight)
+        np.linalg.cholesky(solution.X)
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.all(np.isfinite(solution.X)))

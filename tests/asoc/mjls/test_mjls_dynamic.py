@@ -398,7 +398,7 @@ def test_bad_input_is_named_on_the_matrix_free_path(monkeypatch, sys3, kwargs, m
 
 def _verdicts(sequence, tol=1e-10, max_iter=10_000):
     """The verdicts of Alg. 3.2's stopping rule on a sequence of (scalar) bound iterates."""
-    from asoc.mjls.dynamic import StoppingRule
+    from asoc.mjls.stopping import StoppingRule
 
     rule = StoppingRule(tol, max_iter)
     for it, value in enumerate(sequence):

@@ -309,9 +309,10 @@ def test_the_lyapunov_certificate_of_the_exact_iteration_rejects_an_unstable_loo
     """A positive definite solution P of P = L*(P) + W with W > 0 certifies mean-square stability;
     an unstable loop (rho 1.44 > 1) gives an indefinite P and no certificate."""
     from asoc.mjls.lyapunov import coupled_lyapunov_solver
-    from asoc.mjls.static import _certified
+    from asoc.mjls.static_iterates import lyapunov_certified as certified
 
     T, W = np.array([[1.0]]), np.ones((1, 1, 1))
-    assert _certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), W)
-    assert not _certified(coupled_lyapunov_solver(np.array([[[1.2]]]), T)(W, adjoint=True), W)
-    assert not _certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), np.zeros((1, 1, 1)))
+    assert certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), W)
+    assert not certified(coupled_lyapunov_solver(np.array([[[1.2]]]), T)(W, adjoint=True), W)
+    assert not certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True),
+                         np.zeros((1, 1, 1)))

@@ -1,0 +1,106 @@
+"""The stopping rule of the fixed-point iterations of Algs. 3.1 and 3.2, and why they stop.
+
+Both algorithms iterate a map whose fixed point solves their optimality conditions ((3.31)-
+(3.33), resp. (3.49)-(3.52)), and neither map need converge: Thm. 3.19 assumes a
+stabilisable system, and Alg. 3.2's (3.51) may be ill-posed. So both stop on the same rule
+(:class:`StoppingRule`): converged, a cycle, no progress, or divergence, each with its reason
+(:class:`StopStatus`).
+"""
+
+from collections import deque
+
+import numpy as np
+
+from .. import config
+from ..linalg import relative_change
+from ..result import Status
+
+__all__ = ["StopStatus", "StoppingRule"]
+
+
+#: Why a fixed-point iteration of Alg. 3.1 or 3.2 stopped: the status codes of
+#: :class:`asoc.result.Status` (``StopStatus.CYCLE == "cycle"``).
+StopStatus = Status
+
+
+class StoppingRule:
+    """The stopping rule of Algs. 3.1 and 3.2 on the iterates (a tuple of arrays per iteration).
+
+    Keeps the last ``mjls.alg32_max_period`` iterates. After each, the relative change
+    (:func:`asoc.linalg.relative_change`, the largest over the parts of the iterate, e.g.
+    Xbar, Xunder, Pbar, Punder of Alg. 3.2) against the iterate p steps back,
+    p = 1 .. max period, gives the verdict:
+
+    - ``"converged"`` when it is below tol for p = 1;
+    - ``"cycle"`` when it is for some p >= 2 while the change for p = 1 stays above
+      sqrt(tol) (an iteration converging with an oscillation, e.g. a contraction factor
+      near -1, has a small lag-2 change too, but its lag-1 change then follows it down);
+      with ``early_cycles`` (Alg. 3.1) also when the lag-p change is below sqrt(tol) and
+      below 1e-4 times the lag-1 change: a contraction factor -(1 - e) has lag-2 / lag-1
+      changes of about e, so only e < 1e-4 is taken for a cycle, and such an iteration
+      would need more than 2e5 iterations to reach tol = 1e-10;
+    - ``"diverged"`` when the iterates grow by more than 1e6 within a window of
+      w = ``mjls.alg32_patience`` iterations while not settling;
+    - ``"no_progress"`` when the smallest change (over p) of the last w iterations is not
+      below that of the w before, or when the rate between the two windows predicts that
+      tol would not be reached before ``max_iter``.
+
+    Examples
+    --------
+    Iterates that alternate between two values are a cycle of period 2:
+
+    >>> rule = StoppingRule(tol=1e-10, max_iter=100)
+    >>> a, b = np.ones((4, 1, 1, 1)), 2 * np.ones((4, 1, 1, 1))
+    >>> [rule.status(it, x) for it, x in enumerate((a, b, a), start=1)], rule.period
+    ([None, None, <StopStatus.CYCLE: 'cycle'>], 2)
+    """
+
+    def __init__(self, tol, max_iter, window=None, early_cycles=False):
+        self.tol, self.max_iter, self.early_cycles = tol, max_iter, early_cycles
+        self.max_period = config.defaults["mjls.alg32_max_period"]
+        self.window = config.defaults["mjls.alg32_patience"] if window is None else window
+        self.recent = deque(maxlen=self.max_period)
+        self.smallest, self.norms = [], []
+        self.change, self.period, self.predicted, self.lag1_change = np.inf, 1, np.inf, np.inf
+
+    def status(self, it, parts):
+        """The :class:`StopStatus` after iteration ``it`` with the new iterate ``parts`` (a
+        sequence of arrays, or one array whose first axis lists the parts), or None."""
+        new = [np.ravel(part) for part in parts]
+        if not self.recent:
+            self.recent.append(new)
+            return None
+        changes = [
+            max(relative_change(old_part, new_part) for old_part, new_part in zip(old, new))
+            for old in reversed(self.recent)
+        ]  # largest over the parts, per lag
+        self.recent.append(new)
+        self.change = changes[0]
+        if it > 1 and changes[0] < self.tol:
+            return StopStatus.CONVERGED
+        for period, change in enumerate(changes[1:], start=2):
+            if self._cycles(change, changes[0]):
+                self.change, self.period, self.lag1_change = change, period, changes[0]
+                return StopStatus.CYCLE
+        self.smallest.append(min(changes))
+        self.norms.append(float(np.sqrt(sum(part.dot(part) for part in new))))
+        return self._progress(it)
+
+    def _cycles(self, change, change_1):
+        """Whether a change ``change`` at a lag p >= 2 with ``change_1`` at lag 1 is a cycle."""
+        if change < self.tol and change_1 > np.sqrt(self.tol):
+            return True
+        return self.early_cycles and change < np.sqrt(self.tol) and change < 1e-4 * change_1
+
+    def _progress(self, it):
+        """ "diverged" or "no_progress" from the last two windows of changes, else None."""
+        w = self.window
+        if len(self.smallest) < 2 * w:
+            return None
+        before, last = min(self.smallest[-2 * w : -w]), min(self.smallest[-w:])
+        if self.norms[-1] > 1e6 * self.norms[-w]:
+            return StopStatus.DIVERGED
+        if not last < before:
+            return StopStatus.NO_PROGRESS
+        self.predicted = w * np.log(self.tol / last) / np.log(last / before)
+        return StopStatus.NO_PROGRESS if self.predicted > self.max_iter - it else None
