@@ -94,7 +94,7 @@ class IterationRun:
     >>> sys = sec354_system(1)
     >>> run = step_iteration(sys, Recursion(sys), 1e-10, 20, 1e-4)
     >>> run.status, run.iterations, run.trace_X.shape
-    (<StopStatus.MAX_ITERATIONS: 'max_iterations'>, 20, (21, 2))
+    ('max_iterations', 20, (21, 2))
     """
 
     L: np.ndarray

@@ -52,7 +52,7 @@ class StoppingRule:
     >>> rule = StoppingRule(tol=1e-10, max_iter=100)
     >>> a, b = np.ones((4, 1, 1, 1)), 2 * np.ones((4, 1, 1, 1))
     >>> [rule.status(it, x) for it, x in enumerate((a, b, a), start=1)], rule.period
-    ([None, None, <StopStatus.CYCLE: 'cycle'>], 2)
+    ([None, None, 'cycle'], 2)
     """
 
     def __init__(self, tol, max_iter, window=None, early_cycles=False):
