@@ -195,8 +195,9 @@ def exact_static_output_feedback(sys, gtol=1e-6, max_iter=500, warn=True, alg31=
     leaving the set are rejected), from two starts: the best member of Alg. 3.1's run
     (:func:`asoc.mjls.static_output_feedback`, its cheapest cycle member when it cycles) and
     the averaged LQ gain (:func:`asoc.mjls.exact_static_design.averaged_output_gain`). The
-    cheaper end point is returned. This is the design to use when Alg. 3.1 cycles or stops without converging;
-    where Alg. 3.1 converges to a stabilising gain, that gain is already stationary here.
+    cheaper end point is returned. This is the design to use when Alg. 3.1 cycles or stops
+    without converging; where Alg. 3.1 converges to a stabilising gain, that gain is already
+    stationary here.
 
     Parameters
     ----------
