@@ -139,6 +139,7 @@ def _ledger(fidelity):
 
 def _write_if_changed(path, text, remark=""):
     from .build import rel as _rel
+    from .plan import make_plan
     from .atomic_files import atomic_write_text
 
     if path.exists() and path.read_text() == text:
@@ -208,6 +209,7 @@ def _command(args) -> int:
     from . import build
     from . import notebooks as nbs
     from .build import rel as _rel
+    from .plan import make_plan
 
     paths.project()              # fail early, with the message, outside a checkout
     if args.command == "list":
@@ -216,14 +218,15 @@ def _command(args) -> int:
     if args.command in ("figure", "table", "run"):
         info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command, args.number)
         overrides = nbs.parse_overrides(info, args.parameter)
+        plan = make_plan(paths.project(), info, args.fidelity, overrides)
         if not overrides:
             if args.fidelity == "full":
-                build.run_and_record(info, "full")
+                build.run_and_record(plan)
             else:
-                build.run_one(info, args.fidelity)
+                build.run_one(plan)
             return 0
-        out = nbs.run_folder(info, args.fidelity, overrides)
-        build.run_one(info, args.fidelity, output_dir=out, overrides=overrides)
+        out = plan.output_dir
+        build.run_one(plan)
         print(f"this run (figures, values, executed notebook): {_rel(out)}/")
         if args.command != "run":
             note = unused_parameters(info, args.command, args.number, overrides)

@@ -5,7 +5,8 @@ independent notebooks side by side in worker processes (``jobs``), each after th
 it depends on (``metadata.asoc.depends``), with one BLAS/OpenMP thread per worker so two
 notebooks do not oversubscribe the cores. Each run is crash-safe
 (:func:`asoc_companion.notebooks.run`); the parent writes a notebook's manifest entry after
-its files are in place. The workers' functions live here, in an importable module, so the
+its files are in place. Each notebook's :class:`asoc_companion.plan.RunPlan` is made once, in
+the parent, and passed to the worker, the run and the manifest. The workers' functions live here, in an importable module, so the
 spawned processes find them whatever the parent's ``__main__`` is.
 """
 
@@ -18,6 +19,7 @@ from pathlib import Path
 
 from . import manifest, paths
 from . import notebooks as nbs
+from .plan import make_plan, output_folder
 
 __all__ = ["rel", "terminate", "run_one", "written_since", "run_and_record", "reproduce",
            "longest_first"]
@@ -36,14 +38,14 @@ def terminate(signum, frame):
     raise KeyboardInterrupt(f"signal {signum}")
 
 
-def run_one(info, fidelity, output_dir=None, overrides=None, progress_bar=None):
-    """Run ``info``; return the executed notebook's path and the wall time in seconds."""
+def run_one(plan, progress_bar=None):
+    """Run ``plan``; return the executed notebook's path and the wall time in seconds."""
+    info, folder = plan.notebook, plan.output_dir
     start, started = time.perf_counter(), time.time()
-    print(f"running {info.path.name} ({info.title}) at fidelity={fidelity} ...", flush=True)
-    executed = nbs.run(info, fidelity, output_dir=output_dir, overrides=overrides, progress_bar=progress_bar)
+    print(f"running {info.path.name} ({info.title}) at fidelity={plan.fidelity} ...", flush=True)
+    executed = nbs.run(plan, progress_bar=progress_bar)
     seconds = time.perf_counter() - start
     print(f"  {info.path.name} done in {seconds:.1f} s -> {rel(executed)}", flush=True)
-    folder = Path(output_dir or nbs.default_output_dir(fidelity))
     written = written_since(folder, started)
     if written:
         print(f"  outputs in {rel(folder)}/: {', '.join(written)}", flush=True)
@@ -68,11 +70,10 @@ def written_since(folder, since: float) -> list:
     return sorted((p.relative_to(folder).as_posix() for p in found), key=nbs.natural_key)
 
 
-def run_and_record(info, fidelity, progress_bar=None):
-    """Run ``info`` into its default folder, then write its manifest entry (last)."""
-    _, seconds = run_one(info, fidelity, progress_bar=progress_bar)
-    out = nbs.default_output_dir(fidelity)
-    manifest.update_manifest(info, nbs.harness_parameters(info, fidelity, out), out, seconds=seconds)
+def run_and_record(plan, progress_bar=None):
+    """Run ``plan``, then write its manifest entry (last)."""
+    _, seconds = run_one(plan, progress_bar=progress_bar)
+    manifest.update_manifest(plan, seconds=seconds)
 
 
 def _worker_init(root):
@@ -80,25 +81,23 @@ def _worker_init(root):
     os.environ[paths.ENV_VAR] = str(root)
 
 
-def _worker_run(name, fidelity):
+def _worker_run(plan):
     """Run one notebook in a worker process (the parent writes the manifest)."""
-    info = nbs.by_name(name)
-    return run_one(info, fidelity, progress_bar=False)[1]
+    return run_one(plan, progress_bar=False)[1]
 
 
-def _pending(infos, fidelity, force) -> list:
-    """The notebooks to run, each with why (in build order)."""
-    out = nbs.default_output_dir(fidelity)
+def _pending(plans, force) -> list:
+    """The plans to run, each with why (in build order)."""
     todo = []
-    for info in infos:
-        params = nbs.harness_parameters(info, fidelity, out)
-        changed = ["--force"] if force else manifest.changed_inputs(
-            info, params, out, executed=nbs.executed_path(info, fidelity, out))
+    for plan in plans:
+        changed = ["--force"] if force else manifest.changed_inputs(plan)
+        name = plan.notebook.path.name
         if changed:
-            print(f"{info.path.name}: {', '.join(changed) if changed[0].startswith('outputs') else 'changed: ' + ', '.join(changed)}", flush=True)
-            todo.append(info)
+            why = ", ".join(changed)
+            print(f"{name}: {why if changed[0].startswith('outputs') else 'changed: ' + why}", flush=True)
+            todo.append(plan)
         else:
-            print(f"{info.path.name}: up to date, skipped", flush=True)
+            print(f"{name}: up to date, skipped", flush=True)
     return todo
 
 
@@ -108,22 +107,24 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
     A notebook starts when the notebooks it depends on (``metadata.asoc.depends``) have
     finished; a failed notebook's dependants are skipped, the others still run.
     """
-    ordered = nbs.build_order(nbs.notebooks().values())
-    todo = {info.name: info for info in _pending(ordered, fidelity, force)}
+    project = paths.project()
+    ordered = [make_plan(project, info, fidelity) for info in nbs.build_order(nbs.notebooks().values())]
+    todo = {plan.name: plan for plan in _pending(ordered, force)}
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
-    waits = {name: [d for d in manifest.dependencies(info.path) if d in todo] for name, info in todo.items()}
+    waits = {name: [d for d in manifest.dependencies(plan.notebook.path) if d in todo]
+             for name, plan in todo.items()}
     failed = []
     if jobs == 1:
-        for name, info in todo.items():
+        for name, plan in todo.items():
             if any(d in failed for d in waits[name]):
                 failed.append(name)
-                print(f"{info.path.name}: skipped, a notebook it depends on failed", flush=True)
+                print(f"{plan.notebook.path.name}: skipped, a notebook it depends on failed", flush=True)
                 continue
             try:
-                run_and_record(info, fidelity)
+                run_and_record(plan)
             except Exception as err:           # noqa: BLE001 -- report, go on with the others
                 failed.append(name)
-                print(f"{info.path.name}: FAILED: {type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}",
+                print(f"{plan.notebook.path.name}: FAILED: {type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}",
                       flush=True)
         return 1 if failed else 0
     print(f"running {len(todo)} notebook(s), {jobs} at a time", flush=True)
@@ -132,7 +133,7 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
     with ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_init,
                              initargs=(paths.project().root,)) as pool:
         try:
-            _schedule(pool, todo, waits, jobs, fidelity, done, failed)
+            _schedule(pool, todo, waits, jobs, output_folder(project, fidelity), done, failed)
         except KeyboardInterrupt:
             # stop the workers too: each removes its staging folder, nothing moves into place
             for process in list(getattr(pool, "_processes", {}).values()):
@@ -154,11 +155,10 @@ def longest_first(names, seconds) -> list:
     return sorted(names, key=lambda name: -seconds.get(name, float("inf")))
 
 
-def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
-    """Submit each notebook when its dependencies are done, longest first; write its manifest
-    entry when it finishes."""
+def _schedule(pool, todo, waits, jobs, out, done, failed):
+    """Submit each plan when its dependencies are done, longest first (by the manifest in
+    ``out``); write its manifest entry when it finishes."""
     running = {}
-    out = nbs.default_output_dir(fidelity)
     order = longest_first(list(todo), manifest.last_seconds(out))
     while len(done) + len(failed) < len(todo):
         for name in order:
@@ -168,7 +168,7 @@ def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
                 failed.append(name)
                 print(f"{name}.ipynb: skipped, a notebook it depends on failed", flush=True)
             elif all(d in done for d in waits[name]) and len(running) < jobs:
-                running[pool.submit(_worker_run, name, fidelity)] = name
+                running[pool.submit(_worker_run, todo[name])] = name
         if not running:
             continue          # every remaining notebook was just marked failed or skipped
         finished, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -181,6 +181,5 @@ def _schedule(pool, todo, waits, jobs, fidelity, done, failed):
                 print(f"{name}.ipynb: FAILED: {type(err).__name__}: "
                       f"{str(err).splitlines()[0] if str(err) else ''}", flush=True)
                 continue
-            manifest.update_manifest(todo[name], nbs.harness_parameters(todo[name], fidelity, out), out,
-                                     seconds=seconds)
+            manifest.update_manifest(todo[name], seconds=seconds)
             done.add(name)

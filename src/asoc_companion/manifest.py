@@ -5,7 +5,8 @@ full-fidelity run) holds, per notebook, content hashes of everything its results
 
 ``source``       the notebook's cells (type and source, not outputs; papermill's injected
                  parameters cell excluded) and its ``asoc`` metadata;
-``parameters``   the parameters papermill injects (fidelity, output folder, overrides);
+``parameters``   the parameters papermill injects (fidelity, output folder, overrides:
+                 the plan's ``injected``);
 ``modules``      ``{path under src/: hash}`` of the modules the notebook imports, directly
                  or transitively (:mod:`asoc_companion.imports`): the library modules it
                  calls and the tooling modules that write its values and figures;
@@ -13,7 +14,8 @@ full-fidelity run) holds, per notebook, content hashes of everything its results
 ``depends``      the recorded values of the notebooks named in its metadata
                  (``metadata.asoc.depends``, e.g. a findings page that quotes other pages).
 
-A notebook is up to date when its entry equals the hashes computed now and its outputs
+Every function of one run reads its :class:`asoc_companion.plan.RunPlan` (the values file,
+the executed notebook, the manifest path); none derives a path itself. A notebook is up to date when its entry equals the hashes computed now and its outputs
 are complete (:func:`incomplete_outputs`); ``python -m asoc_companion reproduce`` skips it
 then (``--force`` re-executes everything).
 """
@@ -25,10 +27,11 @@ from pathlib import Path
 from . import paths
 from .imports import notebook_modules
 from .atomic_files import atomic_write_json
-from .values import MANIFEST_NAME, CorruptValuesError, read_values_file, values_path
+from .plan import manifest_file
+from .values import CorruptValuesError, read_values_file
 
 __all__ = ["source_hash", "tree_hash", "HARNESS_ONLY", "module_hashes", "dependencies", "entry",
-           "manifest_path", "load_manifest", "incomplete_notebook", "incomplete_outputs",
+           "load_manifest", "incomplete_notebook", "incomplete_outputs",
            "last_seconds", "changed_inputs", "update_manifest"]
 
 
@@ -133,46 +136,37 @@ def dependencies(path) -> list:
     return list(depends)
 
 
-def entry(info, parameters: dict, output_dir) -> dict:
-    """The input hashes of ``info``'s notebook run with ``parameters`` into ``output_dir``.
+def entry(plan) -> dict:
+    """The input hashes of the run ``plan`` (a :class:`asoc_companion.plan.RunPlan`).
 
     Examples
     --------
     In a temporary checkout with a notebook ``demo`` that imports ``pkg``:
 
     >>> from asoc_companion.notebooks import NotebookInfo
+    >>> from asoc_companion.plan import make_plan
     >>> with paths.scratch_project() as root:
     ...     (root / "src/pkg").mkdir(parents=True)
     ...     for name in ("src/pkg/__init__.py", "environment.txt"):
     ...         _ = (root / name).write_text("")
     ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
     ...     _ = (root / "book" / "demo.ipynb").write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
-    ...     hashes = entry(NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ()),
-    ...                    {"fidelity": "ci"}, root / "out")
+    ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
+    ...     hashes = entry(make_plan(paths.project(), info, "ci"))
     >>> sorted(hashes), list(hashes["modules"]), hashes["depends"]
     (['depends', 'environment', 'modules', 'parameters', 'source'], ['pkg/__init__.py'], {})
     """
+    source = plan.notebook.path
     depends = {}
-    for name in dependencies(info.path):
-        values = values_path(name, output_dir)
+    for name in dependencies(source):
+        values = plan.values_of(name)
         depends[name] = _sha256(values.read_bytes()) if values.exists() else None
     environment = paths.project().environment
-    return {"source": source_hash(info.path),
-            "parameters": _sha256(json.dumps(parameters, sort_keys=True).encode()),
-            "modules": module_hashes(info.path),
+    return {"source": source_hash(source),
+            "parameters": _sha256(json.dumps(plan.injected, sort_keys=True).encode()),
+            "modules": module_hashes(source),
             "environment": _sha256(environment.read_bytes()) if environment.exists() else None,
             "depends": depends}
-
-
-def manifest_path(output_dir) -> Path:
-    """Where the manifest of runs into ``output_dir`` lives.
-
-    Examples
-    --------
-    >>> manifest_path("/tmp/run").as_posix()
-    '/tmp/run/values/manifest.json'
-    """
-    return Path(output_dir) / "values" / MANIFEST_NAME
 
 
 def load_manifest(output_dir) -> dict:
@@ -183,11 +177,11 @@ def load_manifest(output_dir) -> dict:
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     empty = load_manifest(folder)
-    ...     _ = atomic_write_json(manifest_path(folder), {"sec3_5": {"seconds": 4.0}})
+    ...     _ = atomic_write_json(manifest_file(folder), {"sec3_5": {"seconds": 4.0}})
     ...     print(empty, load_manifest(folder))
     {} {'sec3_5': {'seconds': 4.0}}
     """
-    path = manifest_path(output_dir)
+    path = manifest_file(output_dir)
     if not path.exists():
         return {}
     try:
@@ -219,11 +213,12 @@ def incomplete_notebook(path) -> str:
     return f"code cells {unrun} were not executed" if unrun else ""
 
 
-def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
-    """What is missing from the results of ``info``'s last run into ``output_dir`` (empty: complete).
+def incomplete_outputs(plan, reference=None) -> list:
+    """What is missing from the results of the last run ``plan`` (empty: complete).
 
-    The values file must exist and parse and hold every key the reference expects of the
-    notebook; the executed notebook (``executed``, if given) must have every code cell executed.
+    The values file (``plan.values``) must exist and parse and hold every key the reference
+    expects of the notebook; the executed notebook (``plan.executed``) must have every code
+    cell executed.
 
     Examples
     --------
@@ -234,17 +229,18 @@ def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
     >>> from asoc_companion.reference import Entry
     >>> from asoc_companion.recorder import Recorder
     >>> reference = {f"demo.{k}": Entry(f"demo.{k}", where="an example", kind="measured") for k in ("rho", "gain")}
-    >>> info = NotebookInfo("demo", Path("demo.ipynb"), "Demo", (), ())
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     before = incomplete_outputs(info, folder, reference=reference)
-    ...     _ = Recorder("demo", "ci", folder).record("rho", 0.25)
-    ...     print(before, incomplete_outputs(info, folder, reference=reference))
-    ['no values file'] ['values missing: gain']
+    >>> from asoc_companion.plan import make_plan
+    >>> with paths.scratch_project() as root:
+    ...     plan = make_plan(paths.project(), NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ()), "ci")
+    ...     before = incomplete_outputs(plan, reference=reference)
+    ...     _ = Recorder("demo", "ci", plan.output_dir).record("rho", 0.25)
+    ...     print(before, incomplete_outputs(plan, reference=reference))
+    ['no values file', 'no executed notebook'] ['values missing: gain', 'no executed notebook']
     """
     from .reference import load_reference
 
     problems = []
-    path = values_path(info.name, output_dir)
+    path, executed = plan.values, plan.executed
     try:
         recorded = read_values_file(path)["values"] if path.exists() else None
     except CorruptValuesError:
@@ -253,17 +249,14 @@ def incomplete_outputs(info, output_dir, executed=None, reference=None) -> list:
         problems.append("no values file")
     if recorded is not None:
         reference = reference if reference is not None else load_reference()
-        missing = [e.name for e in reference.values() if e.notebook == info.name and e.name not in recorded]
+        missing = [e.name for e in reference.values() if e.notebook == plan.name and e.name not in recorded]
         if missing:
             problems.append(f"values missing: {', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''}")
-    if executed is not None:
-        try:
-            why = incomplete_notebook(executed) if Path(executed).exists() else "no executed notebook"
-        except (ValueError, KeyError):
-            why = "executed notebook unreadable"
-        if why:
-            problems.append(why)
-    return problems
+    try:
+        why = incomplete_notebook(executed) if executed.exists() else "no executed notebook"
+    except (ValueError, KeyError):
+        why = "executed notebook unreadable"
+    return problems + ([why] if why else [])
 
 
 def last_seconds(output_dir) -> dict:
@@ -273,7 +266,7 @@ def last_seconds(output_dir) -> dict:
     --------
     >>> import tempfile
     >>> out = Path(tempfile.mkdtemp())
-    >>> _ = atomic_write_json(manifest_path(out), {"sec3_2": {"seconds": 4.0}, "sec3_4": {"source": "ab12"}})
+    >>> _ = atomic_write_json(manifest_file(out), {"sec3_2": {"seconds": 4.0}, "sec3_4": {"source": "ab12"}})
     >>> last_seconds(out)
     {'sec3_2': 4.0}
     """
@@ -281,8 +274,8 @@ def last_seconds(output_dir) -> dict:
             if isinstance(e, dict) and isinstance(e.get("seconds"), (int, float))}
 
 
-def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
-    """What changed since ``info`` was last run into ``output_dir``, or what its outputs lack (empty: up to date).
+def changed_inputs(plan) -> list:
+    """What changed since the run ``plan`` was last made, or what its outputs lack (empty: up to date).
 
     Examples
     --------
@@ -290,32 +283,33 @@ def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
     date after a recorded run, then out of date once ``pkg`` is edited:
 
     >>> from asoc_companion.notebooks import NotebookInfo
+    >>> from asoc_companion.plan import make_plan
     >>> from asoc_companion.recorder import Recorder
     >>> with paths.scratch_project() as root:
-    ...     out = root / "out"
     ...     (root / "src/pkg").mkdir(parents=True)
     ...     for name in ("src/pkg/__init__.py", "environment.txt"):
     ...         _ = (root / name).write_text("")
-    ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
+    ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}, "execution_count": 1}]
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
     ...     _ = info.path.write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
-    ...     print(changed_inputs(info, {"fidelity": "ci"}, out))
-    ...     _ = Recorder("demo", "ci", out).record("rho", 0.25)
-    ...     _ = update_manifest(info, {"fidelity": "ci"}, out)
-    ...     print(changed_inputs(info, {"fidelity": "ci"}, out))
+    ...     plan = make_plan(paths.project(), info, "full")      # executed in place
+    ...     print(changed_inputs(plan))
+    ...     _ = Recorder("demo", "full", plan.output_dir).record("rho", 0.25)
+    ...     _ = update_manifest(plan)
+    ...     print(changed_inputs(plan))
     ...     _ = (root / "src" / "pkg" / "__init__.py").write_text("x = 1")
-    ...     print(changed_inputs(info, {"fidelity": "ci"}, out))
+    ...     print(changed_inputs(plan))
     ['never run']
     []
     ['modules (pkg/__init__.py)']
     """
-    old = load_manifest(output_dir).get(info.name)
+    old = load_manifest(plan.output_dir).get(plan.name)
     if old is None:
         return ["never run"]
-    incomplete = incomplete_outputs(info, output_dir, executed)
+    incomplete = incomplete_outputs(plan)
     if incomplete:
         return [f"outputs incomplete ({'; '.join(incomplete)})"]
-    new = entry(info, parameters, output_dir)
+    new = entry(plan)
     changed = []
     for key in new:
         if key == "modules" and isinstance(old.get(key), dict):
@@ -327,8 +321,9 @@ def changed_inputs(info, parameters: dict, output_dir, executed=None) -> list:
     return changed
 
 
-def update_manifest(info, parameters: dict, output_dir, seconds=None) -> dict:
-    """Record the input hashes of a finished run of ``info`` (atomically); return the entry.
+def update_manifest(plan, seconds=None) -> dict:
+    """Record the input hashes of the finished run ``plan`` in ``plan.manifest`` (atomically);
+    return the entry.
 
     ``seconds``, the run's wall time, is kept beside the hashes (not compared by
     :func:`changed_inputs`): the parallel build starts the longest notebooks first.
@@ -336,17 +331,18 @@ def update_manifest(info, parameters: dict, output_dir, seconds=None) -> dict:
     Examples
     --------
     >>> from asoc_companion.notebooks import NotebookInfo
+    >>> from asoc_companion.plan import make_plan
     >>> with paths.scratch_project() as root:
-    ...     out = root / "out"
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
     ...     _ = info.path.write_text(json.dumps({"cells": [], "metadata": {"asoc": {}}}))
-    ...     recorded = update_manifest(info, {"fidelity": "ci"}, out, seconds=12.34)
-    ...     print(recorded["seconds"], list(load_manifest(out)), recorded["environment"])
+    ...     plan = make_plan(paths.project(), info, "ci")
+    ...     recorded = update_manifest(plan, seconds=12.34)
+    ...     print(recorded["seconds"], list(load_manifest(plan.output_dir)), recorded["environment"])
     12.3 ['demo'] None
     """
-    manifest = load_manifest(output_dir)
-    manifest[info.name] = entry(info, parameters, output_dir)
+    manifest = load_manifest(plan.output_dir)
+    manifest[plan.name] = entry(plan)
     if seconds is not None:
-        manifest[info.name]["seconds"] = round(float(seconds), 1)
-    atomic_write_json(manifest_path(output_dir), manifest)
-    return manifest[info.name]
+        manifest[plan.name]["seconds"] = round(float(seconds), 1)
+    atomic_write_json(plan.manifest, manifest)
+    return manifest[plan.name]

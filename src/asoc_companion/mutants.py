@@ -15,6 +15,7 @@ import numpy as np
 from . import claim_checks as checks
 from . import paths
 from .atomic_files import atomic_write_text
+from .plan import values_file
 from .reference import load_reference
 
 __all__ = ["NOT_PLANTED", "ledger_mutants", "mutants_path", "write_ledger_mutants"]
@@ -165,7 +166,7 @@ def ledger_mutants(reference=None) -> dict:
 
 def mutants_path():
     """``figures/values/ledger_mutants.json`` of the project."""
-    return paths.project().figures / "values" / "ledger_mutants.json"
+    return values_file(paths.project().figures, "ledger_mutants")
 
 
 def write_ledger_mutants(path=None) -> dict:

@@ -4,13 +4,15 @@ Every notebook in ``book/`` whose metadata has an ``asoc`` entry is run by the h
 the entry declares which thesis figures and tables it regenerates
 (``metadata.asoc = {"title": ..., "figures": [...], "tables": [...]}``) and, optionally,
 the notebooks whose recorded values it reads (``"depends": ["sec3_5", ...]``, run first).
-``full`` fidelity at the default parameters replaces the notebook in ``book/`` (the book
-renders the executed file) and its results in ``figures/``; ``ci`` fidelity writes to
-``book/_build/ci/``; a run with parameter overrides writes to
-``book/_build/runs/<notebook>-<hash>/``. Only the first changes tracked files.
+A run is described by its :class:`asoc_companion.plan.RunPlan` (made once, by
+:func:`asoc_companion.plan.make_plan`), which holds every path of the run: ``full`` fidelity
+at the default parameters replaces the notebook in ``book/`` (the book renders the executed
+file) and its results in ``figures/``; ``ci`` fidelity writes to ``book/_build/ci/``; a run
+with parameter overrides writes to ``book/_build/runs/<notebook>-<hash>/``. Only the first
+changes tracked files.
 
 Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes
-into a fresh staging folder ``book/_build/staging/<notebook>-<random>/``; only when
+into a fresh staging folder ``<plan.staging>/<notebook>-<random>/``; only when
 papermill finishes without error are its figures, tables, values and executed notebook
 moved into place (:mod:`asoc_companion.staging`: ``os.replace``, signals held off); the caller writes the
 manifest entry last. An interrupted or failed run leaves every tracked file as it was, and
@@ -22,7 +24,6 @@ computation gives a byte-identical file.
 """
 
 import ast
-import hashlib
 import json
 import math
 import os
@@ -35,12 +36,10 @@ from pathlib import Path
 from . import paths
 from .manifest import dependencies, incomplete_notebook
 from .staging import commit, one_blas_thread, remove_stage
-from .values import FIDELITIES
 
 __all__ = ["HARNESS_PARAMETERS", "KERNEL_ARGUMENTS", "NotebookInfo", "notebooks", "find",
            "natural_key", "build_order", "by_name", "parameter_specs", "default_parameters",
-           "parse_value", "check_value", "parse_overrides", "check_overrides", "run_folder",
-           "harness_parameters", "default_output_dir", "executed_path", "run", "PAPERMILL_TIMES",
+           "parse_value", "check_value", "parse_overrides", "check_overrides", "run", "PAPERMILL_TIMES",
            "KERNEL_CELL_FILE", "normalise", "parameters_reaching"]
 
 
@@ -291,82 +290,24 @@ def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
     return checked
 
 
-def run_folder(info: NotebookInfo, fidelity: str, overrides: dict) -> Path:
-    """``book/_build/runs/<notebook>-<hash of parameters and fidelity>`` for a run with overrides.
+def run(plan, log_output=False, progress_bar=None) -> Path:
+    """Execute the run ``plan`` (a :class:`asoc_companion.plan.RunPlan`) with papermill,
+    crash-safely; return the executed file.
 
-    Examples
-    --------
-    >>> run_folder(by_name("sec3_2"), "ci", {"steps": 10}).relative_to(paths.project().root).as_posix()
-    'book/_build/runs/sec3_2-6bc049f579'
-    """
-    key = json.dumps({"fidelity": fidelity, **overrides}, sort_keys=True).encode()
-    return paths.project().runs / f"{info.name}-{hashlib.sha256(key).hexdigest()[:10]}"
-
-
-def harness_parameters(info: NotebookInfo, fidelity: str, output_dir, overrides=None) -> dict:
-    """The parameters papermill injects: fidelity, ``output_dir`` relative to the notebook, overrides.
-
-    Examples
-    --------
-    >>> info = NotebookInfo("demo", Path("/checkout/book/demo.ipynb"), "Demo", (), ())
-    >>> harness_parameters(info, "ci", "/checkout/book/_build/ci", {"runs": 10})
-    {'fidelity': 'ci', 'output_dir': '_build/ci', 'runs': 10}
-    """
-    # a relative output_dir keeps machine paths out of the committed notebooks
-    out = os.path.relpath(Path(output_dir).resolve(), info.path.parent.resolve())
-    return {"fidelity": fidelity, "output_dir": out, **(overrides or {})}
-
-
-def default_output_dir(fidelity: str) -> Path:
-    """``figures/`` at full fidelity, ``book/_build/ci/`` at ci fidelity (ValueError for others).
-
-    Examples
-    --------
-    >>> [default_output_dir(f).relative_to(paths.project().root).as_posix() for f in ("full", "ci")]
-    ['figures', 'book/_build/ci']
-    """
-    if fidelity not in FIDELITIES:
-        raise ValueError(f"fidelity must be one of {FIDELITIES}, found {fidelity!r}")
-    project = paths.project()
-    return project.figures if fidelity == "full" else project.ci_output
-
-
-def executed_path(info: NotebookInfo, fidelity: str, output_dir, overrides=None) -> Path:
-    """Where a run's executed notebook goes: the notebook itself for a default full run into
-    ``figures/``, else ``<output_dir>/notebooks/<notebook>.ipynb``.
-
-    Examples
-    --------
-    >>> info, project = by_name("sec3_2"), paths.project()
-    >>> executed_path(info, "full", project.figures) == info.path, executed_path(info, "ci", project.ci_output).parts[-5:]
-    (True, ('book', '_build', 'ci', 'notebooks', 'sec3_2.ipynb'))
-    """
-    in_place = (fidelity == "full" and Path(output_dir).resolve() == paths.project().figures.resolve()
-                and not overrides)
-    return info.path if in_place else Path(output_dir) / "notebooks" / info.path.name
-
-
-def run(info: NotebookInfo, fidelity: str = "full", output_dir=None, log_output=False,
-        overrides=None, progress_bar=None) -> Path:
-    """Execute ``info``'s notebook with papermill at ``fidelity``, crash-safely; return the executed file.
-
-    ``overrides`` ({name: value}) replace defaults of the ``parameters`` cell (checked by
-    :func:`check_overrides`). The run executes into a staging folder; its results move to
-    ``output_dir`` (and the executed notebook to :func:`executed_path`) only on success.
+    The plan's overrides replace defaults of the ``parameters`` cell (checked by
+    :func:`check_overrides`). The run executes into a staging folder in ``plan.staging``; its
+    results move to ``plan.output_dir`` (and the executed notebook to ``plan.executed``) only
+    on success.
     """
     import papermill
 
-    project = paths.project()
-    output_dir = Path(default_output_dir(fidelity) if output_dir is None else output_dir).resolve()
-    overrides = check_overrides(info, overrides or {})
-    target = executed_path(info, fidelity, output_dir, overrides)
-    project.staging.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f"{info.name}-", dir=project.staging))
+    info, output_dir, target, shown = plan.notebook, plan.output_dir, plan.executed, plan.injected
+    check_overrides(info, plan.parameters)
+    plan.staging.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f"{info.name}-", dir=plan.staging))
     try:
-        staged = stage / "notebooks" / info.path.name
+        staged, staged_parameters = plan.staged(stage)
         staged.parent.mkdir(parents=True)
-        staged_parameters = harness_parameters(info, fidelity, stage, overrides)
-        shown = harness_parameters(info, fidelity, output_dir, overrides)
         with one_blas_thread():
             papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
                                        parameters=staged_parameters,

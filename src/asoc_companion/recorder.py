@@ -18,7 +18,7 @@ from pathlib import Path
 
 from . import figures, paths
 from .atomic_files import atomic_write_json, to_jsonable
-from .values import FIDELITIES, values_path
+from .plan import FIDELITIES, values_file
 
 __all__ = ["Recorder", "setup", "scratch_run", "active", "record", "save_figure", "save_table",
            "current_values"]
@@ -84,7 +84,7 @@ class Recorder:
 
     def write(self) -> Path:
         """Write the values recorded so far (atomically); return the file."""
-        return atomic_write_json(values_path(self.notebook, self.output_dir),
+        return atomic_write_json(values_file(self.output_dir, self.notebook),
                                  {"notebook": self.notebook, "fidelity": self.fidelity, "values": self.values})
 
     def save_figure(self, fig, number: str) -> Path:

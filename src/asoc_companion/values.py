@@ -10,13 +10,10 @@ import json
 from pathlib import Path
 
 from . import paths
+from .plan import FIDELITIES, MANIFEST_NAME, output_folder, values_file, values_folder
 
 __all__ = ["FIDELITIES", "MANIFEST_NAME", "CorruptValuesError", "values_path", "regenerate_command",
            "read_values_file", "load_values", "load_all_values"]
-
-
-FIDELITIES = ("full", "ci")
-MANIFEST_NAME = "manifest.json"
 
 
 class CorruptValuesError(ValueError):
@@ -45,7 +42,12 @@ def values_path(notebook: str, output_dir=None) -> Path:
     >>> values_path("sec3_5", "/tmp/run").as_posix()
     '/tmp/run/values/sec3_5.json'
     """
-    return Path(output_dir or paths.project().figures) / "values" / f"{notebook}.json"
+    return values_file(output_dir or _committed(), notebook)
+
+
+def _committed() -> Path:
+    """The output folder of the committed full-fidelity run (``figures/``)."""
+    return output_folder(paths.project(), "full")
 
 
 def regenerate_command(notebook: str, output_dir=None) -> str:
@@ -64,7 +66,7 @@ def regenerate_command(notebook: str, output_dir=None) -> str:
     """
     command = f"python -m asoc_companion run {notebook}"
     try:
-        ci = Path(output_dir).resolve() == paths.project().ci_output.resolve() if output_dir else False
+        ci = Path(output_dir).resolve() == output_folder(paths.project(), "ci").resolve() if output_dir else False
     except RuntimeError:
         ci = False
     return command + (" --fidelity ci" if ci else "")
@@ -83,7 +85,7 @@ def _repair_hint(path) -> str:
     file, the git command that restores it)."""
     hint = f"regenerate it with `{regenerate_command(path.stem, path.parent.parent)}`"
     try:
-        committed = path.resolve().parent == (paths.project().figures / "values").resolve()
+        committed = path.resolve().parent == values_folder(_committed()).resolve()
     except RuntimeError:
         committed = False
     return hint + (f" or restore the committed one with `git checkout -- {_shown(path)}`" if committed else "")
@@ -177,7 +179,7 @@ def load_all_values(output_dir=None) -> dict:
     ...     print(load_all_values(folder))
     {'sec0.a': 1, 'sec1.b': [0.5, 0.75]}
     """
-    folder = Path(output_dir or paths.project().figures) / "values"
+    folder = values_folder(output_dir or _committed())
     out = {}
     for path in sorted(folder.glob("*.json")):
         if path.name == MANIFEST_NAME:

@@ -3,16 +3,17 @@ call (import analysis of every notebook), and the timing helper's own overhead."
 
 from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
+from asoc_companion.plan import make_plan
 from asoc_companion.timing import median_seconds
 
 
 def test_manifest_check_of_every_notebook(benchmark):
     """Hashes of every notebook's inputs (sources, import closures, values): what `make book` checks first."""
     infos = list(nbs.notebooks().values())
-    out = paths.project().figures
+    plans = [make_plan(paths.project(), info, "full") for info in infos]
 
     def check():
-        return [manifest.entry(info, nbs.harness_parameters(info, "full", out), out) for info in infos]
+        return [manifest.entry(plan) for plan in plans]
 
     benchmark.extra_info["target_s"] = 1.0
     benchmark.pedantic(check, rounds=5)

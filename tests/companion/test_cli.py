@@ -14,7 +14,10 @@ from asoc_companion import __main__ as cli
 from asoc_companion import manifest
 from asoc_companion import notebooks as nbs
 from asoc_companion.atomic_files import atomic_write_json
+from asoc_companion import paths
+from asoc_companion import plan as plan_module
 from asoc_companion.paths import ROOT
+from asoc_companion.plan import make_plan, output_folder
 
 
 def _notebook(folder, name, source="x = 1", depends=None, params='fidelity = "full"\noutput_dir = "."\nseed = 3'):
@@ -51,7 +54,7 @@ def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capfd):
     status = ["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"]
     before = subprocess.run(status, capture_output=True, text=True, check=True).stdout
     info = nbs.find("figure", "3.2")
-    out = nbs.run_folder(info, "ci", {"seed": 7})
+    out = make_plan(paths.project(), info, "ci", {"seed": 7}).output_dir
     shutil.rmtree(out, ignore_errors=True)
     assert cli.main(["figure", "3.2", "-p", "seed", "7", "--fidelity", "ci"]) == 0
     printed, errors = capfd.readouterr()          # capfd: the kernel process writes to the same stderr
@@ -68,7 +71,8 @@ def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capfd):
     assert all(key in printed for key in values)
     executed = nbformat.read(out / "notebooks" / "sec3_2.ipynb", as_version=4)
     assert executed.metadata.papermill["parameters"]["seed"] == 7
-    assert nbs.run_folder(info, "ci", {"seed": 8}) != out != nbs.run_folder(info, "full", {"seed": 7})
+    assert output_folder(paths.project(), "ci", info.name, {"seed": 8}) != out \
+        != output_folder(paths.project(), "full", info.name, {"seed": 7})
 
 
 def test_source_hash_ignores_outputs_and_injected_parameters(tmp_path):
@@ -102,19 +106,19 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
     info = _notebook(book, "secX_1")
     ran = []
 
-    def fake_run(info, fidelity, output_dir=None, **kwargs):
-        ran.append(info.name)
-        atomic_write_json(out / "values" / f"{info.name}.json", {"notebook": info.name, "values": {"a": 1}})
-        executed = nbformat.read(info.path, as_version=4)
+    def fake_run(plan, **kwargs):
+        ran.append(plan.name)
+        atomic_write_json(out / "values" / f"{plan.name}.json", {"notebook": plan.name, "values": {"a": 1}})
+        executed = nbformat.read(plan.notebook.path, as_version=4)
         for count, cell in enumerate(executed.cells, 1):
             cell.execution_count = count
-        target = nbs.executed_path(info, fidelity, out)
+        target = plan.executed
         target.parent.mkdir(parents=True, exist_ok=True)
         nbformat.write(executed, target)
         return target
 
     monkeypatch.setattr(nbs, "notebooks", lambda book=None: {"secX_1": info})
-    monkeypatch.setattr(nbs, "default_output_dir", lambda fidelity: out)
+    monkeypatch.setattr(plan_module, "output_folder", lambda *args: out)
     monkeypatch.setattr(nbs, "run", fake_run)
     monkeypatch.setattr(cli, "_ledger", lambda fidelity: None)
     assert cli.main(["reproduce", "--fidelity", "ci", "--jobs", "1"]) == 0
@@ -137,10 +141,10 @@ def test_dependencies_run_first_and_enter_the_hash(tmp_path):
     a = _notebook(tmp_path, "a_findings", depends=["b_sec"])
     b = _notebook(tmp_path, "b_sec")
     assert [i.name for i in nbs.build_order([a, b])] == ["b_sec", "a_findings"]
-    params = {"fidelity": "ci"}
-    h = manifest.entry(a, params, tmp_path)
+    plan = make_plan(paths.project(), a, "ci", output_dir=tmp_path)
+    h = manifest.entry(plan)
     atomic_write_json(tmp_path / "values" / "b_sec.json", {"notebook": "b_sec", "values": {"x": 1}})
-    assert manifest.entry(a, params, tmp_path)["depends"] != h["depends"]
+    assert manifest.entry(plan)["depends"] != h["depends"]
     _notebook(tmp_path, "b_sec", depends=["a_findings"])
     with pytest.raises(ValueError, match="circular"):
         nbs.build_order(nbs.notebooks(tmp_path).values())
@@ -164,7 +168,10 @@ def test_notebooks_are_discovered_by_their_asoc_metadata(tmp_path):
 def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
     source = "import time, warnings\nprint(seed * 2, flush=True)\ntime.sleep(0.3)\nprint('x')\nwarnings.warn('w')"
     info = _notebook(tmp_path, "secX_2", source=source)
-    first = nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5})
+    def plan(overrides):
+        return make_plan(paths.project(), info, "ci", overrides, output_dir=tmp_path / "out")
+
+    first = nbs.run(plan({"seed": 5}))
     data = first.read_bytes()
     nb = nbformat.read(first, as_version=4)
     assert "start_time" not in nb.metadata.papermill and "duration" not in nb.metadata.papermill
@@ -172,9 +179,9 @@ def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
                for c in nb.cells)
     stdout, stderr = nb.cells[-1].outputs          # one chunk per stream, whatever the timing
     assert stdout["text"] == "10\nx\n" and stderr["text"].startswith("<cell>:5: UserWarning: w")
-    assert nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"seed": 5}).read_bytes() == data
+    assert nbs.run(plan({"seed": 5})).read_bytes() == data
     with pytest.raises(ValueError, match="valid names: seed"):
-        nbs.run(info, "ci", output_dir=tmp_path / "out", overrides={"n": 5})
+        nbs.run(plan({"n": 5}))
 
 
 @pytest.mark.parametrize("args, message", [
@@ -310,12 +317,12 @@ def test_a_run_prints_where_its_outputs_went(tmp_path, monkeypatch, capsys):
 
     info = _notebook(tmp_path, "demo")
 
-    def fake_run(info, fidelity, output_dir=None, **kwargs):
-        (output_dir / "fig2_10.png").write_text("")
-        (output_dir / "fig2_2.png").write_text("")
-        return output_dir / "demo.ipynb"
+    def fake_run(plan, **kwargs):
+        (plan.output_dir / "fig2_10.png").write_text("")
+        (plan.output_dir / "fig2_2.png").write_text("")
+        return plan.executed
 
     monkeypatch.setattr(nbs, "run", fake_run)
-    build.run_one(info, "ci", output_dir=tmp_path)
+    build.run_one(make_plan(paths.project(), info, "ci", output_dir=tmp_path))
     out = capsys.readouterr().out
     assert f"outputs in {build.rel(tmp_path)}/: " in out and "fig2_2.png, fig2_10.png" in out, out

@@ -24,6 +24,7 @@ import pytest
 from asoc_companion import __main__ as cli
 from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
+from asoc_companion.plan import make_plan
 from asoc_companion.atomic_files import atomic_write_json
 
 SRC = Path(__file__).resolve().parents[2] / "src"
@@ -138,7 +139,7 @@ def test_failed_run_moves_nothing(tmp_path, monkeypatch):
     atomic_write_json(project.figures / "values" / "secX_9.json", committed)
     before = {p: p.read_bytes() for p in [info.path, project.figures / "values" / "secX_9.json"]}
     with pytest.raises(Exception, match="the computation failed"):
-        nbs.run(info, "full", progress_bar=False)
+        nbs.run(make_plan(project, info, "full"), progress_bar=False)
     assert {p: p.read_bytes() for p in before} == before
     assert sorted(p.name for p in project.figures.rglob("*")) == ["secX_9.json", "values"]
     assert not list(project.staging.iterdir()), "the failed run's staging folder was left behind"
@@ -151,8 +152,8 @@ def test_reproduce_reruns_incomplete_outputs_although_hashes_agree(tmp_path, mon
     info = _notebook(project.book, "secX_8", ["x = 1"])
     ran = []
 
-    def fake_run(info, fidelity, output_dir=None, **kwargs):
-        ran.append(info.name)
+    def fake_run(plan, **kwargs):
+        ran.append(plan.name)
         atomic_write_json(project.figures / "values" / "secX_8.json",
                           {"notebook": "secX_8", "fidelity": "full", "values": {"a": 1, "b": 2}})
         nb = nbformat.read(info.path, as_version=4)
@@ -175,8 +176,7 @@ def test_reproduce_reruns_incomplete_outputs_although_hashes_agree(tmp_path, mon
     nb = nbformat.read(info.path, as_version=4)
     nb.cells[1].execution_count, nb.cells[1].outputs = None, []
     nbformat.write(nb, info.path)
-    assert manifest.changed_inputs(info, nbs.harness_parameters(info, "full", project.figures),
-                                   project.figures, executed=info.path)
+    assert manifest.changed_inputs(make_plan(project, info, "full"))
     assert cli.main(["reproduce", "--jobs", "1"]) == 0 and ran == ["secX_8"] * 3
     # a truncated values file: re-run, not a JSONDecodeError
     (project.figures / "values" / "secX_8.json").write_text('{"notebook": "secX_8", "val')
@@ -195,7 +195,7 @@ def test_every_kernel_computes_with_one_blas_thread(tmp_path, monkeypatch):
     info = _notebook(project.book, "secX_7", [
         "import os\nimport asoc_companion as repro\nrepro.setup('secX_7', fidelity=fidelity, output_dir=output_dir)",
         "repro.record('threads', [os.environ.get(name) for name in ('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS')])"])
-    nbs.run(info, "full", progress_bar=False)
+    nbs.run(make_plan(project, info, "full"), progress_bar=False)
     recorded = json.loads((project.figures / "values" / "secX_7.json").read_text())["values"]
     assert recorded["threads"] == ["1", "1"]
     assert os.environ["OPENBLAS_NUM_THREADS"] == "2" and "OMP_NUM_THREADS" not in os.environ

@@ -15,6 +15,7 @@ import pytest
 from asoc_companion import __main__ as cli
 from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
+from asoc_companion.plan import make_plan
 from asoc_companion.imports import closure, imported_names
 from asoc_companion.atomic_files import atomic_write_json
 
@@ -68,8 +69,7 @@ def test_closure_follows_packages_and_relative_imports(tmp_path, monkeypatch):
 
 
 def _entries(project):
-    out = project.figures
-    return {name: manifest.changed_inputs(info, nbs.harness_parameters(info, "full", out), out)
+    return {name: manifest.changed_inputs(make_plan(project, info, "full"))
             for name, info in nbs.notebooks().items()}
 
 
@@ -86,7 +86,7 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
             cell.execution_count = count
         nbformat.write(nb, info.path)
     for info in nbs.build_order(nbs.notebooks().values()):
-        manifest.update_manifest(info, nbs.harness_parameters(info, "full", out), out)
+        manifest.update_manifest(make_plan(project, info, "full"))
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": []}
     entry = manifest.load_manifest(out)["sec3_2"]["modules"]
     assert "asoc/mjls/system.py" in entry and "asoc_companion/recorder.py" in entry
@@ -96,7 +96,7 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     assert _entries(project) == {"sec2_6": ["modules (asoc/gp/kernels.py)"], "sec3_2": [], "findings": []}
     # Sec. 2.6 re-runs and records a new value: the findings page, which quotes it, follows
     atomic_write_json(out / "values" / "sec2_6.json", {"notebook": "sec2_6", "values": {"x": 2}})
-    manifest.update_manifest(nbs.notebooks()["sec2_6"], nbs.harness_parameters(nbs.notebooks()["sec2_6"], "full", out), out)
+    manifest.update_manifest(make_plan(project, nbs.notebooks()["sec2_6"], "full"))
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": ["depends"]}
     # an edit to the harness's own machinery re-runs nothing; one to recording re-runs all
     (project.src / "asoc_companion" / "manifest.py").write_text("def entry():\n    return 1\n")

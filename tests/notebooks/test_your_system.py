@@ -8,6 +8,8 @@ import pytest
 
 from asoc_companion import load_reference, load_values
 from asoc_companion import notebooks as nbs
+from asoc_companion import paths
+from asoc_companion.plan import make_plan
 from asoc_companion.reference import agrees_with_full
 
 NAME = "your_system"
@@ -16,7 +18,7 @@ NAME = "your_system"
 @pytest.fixture(scope="module")
 def full(tmp_path_factory):
     out = tmp_path_factory.mktemp(NAME)
-    nbs.run(nbs.notebooks()[NAME], "full", output_dir=out)
+    nbs.run(make_plan(paths.project(), nbs.notebooks()[NAME], "full", output_dir=out))
     return load_values(NAME, out), out
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic_files import atomic_write_json
+from ..plan import values_folder
 from .chapter3 import MARGIN, SHOW
 from .statement import Outcome
 from .engine import verdict_text
@@ -28,7 +29,7 @@ def save_counterexamples(results, seed, folder) -> Path:
                   for key, res in results.items() if res.failures}
     data = {"seed": int(seed), "statements": {key: trim_systems(key, entries) for key, entries in statements.items()}}
     # shaped like a notebook's values file, which every reader of figures/values expects
-    return atomic_write_json(Path(folder) / "values" / COUNTEREXAMPLES,
+    return atomic_write_json(values_folder(folder) / COUNTEREXAMPLES,
                              {"notebook": COUNTEREXAMPLES.removesuffix(".json"), "values": data})
 
 
@@ -44,7 +45,7 @@ def trim_systems(key, entries, keep=SYSTEMS_KEPT):
 
 def load_counterexamples(folder):
     """The saved counterexamples, or None when there is no file."""
-    path = Path(folder) / "values" / COUNTEREXAMPLES
+    path = values_folder(folder) / COUNTEREXAMPLES
     return json.loads(path.read_text())["values"] if path.exists() else None
 
 
