@@ -139,7 +139,6 @@ def _ledger(fidelity):
 
 def _write_if_changed(path, text, remark=""):
     from .build import rel as _rel
-    from .plan import make_plan
     from .atomic_files import atomic_write_text
 
     if path.exists() and path.read_text() == text:

@@ -6,8 +6,9 @@ it depends on (``metadata.asoc.depends``), with one BLAS/OpenMP thread per worke
 notebooks do not oversubscribe the cores. Each run is crash-safe
 (:func:`asoc_companion.notebooks.run`); the parent writes a notebook's manifest entry after
 its files are in place. Each notebook's :class:`asoc_companion.plan.RunPlan` is made once, in
-the parent, and passed to the worker, the run and the manifest. The workers' functions live here, in an importable module, so the
-spawned processes find them whatever the parent's ``__main__`` is.
+the parent, and passed to the worker, the run and the manifest. The workers' functions live
+here, in an importable module, so the spawned processes find them whatever the parent's
+``__main__`` is.
 """
 
 import os
@@ -94,7 +95,8 @@ def _pending(plans, force) -> list:
         name = plan.notebook.path.name
         if changed:
             why = ", ".join(changed)
-            print(f"{name}: {why if changed[0].startswith('outputs') else 'changed: ' + why}", flush=True)
+            shown = why if changed[0].startswith("outputs") else "changed: " + why
+            print(f"{name}: {shown}", flush=True)
             todo.append(plan)
         else:
             print(f"{name}: up to date, skipped", flush=True)
@@ -108,7 +110,8 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
     finished; a failed notebook's dependants are skipped, the others still run.
     """
     project = paths.project()
-    ordered = [make_plan(project, info, fidelity) for info in nbs.build_order(nbs.notebooks().values())]
+    ordered = [make_plan(project, info, fidelity)
+               for info in nbs.build_order(nbs.notebooks().values())]
     todo = {plan.name: plan for plan in _pending(ordered, force)}
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(todo) or 1))
     waits = {name: [d for d in manifest.dependencies(plan.notebook.path) if d in todo]
@@ -118,7 +121,8 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
         for name, plan in todo.items():
             if any(d in failed for d in waits[name]):
                 failed.append(name)
-                print(f"{plan.notebook.path.name}: skipped, a notebook it depends on failed", flush=True)
+                print(f"{plan.notebook.path.name}: skipped, a notebook it depends on failed",
+                      flush=True)
                 continue
             try:
                 run_and_record(plan)

@@ -15,9 +15,10 @@ full-fidelity run) holds, per notebook, content hashes of everything its results
                  (``metadata.asoc.depends``, e.g. a findings page that quotes other pages).
 
 Every function of one run reads its :class:`asoc_companion.plan.RunPlan` (the values file,
-the executed notebook, the manifest path); none derives a path itself. A notebook is up to date when its entry equals the hashes computed now and its outputs
-are complete (:func:`incomplete_outputs`); ``python -m asoc_companion reproduce`` skips it
-then (``--force`` re-executes everything).
+the executed notebook, the manifest path); none derives a path itself. A notebook is up to
+date when its entry equals the hashes computed now and its outputs are complete
+(:func:`incomplete_outputs`); ``python -m asoc_companion reproduce`` skips it then
+(``--force`` re-executes everything).
 """
 
 import hashlib
@@ -231,7 +232,8 @@ def incomplete_outputs(plan, reference=None) -> list:
     >>> reference = {f"demo.{k}": Entry(f"demo.{k}", where="an example", kind="measured") for k in ("rho", "gain")}
     >>> from asoc_companion.plan import make_plan
     >>> with paths.scratch_project() as root:
-    ...     plan = make_plan(paths.project(), NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ()), "ci")
+    ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
+    ...     plan = make_plan(paths.project(), info, "ci")
     ...     before = incomplete_outputs(plan, reference=reference)
     ...     _ = Recorder("demo", "ci", plan.output_dir).record("rho", 0.25)
     ...     print(before, incomplete_outputs(plan, reference=reference))
@@ -249,7 +251,8 @@ def incomplete_outputs(plan, reference=None) -> list:
         problems.append("no values file")
     if recorded is not None:
         reference = reference if reference is not None else load_reference()
-        missing = [e.name for e in reference.values() if e.notebook == plan.name and e.name not in recorded]
+        missing = [e.name for e in reference.values()
+                   if e.notebook == plan.name and e.name not in recorded]
         if missing:
             problems.append(f"values missing: {', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''}")
     try:
@@ -275,7 +278,8 @@ def last_seconds(output_dir) -> dict:
 
 
 def changed_inputs(plan) -> list:
-    """What changed since the run ``plan`` was last made, or what its outputs lack (empty: up to date).
+    """What changed since the run ``plan`` was last made, or what its outputs lack (empty: up to
+    date).
 
     Examples
     --------

@@ -137,11 +137,11 @@ class RunPlan:
         return self.notebook.name
 
     def values_of(self, notebook: str) -> Path:
-        """The values file of another ``notebook`` in this run's output folder (its dependencies)."""
+        """The values file of another ``notebook`` in this run's output folder (a dependency)."""
         return values_file(self.output_dir, notebook)
 
     def staged(self, stage) -> tuple:
-        """``(executed notebook, injected parameters)`` of the run while it executes into ``stage``."""
+        """``(executed notebook, injected parameters)`` of the run executing into ``stage``."""
         staged = Path(stage) / "notebooks" / self.notebook.path.name
         return staged, _injected(self.notebook, self.fidelity, stage, self.parameters)
 

@@ -66,7 +66,8 @@ def regenerate_command(notebook: str, output_dir=None) -> str:
     """
     command = f"python -m asoc_companion run {notebook}"
     try:
-        ci = Path(output_dir).resolve() == output_folder(paths.project(), "ci").resolve() if output_dir else False
+        ci_output = output_folder(paths.project(), "ci")
+        ci = Path(output_dir).resolve() == ci_output.resolve() if output_dir else False
     except RuntimeError:
         ci = False
     return command + (" --fidelity ci" if ci else "")

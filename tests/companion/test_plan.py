@@ -23,10 +23,10 @@ def test_full_run_writes_figures_and_executes_in_place():
     plan = make_plan(PROJECT, INFO, "full")
     assert (plan.name, plan.fidelity, plan.parameters) == ("sec3_2", "full", {})
     assert plan.executed == INFO.path
-    assert [_rel(p) for p in (plan.output_dir, plan.values, plan.figures, plan.tables, plan.manifest,
-                              plan.staging)] == ["figures", "figures/values/sec3_2.json", "figures",
-                                                 "figures", "figures/values/manifest.json",
-                                                 "book/_build/staging"]
+    shown = [_rel(p) for p in (plan.output_dir, plan.values, plan.figures, plan.tables,
+                               plan.manifest, plan.staging)]
+    assert shown == ["figures", "figures/values/sec3_2.json", "figures", "figures",
+                     "figures/values/manifest.json", "book/_build/staging"]
     assert plan.injected == {"fidelity": "full", "output_dir": "../figures"}
     assert _rel(plan.values_of("sec3_5")) == "figures/values/sec3_5.json"
 
@@ -47,7 +47,8 @@ def test_run_with_parameters_writes_its_own_runs_folder(fidelity):
     assert _rel(plan.executed) == f"{folder}/notebooks/sec3_2.ipynb"
     assert _rel(plan.values) == f"{folder}/values/sec3_2.json"
     assert _rel(plan.manifest) == f"{folder}/values/manifest.json"
-    assert plan.injected == {"fidelity": fidelity, "output_dir": folder.removeprefix("book/"), "steps": 10}
+    injected = {"fidelity": fidelity, "output_dir": folder.removeprefix("book/"), "steps": 10}
+    assert plan.injected == injected
     other = make_plan(PROJECT, INFO, fidelity, {"steps": 11})
     assert other.output_dir != plan.output_dir != make_plan(PROJECT, INFO, fidelity).output_dir
 
@@ -85,7 +86,8 @@ def _run_path_joins(tree) -> list:
 
 
 def test_the_scan_finds_a_path_built_by_hand():
-    code = 'out / "values" / f"{name}.json"\nPath(out) / "book" / "_build" / "ci"\nx = "manifest.json"'
+    code = ('out / "values" / f"{name}.json"\n'
+            'Path(out) / "book" / "_build" / "ci"\nx = "manifest.json"')
     assert sorted(v for _, v in _run_path_joins(ast.parse(code))) == [
         "<name>.json", "ci", "manifest.json", "values"]
 
