@@ -198,6 +198,8 @@ class DynamicOutputFeedbackResult(CertifiedDesignResult):
     period: int = 1
 
 
+@config.accepts_settings("mjls.rank_rtol", "mjls.divergence_threshold", "mjls.alg32_max_period",
+                         "mjls.alg32_patience", "mjls.matrix_free_min_unknowns", "mjls.cg_tolerance")
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
                             warn=True):
     """Algorithm 3.2: the time-invariant controller (3.37) for the MJLS (3.36), mode not observed.

@@ -269,6 +269,7 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
         seconds=time.perf_counter() - start)
 
 
+@config.accepts_settings("mjls.rho_start", "mjls.radius_max_iter")
 def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False,
                                        warn=True):
     """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the thesis.
@@ -333,6 +334,8 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
     return result
 
 
+@config.accepts_settings("mjls.exact_warm_start_iterations", "mjls.rho_start",
+                         "mjls.radius_max_iter")
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
                                   progress=False):
     """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24); not in the thesis.

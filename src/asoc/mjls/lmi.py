@@ -199,6 +199,7 @@ def performance_output(sys):
     return D, E
 
 
+@config.accepts_settings("mjls.lmi_equality_rtol")
 def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
     """Theorem 3.9 (one gain, mode not observed) or Theorem 3.12 (gains L_i, mode observed).
 

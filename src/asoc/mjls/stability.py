@@ -112,6 +112,7 @@ class MeanSquareStability:
                 f"{self.verdict.value}")
 
 
+@config.accepts_settings("mjls.bracket_rtol", "mjls.dense_max_radius")
 def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
     """Spectral radius rho of the second-moment operator (Cor. 3.2): mean-square stable iff rho < 1.
 
@@ -160,6 +161,7 @@ def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
     return result.rho
 
 
+@config.accepts_settings("mjls.bracket_rtol", "mjls.dense_max_radius")
 def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     """Cor. 3.2 as a certified verdict: rho with a bracket [rho_lower, rho_upper] and stable, unstable or undecided.
 

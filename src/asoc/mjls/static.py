@@ -137,6 +137,7 @@ def gain_from_moments(sys, X, P, method="vec"):
 MOMENTS = ("auto", "step", "exact")
 
 
+@config.accepts_settings("mjls.auto_switch_iterations", "mjls.solve_tolerance")
 def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="vec", warn=True,
                            moments="auto"):
     """Algorithm 3.1: iterate (3.34)-(3.35) from X^i = P^i = init * I (Sec. 3.5.3).
