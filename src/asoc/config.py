@@ -302,6 +302,39 @@ _REGISTRY: dict[str, tuple[object, _Allowed, str]] = {
         "0.055 s, step 0.063 s, exact 0.46 s; open loop at rho 0.995: step 3.0 s (1,049 "
         "iterations), exact 2.6 s, auto 1.0 s. n = 64, M = 8, easy: auto as step (CPU 0.62-0.69 s "
         "against 0.65-0.74 s); rho 0.995: step 221 s (1,629 iterations), exact 13.3 s, auto 15.6 s."),
+    "mjls.stationary_atol": (
+        1e-8,
+        _REAL(0, 1),
+        "Largest |mu_inf T - mu_inf| of a stationary distribution given to MJLS: mu_inf T = mu_inf "
+        "to rounding of a probability vector computed elsewhere (e.g. by another library)."),
+    "mjls.sampling_time_rtol": (
+        1e-12,
+        _REAL(0, 1),
+        "Relative difference at which two sampling times count as one in MJLS.from_statespace and "
+        "to_statespace (dt = 0.1 computed two ways differs in the last bits)."),
+    "mjls.perron_inner_rtol": (
+        1e-12,
+        _REAL(0, 1),
+        "radius_and_gradient: rho is not differentiable where the left and right Perron stacks "
+        "are orthogonal (a defective dominant eigenvalue); an inner product below this times "
+        "their norms counts as zero, and the gradient is not formed (rounding of the products)."),
+    "mjls.lqg_start_regularisation": (
+        1e-6,
+        _REAL(0, 1),
+        "Relative diagonal added to V, Q and W of the mode-averaged LQG start of the exact design "
+        "(y = C x without noise gives a singular filter Riccati equation): the start only needs "
+        "to stabilise, and 1e-6 moves its gains by about that much."),
+    "mjls.exact_warm_start_tol": (
+        1e-10,
+        _REAL(0, 1),
+        "Tolerance of the short Alg. 3.2 run that starts exact_dynamic_output_feedback (its "
+        "iteration cap mjls.exact_warm_start_iterations ends it first in practice)."),
+    "mjls.min_radius_tol": (
+        1e-12,
+        _REAL(0, 1),
+        "Gradient tolerance of the BFGS search that minimises rho (stabilising start, min-radius "
+        "design): it stops earlier once rho < mjls.rho_start, so this only ends a search that "
+        "cannot reach it."),
     "optimize.armijo": (
         1e-4,
         _REAL(0, 1),
@@ -312,6 +345,16 @@ _REGISTRY: dict[str, tuple[object, _Allowed, str]] = {
         _REAL(0, 1),
         "The line search of asoc.optimize.bfgs gives up below this step length (then restarts "
         "from a gradient step, or stops with no_progress)."),
+    "optimize.curvature_rtol": (
+        1e-12,
+        _REAL(0, 1),
+        "asoc.optimize.bfgs skips the inverse-Hessian update unless s'y exceeds this times "
+        "|s| |y| (the curvature condition to rounding; Nocedal and Wright, Sec. 6.1)."),
+    "linalg.norm_floor": (
+        1e-12,
+        _REAL(0, 1),
+        "Absolute floor of ||new|| in asoc.linalg.relative_change: a zero iterate converges "
+        "instead of dividing by zero."),
     "gp.gradient_tol": (
         5e-2,
         _REAL(0, math.inf),
@@ -322,6 +365,15 @@ _REGISTRY: dict[str, tuple[object, _Allowed, str]] = {
         "M 1e10, so for M = 200 the gradient's terms of size ~1e2 carry rounding errors of about "
         "cond * eps * 1e2 ~ 4e-2 (the OMAT fits of Sec. 2.6.4 stall at 1e-2 to 4e-2; 1e-2 was "
         "below that)."),
+    "gp.quad_epsabs": (
+        1e-12,
+        _REAL(0, 1),
+        "Absolute tolerance of scipy.integrate.quad in the density distances and the mCvMd "
+        "quadrature of Sec. 2.6 (distances of order 1e-3 to 1 keep 9 digits)."),
+    "gp.quad_epsrel": (
+        1e-10,
+        _REAL(0, 1),
+        "Relative tolerance of the same quadratures."),
     "gp.max_iterations": (
         500,
         _INT(1),

@@ -6,12 +6,9 @@ Stacks of matrices have shape ``(..., n, m)``; every helper works on the last tw
 
 import numpy as np
 
-__all__ = ["NORM_FLOOR", "transpose", "sym", "pack", "unpack", "relative_change"]
+from . import config
 
-
-#: Absolute floor of a norm in :func:`relative_change`: a zero iterate converges instead of
-#: dividing by zero.
-NORM_FLOOR = 1e-12
+__all__ = ["transpose", "sym", "pack", "unpack", "relative_change"]
 
 
 def transpose(X):
@@ -65,15 +62,16 @@ def unpack(z, shapes):
     return out
 
 
-def relative_change(old, new, floor=NORM_FLOOR, axis=None):
+def relative_change(old, new, floor=None, axis=None):
     """||new - old||_F / max(||new||_F, floor): how much an iterate moved, relative to its size.
 
     Parameters
     ----------
     old, new : array_like
         Iterates; ``old`` may carry leading axes (several old iterates against one new).
-    floor : float
-        Absolute floor of ||new||: a zero iterate converges instead of dividing by zero.
+    floor : float, optional
+        Absolute floor of ||new||: a zero iterate converges instead of dividing by zero
+        (default ``config.defaults["linalg.norm_floor"]``).
     axis : int or tuple of int, optional
         The axes the norms run over (default: all, returning a float); the others are kept.
 
@@ -89,6 +87,7 @@ def relative_change(old, new, floor=NORM_FLOOR, axis=None):
     >>> relative_change(np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([[1.0, 0.0], [0.0, 2.0]]), axis=-1)
     array([0. , 0.5])
     """
+    floor = config.defaults["linalg.norm_floor"] if floor is None else floor
     if axis is None:
         d = np.ravel(new) - np.ravel(old)
         n = np.ravel(new)

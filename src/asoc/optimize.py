@@ -94,7 +94,7 @@ class _InverseHessian:
 
     def update(self, s, y):
         sy = float(s @ y)
-        if not sy > 1e-12 * np.linalg.norm(s) * np.linalg.norm(y):
+        if not sy > config.defaults["optimize.curvature_rtol"] * np.linalg.norm(s) * np.linalg.norm(y):
             return                                     # curvature condition fails: skip
         if self.memory is not None:
             self.scale = sy / float(y @ y)

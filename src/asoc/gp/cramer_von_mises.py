@@ -12,6 +12,7 @@ import numpy as np
 from scipy import integrate
 from scipy.special import xlogy
 
+from .. import config
 from .. import validation as check
 from ..progress import progress_bar
 from . import mixture_checks as v
@@ -349,5 +350,6 @@ def mcvmd_quadrature(lcd1, lcd2, b_max: float = DEFAULT_B_MAX, center: float = 0
         wm = (0.5 * np.diff(edges)[:, None] * w[None]).ravel()
         return float(wm @ (lcd1(m[:, None], b) - lcd2(m[:, None], b)) ** 2)
 
-    val = integrate.quad(inner, 0.0, b_max, limit=400, epsabs=1e-12, epsrel=1e-10)[0]
+    val = integrate.quad(inner, 0.0, b_max, limit=400, epsabs=config.defaults["gp.quad_epsabs"],
+                         epsrel=config.defaults["gp.quad_epsrel"])[0]
     return float(np.sqrt(max(val, 0.0)))

@@ -11,6 +11,7 @@ import numpy as np
 from scipy import integrate
 from scipy.special import xlogy
 
+from .. import config
 from .. import validation as check
 from . import mixture_checks as v
 
@@ -19,7 +20,8 @@ __all__ = ["lq_distance", "hellinger", "hellinger_gaussian", "hellinger_gaussian
 
 
 def _quad(f, lower, upper):
-    return integrate.quad(f, lower, upper, limit=400, epsabs=1e-12, epsrel=1e-10)[0]
+    return integrate.quad(f, lower, upper, limit=400, epsabs=config.defaults["gp.quad_epsabs"],
+                          epsrel=config.defaults["gp.quad_epsrel"])[0]
 
 
 def lq_distance(p1, p2, q: float = 2, lower=-np.inf, upper=np.inf) -> float:

@@ -145,9 +145,10 @@ def averaged_lqg(sys, nc):
     A, B, C, Q, R = (avg(S) for S in (sys.A, sys.B, sys.C, sys.Q, sys.R))
     W = avg(sys.H @ transpose(sys.H))
     V = np.zeros((sys.ny, sys.ny)) if sys.J is None else avg(sys.J @ transpose(sys.J))
-    V = V + 1e-6 * max(1.0, np.abs(V).max()) * np.eye(sys.ny)       # y = C x: a regular filter DARE
-    Q = Q + 1e-6 * max(1.0, np.abs(Q).max()) * np.eye(sys.nx)
-    W = W + 1e-6 * max(1.0, np.abs(W).max()) * np.eye(sys.nx)
+    eps = config.defaults["mjls.lqg_start_regularisation"]
+    V = V + eps * max(1.0, np.abs(V).max()) * np.eye(sys.ny)       # y = C x: a regular filter DARE
+    Q = Q + eps * max(1.0, np.abs(Q).max()) * np.eye(sys.nx)
+    W = W + eps * max(1.0, np.abs(W).max()) * np.eye(sys.nx)
     try:
         X = scipy.linalg.solve_discrete_are(A, B, Q, R)
         S = scipy.linalg.solve_discrete_are(A.T, C.T, W, V)
@@ -161,7 +162,8 @@ def averaged_lqg(sys, nc):
 def _bounded_alg32(sys, nc):
     """Alg. 3.2's controller after at most ``mjls.exact_warm_start_iterations`` iterations,
     padded with zeros or cut to nc states (None when Alg. 3.2 fails at once)."""
-    run = iterate_bounds(sys, 1e-10, config.defaults["mjls.exact_warm_start_iterations"])
+    run = iterate_bounds(sys, config.defaults["mjls.exact_warm_start_tol"],
+                         config.defaults["mjls.exact_warm_start_iterations"])
     if run.best is None:
         return None
     F0, K0, L0 = run.best.gains
@@ -231,7 +233,7 @@ def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False, patien
     """BFGS on rho (Cor. 3.2) over (F, K, L) from z, stopping early once rho <= target (or, with
     ``patience``, once that many steps lowered rho by less than ``_RADIUS_STALL`` relative)."""
     fun = lambda v: _flat(radius_and_gradient(sys, *unpack(v, shapes)))
-    return bfgs(fun, z, 1e-12, max_iter, progress, "min rho", target=target, patience=patience,
+    return bfgs(fun, z, config.defaults["mjls.min_radius_tol"], max_iter, progress, "min rho", target=target, patience=patience,
                 stall=_RADIUS_STALL)
 
 

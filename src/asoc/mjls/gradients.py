@@ -14,6 +14,7 @@ right and left Perron eigenvectors X, V.
 
 import numpy as np
 
+from .. import config
 from ..linalg import transpose
 from .lyapunov import coupled_lyapunov_solver
 from .closed_loops import augmented_closed_loop, noise_covariances
@@ -129,7 +130,8 @@ def average_cost_and_gradient(sys, F, K, L):
     M, n, _ = At.shape
     solve = coupled_lyapunov_solver(At, sys.T)
     Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")    # an unstable loop is expected here
-    if not (np.all(np.isfinite(Y.X)) and Y.residual < 1e-8 and positive_definite(Y.X)):
+    if not (np.all(np.isfinite(Y.X)) and Y.residual < config.defaults["mjls.solve_residual_max"]
+            and positive_definite(Y.X)):
         return np.inf, None
     mu = sys.mu_inf
     X = solve(predecessor_sum(sys.T, mu[:, None, None] * Wt)).X
@@ -201,7 +203,7 @@ def radius_and_gradient(sys, F, K, L):
     At = augmented_closed_loop(sys, F, K, L)[0]
     rho, X, V = perron_pair(At, sys.T)
     inner = float(np.einsum("iab,iab->", V, X))
-    if not abs(inner) > 1e-12 * np.linalg.norm(V) * np.linalg.norm(X):
+    if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * np.linalg.norm(V) * np.linalg.norm(X):
         return rho, closed_loop_gradient(sys, np.zeros_like(At))
     return rho, closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V) @ At @ X / inner)
 

@@ -177,7 +177,7 @@ def nearest_kronecker(X, Y, steps=50):
     b = np.ones(len(Y))
     for _ in range(steps):
         b = Gx @ (Gy @ b)
-        b /= max(np.linalg.norm(b), 1e-300)
+        b /= max(np.linalg.norm(b), np.finfo(float).tiny)
     Y0_norm2 = b @ Gy @ b
     a = Gy @ b / Y0_norm2 if Y0_norm2 > 0 else np.zeros(len(X))
     return np.tensordot(a, X, 1), np.tensordot(b, Y, 1)

@@ -13,13 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
+from .. import config
 from ..validation import probability_vector, real_array, real_scalar, semidefinite, stochastic_matrix
 
-__all__ = ["STATIONARY_ATOL", "check_system", "closed_classes", "stationary_distribution",
+__all__ = ["check_system", "closed_classes", "stationary_distribution",
            "successor_average", "predecessor_sum", "MJLS", "import_control"]
 
 
-STATIONARY_ATOL = 1e-8     # |mu T - mu| allowed for a given stationary distribution
 
 
 def _stack(value, name, M=None, shape2=None, source=""):
@@ -294,7 +294,7 @@ class MJLS:
         else:
             mu_inf = probability_vector(mu_inf, "mu_inf", M)
             gap = np.abs(mu_inf @ T - mu_inf).max()
-            if gap > STATIONARY_ATOL:
+            if gap > config.defaults["mjls.stationary_atol"]:
                 raise ValueError(f"mu_inf: expected a stationary distribution of T (mu_inf T = mu_inf), "
                                  f"found max |mu_inf T - mu_inf| = {gap:.3g}")
         dt = _sampling_time(dt)
@@ -429,7 +429,8 @@ class MJLS:
         found = periods.pop() if periods else True
         if dt is not None:
             dt = _sampling_time(dt)
-            if found is not True and dt is not True and not np.isclose(found, dt, rtol=1e-12, atol=0):
+            if found is not True and dt is not True and not np.isclose(found, dt, rtol=config.defaults["mjls.sampling_time_rtol"],
+                                                                      atol=0):
                 raise ValueError(f"dt: expected the systems' sampling time {found}, found {dt}")
             found = dt if found is True else found
         sizes = [(s.nstates, s.ninputs, s.noutputs) for s in systems]
@@ -482,7 +483,8 @@ class MJLS:
         if dt is None:
             dt = True
         fixed = self.dt is not None and self.dt is not True
-        if fixed and dt is not True and not np.isclose(dt, self.dt, rtol=1e-12, atol=0):
+        rtol = config.defaults["mjls.sampling_time_rtol"]
+        if fixed and dt is not True and not np.isclose(dt, self.dt, rtol=rtol, atol=0):
             raise ValueError(f"dt: expected the system's sampling time {self.dt}, found {dt}")
         return [control.ss(self.A[i], self.B[i], self.C[i], np.zeros((self.ny, self.nu)), dt)
                 for i in range(self.M)]

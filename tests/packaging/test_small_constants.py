@@ -1,0 +1,109 @@
+"""Every small numerical constant of the library is a setting or has a stated reason (issue 32).
+
+A float literal 0 < |v| < 1e-3 in ``src/asoc`` outside ``config.py`` is a tolerance, a step or a
+floor that can change a result. Each one is either read from :data:`asoc.config.defaults` (where
+its reason is recorded) or listed below under its file and top-level name (function, class or
+module constant), with the reason it stays where it is. The list has at most 30 entries, and an
+entry that no longer matches a literal is an error too (so it cannot outlive its reason).
+"""
+
+import ast
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "asoc"
+MAX_ENTRIES = 30
+
+#: (file under src/asoc, top-level name) -> why its small literals are not settings.
+ALLOWED = {
+    # keyword defaults: documented in the signature, changed per call by the caller
+    ("mjls/dynamic.py", "dynamic_output_feedback"):
+        "keyword defaults tol and init of Alg. 3.2 (the thesis's values), per call",
+    ("mjls/dynamic.py", "iterate_bounds"): "keyword default init of Alg. 3.2's bounds, per call",
+    ("mjls/static.py", "static_output_feedback"):
+        "keyword defaults tol and init of Alg. 3.1 (the thesis's values), per call",
+    ("mjls/exact_cost_design.py", "exact_dynamic_output_feedback"): "keyword default tol, per call",
+    ("mjls/exact_cost_design.py", "exact_finite_horizon_dynamic_output_feedback"):
+        "keyword default tol, per call",
+    ("mjls/finite_horizon.py", "finite_horizon_dynamic_output_feedback"):
+        "keyword default tol of Alg. 3.3; and the rounding margins 1e-8 / 1e-12 of its monotonicity "
+        "checks (a cost may not rise by more than rounding between iterations)",
+    ("mjls/observed_mode_feedback.py", "observed_mode_state_feedback"):
+        "keyword default tol of the Riccati iteration, per call",
+    ("mjls/baselines.py", "time_variant_feedback"): "keyword default tol, per call",
+    ("mjls/lmi.py", "EPS"): "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call",
+    ("optimize.py", "bfgs"): "keyword default tol of BFGS, per call",
+    ("belief/sweep.py", "perturbation_sweep"): "keyword default scale of the perturbations, per call",
+    ("belief/trajectory.py", "optimize_belief_trajectory"): "keyword default rtol, per call",
+    ("belief/vdberg.py", "belief_ilqg"): "keyword default rtol, per call",
+    # rounding guards and numerical-differentiation steps
+    ("mjls/baselines.py", "_gain"):
+        "rcond of a least-squares solve: singular values below 1e-12 of the largest are rounding",
+    ("mjls/monte_carlo.py", "_psd_sqrt"):
+        "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD matrix",
+    ("mjls/random.py", "_matrix_with_radius"):
+        "a draw with spectral radius below 1e-8 is nilpotent up to rounding and cannot be rescaled "
+        "(probability 0; the test only redraws)",
+    ("belief/stage.py", "StageProblem"):
+        "rounding margins 1e-9 of the eigenvalue tests of a Schur complement, and the bisection's "
+        "relative stopping width 1e-6 of the regularising shift (the shift only needs to make the "
+        "stage problem convex)",
+    ("belief/vdberg.py", "_linearize"): "base step 1e-4 of numdifftools' finite differences",
+    ("gp/experiment.py", "evaluation_grid"):
+        "1e-9 past the end point so that numpy.arange includes it (grid of step 0.1)",
+    ("gp/regression.py", "_cholesky"):
+        "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to rounding",
+    ("gp/regression.py", "_projected_gradient"):
+        "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound",
+    ("gp/regression.py", "_LikelihoodGP"):
+        "default lower bound 1e-4 std(y) of the noise (documented: keeps Sigma_y well conditioned)",
+    ("gp/regression.py", "DistributionGP"):
+        "central-difference step 1e-6 in log l for the covariances without an analytic derivative",
+    ("gp/sampling.py", "_lcd_standard_normal"):
+        "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges in tens)",
+}
+
+
+def _top_level_names(tree):
+    """(top-level name, node) for every function, class and assigned module constant."""
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            yield node.name, node
+        elif isinstance(node, ast.Assign) and len(node.targets) == 1 \
+                and isinstance(node.targets[0], ast.Name):
+            yield node.targets[0].id, node
+        else:
+            yield "<module>", node
+
+
+def small_literals(root=SRC):
+    """{(file, top-level name): [values]} of every float literal 0 < |v| < 1e-3 outside config.py."""
+    found = {}
+    for path in sorted(root.rglob("*.py")):
+        if path.name == "config.py":
+            continue
+        for name, node in _top_level_names(ast.parse(path.read_text(), filename=str(path))):
+            values = [sub.value for sub in ast.walk(node) if isinstance(sub, ast.Constant)
+                      and isinstance(sub.value, float) and 0 < abs(sub.value) < 1e-3]
+            if values:
+                found.setdefault((path.relative_to(root).as_posix(), name), []).extend(values)
+    return found
+
+
+def test_small_literals_are_settings_or_allowed_with_a_reason():
+    found = small_literals()
+    unexplained = {key: values for key, values in found.items() if key not in ALLOWED}
+    assert not unexplained, (f"small float literals outside asoc.config: make each a key of "
+                             f"asoc.config (with its reason) or allow it here: {unexplained}")
+
+
+def test_the_allow_list_is_short_and_current():
+    assert len(ALLOWED) <= MAX_ENTRIES
+    stale = sorted(set(ALLOWED) - set(small_literals()))
+    assert not stale, f"allow-list entries without a literal any more: {stale}"
+    assert all(len(reason) > 20 for reason in ALLOWED.values())
+
+
+def test_the_scan_finds_a_planted_literal(tmp_path):
+    (tmp_path / "planted.py").write_text("def f(x, tol=1e-9):\n    return x + 2e-4\n")
+    (tmp_path / "config.py").write_text("X = 1e-9\n")
+    assert small_literals(tmp_path) == {("planted.py", "f"): [1e-9, 2e-4]}
