@@ -16,4 +16,6 @@ The companion's tooling (recording values, the ledger, the book) is the separate
 ``asoc_companion``; nothing in ``asoc`` imports it.
 """
 
+__all__ = ["__version__"]
+
 __version__ = "0.1.0"

@@ -354,7 +354,7 @@ def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
     worst_residual, failure, status, it = 0.0, "", Status.MAX_ITERATIONS, 0
     for it in range(1, max_iter + 1):
         Xbar, Xunder, Pbar, Punder = bounds
-        EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
+        EPbar, EPunder = (successor_average(sys.T, P, check=False) for P in (Pbar, Punder))
         try:
             F, K, L, solve = solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, rank_rtol)
         except np.linalg.LinAlgError as error:

@@ -502,7 +502,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         rejected = 0
         for k in range(K_ - 1, -1, -1):                                      # Steps 4-6
             s = st.systems[k]
-            EPbar, EPunder, Eomega = successor_average(s.T, Pbar[k + 1]), successor_average(s.T, Punder[k + 1]), s.T @ omega
+            EPbar, EPunder, Eomega = successor_average(s.T, Pbar[k + 1], check=False), successor_average(s.T, Punder[k + 1], check=False), s.T @ omega
             args = (Xbar[k], Xunder[k], EPbar, EPunder, Eomega, mu[k], st.HHt[k], st.JJt[k])
             Fn, Kn, Ln = gains_from_bounds(s, Xbar[k], Xunder[k], EPbar, EPunder, mu[k],
                                            st.JJt[k], method)

@@ -134,10 +134,10 @@ def average_cost_and_gradient(sys, F, K, L):
             and positive_definite(Y.X)):
         return np.inf, None
     mu = sys.mu_inf
-    X = solve(predecessor_sum(sys.T, mu[:, None, None] * Wt)).X
+    X = solve(predecessor_sum(sys.T, mu[:, None, None] * Wt, check=False)).X
     P = solve(Qt, adjoint=True).X
     cost = float(np.einsum("iab,iba->", Qt, X))
-    return cost, gain_gradient(sys, K, L, At, X, successor_average(sys.T, P), noise_covariances(sys)[1], mu)
+    return cost, gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False), noise_covariances(sys)[1], mu)
 
 def positive_definite(Y):
     """True when every matrix of the stack ``Y`` has a Cholesky factor (is positive definite).
@@ -205,7 +205,7 @@ def radius_and_gradient(sys, F, K, L):
     inner = float(np.einsum("iab,iab->", V, X))
     if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * np.linalg.norm(V) * np.linalg.norm(X):
         return rho, closed_loop_gradient(sys, np.zeros_like(At))
-    return rho, closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V) @ At @ X / inner)
+    return rho, closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V, check=False) @ At @ X / inner)
 
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.
@@ -258,13 +258,13 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     X = np.empty((horizon + 1, M, n, n))
     X[0] = X0
     for k in range(horizon):
-        X[k + 1] = predecessor_sum(m.T[k], A[k] @ X[k] @ At[k] + W[k])
+        X[k + 1] = predecessor_sum(m.T[k], A[k] @ X[k] @ At[k] + W[k], check=False)
     P = np.zeros((M, n, n))
     P[:, :nx, :nx] = st.Q_final
     cost = float(np.einsum("iab,iba->", P, X[-1]))
     EP = np.empty_like(A)
     for k in range(horizon - 1, -1, -1):
-        EP[k] = successor_average(m.T[k], P)
+        EP[k] = successor_average(m.T[k], P, check=False)
         P = At[k] @ EP[k] @ A[k]
         P[:, :nx, :nx] += m.Q[k]
         P[:, nx:, nx:] += LRL[k]

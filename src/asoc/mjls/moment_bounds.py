@@ -45,7 +45,7 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     m = mu[:, None, None]
     Xbar_in = m * (HHt + KJJK) + AKC @ Xbar @ transpose(AKC) + G @ Xunder @ transpose(G)
     Xunder_in = m * KJJK + KC @ Xbar @ transpose(KC) + FKC @ Xunder @ transpose(FKC)
-    Xbar_new, Xunder_new = predecessor_sum(sys.T, Xbar_in), predecessor_sum(sys.T, Xunder_in)
+    Xbar_new, Xunder_new = predecessor_sum(sys.T, Xbar_in, check=False), predecessor_sum(sys.T, Xunder_in, check=False)
     return sym(Xbar_new), sym(Xunder_new)
 
 

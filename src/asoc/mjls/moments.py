@@ -78,7 +78,7 @@ def second_moment_step(Acl, HHt, T, X, mu):
     array([[[2.]]])
     """
     Acl, HHt, T, mu, X = _moment_arguments(Acl, HHt, T, mu, X)
-    return second_moment_map(Acl, T, X) + predecessor_sum(T, mu[:, None, None] * HHt)
+    return second_moment_map(Acl, T, X) + predecessor_sum(T, mu[:, None, None] * HHt, check=False)
 
 
 def second_moments(Acl, HHt, T, X0, mu0, horizon):
@@ -231,7 +231,7 @@ def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
             f"no stationary second moment: the closed loop is not certified mean-square stable (rho = "
             f"{stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], {stability.verdict.value}; "
             f"Cor. 3.2)")
-    solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt))
+    solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt, check=False))
     if not solution.accepted:
         raise np.linalg.LinAlgError(f"the stationary second moment was not found: relative residual "
                                     f"{solution.residual:.3g} of the coupled Lyapunov solve ({solution.method})")

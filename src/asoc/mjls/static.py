@@ -122,7 +122,7 @@ def gain_from_moments(sys, X, P, method="vec"):
     X = semidefinite(real_array(X, "X", shape=(sys.M, sys.nx, sys.nx)), "X")
     P = semidefinite(real_array(P, "P", shape=(sys.M, sys.nx, sys.nx)), "P")
     choice(method, "method", ("vec", "sdp"))
-    EP = successor_average(sys.T, P)
+    EP = successor_average(sys.T, P, check=False)
     S = sys.R + transpose(sys.B) @ EP @ sys.B                     # (M, nu, nu)
     W = sys.C @ X @ transpose(sys.C) + sys.mu_inf[:, None, None] * noise_covariances(sys)[1]   # (M, ny, ny)
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
@@ -337,7 +337,7 @@ def _static_cost(sys, L):
     if not stability.stable:
         return np.inf, None, stability
     noise = Recursion(sys).noise(L)
-    X = coupled_lyapunov_solver(Acl, sys.T)(predecessor_sum(sys.T, noise)).X
+    X = coupled_lyapunov_solver(Acl, sys.T)(predecessor_sum(sys.T, noise, check=False)).X
     LC = L @ sys.C
     cost = np.einsum("iab,iba->", sys.Q + transpose(LC) @ sys.R @ LC, X)
     if sys.J is not None:

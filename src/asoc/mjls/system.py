@@ -144,15 +144,18 @@ def _least_squares_stationary(T):
     return np.clip(mu, 0.0, None) / np.clip(mu, 0.0, None).sum()
 
 
-def successor_average(T, P):
+def successor_average(T, P, check=True):
     """E_i(P) = sum_j p_ij P_j (Prop. 3.16), for a stack P of shape (M, ...).
 
     Parameters
     ----------
-    T : numpy.ndarray, shape (M, M)
-        Transition matrix (not validated here: this helper runs inside the iterations).
-    P : numpy.ndarray, shape (M, ...)
+    T : array_like, shape (M, M)
+        Transition matrix.
+    P : array_like, shape (M, ...)
         One array per mode, e.g. the multipliers P^j of Prop. 3.16.
+    check : bool
+        Validate ``T`` and ``P`` (default); False skips it, for the library's iterations, which
+        pass arrays they have checked once.
 
     Returns
     -------
@@ -162,25 +165,36 @@ def successor_average(T, P):
     Raises
     ------
     ValueError
-        If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
+        If ``T`` is not a transition matrix, or ``P`` not a stack of as many arrays as ``T``
+        has modes.
+    TypeError
+        If ``T`` or ``P`` is not a real array.
 
     Examples
     --------
     >>> successor_average(np.array([[0.5, 0.5], [0.0, 1.0]]), np.array([2.0, 4.0]))
     array([3., 4.])
+    >>> successor_average([[1.0]], np.ones(2))
+    Traceback (most recent call last):
+    ...
+    ValueError: P: expected a stack of 1 array(s), one per mode of T, found shape (2,)
     """
+    if check:
+        T, P = _transition_and_stack(T, P, "P")
     return np.einsum("ij,j...->i...", T, P)
 
 
-def predecessor_sum(T, Y):
+def predecessor_sum(T, Y, check=True):
     """D_i(Y) = sum_j p_ji Y_j (Lemma 3.8), for a stack Y of shape (M, ...).
 
     Parameters
     ----------
-    T : numpy.ndarray, shape (M, M)
-        Transition matrix (not validated here).
-    Y : numpy.ndarray, shape (M, ...)
+    T : array_like, shape (M, M)
+        Transition matrix.
+    Y : array_like, shape (M, ...)
         One array per mode, e.g. the second moments X^j of (3.29).
+    check : bool
+        Validate ``T`` and ``Y`` (default); False skips it, for the library's iterations.
 
     Returns
     -------
@@ -190,14 +204,32 @@ def predecessor_sum(T, Y):
     Raises
     ------
     ValueError
-        If ``T`` and the stack have different numbers of modes (raised by ``numpy.einsum``).
+        If ``T`` is not a transition matrix, or ``Y`` not a stack of as many arrays as ``T``
+        has modes.
+    TypeError
+        If ``T`` or ``Y`` is not a real array.
 
     Examples
     --------
     >>> predecessor_sum(np.array([[0.5, 0.5], [0.0, 1.0]]), np.array([2.0, 4.0]))
     array([1., 5.])
+    >>> predecessor_sum("T", np.ones(2))
+    Traceback (most recent call last):
+    ...
+    TypeError: T: expected a real array, found dtype <U1
     """
+    if check:
+        T, Y = _transition_and_stack(T, Y, "Y")
     return np.einsum("ji,j...->i...", T, Y)
+
+
+def _transition_and_stack(T, stack, name):
+    T = stochastic_matrix(T, "T")
+    stack = real_array(stack, name, finite=False)
+    if stack.ndim < 1 or stack.shape[0] != len(T):
+        raise ValueError(f"{name}: expected a stack of {len(T)} array(s), one per mode of T, "
+                         f"found shape {stack.shape}")
+    return T, stack
 
 
 def _sampling_time(dt, name="dt"):
@@ -328,11 +360,11 @@ class MJLS:
 
     def successor_average(self, P):
         """E_i(P) = sum_j p_ij P_j (:func:`successor_average`)."""
-        return successor_average(self.T, P)
+        return successor_average(self.T, P, check=False)
 
     def predecessor_sum(self, Y):
         """D_i(Y) = sum_j p_ji Y_j (:func:`predecessor_sum`)."""
-        return predecessor_sum(self.T, Y)
+        return predecessor_sum(self.T, Y, check=False)
 
     def replace(self, **changes) -> "MJLS":
         """A copy with some matrices replaced, e.g. ``sys.replace(T=T2, C=C2)``.

@@ -1,0 +1,60 @@
+"""The values a setting of :mod:`asoc.config` accepts: a type and an interval, checked when set.
+
+Examples
+--------
+>>> REAL(0, 1).check("mjls.rank_rtol", 1e-8)
+>>> INT(0).check("mjls.dense_max_radius", -1)
+Traceback (most recent call last):
+    ...
+ValueError: mjls.dense_max_radius: expected an integer >= 0, found -1
+"""
+
+import math
+import numbers
+
+__all__ = ["Allowed", "REAL", "INT", "SIZES"]
+
+
+class Allowed:
+    """The values one tunable accepts: a type and an interval, checked when the value is set."""
+
+    def __init__(self, kind, low, high=math.inf, what=""):
+        self.kind, self.low, self.high, self.what = kind, low, high, what
+
+    def check(self, key, value):
+        """Raise TypeError or ValueError naming ``key`` unless ``value`` is allowed."""
+        if self.kind is tuple:
+            if not isinstance(value, tuple) or not value:
+                raise TypeError(f"{key}: expected {self}, found {type(value).__name__} {value!r}")
+            for item in value:
+                INT(self.low).check(key, item)
+            return
+        real = isinstance(value, numbers.Real) and not isinstance(value, bool)
+        if not real or (self.kind is int and not isinstance(value, numbers.Integral)):
+            raise TypeError(f"{key}: expected {self}, found {type(value).__name__} {value!r}")
+        inside = (self.low <= value <= self.high if self.kind is int
+                  else self.low < value < self.high)
+        if not inside:
+            raise ValueError(f"{key}: expected {self}, found {value!r}")
+
+    def __str__(self):
+        if self.kind is tuple:
+            return f"a non-empty tuple of integers >= {self.low}"
+        if self.kind is int:
+            return f"an integer >= {self.low}"
+        return f"a real number in ({self.low:g}, {self.high:g})"
+
+
+def REAL(low, high):  # noqa: N802 (reads as a type in the table)
+    """A real number in the open interval (low, high)."""
+    return Allowed(float, low, high)
+
+
+def INT(low):  # noqa: N802
+    """An integer >= low."""
+    return Allowed(int, low)
+
+
+def SIZES(low):  # noqa: N802
+    """A non-empty tuple of integers >= low."""
+    return Allowed(tuple, low)
