@@ -1,0 +1,88 @@
+"""The core modules shared by the subpackages: asoc.optimize, asoc.result, asoc.threads,
+asoc.progress, asoc.stats, asoc.linalg and asoc.setting_checks (beside their doctests)."""
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info
+
+from asoc import config
+from asoc.linalg import pack, relative_change, unpack
+from asoc.optimize import bfgs
+from asoc.progress import progress_bar
+from asoc.result import STATUS_CODES, IterativeResult
+from asoc.setting_checks import INT, REAL, SIZES
+from asoc.stats import bootstrap_ci, bootstrap_median_ci
+from asoc.threads import single_threaded
+
+
+def rosenbrock(z):
+    x, y = z
+    f = (1 - x) ** 2 + 100 * (y - x**2) ** 2
+    return float(f), np.array([-2 * (1 - x) - 400 * x * (y - x**2), 200 * (y - x**2)])
+
+
+@pytest.mark.parametrize("memory", [None, 5])
+def test_bfgs_finds_the_rosenbrock_minimum(memory):
+    result = bfgs(rosenbrock, [-1.2, 1.0], tol=1e-14, max_iter=500, memory=memory)
+    assert result.status == "converged"
+    np.testing.assert_allclose(result.z, [1.0, 1.0], atol=1e-5)
+    assert np.all(np.diff(result.history) <= 1e-12 * np.abs(result.history[:-1]))   # descent
+
+
+def test_bfgs_stops_at_the_domain_and_names_bad_input():
+    def outside_unit_disc(z):                     # f = inf outside the domain
+        return (np.inf, z) if z @ z >= 1 else (float(-z[0]), np.array([-1.0, 0.0]))
+    result = bfgs(outside_unit_disc, [0.0, 0.0], max_iter=200)
+    assert result.z @ result.z < 1 and result.f < -0.9
+    with pytest.raises((ValueError, TypeError), match="z0"):
+        bfgs(rosenbrock, "start")
+    with pytest.raises((ValueError, TypeError), match="tol"):
+        bfgs(rosenbrock, [0.0, 0.0], tol=-1.0)
+
+
+def test_a_result_status_must_agree_with_converged():
+    assert set(STATUS_CODES) >= {"converged", "max_iterations", "cycle", "no_progress"}
+    with pytest.raises(ValueError, match="contradicts"):
+        IterativeResult(converged=True, status="max_iterations", message="")
+    with pytest.raises(ValueError, match="status"):
+        IterativeResult(converged=False, status="tired", message="")
+
+
+def test_single_threaded_limits_blas_and_restores_it():
+    before = {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+    with single_threaded():
+        assert {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"} == {1}
+    assert {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"} == before
+
+
+def test_progress_bar_passes_its_items_through():
+    assert list(progress_bar(range(5), enabled=False)) == [0, 1, 2, 3, 4]
+
+
+def test_bootstrap_intervals_cover_the_median_and_are_reproducible():
+    samples = np.random.default_rng(0).standard_normal(400)
+    low, high = bootstrap_ci(samples, np.random.default_rng(1))["ci"]
+    assert [low, high] == list(bootstrap_ci(samples, np.random.default_rng(1))["ci"])
+    assert low < np.median(samples) < high and high - low < 0.5
+    exact_low, exact_high = bootstrap_median_ci(samples)["ci"]
+    assert exact_low < np.median(samples) < exact_high
+    assert abs(exact_low - low) < 0.05 and abs(exact_high - high) < 0.05
+
+
+def test_relative_change_uses_the_configured_floor():
+    assert relative_change(np.zeros(2), np.zeros(2)) == 0.0
+    assert relative_change(np.zeros(2), np.full(2, 1e-13), floor=1.0) == pytest.approx(np.sqrt(2) * 1e-13)
+    with config.option_context(**{"linalg.norm_floor": 1e-3}):
+        assert relative_change(np.zeros(1), np.full(1, 1e-4)) == pytest.approx(0.1)
+    parts = [np.arange(6.0).reshape(2, 3), np.ones((1, 2))]
+    for a, b in zip(unpack(pack(*parts), [p.shape for p in parts]), parts):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_setting_checks_state_what_they_accept():
+    assert str(REAL(0, 1)) == "a real number in (0, 1)"
+    assert str(INT(1)) == "an integer >= 1" and "tuple" in str(SIZES(2))
+    with pytest.raises(ValueError, match="k: expected a real number in"):
+        REAL(0, 1).check("k", 1.0)
+    with pytest.raises(TypeError, match="k: expected an integer"):
+        INT(0).check("k", 1.5)
