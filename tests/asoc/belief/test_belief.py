@@ -497,8 +497,8 @@ def test_stage_problem_inner_loop_equals_its_checked_covariance_part():
     stage = StageProblem(ex.model, ex.cost, filt, (ex.mean0, ex.cov0), Value(0.0, np.zeros(2), np.eye(2), S), w, beta)
     for u in rng.normal(size=(5, 2)):
         C = filt.next_covariance((ex.mean0, ex.cov0), u)
-        assert stage._covariance_part(u) == pytest.approx(stage.covariance_part(list(u)), rel=1e-13)
-        assert stage._covariance_part(u) == pytest.approx(0.5 * np.trace(S @ C), rel=1e-13)
+        assert stage.covariance_part(list(u)) == pytest.approx(0.5 * np.trace(S @ C), rel=1e-13)
+        assert stage.covariance_part(u) == stage.covariance_part(list(u))
     with pytest.raises(ValueError, match="u: expected shape"):
         stage.covariance_part([1.0])
 
