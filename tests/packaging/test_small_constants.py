@@ -16,25 +16,20 @@ MAX_ENTRIES = 30
 #: (file under src/asoc, top-level name) -> why its small literals are not settings.
 ALLOWED = {
     # keyword defaults: documented in the signature, changed per call by the caller
-    ("mjls/dynamic.py", "dynamic_output_feedback"):
-        "keyword defaults tol and init of Alg. 3.2 (the thesis's values), per call",
-    ("mjls/dynamic.py", "iterate_bounds"): "keyword default init of Alg. 3.2's bounds, per call",
-    ("mjls/static.py", "static_output_feedback"):
-        "keyword defaults tol and init of Alg. 3.1 (the thesis's values), per call",
-    ("mjls/exact_cost_design.py", "exact_dynamic_output_feedback"): "keyword default tol, per call",
-    ("mjls/exact_cost_design.py", "exact_finite_horizon_dynamic_output_feedback"):
-        "keyword default tol, per call",
+    ("mjls/dynamic.py", "<keyword defaults>"): "tol and init of Alg. 3.2 (the thesis's values)",
+    ("mjls/static.py", "<keyword defaults>"): "tol and init of Alg. 3.1 (the thesis's values)",
+    ("mjls/exact_cost_design.py", "<keyword defaults>"): "tol of the exact-cost designs' BFGS",
+    ("mjls/finite_horizon.py", "<keyword defaults>"): "tol of Alg. 3.3 (relative change of the bounds)",
     ("mjls/finite_horizon.py", "finite_horizon_dynamic_output_feedback"):
-        "keyword default tol of Alg. 3.3; and the rounding margins 1e-8 / 1e-12 of its monotonicity "
-        "checks (a cost may not rise by more than rounding between iterations)",
-    ("mjls/observed_mode_feedback.py", "observed_mode_state_feedback"):
-        "keyword default tol of the Riccati iteration, per call",
-    ("mjls/baselines.py", "time_variant_feedback"): "keyword default tol, per call",
+        "rounding margins 1e-8 / 1e-12 of Alg. 3.3's monotonicity checks (a bound may not rise by "
+        "more than rounding between iterations)",
+    ("mjls/observed_mode_feedback.py", "<keyword defaults>"): "tol of the Riccati iteration",
+    ("mjls/baselines.py", "<keyword defaults>"): "tol of the time-variant baseline's iteration",
     ("mjls/lmi.py", "EPS"): "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call",
-    ("optimize.py", "bfgs"): "keyword default tol of BFGS, per call",
-    ("belief/sweep.py", "perturbation_sweep"): "keyword default scale of the perturbations, per call",
-    ("belief/trajectory.py", "optimize_belief_trajectory"): "keyword default rtol, per call",
-    ("belief/vdberg.py", "belief_ilqg"): "keyword default rtol, per call",
+    ("optimize.py", "<keyword defaults>"): "tol of BFGS (relative predicted decrease)",
+    ("belief/sweep.py", "<keyword defaults>"): "scale of the perturbations of the sweep",
+    ("belief/trajectory.py", "<keyword defaults>"): "rtol of the belief trajectory optimisation",
+    ("belief/vdberg.py", "<keyword defaults>"): "rtol of belief iLQG (relative cost change)",
     # rounding guards and numerical-differentiation steps
     ("mjls/baselines.py", "_gain"):
         "rcond of a least-squares solve: singular values below 1e-12 of the largest are rounding",
@@ -75,17 +70,33 @@ def _top_level_names(tree):
             yield "<module>", node
 
 
+def _small(node):
+    return [sub.value for sub in ast.walk(node) if isinstance(sub, ast.Constant)
+            and isinstance(sub.value, float) and 0 < abs(sub.value) < 1e-3]
+
+
 def small_literals(root=SRC):
-    """{(file, top-level name): [values]} of every float literal 0 < |v| < 1e-3 outside config.py."""
+    """{(file, top-level name): [values]} of every float literal 0 < |v| < 1e-3 outside config.py.
+
+    The keyword defaults of a file's functions (and methods) share the name
+    ``"<keyword defaults>"``: a value documented in a signature and changed per call.
+    """
     found = {}
     for path in sorted(root.rglob("*.py")):
         if path.name == "config.py":
             continue
+        file = path.relative_to(root).as_posix()
         for name, node in _top_level_names(ast.parse(path.read_text(), filename=str(path))):
-            values = [sub.value for sub in ast.walk(node) if isinstance(sub, ast.Constant)
-                      and isinstance(sub.value, float) and 0 < abs(sub.value) < 1e-3]
-            if values:
-                found.setdefault((path.relative_to(root).as_posix(), name), []).extend(values)
+            defaults = [d for sub in ast.walk(node)
+                        if isinstance(sub, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+                        for d in sub.args.defaults + [k for k in sub.args.kw_defaults if k is not None]]
+            in_defaults = [v for d in defaults for v in _small(d)]
+            rest = _small(node)
+            for value in in_defaults:
+                rest.remove(value)
+            for key, values in (((file, "<keyword defaults>"), in_defaults), ((file, name), rest)):
+                if values:
+                    found.setdefault(key, []).extend(values)
     return found
 
 
@@ -106,4 +117,5 @@ def test_the_allow_list_is_short_and_current():
 def test_the_scan_finds_a_planted_literal(tmp_path):
     (tmp_path / "planted.py").write_text("def f(x, tol=1e-9):\n    return x + 2e-4\n")
     (tmp_path / "config.py").write_text("X = 1e-9\n")
-    assert small_literals(tmp_path) == {("planted.py", "f"): [1e-9, 2e-4]}
+    assert small_literals(tmp_path) == {("planted.py", "<keyword defaults>"): [1e-9],
+                                        ("planted.py", "f"): [2e-4]}
