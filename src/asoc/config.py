@@ -359,6 +359,16 @@ _REGISTRY: dict[str, tuple[object, Allowed, str]] = {
         "of (quadrature nodes) x L x L floats, about 340 MB each at L = 400 with b_max = 100."),
 }
 
+def _check_registry():
+    for key, entry in _REGISTRY.items():
+        if len(entry) != 3 or not isinstance(entry[1], Allowed):
+            raise TypeError(f"asoc.config: the entry {key!r} must be (value, allowed values from "
+                            f"asoc.setting_checks, reason), found {entry!r:.80}")
+        entry[1].check(key, entry[0])
+
+
+_check_registry()
+
 #: Why each tunable has its shipped value.
 DESCRIPTIONS: dict[str, str] = {key: why for key, (_, _, why) in _REGISTRY.items()}
 #: The values each tunable accepts (a type and an interval).

@@ -12,14 +12,14 @@ ValueError: mjls.dense_max_radius: expected an integer >= 0, found -1
 import math
 import numbers
 
-__all__ = ["Allowed", "REAL", "INT", "SIZES"]
+__all__ = ["Allowed", "REAL", "INT", "SIZES", "REALS"]
 
 
 class Allowed:
     """The values one tunable accepts: a type and an interval, checked when the value is set."""
 
-    def __init__(self, kind, low, high=math.inf, what=""):
-        self.kind, self.low, self.high, self.what = kind, low, high, what
+    def __init__(self, kind, low, high=math.inf, item=None):
+        self.kind, self.low, self.high, self.item = kind, low, high, item
 
     def check(self, key, value):
         """Raise TypeError or ValueError naming ``key`` unless ``value`` is allowed."""
@@ -27,27 +27,29 @@ class Allowed:
             if not isinstance(value, tuple) or not value:
                 raise TypeError(f"{key}: expected {self}, found {type(value).__name__} {value!r}")
             for item in value:
-                INT(self.low).check(key, item)
+                self.item.check(key, item)
             return
         real = isinstance(value, numbers.Real) and not isinstance(value, bool)
         if not real or (self.kind is int and not isinstance(value, numbers.Integral)):
             raise TypeError(f"{key}: expected {self}, found {type(value).__name__} {value!r}")
         inside = (self.low <= value <= self.high if self.kind is int
+                  else self.low < value <= self.high if self.kind == "closed"
                   else self.low < value < self.high)
         if not inside:
             raise ValueError(f"{key}: expected {self}, found {value!r}")
 
     def __str__(self):
         if self.kind is tuple:
-            return f"a non-empty tuple of integers >= {self.low}"
+            return f"a non-empty tuple, each {self.item}"
         if self.kind is int:
             return f"an integer >= {self.low}"
-        return f"a real number in ({self.low:g}, {self.high:g})"
+        bracket = "]" if self.kind == "closed" else ")"
+        return f"a real number in ({self.low:g}, {self.high:g}{bracket}"
 
 
-def REAL(low, high):  # noqa: N802 (reads as a type in the table)
-    """A real number in the open interval (low, high)."""
-    return Allowed(float, low, high)
+def REAL(low, high, closed=False):  # noqa: N802 (reads as a type in the table)
+    """A real number in the open interval (low, high), or (low, high] when ``closed``."""
+    return Allowed("closed" if closed else float, low, high)
 
 
 def INT(low):  # noqa: N802
@@ -57,4 +59,9 @@ def INT(low):  # noqa: N802
 
 def SIZES(low):  # noqa: N802
     """A non-empty tuple of integers >= low."""
-    return Allowed(tuple, low)
+    return Allowed(tuple, low, item=INT(low))
+
+
+def REALS(low, high, closed=False):  # noqa: N802
+    """A non-empty tuple of real numbers, each as :func:`REAL` ``(low, high, closed)``."""
+    return Allowed(tuple, low, high, item=REAL(low, high, closed))
