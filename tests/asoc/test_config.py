@@ -1,5 +1,6 @@
 """asoc.config: settings that check themselves (issue 32, item 4)."""
 
+import inspect
 import threading
 
 import numpy as np
@@ -95,3 +96,28 @@ def test_designs_accept_their_settings_per_call():
     assert config.defaults["mjls.alg32_patience"] == 50
     for design in (dynamic_output_feedback, mean_square_stability):
         assert design.settings and "Other Parameters" in design.__doc__
+
+
+def test_every_design_that_reads_a_setting_takes_it_per_call():
+    import asoc.gp
+    import asoc.mjls
+    designs = [asoc.mjls.static_output_feedback, asoc.mjls.dynamic_output_feedback,
+               asoc.mjls.finite_horizon_dynamic_output_feedback, asoc.mjls.exact_dynamic_output_feedback,
+               asoc.mjls.exact_finite_horizon_dynamic_output_feedback,
+               asoc.mjls.min_radius_dynamic_output_feedback, asoc.mjls.static_output_lmi,
+               asoc.mjls.ms_spectral_radius, asoc.mjls.mean_square_stability,
+               asoc.gp.DistributionGP.fit, asoc.gp.MeanKernelGP.fit]
+    for design in designs:
+        assert design.settings, design.__name__
+        names = set(inspect.signature(design).parameters)
+        assert {key.split(".", 1)[1] for key in design.settings} <= names, design.__name__
+
+
+def test_a_gp_fit_takes_its_iteration_cap_per_call():
+    from asoc.gp import DistributionGP
+    x = np.linspace(-2, 2, 8)
+    D, y = np.abs(x[:, None] - x[None]), np.sin(x)
+    with pytest.warns(RuntimeWarning, match="did not converge"):
+        capped = DistributionGP("se", n_restarts=0).fit(D, y, np.random.default_rng(0), max_iterations=1)
+    assert capped.result.status == "max_iterations" and capped.result.iterations == 1
+    assert DistributionGP("se", n_restarts=0).fit(D, y, np.random.default_rng(0)).result.converged

@@ -335,6 +335,7 @@ class DistributionGP(_LikelihoodGP):
         h = 1e-6                                       # central difference in log l
         return K, (self._kappa_training(l * np.exp(h)) - self._kappa_training(l * np.exp(-h))) / (2 * h)
 
+    @config.accepts_settings("gp.gradient_tol", "gp.max_iterations")
     def fit(self, D, y, rng: np.random.Generator):
         """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs ``y`` (M,)."""
         check.generator(rng)
@@ -437,6 +438,7 @@ class MeanKernelGP(_LikelihoodGP):
                 _expected_kernel_rows(dE, self.W, rows, dK)
         return K, dK
 
+    @config.accepts_settings("gp.gradient_tol", "gp.max_iterations")
     def fit(self, X, y, rng: np.random.Generator, W=None):
         """Estimate the hyperparameters from training mixtures ``X`` (M, L, d)."""
         check.generator(rng)

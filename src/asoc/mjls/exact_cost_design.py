@@ -271,7 +271,7 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
         seconds=time.perf_counter() - start)
 
 
-@config.accepts_settings("mjls.rho_start", "mjls.radius_max_iter")
+@config.accepts_settings("mjls.rho_start", "mjls.min_radius_tol", "mjls.lqg_start_regularisation")
 def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False,
                                        warn=True):
     """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the thesis.
@@ -336,8 +336,9 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
     return result
 
 
-@config.accepts_settings("mjls.exact_warm_start_iterations", "mjls.rho_start",
-                         "mjls.radius_max_iter")
+@config.accepts_settings("mjls.exact_warm_start_iterations", "mjls.exact_warm_start_tol",
+                         "mjls.lqg_start_regularisation", "mjls.rho_start", "mjls.radius_max_iter",
+                         "mjls.min_radius_tol")
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
                                   progress=False):
     """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24); not in the thesis.
@@ -416,6 +417,7 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
     return result
 
 
+@config.accepts_settings("mjls.lbfgs_memory")
 def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None, tol=1e-12,
                                                  max_iter=5000, warn=True, progress=False):
     """The time-variant controller (3.55) minimising the exact J_0 (3.56)/(3.58); not in the thesis.

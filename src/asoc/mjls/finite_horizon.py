@@ -24,6 +24,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import config
 from ..linalg import transpose
 from ..progress import progress_bar
 from ..result import Status
@@ -403,6 +404,7 @@ def initial_gains(init, st, nx, ny, nu):
     return tuple(out)
 
 
+@config.accepts_settings("mjls.rank_rtol", "mjls.matrix_free_min_unknowns", "mjls.cg_tolerance")
 def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=None, mu0=None,
                                            init=None, tol=1e-9, max_iter=500, method="lstsq",
                                            safeguard=True, warn=True, progress=False):
