@@ -32,9 +32,13 @@ class Allowed:
         real = isinstance(value, numbers.Real) and not isinstance(value, bool)
         if not real or (self.kind is int and not isinstance(value, numbers.Integral)):
             raise TypeError(f"{key}: expected {self}, found {type(value).__name__} {value!r}")
-        inside = (self.low <= value <= self.high if self.kind is int
-                  else self.low < value <= self.high if self.kind == "closed"
-                  else self.low < value < self.high)
+        inside = (
+            self.low <= value <= self.high
+            if self.kind is int
+            else self.low < value <= self.high
+            if self.kind == "closed"
+            else self.low < value < self.high
+        )
         if not inside:
             raise ValueError(f"{key}: expected {self}, found {value!r}")
 

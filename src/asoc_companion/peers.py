@@ -25,9 +25,18 @@ from asoc.mjls.lyapunov import solve_coupled_lyapunov
 
 from . import paths
 
-__all__ = ["QUANTECON_FILE", "load_quantecon", "one_mode_plant", "control_agreement",
-           "point_masses", "sklearn_agreement", "coupled_riccati_residual", "expectation_outside",
-           "policy_value", "quantecon_comparison"]
+__all__ = [
+    "QUANTECON_FILE",
+    "load_quantecon",
+    "one_mode_plant",
+    "control_agreement",
+    "point_masses",
+    "sklearn_agreement",
+    "coupled_riccati_residual",
+    "expectation_outside",
+    "policy_value",
+    "quantecon_comparison",
+]
 
 #: QuantEcon's recorded numbers, under the project root.
 QUANTECON_FILE = ("tests", "reference", "quantecon_lqmarkov.json")
@@ -79,8 +88,13 @@ def control_agreement(plant=None) -> list:
     alg32 = dynamic_output_feedback(sys)
     K_kf, _, _ = control.dlqe(A, H, C, np.eye(len(A)), J @ J.T)
     F, K, L = A - B @ K_lq - K_kf @ C, K_kf, -K_lq
-    markov = [(alg32.L @ np.linalg.matrix_power(alg32.F, k) @ alg32.K,
-               L @ np.linalg.matrix_power(F, k) @ K) for k in range(6)]
+    markov = [
+        (
+            alg32.L @ np.linalg.matrix_power(alg32.F, k) @ alg32.K,
+            L @ np.linalg.matrix_power(F, k) @ K,
+        )
+        for k in range(6)
+    ]
     A_cl = np.block([[A, B @ L], [K @ C, F]])
     noise = np.block([[H, np.zeros((len(A), J.shape[1]))], [np.zeros_like(H), K @ J]])
     weight = np.block([[Q, np.zeros_like(A)], [np.zeros_like(A), L.T @ R @ L]])
@@ -88,11 +102,24 @@ def control_agreement(plant=None) -> list:
     return [
         ("Riccati solution P", "observed_mode_state_feedback", "dlqr", _relative(lq.P[0], S)),
         ("state-feedback gain", "observed_mode_state_feedback", "dlqr", _relative(lq.L[0], -K_lq)),
-        ("Lyapunov solution", "solve_coupled_lyapunov", "dlyap", _relative(X, control.dlyap(stable, H @ H.T))),
-        ("adjoint Lyapunov solution", "solve_coupled_lyapunov(adjoint=True)", "dlyap",
-         _relative(P, control.dlyap(stable.T, Q))),
-        ("LQG compensator, L F^k K", "dynamic_output_feedback", "dlqr + dlqe",
-         max(_relative(mine, theirs) for mine, theirs in markov)),
+        (
+            "Lyapunov solution",
+            "solve_coupled_lyapunov",
+            "dlyap",
+            _relative(X, control.dlyap(stable, H @ H.T)),
+        ),
+        (
+            "adjoint Lyapunov solution",
+            "solve_coupled_lyapunov(adjoint=True)",
+            "dlyap",
+            _relative(P, control.dlyap(stable.T, Q)),
+        ),
+        (
+            "LQG compensator, L F^k K",
+            "dynamic_output_feedback",
+            "dlqr + dlqe",
+            max(_relative(mine, theirs) for mine, theirs in markov),
+        ),
         ("LQG average cost", "dynamic_output_feedback", "dlyap", _relative(alg32.cost, cost)),
     ]
 
@@ -122,11 +149,15 @@ def point_masses(seed=7):
 def _sklearn_kernels():
     from sklearn.gaussian_process.kernels import RBF, Matern, RationalQuadratic
 
-    return {"se": ({}, lambda l, b="fixed": RBF(l, b)),
-            "matern": ({"nu": 2.5}, lambda l, b="fixed": Matern(l, b, nu=2.5)),
-            "exponential": ({}, lambda l, b="fixed": Matern(l, b, nu=0.5)),
-            "rational_quadratic": ({"alpha_rq": 2.0},
-                                   lambda l, b="fixed": RationalQuadratic(l, 2.0, b, "fixed"))}
+    return {
+        "se": ({}, lambda l, b="fixed": RBF(l, b)),
+        "matern": ({"nu": 2.5}, lambda l, b="fixed": Matern(l, b, nu=2.5)),
+        "exponential": ({}, lambda l, b="fixed": Matern(l, b, nu=0.5)),
+        "rational_quadratic": (
+            {"alpha_rq": 2.0},
+            lambda l, b="fixed": RationalQuadratic(l, 2.0, b, "fixed"),
+        ),
+    }
 
 
 def sklearn_agreement(alpha=0.9, l=0.7, sigma_n=0.1, restarts=3) -> list:
@@ -148,32 +179,53 @@ def sklearn_agreement(alpha=0.9, l=0.7, sigma_n=0.1, restarts=3) -> list:
 
     X, y, X_star, D, D_star = point_masses()
     centred, sy, l0 = y - y.mean(), float(np.std(y)), float(np.median(D[D > 0]))
-    bounds = {"alpha": (1e-3 * sy, 1e3 * sy), "l": (1e-3 * l0, 1e3 * l0), "sigma_n": (1e-4 * sy, sy)}
+    bounds = {
+        "alpha": (1e-3 * sy, 1e3 * sy),
+        "l": (1e-3 * l0, 1e3 * l0),
+        "sigma_n": (1e-4 * sy, sy),
+    }
     rows = []
     for covariance, (shape, kernel) in _sklearn_kernels().items():
         ours = DistributionGP(covariance, **shape).condition(D, y, alpha, l, sigma_n)
         mean, var = ours.predict(D_star, return_var=True)
-        peer = GaussianProcessRegressor(ConstantKernel(alpha**2, "fixed") * kernel(l)
-                                        + WhiteKernel(sigma_n**2, "fixed"), optimizer=None, alpha=0.0)
+        peer = GaussianProcessRegressor(
+            ConstantKernel(alpha**2, "fixed") * kernel(l) + WhiteKernel(sigma_n**2, "fixed"),
+            optimizer=None,
+            alpha=0.0,
+        )
         peer_mean, peer_std = peer.fit(X, centred).predict(X_star, return_std=True)
-        fixed = max(np.abs(mean - peer_mean - y.mean()).max(),
-                    np.abs(var + sigma_n**2 - peer_std**2).max(),
-                    abs(ours.log_marginal_likelihood(alpha, l, sigma_n)
-                        - peer.log_marginal_likelihood_value_))
+        fixed = max(
+            np.abs(mean - peer_mean - y.mean()).max(),
+            np.abs(var + sigma_n**2 - peer_std**2).max(),
+            abs(
+                ours.log_marginal_likelihood(alpha, l, sigma_n)
+                - peer.log_marginal_likelihood_value_
+            ),
+        )
         fit = DistributionGP(covariance, n_restarts=restarts, bounds=bounds, **shape)
         fit = fit.fit(D, y, np.random.default_rng(1)).result
         squared = lambda pair: tuple(np.square(pair))
         peer = GaussianProcessRegressor(
             ConstantKernel(sy**2, squared(bounds["alpha"])) * kernel(l0, bounds["l"])
             + WhiteKernel((sy / 100) ** 2, squared(bounds["sigma_n"])),
-            alpha=0.0, n_restarts_optimizer=restarts, random_state=0)
-        with warnings.catch_warnings():             # a noise at its lower bound: the same for both
+            alpha=0.0,
+            n_restarts_optimizer=restarts,
+            random_state=0,
+        )
+        with warnings.catch_warnings():  # a noise at its lower bound: the same for both
             warnings.simplefilter("ignore", ConvergenceWarning)
             peer.fit(X, centred)
         amplitude, length, noise = np.exp(peer.kernel_.theta)
-        rows.append((covariance, float(fixed),
-                     _relative([fit.alpha, fit.l, fit.sigma_n], [np.sqrt(amplitude), length, np.sqrt(noise)]),
-                     _relative(fit.log_ml, peer.log_marginal_likelihood_value_)))
+        rows.append(
+            (
+                covariance,
+                float(fixed),
+                _relative(
+                    [fit.alpha, fit.l, fit.sigma_n], [np.sqrt(amplitude), length, np.sqrt(noise)]
+                ),
+                _relative(fit.log_ml, peer.log_marginal_likelihood_value_),
+            )
+        )
     return rows
 
 
@@ -187,8 +239,10 @@ def load_quantecon(root=None) -> dict:
     ('scalar reproducer', [3.64588, 1.16537])
     """
     record = json.loads(paths.project(root).root.joinpath(*QUANTECON_FILE).read_text())
-    record["cases"] = [{key: value if key == "name" else np.array(value) for key, value in case.items()}
-                       for case in record["cases"]]
+    record["cases"] = [
+        {key: value if key == "name" else np.array(value) for key, value in case.items()}
+        for case in record["cases"]
+    ]
     return record
 
 
@@ -208,7 +262,8 @@ def coupled_riccati_residual(case, P):
 
 
 def expectation_outside(case, steps=20000):
-    """QuantEcon's recursion P_i <- Q_i + sum_j Pi_ij [A'P_j A - A'P_j B (R + B'P_j B)^{-1} B'P_j A].
+    """QuantEcon's recursion, the expectation outside the inverse:
+    P_i <- Q_i + sum_j Pi_ij [A'P_j A - A'P_j B (R + B'P_j B)^{-1} B'P_j A].
 
     Examples
     --------
@@ -228,7 +283,8 @@ def expectation_outside(case, steps=20000):
 
 
 def policy_value(case, F):
-    """The exact cost-to-go x' P_i x of u = -F_i x (beta = 1): P = Q + F'RF + (A - BF)' E(P) (A - BF).
+    """The exact cost-to-go x' P_i x of u = -F_i x (beta = 1):
+    P = Q + F'RF + (A - BF)' E(P) (A - BF), a coupled Lyapunov equation.
 
     Examples
     --------
@@ -258,14 +314,32 @@ def quantecon_comparison(case) -> dict:
     ([3.8641453, 1.17900908], 0.0565)
     """
     n = case["A"].shape[1]
-    sys = MJLS(A=case["A"], B=case["B"], C=np.eye(n), H=np.zeros((n, 1)), Q=case["Q"], R=case["R"],
-               T=case["Pi"])
+    sys = MJLS(
+        A=case["A"],
+        B=case["B"],
+        C=np.eye(n),
+        H=np.zeros((n, 1)),
+        Q=case["Q"],
+        R=case["R"],
+        T=case["Pi"],
+    )
     ours = observed_mode_state_feedback(sys).P
     shape = ours.shape
-    direct = scipy.optimize.root(lambda p: coupled_riccati_residual(case, p.reshape(shape)).ravel(),
-                                 case["Q"].ravel(), tol=1e-14).x.reshape(shape)
+    direct = scipy.optimize.root(
+        lambda p: coupled_riccati_residual(case, p.reshape(shape)).ravel(),
+        case["Q"].ravel(),
+        tol=1e-14,
+    ).x.reshape(shape)
     value = policy_value(case, case["F"])
     trace = lambda P: float(np.trace(P, axis1=1, axis2=2).sum())
-    return dict(ours=ours, direct=direct, theirs=case["P"], theirs_recomputed=expectation_outside(case),
-                their_value=value, p_gap=_relative(case["P"], ours), direct_gap=_relative(direct, ours),
-                value_gap=_relative(case["P"], value), cost_ratio=trace(value) / trace(ours))
+    return dict(
+        ours=ours,
+        direct=direct,
+        theirs=case["P"],
+        theirs_recomputed=expectation_outside(case),
+        their_value=value,
+        p_gap=_relative(case["P"], ours),
+        direct_gap=_relative(direct, ours),
+        value_gap=_relative(case["P"], value),
+        cost_ratio=trace(value) / trace(ours),
+    )

@@ -22,13 +22,22 @@ def test_a_typo_is_refused_with_the_closest_key():
     assert "mjls.rank_rol" not in config.defaults
 
 
-@pytest.mark.parametrize("key, value, error", [
-    ("mjls.rank_rtol", "1e-8", TypeError), ("mjls.rank_rtol", None, TypeError),
-    ("mjls.rank_rtol", True, TypeError), ("mjls.rank_rtol", 0.0, ValueError),
-    ("mjls.rank_rtol", 2.0, ValueError), ("mjls.rank_rtol", np.nan, ValueError),
-    ("mjls.dense_max_radius", 64.5, TypeError), ("mjls.dense_max_radius", -1, ValueError),
-    ("mjls.arnoldi_subspaces", 60, TypeError), ("mjls.arnoldi_subspaces", (60, 1), ValueError),
-    ("mjls.divergence_threshold", 0.5, ValueError)])
+@pytest.mark.parametrize(
+    "key, value, error",
+    [
+        ("mjls.rank_rtol", "1e-8", TypeError),
+        ("mjls.rank_rtol", None, TypeError),
+        ("mjls.rank_rtol", True, TypeError),
+        ("mjls.rank_rtol", 0.0, ValueError),
+        ("mjls.rank_rtol", 2.0, ValueError),
+        ("mjls.rank_rtol", np.nan, ValueError),
+        ("mjls.dense_max_radius", 64.5, TypeError),
+        ("mjls.dense_max_radius", -1, ValueError),
+        ("mjls.arnoldi_subspaces", 60, TypeError),
+        ("mjls.arnoldi_subspaces", (60, 1), ValueError),
+        ("mjls.divergence_threshold", 0.5, ValueError),
+    ],
+)
 def test_a_wrong_value_is_refused_when_set_naming_the_key(key, value, error):
     before = config.defaults[key]
     with pytest.raises(error, match=key):
@@ -101,12 +110,20 @@ def test_designs_accept_their_settings_per_call():
 def test_every_design_that_reads_a_setting_takes_it_per_call():
     import asoc.gp
     import asoc.mjls
-    designs = [asoc.mjls.static_output_feedback, asoc.mjls.dynamic_output_feedback,
-               asoc.mjls.finite_horizon_dynamic_output_feedback, asoc.mjls.exact_dynamic_output_feedback,
-               asoc.mjls.exact_finite_horizon_dynamic_output_feedback,
-               asoc.mjls.min_radius_dynamic_output_feedback, asoc.mjls.static_output_lmi,
-               asoc.mjls.ms_spectral_radius, asoc.mjls.mean_square_stability,
-               asoc.gp.DistributionGP.fit, asoc.gp.MeanKernelGP.fit]
+
+    designs = [
+        asoc.mjls.static_output_feedback,
+        asoc.mjls.dynamic_output_feedback,
+        asoc.mjls.finite_horizon_dynamic_output_feedback,
+        asoc.mjls.exact_dynamic_output_feedback,
+        asoc.mjls.exact_finite_horizon_dynamic_output_feedback,
+        asoc.mjls.min_radius_dynamic_output_feedback,
+        asoc.mjls.static_output_lmi,
+        asoc.mjls.ms_spectral_radius,
+        asoc.mjls.mean_square_stability,
+        asoc.gp.DistributionGP.fit,
+        asoc.gp.MeanKernelGP.fit,
+    ]
     for design in designs:
         assert design.settings, design.__name__
         names = set(inspect.signature(design).parameters)
@@ -115,9 +132,12 @@ def test_every_design_that_reads_a_setting_takes_it_per_call():
 
 def test_a_gp_fit_takes_its_iteration_cap_per_call():
     from asoc.gp import DistributionGP
+
     x = np.linspace(-2, 2, 8)
     D, y = np.abs(x[:, None] - x[None]), np.sin(x)
     with pytest.warns(RuntimeWarning, match="did not converge"):
-        capped = DistributionGP("se", n_restarts=0).fit(D, y, np.random.default_rng(0), max_iterations=1)
+        capped = DistributionGP("se", n_restarts=0).fit(
+            D, y, np.random.default_rng(0), max_iterations=1
+        )
     assert capped.result.status == "max_iterations" and capped.result.iterations == 1
     assert DistributionGP("se", n_restarts=0).fit(D, y, np.random.default_rng(0)).result.converged

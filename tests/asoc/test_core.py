@@ -26,12 +26,13 @@ def test_bfgs_finds_the_rosenbrock_minimum(memory):
     result = bfgs(rosenbrock, [-1.2, 1.0], tol=1e-14, max_iter=500, memory=memory)
     assert result.status == "converged"
     np.testing.assert_allclose(result.z, [1.0, 1.0], atol=1e-5)
-    assert np.all(np.diff(result.history) <= 1e-12 * np.abs(result.history[:-1]))   # descent
+    assert np.all(np.diff(result.history) <= 1e-12 * np.abs(result.history[:-1]))  # descent
 
 
 def test_bfgs_stops_at_the_domain_and_names_bad_input():
-    def outside_unit_disc(z):                     # f = inf outside the domain
+    def outside_unit_disc(z):  # f = inf outside the domain
         return (np.inf, z) if z @ z >= 1 else (float(-z[0]), np.array([-1.0, 0.0]))
+
     result = bfgs(outside_unit_disc, [0.0, 0.0], max_iter=200)
     assert result.z @ result.z < 1 and result.f < -0.9
     with pytest.raises((ValueError, TypeError), match="z0"):
@@ -71,7 +72,9 @@ def test_bootstrap_intervals_cover_the_median_and_are_reproducible():
 
 def test_relative_change_uses_the_configured_floor():
     assert relative_change(np.zeros(2), np.zeros(2)) == 0.0
-    assert relative_change(np.zeros(2), np.full(2, 1e-13), floor=1.0) == pytest.approx(np.sqrt(2) * 1e-13)
+    assert relative_change(np.zeros(2), np.full(2, 1e-13), floor=1.0) == pytest.approx(
+        np.sqrt(2) * 1e-13
+    )
     with config.option_context(**{"linalg.norm_floor": 1e-3}):
         assert relative_change(np.zeros(1), np.full(1, 1e-4)) == pytest.approx(0.1)
     parts = [np.arange(6.0).reshape(2, 3), np.ones((1, 2))]

@@ -28,7 +28,9 @@ WRONG = "not an array"
 def declared_all(tree):
     """The names of a module's ``__all__`` (None if it has none)."""
     for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "__all__" for t in node.targets):
+        if isinstance(node, ast.Assign) and any(
+            getattr(t, "id", None) == "__all__" for t in node.targets
+        ):
             return set(ast.literal_eval(node.value))
     return None
 
@@ -42,9 +44,13 @@ def public_outside_all(root=SRC):
         if exported is None:
             found.append(f"{path.relative_to(root)}: no __all__")
             continue
-        found += [f"{path.relative_to(root)}: {node.name}" for node in tree.body
-                  if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
-                  and not node.name.startswith("_") and node.name not in exported]
+        found += [
+            f"{path.relative_to(root)}: {node.name}"
+            for node in tree.body
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+            and not node.name.startswith("_")
+            and node.name not in exported
+        ]
     return found
 
 
@@ -53,7 +59,9 @@ def test_every_public_looking_name_is_exported():
 
 
 def test_the_name_check_finds_a_planted_name(tmp_path):
-    (tmp_path / "a.py").write_text("__all__ = ['f']\ndef f(): pass\ndef g(): pass\ndef _h(): pass\n")
+    (tmp_path / "a.py").write_text(
+        "__all__ = ['f']\ndef f(): pass\ndef g(): pass\ndef _h(): pass\n"
+    )
     (tmp_path / "b.py").write_text("class C: pass\n")
     assert public_outside_all(tmp_path) == ["a.py: g", "b.py: no __all__"]
 
@@ -69,8 +77,11 @@ def exported_functions():
 def required(function):
     """(positional, keyword-only) names of the arguments without a default."""
     params = inspect.signature(function).parameters.values()
-    positional = [p.name for p in params if p.default is p.empty
-                  and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    positional = [
+        p.name
+        for p in params
+        if p.default is p.empty and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)
+    ]
     keyword = [p.name for p in params if p.default is p.empty and p.kind is p.KEYWORD_ONLY]
     return positional, keyword
 
@@ -78,7 +89,7 @@ def required(function):
 @pytest.mark.parametrize("function", exported_functions())
 def test_an_exported_function_names_its_wrong_argument(function):
     positional, keyword = required(function)
-    if not positional + keyword:                       # nothing required: try the first argument
+    if not positional + keyword:  # nothing required: try the first argument
         first = next(iter(inspect.signature(function).parameters), None)
         if first is None:
             pytest.skip("takes no arguments")
@@ -89,8 +100,9 @@ def test_an_exported_function_names_its_wrong_argument(function):
             function(*[WRONG] * len(positional), **{name: WRONG for name in keyword})
     message = str(caught.value)
     assert "required positional argument" not in message and "unexpected keyword" not in message
-    assert any(re.search(rf"\b{re.escape(name)}\b", message) for name in positional + keyword), \
+    assert any(re.search(rf"\b{re.escape(name)}\b", message) for name in positional + keyword), (
         f"{function.__name__}: the error does not name {positional + keyword}: {message}"
+    )
 
 
 @pytest.mark.parametrize("function", [asoc.mjls.successor_average, asoc.mjls.predecessor_sum])

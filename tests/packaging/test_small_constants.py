@@ -19,42 +19,70 @@ ALLOWED = {
     ("mjls/dynamic.py", "<keyword defaults>"): "tol and init of Alg. 3.2 (the thesis's values)",
     ("mjls/static.py", "<keyword defaults>"): "tol and init of Alg. 3.1 (the thesis's values)",
     ("mjls/exact_cost_design.py", "<keyword defaults>"): "tol of the exact-cost designs' BFGS",
-    ("mjls/finite_horizon.py", "<keyword defaults>"): "tol of Alg. 3.3 (relative change of the bounds)",
-    ("mjls/finite_horizon.py", "finite_horizon_dynamic_output_feedback"):
-        "rounding margins 1e-8 / 1e-12 of Alg. 3.3's monotonicity checks (a bound may not rise by "
-        "more than rounding between iterations)",
+    (
+        "mjls/finite_horizon.py",
+        "<keyword defaults>",
+    ): "tol of Alg. 3.3 (relative change of the bounds)",
+    (
+        "mjls/finite_horizon.py",
+        "finite_horizon_dynamic_output_feedback",
+    ): "rounding margins 1e-8 / 1e-12 of Alg. 3.3's monotonicity checks (a bound may not rise by "
+    "more than rounding between iterations)",
     ("mjls/observed_mode_feedback.py", "<keyword defaults>"): "tol of the Riccati iteration",
     ("mjls/baselines.py", "<keyword defaults>"): "tol of the time-variant baseline's iteration",
-    ("mjls/lmi.py", "EPS"): "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call",
+    (
+        "mjls/lmi.py",
+        "EPS",
+    ): "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call",
     ("optimize.py", "<keyword defaults>"): "tol of BFGS (relative predicted decrease)",
     ("belief/sweep.py", "<keyword defaults>"): "scale of the perturbations of the sweep",
     ("belief/trajectory.py", "<keyword defaults>"): "rtol of the belief trajectory optimisation",
     ("belief/vdberg.py", "<keyword defaults>"): "rtol of belief iLQG (relative cost change)",
     # rounding guards and numerical-differentiation steps
-    ("mjls/baselines.py", "_gain"):
-        "rcond of a least-squares solve: singular values below 1e-12 of the largest are rounding",
-    ("mjls/monte_carlo.py", "_psd_sqrt"):
-        "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD matrix",
-    ("mjls/random.py", "_matrix_with_radius"):
-        "a draw with spectral radius below 1e-8 is nilpotent up to rounding and cannot be rescaled "
-        "(probability 0; the test only redraws)",
-    ("belief/stage.py", "StageProblem"):
-        "rounding margins 1e-9 of the eigenvalue tests of a Schur complement, and the bisection's "
-        "relative stopping width 1e-6 of the regularising shift (the shift only needs to make the "
-        "stage problem convex)",
+    (
+        "mjls/baselines.py",
+        "_gain",
+    ): "rcond of a least-squares solve: singular values below 1e-12 of the largest are rounding",
+    (
+        "mjls/monte_carlo.py",
+        "_psd_sqrt",
+    ): "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD matrix",
+    (
+        "mjls/random.py",
+        "_matrix_with_radius",
+    ): "a draw with spectral radius below 1e-8 is nilpotent up to rounding and cannot be rescaled "
+    "(probability 0; the test only redraws)",
+    (
+        "belief/stage.py",
+        "StageProblem",
+    ): "rounding margins 1e-9 of the eigenvalue tests of a Schur complement, and the bisection's "
+    "relative stopping width 1e-6 of the regularising shift (the shift only needs to make the "
+    "stage problem convex)",
     ("belief/vdberg.py", "_linearize"): "base step 1e-4 of numdifftools' finite differences",
-    ("gp/experiment.py", "evaluation_grid"):
-        "1e-9 past the end point so that numpy.arange includes it (grid of step 0.1)",
-    ("gp/regression.py", "_cholesky"):
-        "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to rounding",
-    ("gp/regression.py", "_projected_gradient"):
-        "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound",
-    ("gp/regression.py", "_LikelihoodGP"):
-        "default lower bound 1e-4 std(y) of the noise (documented: keeps Sigma_y well conditioned)",
-    ("gp/regression.py", "DistributionGP"):
-        "central-difference step 1e-6 in log l for the covariances without an analytic derivative",
-    ("gp/sampling.py", "_lcd_standard_normal"):
-        "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges in tens)",
+    (
+        "gp/experiment.py",
+        "evaluation_grid",
+    ): "1e-9 past the end point so that numpy.arange includes it (grid of step 0.1)",
+    (
+        "gp/regression.py",
+        "_cholesky",
+    ): "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to rounding",
+    (
+        "gp/regression.py",
+        "_projected_gradient",
+    ): "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound",
+    (
+        "gp/regression.py",
+        "_LikelihoodGP",
+    ): "default lower bound 1e-4 std(y) of the noise (documented: keeps Sigma_y well conditioned)",
+    (
+        "gp/regression.py",
+        "DistributionGP",
+    ): "central-difference step 1e-6 in log l for the covariances without an analytic derivative",
+    (
+        "gp/sampling.py",
+        "_lcd_standard_normal",
+    ): "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges in tens)",
 }
 
 
@@ -63,16 +91,24 @@ def _top_level_names(tree):
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             yield node.name, node
-        elif isinstance(node, ast.Assign) and len(node.targets) == 1 \
-                and isinstance(node.targets[0], ast.Name):
+        elif (
+            isinstance(node, ast.Assign)
+            and len(node.targets) == 1
+            and isinstance(node.targets[0], ast.Name)
+        ):
             yield node.targets[0].id, node
         else:
             yield "<module>", node
 
 
 def _small(node):
-    return [sub.value for sub in ast.walk(node) if isinstance(sub, ast.Constant)
-            and isinstance(sub.value, float) and 0 < abs(sub.value) < 1e-3]
+    return [
+        sub.value
+        for sub in ast.walk(node)
+        if isinstance(sub, ast.Constant)
+        and isinstance(sub.value, float)
+        and 0 < abs(sub.value) < 1e-3
+    ]
 
 
 def small_literals(root=SRC):
@@ -87,9 +123,12 @@ def small_literals(root=SRC):
             continue
         file = path.relative_to(root).as_posix()
         for name, node in _top_level_names(ast.parse(path.read_text(), filename=str(path))):
-            defaults = [d for sub in ast.walk(node)
-                        if isinstance(sub, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
-                        for d in sub.args.defaults + [k for k in sub.args.kw_defaults if k is not None]]
+            defaults = [
+                d
+                for sub in ast.walk(node)
+                if isinstance(sub, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+                for d in sub.args.defaults + [k for k in sub.args.kw_defaults if k is not None]
+            ]
             in_defaults = [v for d in defaults for v in _small(d)]
             rest = _small(node)
             for value in in_defaults:
@@ -103,8 +142,10 @@ def small_literals(root=SRC):
 def test_small_literals_are_settings_or_allowed_with_a_reason():
     found = small_literals()
     unexplained = {key: values for key, values in found.items() if key not in ALLOWED}
-    assert not unexplained, (f"small float literals outside asoc.config: make each a key of "
-                             f"asoc.config (with its reason) or allow it here: {unexplained}")
+    assert not unexplained, (
+        f"small float literals outside asoc.config: make each a key of "
+        f"asoc.config (with its reason) or allow it here: {unexplained}"
+    )
 
 
 def test_the_allow_list_is_short_and_current():
@@ -117,5 +158,7 @@ def test_the_allow_list_is_short_and_current():
 def test_the_scan_finds_a_planted_literal(tmp_path):
     (tmp_path / "planted.py").write_text("def f(x, tol=1e-9):\n    return x + 2e-4\n")
     (tmp_path / "config.py").write_text("X = 1e-9\n")
-    assert small_literals(tmp_path) == {("planted.py", "<keyword defaults>"): [1e-9],
-                                        ("planted.py", "f"): [2e-4]}
+    assert small_literals(tmp_path) == {
+        ("planted.py", "<keyword defaults>"): [1e-9],
+        ("planted.py", "f"): [2e-4],
+    }

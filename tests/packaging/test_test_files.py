@@ -70,7 +70,9 @@ COVERED_BY = {
 
 
 def modules():
-    return sorted(p.relative_to(SRC).as_posix() for p in SRC.rglob("*.py") if p.name != "__init__.py")
+    return sorted(
+        p.relative_to(SRC).as_posix() for p in SRC.rglob("*.py") if p.name != "__init__.py"
+    )
 
 
 def own_test(module):
@@ -81,7 +83,9 @@ def own_test(module):
 def exported(module):
     tree = ast.parse((SRC / module).read_text())
     for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "__all__" for t in node.targets):
+        if isinstance(node, ast.Assign) and any(
+            getattr(t, "id", None) == "__all__" for t in node.targets
+        ):
             return list(ast.literal_eval(node.value))
     return []
 
@@ -90,17 +94,26 @@ def covers(test_file, module):
     """Whether ``test_file`` imports ``module`` or uses one of its exported names."""
     text = test_file.read_text()
     dotted = "asoc." + module[:-3].replace("/", ".")
-    return dotted in text or any(re.search(rf"\b{re.escape(name)}\b", text) for name in exported(module))
+    return dotted in text or any(
+        re.search(rf"\b{re.escape(name)}\b", text) for name in exported(module)
+    )
 
 
 def test_every_module_has_a_test_file():
     missing = [m for m in modules() if own_test(m) is None and m not in COVERED_BY]
-    assert not missing, f"modules without a test file of their name or an entry in COVERED_BY: {missing}"
+    assert not missing, (
+        f"modules without a test file of their name or an entry in COVERED_BY: {missing}"
+    )
 
 
 def test_the_named_test_files_cover_their_modules():
-    wrong = [f"{m} -> {t}" for m, t in COVERED_BY.items()
-             if not (ROOT / "tests" / t).exists() or not covers(ROOT / "tests" / t, m)]
-    assert not wrong, f"COVERED_BY names test files that do not exist or do not use the module: {wrong}"
+    wrong = [
+        f"{m} -> {t}"
+        for m, t in COVERED_BY.items()
+        if not (ROOT / "tests" / t).exists() or not covers(ROOT / "tests" / t, m)
+    ]
+    assert not wrong, (
+        f"COVERED_BY names test files that do not exist or do not use the module: {wrong}"
+    )
     stale = sorted(set(COVERED_BY) - set(modules()))
     assert not stale, f"COVERED_BY names modules that no longer exist: {stale}"

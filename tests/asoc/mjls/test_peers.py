@@ -64,7 +64,7 @@ def test_alg32_is_the_lqg_compensator_with_one_mode():
     A, B, C = p["A"], p["B"], p["C"]
     ours = dynamic_output_feedback(MJLS(T=[[1.0]], **p))
     K_lq, _, _ = control.dlqr(A, B, p["Q"], p["R"])
-    K_kf, _, _ = control.dlqe(A, p["H"], C, np.eye(3), p["J"] @ p["J"].T)   # predictor form
+    K_kf, _, _ = control.dlqe(A, p["H"], C, np.eye(3), p["J"] @ p["J"].T)  # predictor form
     F, K, L = A - B @ K_lq - K_kf @ C, K_kf, -K_lq
     assert ours.converged
     for k in range(6):
@@ -75,20 +75,31 @@ def test_alg32_is_the_lqg_compensator_with_one_mode():
     A_cl = np.block([[A, B @ L], [K @ C, F]])
     noise = np.block([[p["H"], np.zeros((3, 2))], [np.zeros((3, 3)), K @ p["J"]]])
     X = control.dlyap(A_cl, noise @ noise.T)
-    cost = np.trace(np.block([[p["Q"], np.zeros((3, 3))], [np.zeros((3, 3)), L.T @ p["R"] @ L]]) @ X)
+    cost = np.trace(
+        np.block([[p["Q"], np.zeros((3, 3))], [np.zeros((3, 3)), L.T @ p["R"] @ L]]) @ X
+    )
     assert ours.cost == pytest.approx(cost, rel=1e-10)
 
 
 def quantecon_cases():
     record = json.loads(QUANTECON.read_text())
-    return [{key: np.array(value) if key not in ("name",) else value for key, value in case.items()}
-            for case in record["cases"]]
+    return [
+        {key: np.array(value) if key not in ("name",) else value for key, value in case.items()}
+        for case in record["cases"]
+    ]
 
 
 def observed(case):
     n = case["A"].shape[1]
-    return MJLS(A=case["A"], B=case["B"], C=np.eye(n), H=np.zeros((n, 1)), Q=case["Q"],
-                R=case["R"], T=case["Pi"])
+    return MJLS(
+        A=case["A"],
+        B=case["B"],
+        C=np.eye(n),
+        H=np.zeros((n, 1)),
+        Q=case["Q"],
+        R=case["R"],
+        T=case["Pi"],
+    )
 
 
 def coupled_riccati_residual(case, P):
@@ -105,10 +116,11 @@ def expectation_outside(case, steps=20000):
     At, Bt = np.swapaxes(A, 1, 2), np.swapaxes(B, 1, 2)
     P = np.stack([np.eye(A.shape[1])] * len(A))
     for _ in range(steps):
-        per_j = (At[:, None] @ P[None] @ A[:, None]
-                 - At[:, None] @ P[None] @ B[:, None]
-                 @ np.linalg.solve(R[:, None] + Bt[:, None] @ P[None] @ B[:, None],
-                                   Bt[:, None] @ P[None] @ A[:, None]))
+        per_j = At[:, None] @ P[None] @ A[:, None] - At[:, None] @ P[None] @ B[
+            :, None
+        ] @ np.linalg.solve(
+            R[:, None] + Bt[:, None] @ P[None] @ B[:, None], Bt[:, None] @ P[None] @ A[:, None]
+        )
         P = Q + np.einsum("ij,ijab->iab", Pi, per_j)
     return P
 
@@ -124,8 +136,9 @@ def test_scalar_reproducer_solves_the_coupled_riccati_equations():
     case = quantecon_cases()[0]
     ours = observed_mode_state_feedback(observed(case))
     np.testing.assert_allclose(ours.P.ravel(), [3.86414530, 1.17900908], rtol=0, atol=5e-9)
-    direct = scipy.optimize.root(lambda p: coupled_riccati_residual(case, p.reshape(2, 1, 1)).ravel(),
-                                 np.ones(2), tol=1e-14)
+    direct = scipy.optimize.root(
+        lambda p: coupled_riccati_residual(case, p.reshape(2, 1, 1)).ravel(), np.ones(2), tol=1e-14
+    )
     assert direct.success
     np.testing.assert_allclose(ours.P.ravel(), direct.x, rtol=1e-12)
 
@@ -136,6 +149,6 @@ def test_quantecon_puts_the_expectation_outside_the_inverse(index):
     ours = observed_mode_state_feedback(observed(case))
     assert np.abs(coupled_riccati_residual(case, ours.P)).max() < 1e-10 * np.abs(ours.P).max()
     np.testing.assert_allclose(expectation_outside(case), case["P"], rtol=1e-8)
-    value = policy_value(case, case["F"])             # QuantEcon's policy, evaluated exactly
-    assert np.abs(value - case["P"]).max() > 1e-3 * np.abs(value).max()   # P is not its value
+    value = policy_value(case, case["F"])  # QuantEcon's policy, evaluated exactly
+    assert np.abs(value - case["P"]).max() > 1e-3 * np.abs(value).max()  # P is not its value
     assert np.trace(value, axis1=1, axis2=2).sum() > np.trace(ours.P, axis1=1, axis2=2).sum()
