@@ -19,70 +19,87 @@ ALLOWED = {
     ("mjls/dynamic.py", "<keyword defaults>"): "tol and init of Alg. 3.2 (the thesis's values)",
     ("mjls/static.py", "<keyword defaults>"): "tol and init of Alg. 3.1 (the thesis's values)",
     ("mjls/exact_cost_design.py", "<keyword defaults>"): "tol of the exact-cost designs' BFGS",
-    (
-        "mjls/finite_horizon.py",
-        "<keyword defaults>",
-    ): "tol of Alg. 3.3 (relative change of the bounds)",
-    (
-        "mjls/finite_horizon.py",
-        "finite_horizon_dynamic_output_feedback",
-    ): "rounding margins 1e-8 / 1e-12 of Alg. 3.3's monotonicity checks (a bound may not rise by "
-    "more than rounding between iterations)",
+    ("mjls/finite_horizon.py", "<keyword defaults>"): (
+        "tol of Alg. 3.3 (relative change of the bounds)"
+    ),
     ("mjls/observed_mode_feedback.py", "<keyword defaults>"): "tol of the Riccati iteration",
     ("mjls/baselines.py", "<keyword defaults>"): "tol of the time-variant baseline's iteration",
-    (
-        "mjls/lmi.py",
-        "EPS",
-    ): "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call",
+    ("mjls/lmi.py", "EPS"): (
+        "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call"
+    ),
     ("optimize.py", "<keyword defaults>"): "tol of BFGS (relative predicted decrease)",
     ("belief/sweep.py", "<keyword defaults>"): "scale of the perturbations of the sweep",
     ("belief/trajectory.py", "<keyword defaults>"): "rtol of the belief trajectory optimisation",
     ("belief/vdberg.py", "<keyword defaults>"): "rtol of belief iLQG (relative cost change)",
-    # rounding guards and numerical-differentiation steps
-    (
-        "mjls/baselines.py",
-        "_gain",
-    ): "rcond of a least-squares solve: singular values below 1e-12 of the largest are rounding",
-    (
-        "mjls/monte_carlo.py",
-        "_psd_sqrt",
-    ): "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD matrix",
-    (
-        "mjls/random.py",
-        "_matrix_with_radius",
-    ): "a draw with spectral radius below 1e-8 is nilpotent up to rounding and cannot be rescaled "
-    "(probability 0; the test only redraws)",
-    (
-        "belief/stage.py",
-        "StageProblem",
-    ): "rounding margins 1e-9 of the eigenvalue tests of a Schur complement, and the bisection's "
-    "relative stopping width 1e-6 of the regularising shift (the shift only needs to make the "
-    "stage problem convex)",
+    # rounding guards, ladders and numerical-differentiation steps
+    ("mjls/finite_horizon.py", "finite_horizon_dynamic_output_feedback"): (
+        "rounding margins 1e-8 / 1e-12 of Alg. 3.3's monotonicity checks (a bound may not "
+        "rise by more than rounding between iterations)"
+    ),
+    ("mjls/baselines.py", "_gain"): (
+        "rcond of a least-squares solve: singular values below 1e-12 of the largest are "
+        "rounding"
+    ),
+    ("mjls/monte_carlo.py", "_psd_sqrt"): (
+        "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD "
+        "matrix"
+    ),
+    ("mjls/random.py", "_matrix_with_radius"): (
+        "a draw with spectral radius below 1e-8 is nilpotent up to rounding and cannot be "
+        "rescaled (probability 0; the test only redraws)"
+    ),
+    ("belief/stage.py", "StageProblem"): (
+        "rounding margins 1e-9 of the eigenvalue tests of a Schur complement, and the "
+        "bisection's relative stopping width 1e-6 of the regularising shift (the shift only "
+        "needs to make the stage problem convex)"
+    ),
     ("belief/vdberg.py", "_linearize"): "base step 1e-4 of numdifftools' finite differences",
-    (
-        "gp/experiment.py",
-        "evaluation_grid",
-    ): "1e-9 past the end point so that numpy.arange includes it (grid of step 0.1)",
-    (
-        "gp/regression.py",
-        "_cholesky",
-    ): "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to rounding",
-    (
-        "gp/regression.py",
-        "_projected_gradient",
-    ): "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound",
-    (
-        "gp/regression.py",
-        "_LikelihoodGP",
-    ): "default lower bound 1e-4 std(y) of the noise (documented: keeps Sigma_y well conditioned)",
-    (
-        "gp/regression.py",
-        "DistributionGP",
-    ): "central-difference step 1e-6 in log l for the covariances without an analytic derivative",
-    (
-        "gp/sampling.py",
-        "_lcd_standard_normal",
-    ): "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges in tens)",
+    ("gp/experiment.py", "evaluation_grid"): (
+        "1e-9 past the end point so that numpy.arange includes it (grid of step 0.1)"
+    ),
+    ("gp/regression.py", "_cholesky"): (
+        "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to "
+        "rounding"
+    ),
+    ("gp/regression.py", "_projected_gradient"): (
+        "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound"
+    ),
+    ("gp/regression.py", "_LikelihoodGP"): (
+        "default lower bound 1e-4 std(y) of the noise (documented: keeps Sigma_y well "
+        "conditioned)"
+    ),
+    ("gp/regression.py", "DistributionGP"): (
+        "central-difference step 1e-6 in log l for the covariances without an analytic "
+        "derivative"
+    ),
+    ("gp/sampling.py", "_lcd_standard_normal"): (
+        "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges "
+        "in tens)"
+    ),
+    # the certified rho and the input checks
+    ("mjls/certificate.py", "_SHIFTS"): (
+        "shifts tried in turn where the Perron stack is singular to rounding (0 first, then "
+        "growing); each bound is certified whatever shift succeeds"
+    ),
+    ("mjls/certificate.py", "_RESOLVENT_GAPS"): (
+        "relative gaps r = rho (1 + gap) tried in turn for the resolvent stacks, the widest "
+        "first; each gives a certified upper bound"
+    ),
+    ("mjls/certificate.py", "_DEFLATED_GAPS"): (
+        "gaps tried in turn for the deflated resolvent bounds (a ladder of half decades); "
+        "each gives a certified upper bound, the tightest is kept"
+    ),
+    ("mjls/certificate.py", "_resolvent_stacks"): (
+        "1e-300 floor of rho in the resolvent radius: rho = 0 still gives a positive radius"
+    ),
+    ("validation.py", "SYMMETRY_RTOL"): (
+        "input checks: asymmetry and negative eigenvalues of a symmetric positive "
+        "semidefinite argument up to rounding of data computed elsewhere are accepted"
+    ),
+    ("validation.py", "WEIGHT_ATOL"): (
+        "input checks: probability vectors and rows of T that sum to 1 within rounding of "
+        "data computed elsewhere are accepted, and used as given"
+    ),
 }
 
 

@@ -98,7 +98,7 @@ def residual(A, T, X, W, adjoint=False):
     if not np.all(np.isfinite(X)):
         return np.inf
     apply = costate_map if adjoint else second_moment_map
-    return float(np.linalg.norm(X - apply(A, T, X) - W) / max(np.linalg.norm(W), 1e-300))
+    return float(np.linalg.norm(X - apply(A, T, X) - W) / max(np.linalg.norm(W), np.finfo(float).tiny))
 
 
 def solve_coupled_lyapunov(A, T, W, adjoint=False, method="auto", tol=None):
@@ -219,7 +219,7 @@ def _iterative_solve(A, T, W, adjoint, method, tol, max_iter=5000, x0=None):
     if method == "fixed_point":
         apply = costate_map if adjoint else second_moment_map
         X = W.copy()
-        norm_W = max(np.linalg.norm(W), 1e-300)
+        norm_W = max(np.linalg.norm(W), np.finfo(float).tiny)
         for it in range(1, max_iter + 1):
             X_new = apply(A, T, X) + W
             if np.linalg.norm(X_new - X) <= tol * norm_W or not np.all(np.isfinite(X_new)):
