@@ -587,7 +587,9 @@ def _checked_per_call(key, value):
 def _settings_section(names):
     lines = ["", "", "    Other Parameters", "    ----------------"]
     for name, key in names.items():
-        lines += [f"    {name} : {ALLOWED[key]}, optional", f"        This call's ``{key}`` "
-                  f"(None, the default: ``asoc.config.defaults``, shipped {_REGISTRY[key][0]!r}).",
-                  ""]
+        kind = _REGISTRY[key][1].kind
+        kind = "int" if kind is int else "tuple" if kind is tuple else "float"
+        lines += [f"    {name} : {kind}, optional",
+                  f"        This call's ``{key}``, {ALLOWED[key]} (None, the default: "
+                  f"``asoc.config.defaults``, shipped {_REGISTRY[key][0]!r}).", ""]
     return "\n".join(lines)
