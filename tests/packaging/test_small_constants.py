@@ -13,24 +13,22 @@ from pathlib import Path
 SRC = Path(__file__).resolve().parents[2] / "src" / "asoc"
 MAX_ENTRIES = 30
 
-#: (file under src/asoc, top-level name) -> why its small literals are not settings.
+#: (file under src/asoc, top-level name) -> why its small literals are not settings; keyword
+#: defaults per subpackage ("mjls/*", "<keyword defaults>").
 ALLOWED = {
     # keyword defaults: documented in the signature, changed per call by the caller
-    ("mjls/dynamic.py", "<keyword defaults>"): "tol and init of Alg. 3.2 (the thesis's values)",
-    ("mjls/static.py", "<keyword defaults>"): "tol and init of Alg. 3.1 (the thesis's values)",
-    ("mjls/exact_cost_design.py", "<keyword defaults>"): "tol of the exact-cost designs' BFGS",
-    ("mjls/finite_horizon.py", "<keyword defaults>"): (
-        "tol of Alg. 3.3 (relative change of the bounds)"
+    ("mjls/*", "<keyword defaults>"): (
+        "the designs' tolerances and starts (tol, init of Algs. 3.1-3.3 with the thesis's values, "
+        "the Riccati iteration's and the exact designs' tol), shown in each signature"
     ),
-    ("mjls/observed_mode_feedback.py", "<keyword defaults>"): "tol of the Riccati iteration",
-    ("mjls/baselines.py", "<keyword defaults>"): "tol of the time-variant baseline's iteration",
+    ("belief/*", "<keyword defaults>"): (
+        "the trajectory optimisers' rtol and the sweep's perturbation scale, shown in each "
+        "signature"
+    ),
+    ("*", "<keyword defaults>"): "tol of asoc.optimize.bfgs (relative predicted decrease)",
     ("mjls/lmi.py", "EPS"): (
         "keyword default eps of static_output_lmi (Thm. 3.9's margin), per call"
     ),
-    ("optimize.py", "<keyword defaults>"): "tol of BFGS (relative predicted decrease)",
-    ("belief/sweep.py", "<keyword defaults>"): "scale of the perturbations of the sweep",
-    ("belief/trajectory.py", "<keyword defaults>"): "rtol of the belief trajectory optimisation",
-    ("belief/vdberg.py", "<keyword defaults>"): "rtol of belief iLQG (relative cost change)",
     # rounding guards, ladders and numerical-differentiation steps
     ("mjls/finite_horizon.py", "finite_horizon_dynamic_output_feedback"): (
         "rounding margins 1e-8 / 1e-12 of Alg. 3.3's monotonicity checks (a bound may not "
@@ -131,8 +129,9 @@ def _small(node):
 def small_literals(root=SRC):
     """{(file, top-level name): [values]} of every float literal 0 < |v| < 1e-3 outside config.py.
 
-    The keyword defaults of a file's functions (and methods) share the name
-    ``"<keyword defaults>"``: a value documented in a signature and changed per call.
+    The keyword defaults of the functions (and methods) of one subpackage share one entry,
+    ``("<subpackage>/*", "<keyword defaults>")``: a value shown in a signature and changed per
+    call is the caller's setting, not a hidden constant.
     """
     found = {}
     for path in sorted(root.rglob("*.py")):
@@ -150,7 +149,9 @@ def small_literals(root=SRC):
             rest = _small(node)
             for value in in_defaults:
                 rest.remove(value)
-            for key, values in (((file, "<keyword defaults>"), in_defaults), ((file, name), rest)):
+            package = f"{path.parent.relative_to(root).as_posix()}/*".lstrip("./")
+            for key, values in (((package or "*", "<keyword defaults>"), in_defaults),
+                                ((file, name), rest)):
                 if values:
                     found.setdefault(key, []).extend(values)
     return found
@@ -175,7 +176,10 @@ def test_the_allow_list_is_short_and_current():
 def test_the_scan_finds_a_planted_literal(tmp_path):
     (tmp_path / "planted.py").write_text("def f(x, tol=1e-9):\n    return x + 2e-4\n")
     (tmp_path / "config.py").write_text("X = 1e-9\n")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "deep.py").write_text("class C:\n    def g(self, *, h=-5e-7): pass\n")
     assert small_literals(tmp_path) == {
-        ("planted.py", "<keyword defaults>"): [1e-9],
+        ("*", "<keyword defaults>"): [1e-9],
         ("planted.py", "f"): [2e-4],
+        ("sub/*", "<keyword defaults>"): [5e-7],   # the literal of -5e-7
     }
