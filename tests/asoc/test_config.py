@@ -57,6 +57,14 @@ def test_every_shipped_value_passes_its_own_check_and_is_described():
         assert len(config.DESCRIPTIONS[key]) > 20, key
 
 
+def test_the_table_of_asoc_tunables_is_what_config_serves():
+    from asoc.tunables import TUNABLES
+
+    assert list(config.defaults) == list(TUNABLES)
+    for key, (value, allowed, why) in TUNABLES.items():
+        assert config.ALLOWED[key] == str(allowed) and config.DESCRIPTIONS[key] == why
+
+
 def test_keys_can_be_changed_but_not_removed():
     with pytest.raises(TypeError, match="cannot be removed"):
         del config.defaults["mjls.rank_rtol"]

@@ -12,6 +12,8 @@ from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "asoc"
 MAX_ENTRIES = 30
+#: The settings and their table (asoc.config, asoc.tunables), where small constants belong.
+SETTINGS_FILES = ("config.py", "tunables.py")
 
 #: (file under src/asoc, top-level name) -> why its small literals are not settings; keyword
 #: defaults per subpackage ("mjls/*", "<keyword defaults>").
@@ -62,10 +64,6 @@ ALLOWED = {
     ("gp/regression.py", "_projected_gradient"): (
         "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound"
     ),
-    ("gp/regression.py", "_LikelihoodGP"): (
-        "default lower bound 1e-4 std(y) of the noise (documented: keeps Sigma_y well "
-        "conditioned)"
-    ),
     ("gp/regression.py", "DistributionGP"): (
         "central-difference step 1e-6 in log l for the covariances without an analytic "
         "derivative"
@@ -87,7 +85,7 @@ ALLOWED = {
         "gaps tried in turn for the deflated resolvent bounds (a ladder of half decades); "
         "each gives a certified upper bound, the tightest is kept"
     ),
-    ("mjls/certificate.py", "_resolvent_stacks"): (
+    ("mjls/certificate.py", "_resolvent_bounds"): (
         "1e-300 floor of rho in the resolvent radius: rho = 0 still gives a positive radius"
     ),
     ("validation.py", "SYMMETRY_RTOL"): (
@@ -135,7 +133,7 @@ def small_literals(root=SRC):
     """
     found = {}
     for path in sorted(root.rglob("*.py")):
-        if path.name == "config.py":
+        if path.name in SETTINGS_FILES:
             continue
         file = path.relative_to(root).as_posix()
         for name, node in _top_level_names(ast.parse(path.read_text(), filename=str(path))):
