@@ -48,6 +48,7 @@ COVERED_BY = {
     "mjls/baselines.py": "asoc/mjls/test_mjls.py",
     "mjls/certificate.py": "asoc/mjls/test_certified.py",
     "mjls/closed_loops.py": "asoc/mjls/test_mjls_dynamic.py",
+    "mjls/controllers.py": "asoc/mjls/test_design_result.py",
     "mjls/costs.py": "asoc/mjls/test_mjls.py",
     "mjls/dynamic.py": "asoc/mjls/test_mjls_dynamic.py",
     "mjls/exact_cost_design.py": "asoc/mjls/test_mjls_exact.py",
