@@ -122,8 +122,8 @@ def static_cost_and_gradient(sys, L):
     rec = Recursion(sys)
     LC = L @ sys.C
     weight = sys.Q + transpose(LC) @ sys.R @ LC
-    X = solve(predecessor_sum(sys.T, rec.noise(L))).X
-    EP = successor_average(sys.T, solve(weight, adjoint=True).X)
+    X = solve(predecessor_sum(sys.T, rec.noise(L), check=False)).X
+    EP = successor_average(sys.T, solve(weight, adjoint=True).X, check=False)
     cost = float(np.einsum("iab,iba->", weight, X))
     XCt = X @ transpose(sys.C)
     gradient = (sys.R @ LC @ XCt + transpose(sys.B) @ EP @ Acl @ XCt).sum(axis=0)

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import config
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from ..linalg import transpose
 from .lyapunov import coupled_lyapunov_solver

@@ -391,11 +391,11 @@ def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=Non
             stabilized, status = False, StopStatus.DIVERGED
             break
         P = P_solution.X
-        X = solve(predecessor_sum(sys.T, rec.noise(L)), x0=X).X
+        X = solve(predecessor_sum(sys.T, rec.noise(L), check=False), x0=X).X
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
         try:
-            L_new = rec.gain(X, successor_average(sys.T, P), 1.0, 1.0, method)
+            L_new = rec.gain(X, successor_average(sys.T, P, check=False), 1.0, 1.0, method)
         except np.linalg.LinAlgError:
             status = StopStatus.LINALG_ERROR
             break
