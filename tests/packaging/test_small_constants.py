@@ -72,6 +72,18 @@ ALLOWED = {
         "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges "
         "in tens)"
     ),
+    ("mjls/exact_cost_design.py", "<module>"): (
+        "_RADIUS_STALL = 1e-5: the min-radius search stops when BFGS steps lower rho by less "
+        "than this relative (rho is not smooth at its minimum)"
+    ),
+    ("mjls/exact_static_design.py", "_minimise"): (
+        "BFGS's decrease tolerance set to 1e-16, i.e. off: the exact static design stops on its "
+        "scaled-gradient tolerance gtol instead"
+    ),
+    ("mjls/stopping.py", "StoppingRule"): (
+        "a cycle needs a lag-p change below 1e-4 times the lag-1 change: a contraction factor "
+        "-(1 - e) has their ratio about e, so only e < 1e-4 is taken for a cycle"
+    ),
     # the certified rho and the input checks
     ("mjls/certificate.py", "_SHIFTS"): (
         "shifts tried in turn where the Perron stack is singular to rounding (0 first, then "

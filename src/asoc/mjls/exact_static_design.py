@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from .. import config
 from ..linalg import transpose
 from ..optimize import bfgs
 from ..validation import boolean, integer, real_scalar
@@ -117,7 +118,7 @@ def static_cost_and_gradient(sys, L):
     M, n, _ = Acl.shape
     solve = coupled_lyapunov_solver(Acl, sys.T)
     Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")
-    if not (np.all(np.isfinite(Y.X)) and Y.residual < 1e-8 and positive_definite(Y.X)):
+    if not (np.all(np.isfinite(Y.X)) and Y.residual < config.defaults["mjls.solve_residual_max"] and positive_definite(Y.X)):
         return np.inf, None
     rec = Recursion(sys)
     LC = L @ sys.C
@@ -148,7 +149,7 @@ def averaged_output_gain(sys):
     """
     mu = sys.mu_inf
     A, B, C, Q, R = (np.einsum("i,iab->ab", mu, S) for S in (sys.A, sys.B, sys.C, sys.Q, sys.R))
-    Q = Q + 1e-6 * max(1.0, np.abs(Q).max()) * np.eye(sys.nx)
+    Q = Q + config.defaults["mjls.lqg_start_regularisation"] * max(1.0, np.abs(Q).max()) * np.eye(sys.nx)
     try:
         X = scipy.linalg.solve_discrete_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError):
