@@ -40,7 +40,7 @@ from collections.abc import Iterator, MutableMapping
 from .setting_checks import Allowed
 from .tunables import TUNABLES
 
-__all__ = ["defaults", "DESCRIPTIONS", "ALLOWED", "set_defaults", "reset_defaults",
+__all__ = ["DESCRIPTIONS", "ALLOWED", "defaults", "set_defaults", "reset_defaults",
            "option_context", "accepts_settings"]
 
 

@@ -8,10 +8,10 @@ theme adds a few scripts that this book does not use. This extension (listed und
   ``django-static-mathjax`` package) and its web fonts, copied into ``_static/mathjax``
   when the HTML build finishes; it is loaded once, on pages with math only (Sphinx also
   asks for it on the landing page, whose table of contents leads to math);
-- scripts a page does not use are left out (:func:`unused_script`): the Thebe launcher
+- scripts a page does not use are left out (``_unused_script``): the Thebe launcher
   (the book has no launch buttons), sphinx-design's tabs and the toggle button where the
   page has none, and any script listed twice;
-- the architecture page's picture of the layout (:func:`layout_tree`) is generated from
+- the architecture page's picture of the layout (``_layout_tree``) is generated from
   ``src/`` when the page is read, so it follows the modules as they are split;
 - the API pages' ``<!-- api MODULE ... -->`` blocks become an autosummary table of the
   module's public names and their entries grouped by task (:func:`api_markdown`).
@@ -33,11 +33,9 @@ from pathlib import Path
 
 from . import paths, printing
 
-__all__ = ["MATHJAX_BUNDLE", "MATHJAX_FONTS", "API_BLOCK", "LAYOUT_MARKER", "mathjax_source",
-           "install_mathjax", "unused_script", "THEBE_BODY", "THESIS", "LATEX_ELEMENTS",
-           "title_page", "SUMMARY_WIDTH", "module_summary", "layout_tree", "public_names",
-           "attribute_docs", "documented", "api_markdown", "THESIS_ABBREVIATIONS",
-           "use_abbreviations", "setup", "prepare"]
+__all__ = ["MATHJAX_BUNDLE", "MATHJAX_FONTS", "API_BLOCK", "LAYOUT_MARKER", "THEBE_BODY", "THESIS",
+           "LATEX_ELEMENTS", "SUMMARY_WIDTH", "public_names", "documented", "api_markdown",
+           "THESIS_ABBREVIATIONS", "use_abbreviations", "setup"]
 
 
 MATHJAX_BUNDLE = "tex-chtml-full.js"
@@ -48,10 +46,10 @@ MATHJAX_FONTS = Path("output") / "chtml" / "fonts" / "woff-v2"
 API_BLOCK = re.compile(r"<!-- api (?P<module>[\w.]+)(?P<groups>.*?)-->", re.DOTALL)
 """An API block of a page: ``<!-- api MODULE`` then lines ``Title: name name ...`` then ``-->``."""
 LAYOUT_MARKER = "<!-- layout: generated from src/ by asoc_companion.book -->"
-"""Where the architecture page receives :func:`layout_tree` (replaced when the page is read)."""
+"""Where the architecture page receives ``_layout_tree`` (replaced when the page is read)."""
 
 
-def mathjax_source() -> Path:
+def _mathjax_source() -> Path:
     """The folder of MathJax 3's ``es5`` build installed by ``django-static-mathjax``.
 
     Raises
@@ -65,16 +63,16 @@ def mathjax_source() -> Path:
     return Path(list(spec.submodule_search_locations)[0]) / "static" / "mathjax" / "es5"
 
 
-def install_mathjax(static) -> Path:
+def _install_mathjax(static) -> Path:
     """Copy :data:`MATHJAX_BUNDLE` and its fonts into ``static/mathjax``; return that folder."""
-    source, target = mathjax_source(), Path(static) / "mathjax"
+    source, target = _mathjax_source(), Path(static) / "mathjax"
     (target / MATHJAX_FONTS).mkdir(parents=True, exist_ok=True)
     shutil.copy2(source / MATHJAX_BUNDLE, target / MATHJAX_BUNDLE)
     shutil.copytree(source / MATHJAX_FONTS, target / MATHJAX_FONTS, dirs_exist_ok=True)
     return target
 
 
-def unused_script(script, body: str, seen: set) -> bool:
+def _unused_script(script, body: str, seen: set) -> bool:
     """Whether a page with HTML ``body`` can do without ``script`` (a Sphinx ``_JavaScript``).
 
     ``seen`` collects the scripts already kept on the page; a repeated one is unused.
@@ -83,15 +81,15 @@ def unused_script(script, body: str, seen: set) -> bool:
     --------
     >>> from sphinx.builders.html._assets import _JavaScript
     >>> seen = set()
-    >>> unused_script(_JavaScript("_static/doctools.js"), "<p>text</p>", seen)
+    >>> _unused_script(_JavaScript("_static/doctools.js"), "<p>text</p>", seen)
     False
-    >>> unused_script(_JavaScript("_static/doctools.js"), "<p>text</p>", seen)
+    >>> _unused_script(_JavaScript("_static/doctools.js"), "<p>text</p>", seen)
     True
-    >>> unused_script(_JavaScript("_static/design-tabs.js"), "<p>text</p>", set())
+    >>> _unused_script(_JavaScript("_static/design-tabs.js"), "<p>text</p>", set())
     True
-    >>> unused_script(_JavaScript("_static/mathjax/a11y/sre.js"), "", set())
+    >>> _unused_script(_JavaScript("_static/mathjax/a11y/sre.js"), "", set())
     True
-    >>> unused_script(_JavaScript(f"_static/mathjax/{MATHJAX_BUNDLE}"), '<span class="math">x</span>', set())
+    >>> _unused_script(_JavaScript(f"_static/mathjax/{MATHJAX_BUNDLE}"), '<span class="math">x</span>', set())
     False
     """
     name = str(script.filename)
@@ -117,7 +115,7 @@ def _prune_page_assets(app, pagename, templatename, context, doctree):
     if app.builder.format != "html" or "script_files" not in context:
         return
     seen, body = set(), context.get("body", "")
-    context["script_files"][:] = [s for s in context["script_files"] if not unused_script(s, body, seen)]
+    context["script_files"][:] = [s for s in context["script_files"] if not _unused_script(s, body, seen)]
     css_seen = set()
     context["css_files"][:] = [c for c in context["css_files"]
                                if not (c.filename in css_seen or css_seen.add(c.filename))]
@@ -150,12 +148,12 @@ LATEX_ELEMENTS = {
 """Sphinx's LaTeX settings for the PDF, besides the title page."""
 
 
-def title_page(title: str, version: str) -> str:
+def _title_page(title: str, version: str) -> str:
     """The PDF's title page (LaTeX): the book's title, the thesis, the licences, the version.
 
     Examples
     --------
-    >>> page = title_page("A companion", "0.1.0")
+    >>> page = _title_page("A companion", "0.1.0")
     >>> "A companion" in page and "CC BY-NC 4.0" in page and "version 0.1.0" in page
     True
     """
@@ -177,7 +175,7 @@ def _configure(app, config):
     config.mathjax_path = f"mathjax/{MATHJAX_BUNDLE}"
     config.release = config.version = version("asoc")
     config.latex_elements = {**config.latex_elements, **LATEX_ELEMENTS,
-                             "maketitle": title_page(config.html_title or config.project, config.release)}
+                             "maketitle": _title_page(config.html_title or config.project, config.release)}
     config.latex_use_xindy = False          # makeindex comes with TeX Live; xindy is a package more
     # Jupyter Book listed every .js under _static (a MathJax folder left there by an old
     # build would add 70 scripts): keep the book's own scripts only
@@ -187,20 +185,20 @@ def _configure(app, config):
 
 def _copy_mathjax(app, exception):
     if exception is None and app.builder.format == "html":
-        install_mathjax(Path(app.outdir) / "_static")
+        _install_mathjax(Path(app.outdir) / "_static")
 
 
 SUMMARY_WIDTH = 42
 """Characters of a module's summary in the layout tree (the page's code block stays narrow)."""
 
 
-def module_summary(path: Path, width: int = SUMMARY_WIDTH) -> str:
+def _module_summary(path: Path, width: int = SUMMARY_WIDTH) -> str:
     """The first line of a module's docstring, without reST markup, cut at ``width`` characters.
 
     Examples
     --------
     >>> import asoc_companion.book as me
-    >>> module_summary(Path(me.__file__))
+    >>> _module_summary(Path(me.__file__))
     "The book's Sphinx extension: a light…"
     """
     doc = ast.get_docstring(ast.parse(path.read_text()))
@@ -209,12 +207,12 @@ def module_summary(path: Path, width: int = SUMMARY_WIDTH) -> str:
     return line if len(line) <= width else line[:width].rsplit(" ", 1)[0] + "…"
 
 
-def layout_tree(src) -> str:
+def _layout_tree(src) -> str:
     """A tree of the packages under ``src``, one line per module with its docstring's first line.
 
     Examples
     --------
-    >>> tree = layout_tree(paths.project().src)
+    >>> tree = _layout_tree(paths.project().src)
     >>> tree.splitlines()[0]
     'src/'
     >>> any(line.lstrip(' │├└─').startswith('book.py') for line in tree.splitlines())
@@ -229,7 +227,7 @@ def layout_tree(src) -> str:
         width = max(map(len, names), default=0)
         for i, (entry, name) in enumerate(zip(entries, names)):
             last = i == len(entries) - 1
-            summary = module_summary(entry / "__init__.py" if entry.is_dir() else entry)
+            summary = _module_summary(entry / "__init__.py" if entry.is_dir() else entry)
             lines.append(f"{indent}{'└── ' if last else '├── '}{name:<{width}}  {summary}".rstrip())
             if entry.is_dir():
                 walk(entry, indent + ("    " if last else "│   "))
@@ -262,7 +260,7 @@ def public_names(module) -> list:
     return [name for name, obj in vars(module).items() if defined_here(name, obj)]
 
 
-def attribute_docs(module) -> dict:
+def _attribute_docs(module) -> dict:
     """``{name: docstring}`` of the module's data documented in its source (``#:`` comments or
     a string right after the assignment); data without one would show its type's docstring."""
     from sphinx.pycode import ModuleAnalyzer
@@ -276,7 +274,7 @@ def attribute_docs(module) -> dict:
 
 def documented(module, names) -> list:
     """``names`` without the module's data that has no documentation of its own."""
-    docs = attribute_docs(module)
+    docs = _attribute_docs(module)
     return [n for n in names if inspect.isclass(getattr(module, n)) or callable(getattr(module, n)) or n in docs]
 
 
@@ -332,7 +330,7 @@ def api_markdown(module_name: str, groups: str) -> str:
 def _expand_blocks(app, docname, source):
     text = source[0]
     if LAYOUT_MARKER in text:
-        text = text.replace(LAYOUT_MARKER, f"```text\n{layout_tree(Path(app.srcdir).parent / 'src')}\n```")
+        text = text.replace(LAYOUT_MARKER, f"```text\n{_layout_tree(Path(app.srcdir).parent / 'src')}\n```")
     source[0] = API_BLOCK.sub(lambda m: api_markdown(m["module"], m["groups"]), text)
 
 
@@ -377,18 +375,18 @@ def setup(app):
     return {"parallel_read_safe": True, "parallel_write_safe": True}
 
 
-def prepare(book=None) -> Path:
+def _prepare(book=None) -> Path:
     """Ready ``book`` (default the checkout's) for a build; return its folder.
 
     Removes ``book/_static/mathjax`` left by earlier versions and checks that MathJax is
-    installed (:func:`mathjax_source`).
+    installed (``_mathjax_source``).
     """
     book = Path(book or paths.project().book)
     shutil.rmtree(book / "_static" / "mathjax", ignore_errors=True)
-    mathjax_source()
+    _mathjax_source()
     return book
 
 
 if __name__ == "__main__":
-    print(f"{prepare()} is ready to build (MathJax: {mathjax_source() / MATHJAX_BUNDLE})")
+    print(f"{_prepare()} is ready to build (MathJax: {_mathjax_source() / MATHJAX_BUNDLE})")
     sys.exit(0)

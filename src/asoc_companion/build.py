@@ -22,8 +22,7 @@ from . import manifest, paths
 from . import notebooks as nbs
 from .plan import make_plan, output_folder
 
-__all__ = ["rel", "terminate", "run_one", "written_since", "run_and_record", "reproduce",
-           "longest_first"]
+__all__ = ["rel", "terminate", "run_one", "run_and_record", "reproduce"]
 
 
 def rel(path) -> str:
@@ -47,13 +46,13 @@ def run_one(plan, progress_bar=None):
     executed = nbs.run(plan, progress_bar=progress_bar)
     seconds = time.perf_counter() - start
     print(f"  {info.path.name} done in {seconds:.1f} s -> {rel(executed)}", flush=True)
-    written = written_since(folder, started)
+    written = _written_since(folder, started)
     if written:
         print(f"  outputs in {rel(folder)}/: {', '.join(written)}", flush=True)
     return executed, seconds
 
 
-def written_since(folder, since: float) -> list:
+def _written_since(folder, since: float) -> list:
     """The files under ``folder`` written at or after ``since`` (a ``time.time()``), relative to it,
     in natural order (fig2_2 before fig2_10).
 
@@ -63,7 +62,7 @@ def written_since(folder, since: float) -> list:
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     for name in ("fig2_10.png", "fig2_2.png"):
     ...         _ = (Path(tmp) / name).write_text("")
-    ...     written_since(tmp, 0)
+    ...     _written_since(tmp, 0)
     ['fig2_2.png', 'fig2_10.png']
     """
     folder = Path(folder)
@@ -147,13 +146,13 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
     return 1 if failed else 0
 
 
-def longest_first(names, seconds) -> list:
+def _longest_first(names, seconds) -> list:
     """``names`` by their last run's wall time, longest first, never-timed ones before all
     (the longest-processing-time rule: on two cores the short notebooks fill the gaps at the end).
 
     Examples
     --------
-    >>> longest_first(["sec3_2", "theorems", "new", "sec2_5"], {"sec3_2": 6.0, "theorems": 300.0, "sec2_5": 90.0})
+    >>> _longest_first(["sec3_2", "theorems", "new", "sec2_5"], {"sec3_2": 6.0, "theorems": 300.0, "sec2_5": 90.0})
     ['new', 'theorems', 'sec2_5', 'sec3_2']
     """
     return sorted(names, key=lambda name: -seconds.get(name, float("inf")))
@@ -163,7 +162,7 @@ def _schedule(pool, todo, waits, jobs, out, done, failed):
     """Submit each plan when its dependencies are done, longest first (by the manifest in
     ``out``); write its manifest entry when it finishes."""
     running = {}
-    order = longest_first(list(todo), manifest.last_seconds(out))
+    order = _longest_first(list(todo), manifest.last_seconds(out))
     while len(done) + len(failed) < len(todo):
         for name in order:
             if name in running.values() or name in done or name in failed:

@@ -13,20 +13,20 @@ from . import paths
 from .ledger import badge, ledger_label
 from .reference import SAFE_LOADER, load_reference, status
 
-__all__ = ["CLAIMS_NAME", "claims_path", "load_claims", "verdict", "caption_markdown",
-           "STATUS_WORDS", "figure_caption", "insert_caption_cells"]
+__all__ = ["CLAIMS_NAME", "load_claims", "verdict", "caption_markdown", "STATUS_WORDS",
+           "figure_caption"]
 
 
 CLAIMS_NAME = "figure_claims.yaml"
 
 
-def claims_path():
+def _claims_path():
     """``tests/reference/figure_claims.yaml`` of the project.
 
     Examples
     --------
     >>> with paths.scratch_project() as root:
-    ...     print(claims_path().relative_to(root).as_posix())
+    ...     print(_claims_path().relative_to(root).as_posix())
     tests/reference/figure_claims.yaml
     """
     return paths.project().reference.parent / CLAIMS_NAME
@@ -44,7 +44,7 @@ def load_claims(path=None) -> dict:
     ...     print(load_claims(path))
     {'own.1': {'where': 'p. 1', 'claim': 'The loop is stable.', 'keys': ['sec_demo.rho']}}
     """
-    with open(path or claims_path()) as handle:
+    with open(path or _claims_path()) as handle:
         raw = yaml.load(handle, Loader=SAFE_LOADER) or {}
     for number, spec in raw.items():
         missing = {"where", "claim", "keys"} - set(spec)
@@ -146,7 +146,7 @@ def _caption_cell(number, output, count):
     return cell
 
 
-def insert_caption_cells(path, with_output=False) -> list:
+def _insert_caption_cells(path, with_output=False) -> list:
     """Add a ``repro.figure_caption`` cell after each figure of the notebook at ``path`` that lacks one.
 
     The cell goes right after the cell that saves the figure (after its Markdown caption, if
@@ -163,7 +163,7 @@ def insert_caption_cells(path, with_output=False) -> list:
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = pathlib.Path(folder) / "demo.ipynb"
     ...     nbformat.write(nb, path)
-    ...     print(insert_caption_cells(path), insert_caption_cells(path))
+    ...     print(_insert_caption_cells(path), _insert_caption_cells(path))
     ...     print([cell.source for cell in nbformat.read(path, as_version=4).cells][2])
     ['own.1'] []
     repro.figure_caption("own.1")

@@ -16,7 +16,7 @@ from asoc.progress import progress_bar
 
 from .theorems.instances import draw_system, random_spd_stack
 
-__all__ = ["infinite_horizon_gap", "finite_horizon_gap", "design_gaps", "quantiles"]
+__all__ = ["design_gaps", "quantiles"]
 
 
 def _draw(rng):
@@ -27,7 +27,7 @@ def _draw(rng):
             return sys
 
 
-def infinite_horizon_gap(rng):
+def _infinite_horizon_gap(rng):
     """Relative gap of Alg. 3.2's controller to the exact-cost design started from it (None if Alg. 3.2
     does not converge to a stabilising controller).
 
@@ -36,8 +36,8 @@ def infinite_horizon_gap(rng):
     The exact-cost design improves on Alg. 3.2 by a small fraction; on the second system Alg. 3.2
     diverges (the closed loop's rho is about 5), so there is no gap to report:
 
-    >>> gap = infinite_horizon_gap(np.random.default_rng(0))
-    >>> 0 <= gap < 0.01, infinite_horizon_gap(np.random.default_rng(1))
+    >>> gap = _infinite_horizon_gap(np.random.default_rng(0))
+    >>> 0 <= gap < 0.01, _infinite_horizon_gap(np.random.default_rng(1))
     (True, None)
     """
     sys = _draw(rng)
@@ -48,13 +48,13 @@ def infinite_horizon_gap(rng):
     return float((run.cost - best.cost) / best.cost)
 
 
-def finite_horizon_gap(rng, horizon=20):
+def _finite_horizon_gap(rng, horizon=20):
     """Relative gap of Alg. 3.3's controller (random Gaussian-mixture x_0) to the exact-cost design
     started from it.
 
     Examples
     --------
-    >>> gap = finite_horizon_gap(np.random.default_rng(0), horizon=5)
+    >>> gap = _finite_horizon_gap(np.random.default_rng(0), horizon=5)
     >>> 0 <= gap < 0.01
     True
     """
@@ -86,11 +86,11 @@ def design_gaps(seed_sequence, n_systems, horizon=20, progress=False):
     bar = progress_bar(total=2 * n_systems, enabled=progress, desc="design gaps", unit="system")
     gaps_32 = []
     for child in infinite.spawn(n_systems):
-        gaps_32.append(infinite_horizon_gap(np.random.default_rng(child)))
+        gaps_32.append(_infinite_horizon_gap(np.random.default_rng(child)))
         bar.update()
     gaps_33 = []
     for child in finite.spawn(n_systems):
-        gaps_33.append(finite_horizon_gap(np.random.default_rng(child), horizon))
+        gaps_33.append(_finite_horizon_gap(np.random.default_rng(child), horizon))
         bar.update()
     bar.close()
     return {"alg_3_2": [g for g in gaps_32 if g is not None], "alg_3_3": gaps_33,

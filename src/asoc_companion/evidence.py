@@ -16,9 +16,8 @@ mapping ``{verdict, n, estimate, ci_low, ci_high, test}``; its verdict ``holds``
 """
 
 __all__ = ["EVIDENCE_NEEDS", "EVIDENCE_BADGE", "STATISTIC_FIELDS", "VERDICT_STATUS",
-           "evidence_problems", "evidence_badge", "section_link", "evidence_text",
-           "statistic_status", "is_statistic", "statistic_text", "evidence_counts",
-           "evidence_badges"]
+           "evidence_problems", "evidence_badge", "evidence_text", "statistic_status",
+           "is_statistic", "statistic_text", "evidence_badges"]
 
 
 EVIDENCE_NEEDS = {
@@ -93,12 +92,12 @@ def evidence_badge(kind: str, text: str | None = None) -> str:
     return f"{{bdg-{colour}-line}}`{text or label}`"
 
 
-def section_link(section: str) -> str:
+def _section_link(section: str) -> str:
     """An HTML link to the page (and anchor) ``page`` or ``page#anchor`` of the book.
 
     Examples
     --------
-    >>> section_link("findings#finding-table32")
+    >>> _section_link("findings#finding-table32")
     '<a href="findings.html#finding-table32">findings, finding-table32</a>'
     """
     page, _, anchor = section.partition("#")
@@ -127,7 +126,7 @@ def evidence_text(evidence) -> str:
     head = f"*Evidence, {EVIDENCE_BADGE[kind][1]}:*"
     if kind == "thesis-error":
         body = (
-            f"{_sentence(evidence['certificate'])} Computed in {section_link(evidence['section'])}."
+            f"{_sentence(evidence['certificate'])} Computed in {_section_link(evidence['section'])}."
         )
     elif kind == "unspecified":
         readings = "; ".join(str(r).rstrip(".") for r in evidence["readings"])
@@ -195,12 +194,12 @@ def statistic_text(value) -> str:
     )
 
 
-def evidence_counts(rows) -> dict:
+def _evidence_counts(rows) -> dict:
     """``{kind: number of deviating rows}`` over ``rows`` (dicts with ``status`` and ``evidence``).
 
     Examples
     --------
-    >>> evidence_counts([{"status": "deviates", "evidence": "open"},
+    >>> _evidence_counts([{"status": "deviates", "evidence": "open"},
     ...                  {"status": "reproduced", "evidence": ""},
     ...                  {"status": "deviates", "evidence": "open"}])
     {'open': 2}
@@ -220,7 +219,7 @@ def evidence_badges(rows) -> str:
     >>> evidence_badges([{"status": "deviates", "evidence": "thesis-error"}])
     '{bdg-danger-line}`1 thesis error`'
     """
-    c = evidence_counts(rows)
+    c = _evidence_counts(rows)
     return " ".join(
         evidence_badge(k, f"{c[k]} {EVIDENCE_BADGE[k][1]}") for k in EVIDENCE_NEEDS if c.get(k)
     )

@@ -14,7 +14,7 @@ import json
 from functools import lru_cache
 from pathlib import Path
 
-__all__ = ["imported_names", "module_file", "closure", "notebook_modules"]
+__all__ = ["imported_names", "closure", "notebook_modules"]
 
 
 def _code_of_notebook(path) -> list:
@@ -70,7 +70,7 @@ def _file_imports(path: str, mtime_ns: int, size: int, package: str) -> frozense
     return frozenset(imported_names(Path(path).read_text(), package))
 
 
-def module_file(name: str, src) -> Path | None:
+def _module_file(name: str, src) -> Path | None:
     """The file of module ``name`` under ``src`` (``a/b.py`` or ``a/b/__init__.py``), or None.
 
     Examples
@@ -80,8 +80,8 @@ def module_file(name: str, src) -> Path | None:
     ...     (Path(src) / "pkg" / "sub").mkdir(parents=True)
     ...     for name in ("pkg/__init__.py", "pkg/a.py", "pkg/sub/__init__.py"):
     ...         _ = (Path(src) / name).write_text("")
-    ...     print([module_file(m, src).relative_to(src).as_posix() for m in ("pkg.a", "pkg.sub")],
-    ...           module_file("pkg.missing", src))
+    ...     print([_module_file(m, src).relative_to(src).as_posix() for m in ("pkg.a", "pkg.sub")],
+    ...           _module_file("pkg.missing", src))
     ['pkg/a.py', 'pkg/sub/__init__.py'] None
     """
     base = Path(src).joinpath(*name.split("."))
@@ -118,7 +118,7 @@ def closure(names, src, exclude=()) -> dict:
             module = ".".join(parts[:depth])
             if module in found or module in exclude:
                 continue
-            path = module_file(module, src)
+            path = _module_file(module, src)
             if path is None:
                 continue
             found[module] = path

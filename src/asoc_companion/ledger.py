@@ -24,8 +24,8 @@ from .values import load_all_values
 
 __all__ = ["STATUS_TEXT", "BADGE", "SHORT", "SHARED_PREFIX", "SUMMARY", "FINDINGS", "VERDICT",
            "badge", "decimals", "ledger_rows", "note_groups", "FIELDS", "counts", "ledger_label",
-           "ledger_markdown", "totals_markdown", "verdict_markdown", "summary_markdown",
-           "findings_markdown", "intro_markdown", "write_summary", "write_ledger"]
+           "ledger_markdown", "totals_markdown", "verdict_markdown", "intro_markdown",
+           "write_ledger"]
 
 
 STATUS_TEXT = {"reproduced": "reproduced", "deviates": "deviates", "not-resolved": "not resolved",
@@ -429,7 +429,7 @@ def _join(items) -> str:
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + (" and " if len(items) == 2 else ", and ") + items[-1]
 
 
-def summary_markdown(rows=None) -> str:
+def _summary_markdown(rows=None) -> str:
     """The intro's summary: per thesis section the counts of reproduced / deviating / not
     printed values, linked, their total, and what is counted (:func:`totals_markdown`).
 
@@ -437,7 +437,7 @@ def summary_markdown(rows=None) -> str:
     --------
     >>> rows = [{"notebook": "sec_demo", "status": "reproduced"}, {"notebook": "sec_demo", "status": "deviates"}]
     >>> with paths.scratch_project() as root:
-    ...     print(summary_markdown(rows).splitlines()[2])
+    ...     print(_summary_markdown(rows).splitlines()[2])
     | sec_demo | {bdg-success}`1` | {bdg-warning}`1` | 0 | 0 | – | {ref}`ledger <ledger-sec_demo>` |
     """
     rows = rows if rows is not None else ledger_rows()
@@ -456,7 +456,7 @@ def summary_markdown(rows=None) -> str:
             + "\n" + totals_markdown(rows) + "\n")
 
 
-def findings_markdown(path=None) -> str:
+def _findings_markdown(path=None) -> str:
     r"""The intro's list of findings: one link per section of ``book/findings.ipynb``, with its kind.
 
     Examples
@@ -466,7 +466,7 @@ def findings_markdown(path=None) -> str:
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = pathlib.Path(folder) / "findings.ipynb"
     ...     _ = path.write_text(json.dumps({"cells": [{"cell_type": "markdown", "source": source}]}))
-    ...     print(findings_markdown(path), end="")
+    ...     print(_findings_markdown(path), end="")
     - {ref}`finding-cb` {bdg-warning}`error in the thesis`
     """
     path = path or paths.project().book / "findings.ipynb"
@@ -496,11 +496,11 @@ def intro_markdown(text, rows=None) -> str:
     (False, '# Intro', 'The end.', 1)
     """
     rows = rows if rows is not None else ledger_rows()
-    text = _replace_block(_replace_block(text, SUMMARY, summary_markdown(rows)), FINDINGS, findings_markdown())
+    text = _replace_block(_replace_block(text, SUMMARY, _summary_markdown(rows)), FINDINGS, _findings_markdown())
     return _replace_block(text, VERDICT, verdict_markdown(rows) + "\n") if VERDICT[0] in text else text
 
 
-def write_summary(intro=None, rows=None) -> str:
+def _write_summary(intro=None, rows=None) -> str:
     r"""Refresh the generated blocks of ``book/intro.md``; return the new text.
 
     Examples
@@ -508,7 +508,7 @@ def write_summary(intro=None, rows=None) -> str:
     >>> with paths.scratch_project() as root:
     ...     intro = root / "book" / "intro.md"
     ...     _ = intro.write_text("\n".join(["# Intro", SUMMARY[0], SUMMARY[1], FINDINGS[0], FINDINGS[1]]))
-    ...     new = write_summary(intro, [{"notebook": "sec_demo", "status": "deviates"}])
+    ...     new = _write_summary(intro, [{"notebook": "sec_demo", "status": "deviates"}])
     ...     print(new == intro.read_text(), "| sec_demo | 0 | {bdg-warning}`1` | 0 | 0 |" in new)
     True True
     """
@@ -554,7 +554,7 @@ def write_ledger(path=None) -> str:
     text = ledger_markdown()
     atomic_write_text(path or paths.project().book / "ledger.md", text)
     if path is None:
-        write_summary()
+        _write_summary()
     return text
 
 

@@ -17,7 +17,7 @@ full-fidelity run) holds, per notebook, content hashes of everything its results
 Every function of one run reads its :class:`asoc_companion.plan.RunPlan` (the values file,
 the executed notebook, the manifest path); none derives a path itself. A notebook is up to
 date when its entry equals the hashes computed now and its outputs are complete
-(:func:`incomplete_outputs`); ``python -m asoc_companion reproduce`` skips it then
+(``_incomplete_outputs``); ``python -m asoc_companion reproduce`` skips it then
 (``--force`` re-executes everything).
 """
 
@@ -32,8 +32,8 @@ from .plan import manifest_file
 from .values import CorruptValuesError, read_values_file
 
 __all__ = ["source_hash", "tree_hash", "HARNESS_ONLY", "module_hashes", "dependencies", "entry",
-           "load_manifest", "incomplete_notebook", "incomplete_outputs",
-           "last_seconds", "changed_inputs", "update_manifest"]
+           "load_manifest", "incomplete_notebook", "last_seconds", "changed_inputs",
+           "update_manifest"]
 
 
 def _sha256(data: bytes) -> str:
@@ -214,7 +214,7 @@ def incomplete_notebook(path) -> str:
     return f"code cells {unrun} were not executed" if unrun else ""
 
 
-def incomplete_outputs(plan, reference=None) -> list:
+def _incomplete_outputs(plan, reference=None) -> list:
     """What is missing from the results of the last run ``plan`` (empty: complete).
 
     The values file (``plan.values``) must exist and parse and hold every key the reference
@@ -234,9 +234,9 @@ def incomplete_outputs(plan, reference=None) -> list:
     >>> with paths.scratch_project() as root:
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
     ...     plan = make_plan(paths.project(), info, "ci")
-    ...     before = incomplete_outputs(plan, reference=reference)
+    ...     before = _incomplete_outputs(plan, reference=reference)
     ...     _ = Recorder("demo", "ci", plan.output_dir).record("rho", 0.25)
-    ...     print(before, incomplete_outputs(plan, reference=reference))
+    ...     print(before, _incomplete_outputs(plan, reference=reference))
     ['no values file', 'no executed notebook'] ['values missing: gain', 'no executed notebook']
     """
     from .reference import load_reference
@@ -310,7 +310,7 @@ def changed_inputs(plan) -> list:
     old = load_manifest(plan.output_dir).get(plan.name)
     if old is None:
         return ["never run"]
-    incomplete = incomplete_outputs(plan)
+    incomplete = _incomplete_outputs(plan)
     if incomplete:
         return [f"outputs incomplete ({'; '.join(incomplete)})"]
     new = entry(plan)

@@ -38,9 +38,9 @@ from .manifest import dependencies, incomplete_notebook
 from .staging import commit, one_blas_thread, remove_stage
 
 __all__ = ["HARNESS_PARAMETERS", "KERNEL_ARGUMENTS", "NotebookInfo", "notebooks", "find",
-           "natural_key", "build_order", "by_name", "parameter_specs", "default_parameters",
-           "parse_value", "check_value", "parse_overrides", "check_overrides", "run", "PAPERMILL_TIMES",
-           "KERNEL_CELL_FILE", "normalise", "parameters_reaching"]
+           "natural_key", "build_order", "by_name", "default_parameters", "parse_value",
+           "parse_overrides", "run", "PAPERMILL_TIMES", "KERNEL_CELL_FILE", "normalise",
+           "parameters_reaching"]
 
 
 HARNESS_PARAMETERS = ("fidelity", "output_dir")   # set by the harness, not by -p
@@ -157,12 +157,12 @@ def by_name(name: str, book=None) -> NotebookInfo:
     return found[name]
 
 
-def parameter_specs(info: NotebookInfo) -> dict:
+def _parameter_specs(info: NotebookInfo) -> dict:
     """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (``default`` is source text).
 
     Examples
     --------
-    >>> parameter_specs(by_name("sec3_2"))["output_dir"]["name"]
+    >>> _parameter_specs(by_name("sec3_2"))["output_dir"]["name"]
     'output_dir'
     """
     import papermill
@@ -178,7 +178,7 @@ def default_parameters(info: NotebookInfo) -> dict:
     >>> {"fidelity", "output_dir"} <= set(default_parameters(by_name("sec3_2")))
     True
     """
-    return {name: spec["default"] for name, spec in parameter_specs(info).items()}
+    return {name: spec["default"] for name, spec in _parameter_specs(info).items()}
 
 
 def parse_value(text: str):
@@ -208,7 +208,7 @@ def _default_value(source: str):
         return None          # an expression: no type to check against
 
 
-def check_value(name: str, value, default_source: str, notebook: str):
+def _check_value(name: str, value, default_source: str, notebook: str):
     """``value`` for parameter ``name`` if it has the type (and range) of the default; ValueError otherwise.
 
     The type is the default's: an int parameter takes an int (not a bool, float or text), a
@@ -219,9 +219,9 @@ def check_value(name: str, value, default_source: str, notebook: str):
 
     Examples
     --------
-    >>> check_value("runs", 50, "100", "demo.ipynb"), check_value("noise", 1, "0.5", "demo.ipynb")
+    >>> _check_value("runs", 50, "100", "demo.ipynb"), _check_value("noise", 1, "0.5", "demo.ipynb")
     (50, 1.0)
-    >>> check_value("runs", 0, "100", "demo.ipynb")
+    >>> _check_value("runs", 0, "100", "demo.ipynb")
     Traceback (most recent call last):
     ...
     ValueError: parameter runs of demo.ipynb (default 100) is a count: it takes an integer >= 1, found 0
@@ -252,7 +252,7 @@ def parse_overrides(info: NotebookInfo, pairs) -> dict:
     ------
     ValueError
         A name given twice, a name that is not a parameter (the message lists the valid
-        ones), or a value of the wrong type or range (:func:`check_value`).
+        ones), or a value of the wrong type or range (``_check_value``).
 
     Examples
     --------
@@ -264,20 +264,20 @@ def parse_overrides(info: NotebookInfo, pairs) -> dict:
         if name in overrides:
             raise ValueError(f"parameters: -p {name} given twice ({overrides[name]!r} and {text!r}); give it once")
         overrides[name] = parse_value(text)
-    return check_overrides(info, overrides)
+    return _check_overrides(info, overrides)
 
 
-def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
+def _check_overrides(info: NotebookInfo, overrides: dict) -> dict:
     """``overrides`` if every name is a parameter of the notebook with a value of its type and range.
 
     Examples
     --------
-    >>> check_overrides(by_name("sec3_2"), {"nosuch": 1})  # doctest: +ELLIPSIS
+    >>> _check_overrides(by_name("sec3_2"), {"nosuch": 1})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     ValueError: parameters: 'nosuch' is not a parameter of sec3_2.ipynb; valid names: ...
     """
-    specs = parameter_specs(info)
+    specs = _parameter_specs(info)
     valid = [name for name in specs if name not in HARNESS_PARAMETERS]
     checked = {}
     for name, value in overrides.items():
@@ -286,7 +286,7 @@ def check_overrides(info: NotebookInfo, overrides: dict) -> dict:
         if name not in valid:
             raise ValueError(f"parameters: {name!r} is not a parameter of {info.path.name}; "
                              f"valid names: {', '.join(valid)}")
-        checked[name] = check_value(name, value, specs[name]["default"], info.path.name)
+        checked[name] = _check_value(name, value, specs[name]["default"], info.path.name)
     return checked
 
 
@@ -295,14 +295,14 @@ def run(plan, log_output=False, progress_bar=None) -> Path:
     crash-safely; return the executed file.
 
     The plan's overrides replace defaults of the ``parameters`` cell (checked by
-    :func:`check_overrides`). The run executes into a staging folder in ``plan.staging``; its
+    ``_check_overrides``). The run executes into a staging folder in ``plan.staging``; its
     results move to ``plan.output_dir`` (and the executed notebook to ``plan.executed``) only
     on success.
     """
     import papermill
 
     info, output_dir, target, shown = plan.notebook, plan.output_dir, plan.executed, plan.injected
-    check_overrides(info, plan.parameters)
+    _check_overrides(info, plan.parameters)
     plan.staging.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f"{info.name}-", dir=plan.staging))
     try:

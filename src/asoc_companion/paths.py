@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from unittest import mock
 
-__all__ = ["ENV_VAR", "MARKERS", "Project", "is_project", "find_root", "project", "scratch_project"]
+__all__ = ["ENV_VAR", "MARKERS", "Project", "project", "scratch_project"]
 
 
 ENV_VAR = "ASOC_COMPANION_ROOT"
@@ -77,22 +77,22 @@ class Project:
         return self.book / "_build" / "staging"
 
 
-def is_project(folder) -> bool:
+def _is_project(folder) -> bool:
     """Whether ``folder`` holds ``book/_toc.yml`` and ``figures/``.
 
     Examples
     --------
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     before = is_project(folder)
+    ...     before = _is_project(folder)
     ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch(); (Path(folder) / "figures").mkdir()
-    ...     print(before, is_project(folder))
+    ...     print(before, _is_project(folder))
     False True
     """
     return all((Path(folder) / marker).exists() for marker in MARKERS)
 
 
-def find_root(start=None) -> Path:
+def _find_root(start=None) -> Path:
     """The project root: ``$ASOC_COMPANION_ROOT``, else the nearest project folder above ``start``.
 
     Parameters
@@ -118,10 +118,10 @@ def find_root(start=None) -> Path:
     >>> with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ, {ENV_VAR: ""}):
     ...     root = Path(folder).resolve()
     ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch(); (root / "figures").mkdir()
-    ...     print(find_root(root / "book") == root)
+    ...     print(_find_root(root / "book") == root)
     True
     >>> with mock.patch.dict(os.environ, {ENV_VAR: "/"}):
-    ...     find_root()
+    ...     _find_root()
     Traceback (most recent call last):
     ...
     RuntimeError: ASOC_COMPANION_ROOT='/' is not a checkout of the companion (expected book/_toc.yml and figures/ in it)
@@ -129,27 +129,27 @@ def find_root(start=None) -> Path:
     configured = os.environ.get(ENV_VAR)
     if configured:
         root = Path(configured).expanduser().resolve()
-        if not is_project(root):
+        if not _is_project(root):
             raise RuntimeError(f"{ENV_VAR}={configured!r} is not a checkout of the companion "
                                f"(expected book/_toc.yml and figures/ in it)")
         return root
     here = Path(start or Path.cwd()).resolve()
     for folder in (here, *here.parents):
-        if is_project(folder):
+        if _is_project(folder):
             return folder
     raise RuntimeError(f"no checkout of the companion found above {here} (a folder with book/_toc.yml and "
                        f"figures/): run from inside one, pass --root, or set {ENV_VAR}")
 
 
 def project(root=None) -> Project:
-    """The :class:`Project` at ``root`` (default :func:`find_root`).
+    """The :class:`Project` at ``root`` (default ``_find_root``).
 
     Examples
     --------
     >>> project("/checkout").figures.as_posix()
     '/checkout/figures'
     """
-    return Project(Path(root).resolve() if root is not None else find_root())
+    return Project(Path(root).resolve() if root is not None else _find_root())
 
 
 @contextmanager

@@ -25,18 +25,10 @@ from asoc.mjls.lyapunov import solve_coupled_lyapunov
 
 from . import paths
 
-__all__ = [
-    "QUANTECON_FILE",
-    "load_quantecon",
-    "one_mode_plant",
-    "control_agreement",
-    "point_masses",
-    "sklearn_agreement",
-    "coupled_riccati_residual",
-    "expectation_outside",
-    "policy_value",
-    "quantecon_comparison",
-]
+__all__ = ["QUANTECON_FILE", "one_mode_plant", "control_agreement", "point_masses",
+           "sklearn_agreement", "load_quantecon", "coupled_riccati_residual", "expectation_outside",
+           "policy_value", "quantecon_comparison"]
+
 
 #: QuantEcon's recorded numbers, under the project root.
 QUANTECON_FILE = ("tests", "reference", "quantecon_lqmarkov.json")

@@ -22,8 +22,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["FIDELITIES", "MANIFEST_NAME", "RunPlan", "make_plan", "output_folder",
-           "values_folder", "values_file", "manifest_file"]
+__all__ = ["FIDELITIES", "MANIFEST_NAME", "values_folder", "values_file", "manifest_file",
+           "output_folder", "RunPlan", "make_plan"]
 
 
 FIDELITIES = ("full", "ci")

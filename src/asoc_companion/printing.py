@@ -1,7 +1,7 @@
 """The book in print: which notebook cells the PDF leaves out, and `make pdf`'s short summary.
 
 The notebooks are rendered from their committed cells, so the rules apply when the book is
-built (a Sphinx ``doctree-resolved`` hook, :func:`prune_cells`), never by editing a notebook:
+built (a Sphinx ``doctree-resolved`` hook, ``_prune_cells``), never by editing a notebook:
 
 - papermill's injected-parameters cell (tag ``injected-parameters``) repeats the parameters
   cell above it; it is left out of every builder's output;
@@ -26,9 +26,8 @@ from docutils import nodes
 
 from . import paths
 
-__all__ = ["INJECTED_TAG", "OVERFULL", "OVERFULL_LIMIT", "is_setup_cell", "setup_note",
-           "prune_cells", "TEXT_WIDTH_CHARACTERS", "COLUMN_CAP", "column_widths", "fit_wide_tables",
-           "prune_doctree", "LATEX_PREAMBLE", "overfull_boxes", "build_pdf"]
+__all__ = ["INJECTED_TAG", "OVERFULL", "OVERFULL_LIMIT", "is_setup_cell", "TEXT_WIDTH_CHARACTERS",
+           "COLUMN_CAP", "prune_doctree", "LATEX_PREAMBLE", "overfull_boxes", "build_pdf"]
 
 
 INJECTED_TAG = "injected-parameters"
@@ -73,7 +72,7 @@ def _notebook_name(cell, docname: str) -> str:
     return f"book/{Path(source).stem}.ipynb"
 
 
-def setup_note(notebook: str) -> nodes.paragraph:
+def _setup_note(notebook: str) -> nodes.paragraph:
     """The line printed in place of a setup cell's code."""
     note = nodes.paragraph(classes=["setup-note"])
     note += nodes.emphasis(text=f"Setup code (imports, parameters read, asoc_companion.setup) "
@@ -81,7 +80,7 @@ def setup_note(notebook: str) -> nodes.paragraph:
     return note
 
 
-def prune_cells(doctree, builder_format: str, docname: str = "") -> dict:
+def _prune_cells(doctree, builder_format: str, docname: str = "") -> dict:
     """Apply the print rules to a resolved doctree; return how many cells each rule changed.
 
     ``builder_format`` is the Sphinx builder's format: injected-parameters cells are removed
@@ -101,7 +100,7 @@ def prune_cells(doctree, builder_format: str, docname: str = "") -> dict:
         for source in [c for c in cell.children if c.get("nb_element") == "cell_code_source"]:
             code = "".join(block.astext() for block in source.findall(nodes.literal_block))
             if is_setup_cell(code):
-                cell.replace(source, setup_note(_notebook_name(cell, docname)))
+                cell.replace(source, _setup_note(_notebook_name(cell, docname)))
                 changed["setup"] += 1
     return changed
 
@@ -112,7 +111,7 @@ COLUMN_CAP = 40
 """A column wider than this many characters is wrapped rather than given its natural width."""
 
 
-def column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
+def _column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
     """Relative widths of a table's columns (characters) from each column's longest cell and
     longest word, and whether the table needs the small font to fit ``width`` characters.
 
@@ -123,9 +122,9 @@ def column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
 
     Examples
     --------
-    >>> column_widths([60, 60], [10, 10])
+    >>> _column_widths([60, 60], [10, 10])
     ([40.0, 40.0], False)
-    >>> column_widths([8] * 10, [8] * 10)
+    >>> _column_widths([8] * 10, [8] * 10)
     ([11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0, 11.0], True)
     """
     least = [min(w, COLUMN_CAP) + 3 for w in words]
@@ -139,12 +138,12 @@ def column_widths(longest, words, width: int = TEXT_WIDTH_CHARACTERS):
     return [m + share * e for m, e in zip(least, extra)], small
 
 
-def fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
+def _fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
     """Give every table that would run past the margin column widths, so LaTeX wraps its cells.
 
     Sphinx sets a long table without declared widths in ``l`` columns, which never wrap; a
     table whose longest cells add up to more than ``width`` characters gets the widths of
-    :func:`column_widths`, and the small font when it needs it. Returns how many tables
+    ``_column_widths``, and the small font when it needs it. Returns how many tables
     were changed.
     """
     changed = 0
@@ -161,7 +160,7 @@ def fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
                     words[k] = max([words[k]] + [len(w) for w in text.split()])
             if sum(longest) <= width:
                 continue
-            widths, small = column_widths(longest, words, width)
+            widths, small = _column_widths(longest, words, width)
             for spec, chars in zip(specs, widths):
                 spec["colwidth"] = max(1, round(10 * chars))
             table["classes"].append("colwidths-given")
@@ -175,11 +174,11 @@ def fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
 
 
 def prune_doctree(app, doctree, docname):
-    """Sphinx's ``doctree-resolved`` hook: :func:`prune_cells` for the running builder, and
-    :func:`fit_wide_tables` for the LaTeX builder."""
-    prune_cells(doctree, app.builder.format, docname)
+    """Sphinx's ``doctree-resolved`` hook: ``_prune_cells`` for the running builder, and
+    ``_fit_wide_tables`` for the LaTeX builder."""
+    _prune_cells(doctree, app.builder.format, docname)
     if app.builder.format == "latex":
-        fit_wide_tables(doctree)
+        _fit_wide_tables(doctree)
 
 
 LATEX_PREAMBLE = r"""

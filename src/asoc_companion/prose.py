@@ -18,22 +18,22 @@ An unknown path raises ``KeyError`` naming it: a number is never typed in its pl
 
 import re
 
-__all__ = ["PLACEHOLDER", "lookup", "format_value", "fill", "thesis_values", "prose"]
+__all__ = ["PLACEHOLDER", "fill", "thesis_values", "prose"]
 
 
 PLACEHOLDER = re.compile(r"\{\{\s*([A-Za-z_][\w.\[\]-]*?)\s*(?::\s*([^{}]*?))?\s*\}\}")
 _STEP = re.compile(r"\.?([A-Za-z0-9_-]+)|\[(-?\d+)\]")
 
 
-def lookup(path: str, values: dict, notebook: str | None = None):
+def _lookup(path: str, values: dict, notebook: str | None = None):
     """The value at ``path`` in ``values`` (``{"<notebook>.<key>": value}``).
 
     Examples
     --------
     >>> values = {"sec3_5.rho": 0.25, "sec2_5.cost": {"median": 1.5, "ci": [1.25, 1.75]}}
-    >>> lookup("sec2_5.cost.ci[0]", values), lookup("rho", values, notebook="sec3_5")
+    >>> _lookup("sec2_5.cost.ci[0]", values), _lookup("rho", values, notebook="sec3_5")
     (1.25, 0.25)
-    >>> lookup("sec3_5.gain", values)
+    >>> _lookup("sec3_5.gain", values)
     Traceback (most recent call last):
     ...
     KeyError: '{{sec3_5.gain}}: sec3_5.gain is not recorded'
@@ -56,24 +56,24 @@ def lookup(path: str, values: dict, notebook: str | None = None):
     return value
 
 
-def format_value(value, spec: str = "") -> str:
+def _format_value(value, spec: str = "") -> str:
     """``value`` formatted with ``spec`` (Monte Carlo records as ``m [lo, hi]``).
 
     Examples
     --------
-    >>> format_value({"median": 1.5, "ci": [1.25, 1.75]}, ".2f"), format_value(True), format_value([0.5, 1], ".1f")
+    >>> _format_value({"median": 1.5, "ci": [1.25, 1.75]}, ".2f"), _format_value(True), _format_value([0.5, 1], ".1f")
     ('1.50 [1.25, 1.75]', 'yes', '[0.5, 1.0]')
     """
     if isinstance(value, dict):
         if "ci" in value and ("median" in value or "value" in value):
             lo, hi = value["ci"]
-            return f"{format_value(value.get('median', value.get('value')), spec)} [{format_value(lo, spec)}, {format_value(hi, spec)}]"
+            return f"{_format_value(value.get('median', value.get('value')), spec)} [{_format_value(lo, spec)}, {_format_value(hi, spec)}]"
         if "value" in value:
-            return format_value(value["value"], spec)
+            return _format_value(value["value"], spec)
     if isinstance(value, bool):
         return "yes" if value else "no"
     if isinstance(value, list):
-        return "[" + ", ".join(format_value(v, spec) for v in value) + "]"
+        return "[" + ", ".join(_format_value(v, spec) for v in value) + "]"
     return format(value, spec) if spec else str(value)
 
 
@@ -103,7 +103,7 @@ def fill(text: str, values: dict, notebook: str | None = None) -> str:
     >>> fill("rho = {{sec3_5.rho:.3f}}, stable: {{stable}}", {"sec3_5.rho": 0.25, "sec3_5.stable": True}, "sec3_5")
     'rho = 0.250, stable: yes'
     """
-    return PLACEHOLDER.sub(lambda m: format_value(lookup(m.group(1), values, notebook), m.group(2) or ""), text)
+    return PLACEHOLDER.sub(lambda m: _format_value(_lookup(m.group(1), values, notebook), m.group(2) or ""), text)
 
 
 def thesis_values(reference=None) -> dict:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .atomic_files import atomic_write_bytes
 
-__all__ = ["THREAD_VARIABLES", "remove_stage", "one_blas_thread", "signals_held", "commit"]
+__all__ = ["THREAD_VARIABLES", "remove_stage", "one_blas_thread", "commit"]
 
 
 #: Every kernel computes with one BLAS/OpenMP thread, whoever starts it (``make book``, which runs
@@ -40,7 +40,7 @@ def remove_stage(stage: Path, attempts: int = 5):
     >>> stage.exists()
     False
     """
-    with signals_held():
+    with _signals_held():
         for _ in range(attempts):
             shutil.rmtree(stage, ignore_errors=True)
             if not stage.exists():
@@ -74,12 +74,12 @@ def one_blas_thread():
 
 
 @contextmanager
-def signals_held():
+def _signals_held():
     """Hold off SIGINT and SIGTERM (delivered on exit) while files move into place.
 
     Examples
     --------
-    >>> with signals_held():
+    >>> with _signals_held():
     ...     held = signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
     >>> held, signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
     (True, False)
@@ -122,7 +122,7 @@ def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook
     files = [p for p in stage.rglob("*") if p.is_file() and p != staged_notebook
              and not p.name.endswith(".tmp")]
     files.sort(key=lambda p: (p.parent.name == "values", str(p)))
-    with signals_held():
+    with _signals_held():
         for source in files:
             _move(source, Path(output_dir) / source.relative_to(stage))
         _move(staged_notebook, Path(target_notebook))

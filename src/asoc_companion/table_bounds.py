@@ -20,8 +20,7 @@ import scipy.stats
 from asoc.mjls import successor_average
 
 __all__ = ["CONFIDENCE_TAIL", "clairvoyant_costs", "clairvoyant_minimum", "median_lower_bound",
-           "table_3_3_bounds", "closed_loop_cost_to_go", "transient_gap", "noise_weight",
-           "monte_carlo_gap"]
+           "table_3_3_bounds", "transient_gap", "noise_weight", "monte_carlo_gap"]
 
 
 CONFIDENCE_TAIL = 1e-6     # P(the lower bound exceeds the true median) <= this
@@ -138,7 +137,7 @@ def table_3_3_bounds(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scales):
 
 # ------------------------------------------------------------------ Table 3.2
 
-def closed_loop_cost_to_go(sys, L, horizon):
+def _closed_loop_cost_to_go(sys, L, horizon):
     """Pi(0), ..., Pi(K) of a mode-dependent state feedback u = L_theta x over K steps (final cost Q):
     Pi_i(k) = Q_i + L_i^T R_i L_i + Acl_i^T E_i(Pi(k+1)) Acl_i, Pi(K) = Q.
 
@@ -149,7 +148,7 @@ def closed_loop_cost_to_go(sys, L, horizon):
     >>> from asoc.mjls import MJLS
     >>> one = np.ones((1, 1, 1))
     >>> sys = MJLS(0.5 * one, one, one, one, one, one, [[1.0]])
-    >>> [round(float(P[0, 0, 0]), 9) for P in closed_loop_cost_to_go(sys, np.zeros((1, 1, 1)), 2)]
+    >>> [round(float(P[0, 0, 0]), 9) for P in _closed_loop_cost_to_go(sys, np.zeros((1, 1, 1)), 2)]
     [1.3125, 1.25, 1.0]
     """
     Acl = sys.A + sys.B @ L
@@ -173,7 +172,7 @@ def transient_gap(sys, L, x0, mu0, horizon):
     >>> round(transient_gap(sys, np.zeros((1, 1, 1)), np.array([2.0]), np.array([1.0]), 2), 9)
     5.25
     """
-    Pi0 = closed_loop_cost_to_go(sys, L, horizon)[0]
+    Pi0 = _closed_loop_cost_to_go(sys, L, horizon)[0]
     return float(mu0 @ np.einsum("a,iab,b->i", x0, Pi0, x0))
 
 
@@ -191,7 +190,7 @@ def noise_weight(sys, L, mu0, horizon):
     >>> noise_weight(sys, np.zeros((1, 1, 1)), np.array([1.0]), 2).round(9)
     array([[1.125]])
     """
-    Pis = closed_loop_cost_to_go(sys, L, horizon)
+    Pis = _closed_loop_cost_to_go(sys, L, horizon)
     mu, total = np.asarray(mu0, dtype=float), 0.0
     for k in range(horizon):
         total = total + np.einsum("i,iab->ab", mu, successor_average(sys.T, Pis[k + 1]))

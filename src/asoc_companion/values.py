@@ -10,10 +10,9 @@ import json
 from pathlib import Path
 
 from . import paths
-from .plan import FIDELITIES, MANIFEST_NAME, output_folder, values_file, values_folder
+from .plan import MANIFEST_NAME, output_folder, values_file, values_folder
 
-__all__ = ["FIDELITIES", "MANIFEST_NAME", "CorruptValuesError", "values_path", "regenerate_command",
-           "read_values_file", "load_values", "load_all_values"]
+__all__ = ["CorruptValuesError", "read_values_file", "load_values", "load_all_values"]
 
 
 class CorruptValuesError(ValueError):
@@ -34,12 +33,12 @@ class CorruptValuesError(ValueError):
     """
 
 
-def values_path(notebook: str, output_dir=None) -> Path:
+def _values_path(notebook: str, output_dir=None) -> Path:
     """Path of the JSON file holding ``notebook``'s recorded values (default folder ``figures/``).
 
     Examples
     --------
-    >>> values_path("sec3_5", "/tmp/run").as_posix()
+    >>> _values_path("sec3_5", "/tmp/run").as_posix()
     '/tmp/run/values/sec3_5.json'
     """
     return values_file(output_dir or _committed(), notebook)
@@ -50,18 +49,18 @@ def _committed() -> Path:
     return output_folder(paths.project(), "full")
 
 
-def regenerate_command(notebook: str, output_dir=None) -> str:
+def _regenerate_command(notebook: str, output_dir=None) -> str:
     """The command line that rewrites ``notebook``'s values in ``output_dir``.
 
     Examples
     --------
-    >>> regenerate_command("sec3_5", "/tmp/run")
+    >>> _regenerate_command("sec3_5", "/tmp/run")
     'python -m asoc_companion run sec3_5'
 
     The ci output folder of a checkout (here a temporary one) asks for ``--fidelity ci``:
 
     >>> with paths.scratch_project() as root:
-    ...     print(regenerate_command("sec3_5", root / "book" / "_build" / "ci"))
+    ...     print(_regenerate_command("sec3_5", root / "book" / "_build" / "ci"))
     python -m asoc_companion run sec3_5 --fidelity ci
     """
     command = f"python -m asoc_companion run {notebook}"
@@ -84,7 +83,7 @@ def _shown(path) -> str:
 def _repair_hint(path) -> str:
     """How to get a good values file back: the command that regenerates it (and, for a committed
     file, the git command that restores it)."""
-    hint = f"regenerate it with `{regenerate_command(path.stem, path.parent.parent)}`"
+    hint = f"regenerate it with `{_regenerate_command(path.stem, path.parent.parent)}`"
     try:
         committed = path.resolve().parent == values_folder(_committed()).resolve()
     except RuntimeError:
@@ -147,7 +146,7 @@ def load_values(notebook: str, output_dir=None) -> dict:
     ...     print(load_values("demo", folder), load_values("not_run", folder))
     {'rho': 0.25} {}
     """
-    path = values_path(notebook, output_dir)
+    path = _values_path(notebook, output_dir)
     if not path.exists():
         return {}
     return read_values_file(path)["values"]

@@ -121,6 +121,15 @@ CALLS = {
                                         covariance_hessian="psd", covariance_term=True, progress=False)),
     "belief_ilqg": (belief.belief_ilqg, dict(model=MODEL, cost=COST, mean0=MEAN0, cov0=COV0, u_init=np.zeros((2, 2)),
                                              max_iterations=2, rtol=1e-3, eps_min=0.01, progress=False)),
+    "optimize_damped": (belief.optimize_damped,
+                        dict(model=MODEL, cost=COST, mean0=MEAN0, cov0=COV0, filt=UKF, policy=POLICY,
+                             max_iterations=2, rtol=1e-3, n_cost_runs=3, rng=rng(), mu_min=1e-3,
+                             mu_max=1e3, factor=4.0, derivatives="analytic", alpha_min=0.01)),
+    "bend_toward_landmark": (belief.bend_toward_landmark,
+                             dict(means=[[-5.0, 3.0], [-2.0, 2.5], [0.0, 3.0]], start=[-5.0, 3.0],
+                                  target=[0.0, 3.0], landmark=[-3.0, 0.0])),
+    "covariance_aware_optimum": (belief.covariance_aware_optimum,
+                                 dict(example=EX, offsets=(0.0,), gtol=1e-3)),
     "belief_vector": (belief.belief_vector, dict(mean=[0.0, 1.0], cov=np.eye(2))),
     "BeliefDynamics": (belief.BeliefDynamics, dict(model=MODEL)),
     "draw_noise": (belief.draw_noise, dict(model=MODEL, mean0=MEAN0, cov0=COV0, K=2, n_runs=3, rng=rng())),
@@ -190,11 +199,14 @@ CALLS = {
     "training_gaussians": (gp.training_gaussians, dict(n=3, rng=rng())),
     "evaluation_grid": (gp.evaluation_grid, dict(step=0.5)),
     "error_metrics": (gp.error_metrics, dict(prediction=[1.0, 2.0], truth=[1.0, 3.0])),
+    "kernel_study": (gp.kernel_study, dict(n_seeds=1, rng=rng(), n_train=5, grid_step=2.0, n_dirac=3,
+                                           b_max=100.0, n_restarts=0, n_jobs=1, progress=False)),
 }
 
 PUBLIC_RESULTS = {"BeliefFilter", "LandmarkExample", "QuadraticExpansion", "Expansion", "Reference", "LineSearch",
                   "TrajectoryOptimizationResult", "BeliefILQGResult", "ClosedLoop", "Noise", "FitResult",
-                  "DiracApproximation", "COVARIANCES", "TABLE_2_1"}
+                  "DiracApproximation", "COVARIANCES", "TABLE_2_1", "DampedResult", "IndefiniteStep",
+                  "KernelStudy"}
 
 BAD = [float("nan"), float("inf"), -float("inf"), -1, 0, 2.5, -0.5, "x", True, None, 1j, [], [[float("nan")]],
        np.zeros((2, 3, 4)), np.array([1 + 1j, 2]), np.full(2, np.nan), [1.0, "a"], object(), {"a": 1}, 10**6,

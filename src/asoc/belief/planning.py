@@ -156,6 +156,17 @@ def covariance_aware_optimum(
     straight line) and that plan with its middle input shifted sideways by each of
     ``offsets`` (and back at the next step), so detours on both sides are tried.
 
+    Parameters
+    ----------
+    example : LandmarkExample
+        The model, cost and initial belief of Sec. 2.5.3.
+    offsets : array_like, (m,)
+        Sideways shifts of the middle input of the straight plan, one start each (finite).
+    gtol : float
+        BFGS's gradient tolerance, > 0.
+    **noise
+        ``noise_gain`` and ``range_noise`` of ``ekf_belief_plan``.
+
     Returns
     -------
     dict
@@ -172,6 +183,8 @@ def covariance_aware_optimum(
     (True, (4, 2))
     """
     example = check.instance(example, LandmarkExample, "example")
+    offsets = check.real_array(offsets, "offsets", ndim=1)
+    gtol = check.real_scalar(gtol, "gtol", low=0, low_open=True)
     K = example.cost.K
     zero = np.zeros(2 * K)
     straight = minimize(

@@ -22,7 +22,7 @@ from .simulate import draw_noise, simulate
 from .stage import COVARIANCE_HESSIANS, StageProblem, filter_for, terminal_value
 
 __all__ = ["Reference", "reference_trajectory", "TrajectoryOptimizationResult", "backward_pass",
-           "optimize_belief_trajectory", "IndefiniteStep"]
+           "IndefiniteStep", "optimize_belief_trajectory"]
 
 
 @dataclass(frozen=True)

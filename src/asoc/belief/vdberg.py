@@ -45,7 +45,7 @@ def _tril_indices(n):
 
 @lru_cache
 def _tril_index_arrays(n):
-    """Row and column indices of :func:`_tril_indices` as read-only integer arrays."""
+    """Row and column indices of ``_tril_indices`` as read-only integer arrays."""
     rows, cols = np.array(_tril_indices(n)).T
     rows.flags.writeable = cols.flags.writeable = False
     return rows, cols

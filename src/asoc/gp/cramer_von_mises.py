@@ -176,7 +176,7 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
 
 
 def _combined(sums, cb, d, symmetric):
-    """The mCvMd matrix from the b_max-independent sums of :func:`_mcvmd_sums` and the constant c_b."""
+    """The mCvMd matrix from the b_max-independent sums of ``_mcvmd_sums`` and the constant c_b."""
     D1, D2, D12, Dm = sums
     out = D1[:, None] - 2 * D12 + D2[None] + 2 * cb * Dm
     out *= np.pi ** (d / 2) / 8

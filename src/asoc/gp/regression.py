@@ -37,8 +37,8 @@ from ..result import IterativeResult
 from . import mixture_checks as v
 from .kernels import COVARIANCES, mean_kernel_dirac
 
-__all__ = ["PARAMS", "FitResult", "DistributionGP", "MeanKernelGP", "EXP_ZERO_BELOW", "ALPHA_CAP",
-           "NOISE_FLOOR", "POLISH_RESTARTS", "LOG_ML_TIE"]
+__all__ = ["PARAMS", "ALPHA_CAP", "NOISE_FLOOR", "POLISH_RESTARTS", "LOG_ML_TIE", "FitResult",
+           "DistributionGP", "MeanKernelGP", "EXP_ZERO_BELOW"]
 
 
 PARAMS = ("alpha", "l", "sigma_n")

@@ -29,6 +29,7 @@ from .transport import omat_matrix
 
 __all__ = ["GPS", "FUNCTIONS", "KernelStudy", "kernel_study"]
 
+
 GPS = ("mcvmd", "omat", "mean_kernel")
 FUNCTIONS = {"v1": quadratic_function, "v2": modified_rosenbrock}
 
@@ -115,11 +116,12 @@ def kernel_study(
     n_train = check.integer(n_train, "n_train", minimum=3)
     grid_step = check.real_scalar(grid_step, "grid_step", low=0, low_open=True)
     n_jobs = check.integer(n_jobs, "n_jobs")
+    progress = check.boolean(progress, "progress")
     settings = (
         n_train,
         grid_step,
         check.integer(n_dirac, "n_dirac", minimum=1),
-        float(b_max),
+        check.real_scalar(b_max, "b_max", low=0, low_open=True),
         check.integer(n_restarts, "n_restarts", minimum=0),
     )
     children = rng.spawn(n_seeds)

@@ -13,7 +13,7 @@ end also comes from first-order eigenvalue perturbation with the left Perron sta
 end from deflated resolvent stacks. An Arnoldi estimate that is not inside a narrow bracket (a
 subdominant eigenvalue) is replaced by the next Krylov space's.
 
-:class:`Bracket` keeps the best bounds found over the stacks it is shown; :func:`refine` shows it
+:class:`Bracket` keeps the best bounds found over the stacks it is shown; ``_refine`` shows it
 the candidates; :func:`certify` runs the whole certificate on balanced modes.
 :func:`asoc.mjls.mean_square_stability` (Notes) gives the margin for rounding. This is the one
 explanation of the bounds; the library's other modules point here.
@@ -32,8 +32,8 @@ from ..threads import single_threaded
 from .moment_operator import kronecker_stack, linear_operator, second_moment_map
 from .spectral_estimate import estimates, left_perron_stack
 
-__all__ = ["EPS", "certified_upper_bound", "Bracket", "refine", "deflated_resolvent_bounds",
-           "residual_lower_bound", "lyapunov_upper_bound", "certify"]
+__all__ = ["EPS", "TINY", "certified_upper_bound", "Bracket", "deflated_resolvent_bounds",
+           "lyapunov_upper_bound", "certify"]
 
 
 EPS = np.finfo(float).eps
@@ -152,7 +152,7 @@ class Bracket:
             self.lower = lower
 
 
-def refine(A, T, X0, rho):
+def _refine(A, T, X0, rho):
     """(lower, upper, rho, X): Collatz-Wielandt bounds at the eigenvector estimate X0 of rho (nan: none, the
     power method alone), at resolvent solutions (small sizes) and along the shifted cone power method;
     X the last iterate. Call it with BLAS on one thread (``asoc.threads.single_threaded``):
@@ -161,7 +161,7 @@ def refine(A, T, X0, rho):
     Examples
     --------
     >>> A = np.array([[[0.5]], [[1.2]]]); T = np.array([[0.5, 0.5], [0.5, 0.5]])
-    >>> [round(v, 9) for v in refine(A, T, np.ones((2, 1, 1)), np.nan)[:3]]
+    >>> [round(v, 9) for v in _refine(A, T, np.ones((2, 1, 1)), np.nan)[:3]]
     [0.845, 0.845, 0.845]
     """
     M, n, _ = A.shape
@@ -278,7 +278,7 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
         previous = own.upper
 
 
-def residual_lower_bound(A, T, rho, X, P, upper):
+def _residual_lower_bound(A, T, rho, X, P, upper):
     """rho - 10 s ||E|| for an eigen-pair estimate (rho, X) of Cor. 3.2's operator and its left Perron stack P.
 
     The pair is exact for L + E with ||E|| = ||L(X) - rho X|| / ||X|| (plus the rounding of that
@@ -290,7 +290,7 @@ def residual_lower_bound(A, T, rho, X, P, upper):
     Examples
     --------
     >>> A = np.array([[[0.9, 0.0], [0.0, 0.5]]]); T = np.array([[1.0]]); X = np.array([[[1.0, 0.0], [0.0, 0.0]]])
-    >>> bool(0.81 - 1e-12 < residual_lower_bound(A, T, 0.81, X, X, 1.0) <= 0.81)
+    >>> bool(0.81 - 1e-12 < _residual_lower_bound(A, T, 0.81, X, X, 1.0) <= 0.81)
     True
     """
     M, n, _ = A.shape
@@ -409,7 +409,7 @@ def _certify_estimates(A, T, method, unit):
     Krylov space fails the test: the bracket holds rho, not it)."""
     best = None
     for estimate in estimates(A, T, method):
-        lower, upper, rho, X = refine(A, T, estimate.X, estimate.rho)
+        lower, upper, rho, X = _refine(A, T, estimate.X, estimate.rho)
         lower, upper = _singular_perron_bounds(A, T, estimate, lower, upper, rho, X)
         rho = float(np.clip(rho, lower, upper))
         if lower < estimate.lower <= upper:
@@ -435,7 +435,7 @@ def _singular_perron_bounds(A, T, estimate, lower, upper, rho, X):
         return lower, upper
     P = left_perron_stack(A, T, rho, estimate.method)
     if needs_lower:
-        lower = max(lower, residual_lower_bound(A, T, rho, X, P, upper))
+        lower = max(lower, _residual_lower_bound(A, T, rho, X, P, upper))
     if not _narrow(lower, upper):
         bracket = Bracket(A, T)
         deflated_resolvent_bounds(bracket, rho, X, P)

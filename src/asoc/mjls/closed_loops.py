@@ -7,7 +7,7 @@ with the checks of the gains and the noise covariances they need.
   controller or design result (what :func:`asoc.mjls.mean_square_stability` ``(sys, result)``
   and :func:`asoc.mjls.steady_state_second_moment` ``(sys, result)`` use);
 - :func:`noise_covariances`: H_i H_i^T and J_i J_i^T of (3.36);
-- :func:`gain_matrix`, :func:`check_gains`: validated gains.
+- :func:`gain_matrix`, ``_check_gains``: validated gains.
 
 Each takes the gains as arrays, or the controller that holds them (an
 :class:`asoc.mjls.Controller` or a design result with ``.controller``).
@@ -21,8 +21,8 @@ from .controllers import (Controller, DynamicOutputFeedback, ModeDependentGain, 
                           as_controller)
 from .system import check_system
 
-__all__ = ["closed_loop", "gain_matrix", "noise_covariances", "check_gains",
-           "augmented_closed_loop", "controller_closed_loop", "is_controller"]
+__all__ = ["is_controller", "closed_loop", "gain_matrix", "noise_covariances",
+           "augmented_closed_loop", "controller_closed_loop"]
 
 
 def is_controller(value):
@@ -123,13 +123,13 @@ def noise_covariances(sys):
     return HHt, JJt
 
 
-def check_gains(sys, F, K, L):
+def _check_gains(sys, F, K, L):
     """Validate F (nc, nc), K (nc, ny), L (nu, nc) of (3.37); return them as arrays.
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec373_system
-    >>> check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
+    >>> _check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
     Traceback (most recent call last):
     ...
     ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys), found shape (1, 3)
@@ -194,7 +194,7 @@ def augmented_closed_loop(sys, F, K=None, L=None):
     True
     """
     F, K, L = _dynamic_gains(F, K, L)
-    F, K, L = check_gains(sys, F, K, L)
+    F, K, L = _check_gains(sys, F, K, L)
     M, nx, nc = sys.M, sys.nx, F.shape[0]
     HHt, JJt = noise_covariances(sys)
     At = np.zeros((M, nx + nc, nx + nc))

@@ -57,9 +57,8 @@ from .optimality import METHODS, GainSolve, solve_gains
 from .stopping import StoppingRule
 from .system import check_system, successor_average
 
-__all__ = ["steady_state_cost", "certified_steady_state_cost", "DynamicOutputFeedbackResult",
-           "StoppingRule", "BoundIterate", "BoundIteration", "dynamic_output_feedback",
-           "iterate_bounds"]
+__all__ = ["steady_state_cost", "DynamicOutputFeedbackResult", "dynamic_output_feedback",
+           "BoundIterate", "BoundIteration", "iterate_bounds"]
 
 
 def steady_state_cost(sys, F, K=None, L=None):
@@ -103,11 +102,11 @@ def steady_state_cost(sys, F, K=None, L=None):
     >>> round(cost, 3) == round(r.cost, 3), bool(rho < 1), steady_state_cost(sys, r)[0] == cost
     (True, True, True)
     """
-    cost, X, stability = certified_steady_state_cost(sys, F, K, L)
+    cost, X, stability = _certified_steady_state_cost(sys, F, K, L)
     return cost, X, stability.rho
 
 
-def certified_steady_state_cost(sys, F, K=None, L=None):
+def _certified_steady_state_cost(sys, F, K=None, L=None):
     """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place of
     its rho, for callers that report the bracket too: one spectral radius per controller.
 
@@ -116,7 +115,7 @@ def certified_steady_state_cost(sys, F, K=None, L=None):
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
     >>> r = dynamic_output_feedback(sys)
-    >>> cost, X, stability = certified_steady_state_cost(sys, r.F, r.K, r.L)
+    >>> cost, X, stability = _certified_steady_state_cost(sys, r.F, r.K, r.L)
     >>> round(cost, 3) == round(r.cost, 3), stability.stabilizing, stability.bracket == r.rho_bracket
     (True, True, True)
     """
@@ -391,7 +390,7 @@ def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
                                  f"{': ' + failure if failure else ''}")
     best = run.best
     (F, K, L), (Xbar, Xunder, Pbar, Punder) = best.gains, best.bounds
-    cost, _, stability = certified_steady_state_cost(sys, F, K, L)
+    cost, _, stability = _certified_steady_state_cost(sys, F, K, L)
     rho = stability.rho
     stabilizing = stability.stabilizing
     message = _message(status, it, stopping, tol, rho, failure, best.solve, run.worst_residual)

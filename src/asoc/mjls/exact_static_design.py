@@ -36,12 +36,8 @@ from .static import StaticOutputFeedbackResult, static_cost, static_output_feedb
 from .static_iterates import Recursion
 from .system import check_system, predecessor_sum, successor_average
 
-__all__ = [
-    "ExactStaticOutputFeedbackResult",
-    "static_cost_and_gradient",
-    "averaged_output_gain",
-    "exact_static_output_feedback",
-]
+__all__ = ["ExactStaticOutputFeedbackResult", "static_cost_and_gradient", "averaged_output_gain",
+           "exact_static_output_feedback"]
 
 
 @dataclass(kw_only=True)

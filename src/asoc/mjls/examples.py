@@ -9,7 +9,7 @@ __all__ = ["SEC32_A", "SEC32_T", "SEC32_X0", "SEC34_A", "SEC34_B", "SEC34_G", "S
            "SEC354_A", "SEC354_B", "SEC354_H", "SEC354_T", "SEC354_C", "SEC354_X0", "sec32_system",
            "sec354_system", "SEC373_C", "SEC373_T", "SEC373_MU0", "SEC373_MEAN0", "SEC373_COV0",
            "sec373_system", "NETWORKED_A", "NETWORKED_B", "NETWORKED_C", "NETWORKED_T",
-           "networked_loop", "lossy_plant", "networked_loop_lossy"]
+           "networked_loop", "networked_loop_lossy"]
 
 
 # Sec. 3.2: two stable modes whose switching makes the MJLS mean-square unstable (Fig. 3.2).
@@ -114,14 +114,14 @@ def networked_loop() -> MJLS:
                 R=np.eye(1), T=NETWORKED_T)
 
 
-def lossy_plant(dt=0.1):
+def _lossy_plant(dt=0.1):
     """The plant of :func:`networked_loop_lossy`: x1' = a x1 + x2, x2' = -x2 + x3, x3' = -2 x3 + u
     with a = ln(1.08) / dt (the discrete unstable pole 1.08), y = (x1, x3), discretised with a
     zero-order hold (``control.c2d``). Returns (A, B, C).
 
     Examples
     --------
-    >>> A, B, C = lossy_plant()
+    >>> A, B, C = _lossy_plant()
     >>> round(float(max(abs(np.linalg.eigvals(A)))), 6), C.shape
     (1.08, (2, 3))
     """
@@ -139,7 +139,7 @@ def networked_loop_lossy() -> MJLS:
 
     The loop of issue 33: mode 1 the packet arrives, mode 2 it is lost (u = 0);
     T = [[0.9, 0.1], [0.6, 0.4]], Q = I, R = 0.1, H = 0.05 I, J = 0.01 I. The issue did not
-    give its plant's matrices; this one (:func:`lossy_plant`) has the stated poles, sampling
+    give its plant's matrices; this one (``_lossy_plant``) has the stated poles, sampling
     and outputs, and Alg. 3.1 cycles on it as on the issue's: its iterates settle into a
     2-cycle between a stabilising and a non-stabilising gain, so which one a fixed
     ``max_iter`` returns depends on its parity.
@@ -150,6 +150,6 @@ def networked_loop_lossy() -> MJLS:
     >>> sys.M, sys.nx, sys.ny, sys.B[1].ravel().tolist()
     (2, 3, 2, [0.0, 0.0, 0.0])
     """
-    A, B, C = lossy_plant()
+    A, B, C = _lossy_plant()
     return MJLS(A=A, B=[B, np.zeros_like(B)], C=C, H=0.05 * np.eye(3), Q=np.eye(3),
                 R=0.1 * np.eye(1), T=NETWORKED_T, J=0.01 * np.eye(2))

@@ -38,10 +38,9 @@ from .design_result import DesignResult
 from .optimality import METHODS, gains_from_bounds
 from .system import MJLS, successor_average
 
-__all__ = ["FiniteHorizonResult", "Stages", "StackedStages", "stages",
-           "check_initial_state", "initial_bounds", "mode_distributions",
-           "augmented_initial_moment", "augmented_cost", "finite_horizon_cost", "initial_gains",
-           "finite_horizon_dynamic_output_feedback"]
+__all__ = ["FiniteHorizonResult", "Stages", "StackedStages", "stages", "check_initial_state",
+           "initial_bounds", "mode_distributions", "augmented_initial_moment", "augmented_cost",
+           "finite_horizon_cost", "initial_gains", "finite_horizon_dynamic_output_feedback"]
 
 
 @dataclass(kw_only=True)

@@ -21,12 +21,11 @@ from .closed_loops import augmented_closed_loop, noise_covariances
 from .stability import mean_square_stability, perron_pair
 from .system import predecessor_sum, successor_average
 
-__all__ = ["closed_loop_gradient", "gain_gradient", "average_cost_and_gradient",
-           "positive_definite", "closed_loop_radius", "radius_and_gradient",
-           "finite_horizon_cost_and_gradient"]
+__all__ = ["average_cost_and_gradient", "positive_definite", "closed_loop_radius",
+           "radius_and_gradient", "finite_horizon_cost_and_gradient"]
 
 
-def closed_loop_gradient(sys, G):
+def _closed_loop_gradient(sys, G):
     """The gradient over (F, K, L) of a function of A~ (3.39) alone, from G_i = d/dA~_i.
 
     A~_i has F in its lower right block, K C_i in its lower left and B_i L in its upper right,
@@ -36,7 +35,7 @@ def closed_loop_gradient(sys, G):
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
-    >>> gF, gK, gL = closed_loop_gradient(sys, np.ones((sys.M, 2 * sys.nx, 2 * sys.nx)))
+    >>> gF, gK, gL = _closed_loop_gradient(sys, np.ones((sys.M, 2 * sys.nx, 2 * sys.nx)))
     >>> gF.shape, gK.shape, gL.shape
     ((2, 2), (2, 1), (1, 2))
     """
@@ -46,7 +45,7 @@ def closed_loop_gradient(sys, G):
     gL = (transpose(sys.B) @ G[:, :nx, nx:]).sum(axis=0)
     return gF, gK, gL
 
-def gain_gradient(sys, K, L, At, X, EP, JJt, mu):
+def _gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     """dJ/dF, dJ/dK, dJ/dL from the moments X and costates E_i(P) (adjoint of Prop. 3.23).
 
     Parameters
@@ -78,12 +77,12 @@ def gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     >>> F, K, L = 0.5 * np.eye(2), np.array([[0.1], [0.2]]), np.array([[-0.3, -0.2]])
     >>> At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     >>> I = np.broadcast_to(np.eye(4), (2, 4, 4))
-    >>> gF, gK, gL = gain_gradient(sys, K, L, At, I, I, noise_covariances(sys)[1], sys.mu_inf)
+    >>> gF, gK, gL = _gain_gradient(sys, K, L, At, I, I, noise_covariances(sys)[1], sys.mu_inf)
     >>> gF.shape, gK.shape, gL.shape
     ((2, 2), (2, 1), (1, 2))
     """
     nx = sys.nx
-    gF, gK, gL = closed_loop_gradient(sys, 2.0 * EP @ At @ X)        # dJ/dA~_i
+    gF, gK, gL = _closed_loop_gradient(sys, 2.0 * EP @ At @ X)        # dJ/dA~_i
     gK += 2.0 * (mu[:, None, None] * EP[:, nx:, nx:] @ K @ JJt).sum(axis=0)
     gL += 2.0 * (sys.R @ L @ X[:, nx:, nx:]).sum(axis=0)
     return gF, gK, gL
@@ -137,7 +136,7 @@ def average_cost_and_gradient(sys, F, K, L):
     X = solve(predecessor_sum(sys.T, mu[:, None, None] * Wt, check=False)).X
     P = solve(Qt, adjoint=True).X
     cost = float(np.einsum("iab,iba->", Qt, X))
-    return cost, gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False), noise_covariances(sys)[1], mu)
+    return cost, _gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False), noise_covariances(sys)[1], mu)
 
 def positive_definite(Y):
     """True when every matrix of the stack ``Y`` has a Cholesky factor (is positive definite).
@@ -204,8 +203,8 @@ def radius_and_gradient(sys, F, K, L):
     rho, X, V = perron_pair(At, sys.T)
     inner = float(np.einsum("iab,iab->", V, X))
     if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * np.linalg.norm(V) * np.linalg.norm(X):
-        return rho, closed_loop_gradient(sys, np.zeros_like(At))
-    return rho, closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V, check=False) @ At @ X / inner)
+        return rho, _closed_loop_gradient(sys, np.zeros_like(At))
+    return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V, check=False) @ At @ X / inner)
 
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.

@@ -41,8 +41,7 @@ from .finite_horizon import (augmented_cost, augmented_initial_moment, check_ini
 from .controllers import Controller
 from .system import check_system
 
-__all__ = ["ModeObservedResult", "ModeObservedLQG", "control_riccati", "markov_jump_filter",
-           "mode_observed_lqg"]
+__all__ = ["ModeObservedResult", "ModeObservedLQG", "mode_observed_lqg"]
 
 
 @dataclass
@@ -139,7 +138,7 @@ class ModeObservedLQG(Controller):
                                                              self._dims[3], self._dims[2])))
 
 
-def control_riccati(st):
+def _control_riccati(st):
     """Coupled Riccati difference equations of the LQ problem with observed mode ([38], Ch. 4).
 
     Examples
@@ -147,7 +146,7 @@ def control_riccati(st):
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.finite_horizon import stages
-    >>> F, X = control_riccati(stages(sys, 3))
+    >>> F, X = _control_riccati(stages(sys, 3))
     >>> F.shape, np.allclose(X[-1], sys.Q)
     ((3, 2, 1, 2), True)
     """
@@ -166,7 +165,7 @@ def control_riccati(st):
     return F, X
 
 
-def markov_jump_filter(st, Y0, mu):
+def _markov_jump_filter(st, Y0, mu):
     """Gains M_i(k) and error moments Y_i(k) of the Markov jump filter ([38], Ch. 5).
 
     Examples
@@ -175,7 +174,7 @@ def markov_jump_filter(st, Y0, mu):
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.finite_horizon import mode_distributions, stages
     >>> st = stages(sys, 3)
-    >>> Mf, Y = markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st, sys.mu_inf))
+    >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st, sys.mu_inf))
     >>> Mf.shape, Y.shape
     ((3, 2, 2, 1), (4, 2, 2, 2))
     """
@@ -241,8 +240,8 @@ def mode_observed_lqg(sys, horizon, mean0, cov0, mu0):
     xhat0 = mu0 @ mean0
     dev = mean0 - xhat0
     Y0 = mu0[:, None, None] * (cov0 + np.einsum("ia,ib->iab", dev, dev))
-    F, X = control_riccati(st)
-    Mf, Y = markov_jump_filter(st, Y0, mu)
+    F, X = _control_riccati(st)
+    Mf, Y = _markov_jump_filter(st, Y0, mu)
     cost = _closed_loop_cost(st, F, Mf, mean0, cov0, mu0, xhat0)
     return ModeObservedResult(F=F, Mf=Mf, X=X, Y=Y, xhat0=xhat0, cost=cost)
 

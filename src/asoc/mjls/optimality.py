@@ -19,9 +19,9 @@ from ..linalg import pack, transpose, unpack
 from ..validation import choice
 from ..threads import single_threaded
 
-__all__ = ["METHODS", "gain_shapes", "optimality_vector", "optimality_system", "OptimalityOperator",
-           "nearest_kronecker", "KroneckerPreconditioner", "GainSolve", "solve_optimality_cg",
-           "gains_from_bounds", "solve_gains"]
+__all__ = ["METHODS", "optimality_vector", "optimality_system", "OptimalityOperator",
+           "KroneckerPreconditioner", "GainSolve", "solve_optimality_cg", "gains_from_bounds",
+           "solve_gains"]
 
 
 METHODS = ("lstsq", "sdp")
@@ -34,13 +34,13 @@ def _kron_sum(X, Y):
     return np.einsum("iab,icd->acbd", X, Y).reshape(a * c, b * d)
 
 
-def gain_shapes(sys):
+def _gain_shapes(sys):
     """Shapes of F, K, L in the unknown z = [vec F; vec K; vec L] of (3.49) (:func:`asoc.linalg.pack`).
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec373_system
-    >>> gain_shapes(sec373_system(1))
+    >>> _gain_shapes(sec373_system(1))
     ((2, 2), (2, 1), (1, 2))
     """
     return (sys.nx, sys.nx), (sys.nx, sys.ny), (sys.nu, sys.nx)
@@ -121,7 +121,7 @@ class OptimalityOperator:
     Attributes
     ----------
     shapes : tuple
-        Shapes of F, K, L (:func:`gain_shapes`).
+        Shapes of F, K, L (``_gain_shapes``).
     size : int
         Number of unknowns n^2 + n ny + nu n.
 
@@ -142,7 +142,7 @@ class OptimalityOperator:
         self.B, self.C, self.Xunder, self.EPunder = sys.B, sys.C, Xunder, EPunder
         self.output_weight = sys.C @ Xbar @ transpose(sys.C) + mu[:, None, None] * JJt     # (M, ny, ny)
         self.input_weight = sys.R + transpose(sys.B) @ EPbar @ sys.B                       # (M, nu, nu)
-        self.shapes = gain_shapes(sys)
+        self.shapes = _gain_shapes(sys)
         self.size = sum(a * b for a, b in self.shapes)
 
     def apply(self, F, K, L):
@@ -158,7 +158,7 @@ class OptimalityOperator:
         return pack(*self.apply(*unpack(z, self.shapes)))
 
 
-def nearest_kronecker(X, Y, steps=50):
+def _nearest_kronecker(X, Y, steps=50):
     """X0 (x) Y0 nearest in the Frobenius norm to sum_i X_i (x) Y_i (Van Loan and Pitsianis 1993).
 
     X0 = sum_i a_i X_i and Y0 = sum_i b_i Y_i, the leading singular pair of
@@ -169,7 +169,7 @@ def nearest_kronecker(X, Y, steps=50):
     Examples
     --------
     >>> X = np.array([np.eye(2), 2 * np.eye(2)]); Y = np.array([np.eye(3), 2 * np.eye(3)])
-    >>> X0, Y0 = nearest_kronecker(X, Y)
+    >>> X0, Y0 = _nearest_kronecker(X, Y)
     >>> bool(np.allclose(np.kron(X0, Y0), np.kron(X[0], Y[0]) + np.kron(X[1], Y[1])))
     True
     """
@@ -187,7 +187,7 @@ class KroneckerPreconditioner:
     """Block-diagonal approximate inverse of H + delta I of (3.51), one Kronecker product a block.
 
     Each diagonal block of :func:`optimality_system` (F, K, L) is replaced by its
-    :func:`nearest_kronecker` X0 (x) Y0; with X0 = U diag(a) U^T, Y0 = W diag(b) W^T,
+    ``_nearest_kronecker`` X0 (x) Y0; with X0 = U diag(a) U^T, Y0 = W diag(b) W^T,
     (X0 (x) Y0 + delta I)^-1 vec Z = vec(W [(W^T Z U) / (b a^T + delta)] U^T). The F-K-L
     coupling and the spread over the modes are left to the conjugate gradients.
 
@@ -209,11 +209,11 @@ class KroneckerPreconditioner:
 
     def __init__(self, sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
         B, C = sys.B, sys.C
-        pairs = (nearest_kronecker(Xunder, EPunder),
-                 nearest_kronecker(C @ (Xbar + Xunder) @ transpose(C) + mu[:, None, None] * JJt, EPunder),
-                 nearest_kronecker(Xunder, sys.R + transpose(B) @ (EPbar + EPunder) @ B))
+        pairs = (_nearest_kronecker(Xunder, EPunder),
+                 _nearest_kronecker(C @ (Xbar + Xunder) @ transpose(C) + mu[:, None, None] * JJt, EPunder),
+                 _nearest_kronecker(Xunder, sys.R + transpose(B) @ (EPbar + EPunder) @ B))
         self.factors = [(*np.linalg.eigh(X0), *np.linalg.eigh(Y0)) for X0, Y0 in pairs]
-        self.shapes = gain_shapes(sys)
+        self.shapes = _gain_shapes(sys)
         self.scale = max(float(np.abs(a).max() * np.abs(b).max()) for a, _, b, _ in self.factors)
 
     def solve(self, z, delta):
@@ -388,7 +388,7 @@ def solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcon
     """
     choice(method, "method", METHODS)
     args = (sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
-    shapes = gain_shapes(sys)
+    shapes = _gain_shapes(sys)
     if method == "lstsq" and sum(a * b for a, b in shapes) >= config.defaults["mjls.matrix_free_min_unknowns"]:
         z, info = solve_optimality_cg(OptimalityOperator(*args), optimality_vector(*args[:5]),
                                       KroneckerPreconditioner(*args), rcond)

@@ -1,7 +1,7 @@
 """The estimate of the spectral radius rho of the second-moment operator L (Cor. 3.2): an
 eigen-solver's rho and its positive semidefinite eigenvector, the input of the certificate.
 
-The methods (:data:`METHODS`, one table resolved by :func:`resolve_method`): rho(A)^2 directly for
+The methods (:data:`METHODS`, one table resolved by ``_resolve_method``): rho(A)^2 directly for
 one mode (``"single_mode"``); the dense eigenvalues of the Kronecker matrix for small M n^2
 (``"dense"``); ARPACK on the matrix-free operator above (``"arnoldi"``, falling back to dense
 eigenvalues up to M n^2 = ``mjls.dense_fallback_radius``, ``"arnoldi+dense"``, else to the
@@ -24,9 +24,8 @@ from ..linalg import sym, transpose
 from ..threads import single_threaded
 from .moment_operator import costate_map, kronecker_stack, linear_operator
 
-__all__ = ["METHODS", "Estimate", "check_method", "resolve_method", "fallback_method",
-           "adjoint_method", "left_perron_stack", "Balanced", "balance", "psd_stack", "estimates",
-           "estimate"]
+__all__ = ["METHODS", "Estimate", "check_method", "left_perron_stack", "Balanced", "balance",
+           "estimates", "estimate"]
 
 
 _EPS = np.finfo(float).eps
@@ -75,7 +74,7 @@ def check_method(method):
         raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, found {method!r}")
 
 
-def resolve_method(method, M, n):
+def _resolve_method(method, M, n):
     """The eigen-solver that ``method`` means for M modes of size n: the one resolution table.
 
     ``"auto"`` is "single_mode" for one mode, "noda" for scalar modes (n = 1) from
@@ -84,9 +83,9 @@ def resolve_method(method, M, n):
 
     Examples
     --------
-    >>> resolve_method("auto", 1, 3), resolve_method("auto", 2, 3), resolve_method("auto", 100, 100)
+    >>> _resolve_method("auto", 1, 3), _resolve_method("auto", 2, 3), _resolve_method("auto", 100, 100)
     ('single_mode', 'dense', 'arnoldi')
-    >>> resolve_method("auto", 1000, 1)
+    >>> _resolve_method("auto", 1000, 1)
     'noda'
     """
     if method == "auto":
@@ -98,25 +97,25 @@ def resolve_method(method, M, n):
     return "dense" if method == "arnoldi" and M * n * n <= 3 else method
 
 
-def fallback_method(dim):
+def _fallback_method(dim):
     """Where no Krylov space converges: dense eigenvalues up to M n^2 = ``mjls.dense_fallback_radius``
     ("arnoldi+dense"), else the shifted cone power method ("power").
 
     Examples
     --------
-    >>> fallback_method(16), fallback_method(10**6)
+    >>> _fallback_method(16), _fallback_method(10**6)
     ('arnoldi+dense', 'power')
     """
     return "arnoldi+dense" if dim <= config.defaults["mjls.dense_fallback_radius"] else "power"
 
 
-def adjoint_method(method):
+def _adjoint_method(method):
     """The eigen-solver for the left Perron stack, given the one that found the right one: the
     same, with the dense fallback run with left eigenvectors ("arnoldi+dense" -> "dense").
 
     Examples
     --------
-    >>> adjoint_method("arnoldi+dense"), adjoint_method("arnoldi")
+    >>> _adjoint_method("arnoldi+dense"), _adjoint_method("arnoldi")
     ('dense', 'arnoldi')
     """
     return "dense" if method == "arnoldi+dense" else method
@@ -133,7 +132,7 @@ def left_perron_stack(A, T, rho, method):
     >>> (P.ravel() / np.linalg.norm(P)).round(4)
     array([0.4856, 0.8742])
     """
-    left = estimate(A, T, adjoint_method(method), adjoint=True)
+    left = estimate(A, T, _adjoint_method(method), adjoint=True)
     return left.X if left.method != "power" else _adjoint_power(A, T, rho)
 
 
@@ -260,12 +259,12 @@ def _log2_sum(x):
     return top + np.log2(np.exp2(x - top).sum())
 
 
-def psd_stack(v, M, n):
+def _psd_stack(v, M, n):
     """The positive semidefinite stack nearest the real symmetric part of an eigenvector (phase removed).
 
     Examples
     --------
-    >>> psd_stack(np.array([1.0, 0.0, 0.0, -1e-3]), 1, 2).round(6).tolist()
+    >>> _psd_stack(np.array([1.0, 0.0, 0.0, -1e-3]), 1, 2).round(6).tolist()
     [[[1.0, 0.0], [0.0, 0.0]]]
     """
     Z = np.asarray(v).reshape(M, n, n)
@@ -290,16 +289,16 @@ def estimates(A, T, method):
     ['power']
     """
     M, n, _ = A.shape
-    method = resolve_method(method, M, n)
+    method = _resolve_method(method, M, n)
     if method == "arnoldi" and M * n * n > 3:
         yield from _arnoldi(A, T, False)
-        method = fallback_method(M * n * n)
+        method = _fallback_method(M * n * n)
     yield estimate(A, T, method)
 
 
 def estimate(A, T, method, adjoint=False):
     """rho and a PSD eigenvector of L (or L*) from the eigen-solver ``method`` (a name of
-    :data:`METHODS`, or one that :func:`resolve_method` returns).
+    :data:`METHODS`, or one that ``_resolve_method`` returns).
 
     Examples
     --------
@@ -310,7 +309,7 @@ def estimate(A, T, method, adjoint=False):
     """
     M, n, _ = A.shape
     dim = M * n * n
-    method = resolve_method(method, M, n)
+    method = _resolve_method(method, M, n)
     if method == "single_mode":
         return _single_mode(A[0], T[0, 0], adjoint)
     if method == "noda":
@@ -319,7 +318,7 @@ def estimate(A, T, method, adjoint=False):
         estimate = next(_arnoldi(A, T, adjoint), None)
         if estimate is not None:
             return estimate
-        method = fallback_method(dim)
+        method = _fallback_method(dim)
     if method == "power":
         return Estimate(np.nan, np.broadcast_to(np.eye(n), (M, n, n)).copy(), "power")
     K = kronecker_stack(A[None], T)[0]
@@ -331,7 +330,7 @@ def estimate(A, T, method, adjoint=False):
     rho = float(np.max(np.abs(lam)))
     top = np.flatnonzero(np.abs(lam) >= rho * (1 - config.defaults["mjls.perron_tie_rtol"]))
     k = top[np.argmax(lam[top].real)]                             # the real Perron eigenvalue
-    return Estimate(rho, psd_stack(right[:, k], M, n), method,
+    return Estimate(rho, _psd_stack(right[:, k], M, n), method,
                      _first_order_lower(K, lam, left, right) if method == "dense" else 0.0)
 
 
@@ -343,7 +342,7 @@ def _single_mode(A, p, adjoint):
     k = np.argmax(np.abs(lam))
     v = right[:, k]
     lower = _first_order_lower(A, lam, left, right)
-    return Estimate(p * float(abs(lam[k])) ** 2, psd_stack(np.outer(v, np.conj(v)), 1, len(A)),
+    return Estimate(p * float(abs(lam[k])) ** 2, _psd_stack(np.outer(v, np.conj(v)), 1, len(A)),
                     "single_mode", p * lower * lower)
 
 
@@ -408,7 +407,7 @@ def _arnoldi(A, T, adjoint):
                     if real and lam.real >= 0:
                         break
                     shift = abs(lam)
-            yield Estimate(abs(lam), psd_stack(V[:, 0], M, n), "arnoldi")
+            yield Estimate(abs(lam), _psd_stack(V[:, 0], M, n), "arnoldi")
         except scipy.sparse.linalg.ArpackError:
             pass
         if ncv >= dim - 1:

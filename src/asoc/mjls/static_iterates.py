@@ -23,16 +23,8 @@ from .stability import mean_square_stability
 from .stopping import StoppingRule, StopStatus
 from .system import predecessor_sum, successor_average
 
-__all__ = [
-    "UntilStabilizing",
-    "IterationRun",
-    "Recursion",
-    "ScaledPair",
-    "gain_sdp",
-    "step_iteration",
-    "exact_iteration",
-    "lyapunov_certified",
-]
+__all__ = ["ALG31_PATIENCE", "UntilStabilizing", "IterationRun", "Recursion", "ScaledPair",
+           "gain_sdp", "step_iteration", "exact_iteration", "lyapunov_certified"]
 
 
 #: The window of Alg. 3.1's progress test (:class:`asoc.mjls.stopping.StoppingRule`).

@@ -16,10 +16,8 @@ from scipy.sparse.csgraph import connected_components
 from .. import config
 from ..validation import probability_vector, real_array, real_scalar, semidefinite, stochastic_matrix
 
-__all__ = ["check_system", "closed_classes", "stationary_distribution",
-           "successor_average", "predecessor_sum", "MJLS", "import_control"]
-
-
+__all__ = ["check_system", "stationary_distribution", "successor_average", "predecessor_sum",
+           "MJLS", "import_control"]
 
 
 def _stack(value, name, M=None, shape2=None, source=""):
@@ -74,12 +72,12 @@ def check_system(sys, name="sys"):
     return sys
 
 
-def closed_classes(T):
+def _closed_classes(T):
     """The number of closed communicating classes of the chain T (1 iff mu_inf is unique).
 
     Examples
     --------
-    >>> closed_classes(np.eye(2)), closed_classes([[0.9, 0.1], [0.2, 0.8]])
+    >>> _closed_classes(np.eye(2)), _closed_classes([[0.9, 0.1], [0.2, 0.8]])
     (2, 1)
     """
     T = stochastic_matrix(T, "T")
@@ -129,7 +127,7 @@ def stationary_distribution(T):
 
 
 def _warn_if_not_unique(T, stacklevel):
-    n_closed = closed_classes(T)
+    n_closed = _closed_classes(T)
     if n_closed > 1:
         warnings.warn(f"T: the chain has {n_closed} closed classes, so its stationary distribution is "
                       f"not unique; pass the intended one as MJLS(..., mu_inf=...)", RuntimeWarning,

@@ -21,12 +21,10 @@ terms doubled bound the blocks from above for every k (induction, the maps are m
 
 import numpy as np
 
-from asoc.mjls import predecessor_sum, successor_average
+from asoc.mjls import predecessor_sum
 
-__all__ = ["blocks", "moment_bound", "costate_bound", "costate", "error_blocks_step",
-           "initial_error_blocks", "forward_bound", "optimality_conditions", "split", "step_terms",
-           "noise_term", "bound_3_65", "functional_b4", "difference_3_65_b4",
-           "next_costate_expectations"]
+__all__ = ["blocks", "moment_bound", "costate_bound", "costate", "forward_bound",
+           "optimality_conditions", "split", "bound_3_65", "functional_b4", "difference_3_65_b4"]
 
 
 _T = lambda S: np.swapaxes(S, -1, -2)
@@ -71,7 +69,7 @@ def costate(At, Qt, T):
     return 0.5 * (P + _T(P))
 
 
-def error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
+def _error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
     """One step of (3.66)-(3.67), the two transported terms multiplied by ``factor``.
 
     factor = 1 is the printed recursion; factor = 2 the corrected one (an upper bound)."""
@@ -85,7 +83,7 @@ def error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
     return Xbar_next, Xunder_next
 
 
-def initial_error_blocks(mean0, cov0, mu0, xhat0):
+def _initial_error_blocks(mean0, cov0, mu0, xhat0):
     """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a constant x^_0."""
     dev = mean0 - xhat0
     m = mu0[:, None, None]
@@ -96,12 +94,12 @@ def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
     """Sum over k of sum_i tr[Q~_i factor [[Xbar + Xu, Xu], [Xu, Xu]]] with (3.66)-(3.67) (transported
     terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56) (Thm. 3.31
     corrected); with factor 1 the cost of the printed recursions (no bound)."""
-    Xbar, Xunder = initial_error_blocks(mean0, cov0, mu0, xhat0)
+    Xbar, Xunder = _initial_error_blocks(mean0, cov0, mu0, xhat0)
     mu, total = mu0, 0.0
     for k in range(len(F)):
         LRL = L[k].T @ sys.R @ L[k]
         total += factor * (_tr(sys.Q, Xbar + Xunder) + _tr(LRL, Xunder))
-        Xbar, Xunder = error_blocks_step(sys, F[k], K[k], L[k], Xbar, Xunder, mu, factor)
+        Xbar, Xunder = _error_blocks_step(sys, F[k], K[k], L[k], Xbar, Xunder, mu, factor)
         mu = mu @ sys.T
     return total + factor * _tr(sys.Q, Xbar + Xunder)
 
@@ -133,7 +131,7 @@ def split(z, sys):
     return F, K, z[n * n + n * ny:].reshape((nu, n), order="F")
 
 
-def step_terms(sys, F, K, L, EPbar, EPunder):
+def _step_terms(sys, F, K, L, EPbar, EPunder):
     """Pbar_k (3.68), Punder_k (3.69) from E_i(Pbar_{k+1}), E_i(Punder_{k+1})."""
     BL = sys.B @ L
     ABL, G, FBL, LRL = sys.A + BL, sys.A + BL - F - K @ sys.C, F - BL, L.T @ sys.R @ L
@@ -141,7 +139,7 @@ def step_terms(sys, F, K, L, EPbar, EPunder):
     return Pbar, LRL + _T(BL) @ EPbar @ BL + _T(FBL) @ EPunder @ FBL
 
 
-def noise_term(sys, K, EPbar, EPunder, mu):
+def _noise_term(sys, K, EPbar, EPunder, mu):
     JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
     return float(mu @ (np.einsum("iab,iba->i", EPbar + EPunder, sys.H @ _T(sys.H))
                        + np.einsum("iab,iba->i", EPunder, K @ JJt @ K.T)))
@@ -149,8 +147,8 @@ def noise_term(sys, K, EPbar, EPunder, mu):
 
 def bound_3_65(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu):
     """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the constant E_i(omega_{k+1}))."""
-    Pbar, Punder = step_terms(sys, F, K, L, EPbar, EPunder)
-    return _tr(Pbar, Xbar + Xunder) + _tr(Punder, Xbar) + noise_term(sys, K, EPbar, EPunder, mu)
+    Pbar, Punder = _step_terms(sys, F, K, L, EPbar, EPunder)
+    return _tr(Pbar, Xbar + Xunder) + _tr(Punder, Xbar) + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
@@ -164,7 +162,7 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
              - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC)) + cross * _tr(E + U, BL @ Xunder @ _T(A))
              - 2 * _tr(U, BL @ Xunder @ _T(KC)) - 2 * _tr(U, F @ Xunder @ _T(A)) + 2 * _tr(U, F @ Xunder @ _T(KC))
              - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U, BL @ Xunder @ _T(BL)) + _tr(U, F @ Xunder @ F.T))
-    return terms + noise_term(sys, K, EPbar, EPunder, mu)
+    return terms + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder):
@@ -179,6 +177,3 @@ def difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder):
     _, Z12, Z22 = blocks(Z, n)
     return _tr(Z12 + _T(Z12) + 2 * Z22, Xbar)
 
-
-def next_costate_expectations(sys, Pbar, Punder):
-    return successor_average(sys.T, Pbar), successor_average(sys.T, Punder)

@@ -22,9 +22,9 @@ from asoc.mjls.optimality import optimality_system
 
 from .instances import draw_system
 
-__all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "alg_3_1_one_mode",
-           "thm_3_19_example", "THM_3_19_NOISELESS", "thm_3_19_noiseless_example", "kernel_example",
-           "THM_3_27_INSTANCE", "fixed_point_residuals", "thm_3_27_fixed_points", "mcvmd_integral"]
+__all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "thm_3_19_example",
+           "THM_3_19_NOISELESS", "thm_3_19_noiseless_example", "kernel_example",
+           "THM_3_27_INSTANCE", "thm_3_27_fixed_points", "mcvmd_integral"]
 
 
 # ------------------------------------------------------------------ exact 2 x 2 algebra
@@ -123,7 +123,7 @@ THM_3_19_SYSTEM = dict(          # one mode, nx = 2: instance 79 of the study, r
     Q=[[2.8, -1.2], [-1.2, 1.9]], R=[[1.4]])
 
 
-def alg_3_1_one_mode(A, B, C, H, Q, R, start, iterations=400):
+def _alg_3_1_one_mode(A, B, C, H, Q, R, start, iterations=400):
     """The gains of Alg. 3.1 ((3.34)-(3.35), one mode, column-major vec) from X = P = start I."""
     A, B, C, H, Q, R = (np.asarray(v, dtype=float) for v in (A, B, C, H, Q, R))
     X = P = start * np.eye(len(A))
@@ -153,7 +153,7 @@ def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
     rho = lambda L: float(np.max(np.abs(np.linalg.eigvals(A + B @ np.atleast_2d(L) @ C))) ** 2)
     cycles = []
     for start in starts:
-        gains = alg_3_1_one_mode(**s, start=start)[:, 0, 0]
+        gains = _alg_3_1_one_mode(**s, start=start)[:, 0, 0]
         period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9) and not np.isclose(gains[-1], gains[-2], rtol=1e-3))
         cycles.append({"start": start, "gains": sorted([float(gains[-1]), float(gains[-2])]),
                        "rho": sorted([rho(gains[-1]), rho(gains[-2])]), "period_2": period_2})
@@ -222,7 +222,7 @@ def kernel_example(length_scale=0.03):
 THM_3_27_INSTANCE = 13     # the study's saved counterexample of Thm. 3.27 (seed 2017): M = 2
 
 
-def fixed_point_residuals(sys, run):
+def _fixed_point_residuals(sys, run):
     """How well Alg. 3.2's last iterate solves (3.45)-(3.49): the largest relative change of Xbar,
     Xu, Pbar, Pu under one more step (3.45)-(3.48) with the iterate's gains, the relative residual
     ||H z + rho|| / ||rho|| of (3.49) (z = [vec F; vec K; vec L], column-stacking), and the smallest
@@ -247,7 +247,7 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
     the author's start 1e-4 I and from ``random_starts`` random SPD starts of scale 1 (seeds 0, 1,
     ...): the distinct converged, stabilising fixed points (costs equal to 1e-9 relative merged),
     each with its exact cost (3.42), how many starts reach it, its gains and
-    :func:`fixed_point_residuals`.
+    ``_fixed_point_residuals``.
 
     Examples
     --------
@@ -275,7 +275,7 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
             continue
         points.append({"cost": float(run.cost), "starts": [name], "F": run.F.tolist(),
                        "K": run.K.tolist(), "L": run.L.tolist(), "rho": float(run.rho),
-                       **fixed_point_residuals(sys, run)})
+                       **_fixed_point_residuals(sys, run)})
     return {"seed": seed, "index": index, "M": sys.M, "nx": sys.nx, "nu": sys.nu, "ny": sys.ny,
             "random_starts": random_starts, "fixed_points": sorted(points, key=lambda p: p["cost"])}
 

@@ -23,8 +23,8 @@ from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, draw_system,
                         stationary_average, trace_sum, verdict, z_scores)
 from .mean_square import moment_map_matrix
 
-__all__ = ["check_3_20", "dynamic_gains", "loop_step", "quadratic_form", "check_3_23", "check_3_24",
-           "augmented_dense", "check_3_25", "check_3_26", "check_3_27"]
+__all__ = ["check_3_20", "loop_step", "quadratic_form", "check_3_23", "check_3_24", "check_3_25",
+           "check_3_26", "check_3_27"]
 
 
 def check_3_20(rng, mutant=False):
@@ -42,7 +42,7 @@ def check_3_20(rng, mutant=False):
     return outcome(verdict(rel < 1e-12), sys, relative_difference=rel)
 
 
-def dynamic_gains(rng, sys, scale=0.5):
+def _dynamic_gains(rng, sys, scale=0.5):
     """Random controller matrices F (nx, nx), K (nx, ny), L (nu, nx), entries N(0, scale^2)."""
     F = scale * rng.standard_normal((sys.nx, sys.nx))
     K = scale * rng.standard_normal((sys.nx, sys.ny))
@@ -52,7 +52,7 @@ def dynamic_gains(rng, sys, scale=0.5):
 
 def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
     """Random (F, K, L) and the system rescaled (with F, K) so the augmented loop has rho in [low, high]."""
-    F, K, L = dynamic_gains(rng, sys)
+    F, K, L = _dynamic_gains(rng, sys)
     At = augmented_closed_loop(sys, F, K, L)[0]
     target = rng.uniform(low, high)
     c = float(np.sqrt(target / ms_spectral_radius(At, sys.T)))
@@ -83,7 +83,7 @@ def check_3_23(rng, mutant=False):
     """Prop. 3.23: the printed block recursion of X~ against Monte Carlo, k = 1..3.
     Mutant: the recursion without the process noise mu_k^i H_i H_i^T."""
     sys = draw_system(rng)
-    F, K, L = dynamic_gains(rng, sys)
+    F, K, L = _dynamic_gains(rng, sys)
     c = norm_scale(rng, augmented_closed_loop(sys, F, K, L)[0])
     sys, F, K = rescaled(sys, c), c * F, c * K
     HHt, JJt = noise_covariances(sys)
@@ -135,7 +135,7 @@ def check_3_24(rng, mutant=False):
                    burn_in=burn)
 
 
-def augmented_dense(sys, F, K, L):
+def _augmented_dense(sys, F, K, L):
     """(A~_i, H~_i, Q~_i) of (3.39) assembled block by block: [[A_i, B_i L], [K C_i, F]],
     blockdiag(H_i, K J_i) and blockdiag(Q_i, L^T R_i L).
 
@@ -143,7 +143,7 @@ def augmented_dense(sys, F, K, L):
     --------
     >>> from asoc.mjls.examples import sec354_system
     >>> sys = sec354_system(1)
-    >>> At, Ht, Qt = augmented_dense(sys, np.eye(2), np.ones((2, 1)), np.ones((1, 2)))
+    >>> At, Ht, Qt = _augmented_dense(sys, np.eye(2), np.ones((2, 1)), np.ones((1, 2)))
     >>> At.shape, Ht.shape, Qt.shape
     ((2, 4, 4), (2, 4, 2), (2, 4, 4))
     """
@@ -158,14 +158,14 @@ def check_3_25(rng, mutant=False):
     """Prop. 3.25: the stated Hamiltonian of (3.42) (with E_i(P~)) against its Lagrangian built densely.
     Mutant: the stated form without the noise term mu_i H~_i H~_i^T."""
     sys = draw_system(rng)
-    F, K, L = dynamic_gains(rng, sys)
+    F, K, L = _dynamic_gains(rng, sys)
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
     n2 = 2 * sys.nx
     X, P = random_spd_stack(rng, sys.M, n2), random_spd_stack(rng, sys.M, n2)
     mu = sys.mu_inf
     inner = At @ X @ transpose(At) + (0 if mutant else mu[:, None, None] * HHt_cl)
     stated = trace_sum(Qt, X) + trace_sum(successor_average(sys.T, P), inner) - trace_sum(P, X)
-    Ad, Hd, Qd = augmented_dense(sys, F, K, L)
+    Ad, Hd, Qd = _augmented_dense(sys, F, K, L)
     noise = np.einsum("ij,iab->jab", sys.T, mu[:, None, None] * (Hd @ transpose(Hd)))
     constraint = moment_map_matrix(Ad, sys.T) @ X.ravel() + noise.ravel() - X.ravel()
     dense = trace_sum(Qd, X) + float(P.ravel() @ constraint)

@@ -15,11 +15,11 @@ from .dynamic_feedback import loop_step, quadratic_form
 from .instances import (Z_SCORE, ModeChain, RunModes, draw_system, gaussian_mixture, moment_estimate, outcome,
                         random_spd_stack, sample_mixture, trace_sum, verdict)
 
-__all__ = ["finite_instance", "check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31",
-           "summarise_3_31", "check_3_32", "check_3_33"]
+__all__ = ["check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31", "summarise_3_31",
+           "check_3_32", "check_3_33"]
 
 
-def finite_instance(rng, max_states=3, max_modes=3):
+def _finite_instance(rng, max_states=3, max_modes=3):
     """A random system, horizon 2-8, random time-variant gains (F_k, K_k, L_k) and a Gaussian-mixture x_0."""
     sys = draw_system(rng, max_states=max_states, max_modes=max_modes)
     horizon = int(rng.integers(2, 9))
@@ -33,7 +33,7 @@ def finite_instance(rng, max_states=3, max_modes=3):
 def check_3_28(rng, mutant=False):
     """Prop. 3.28: the expected cost (3.56) by the moment recursion (3.57)-(3.58) against Monte Carlo.
     Mutant: the moment form evaluated with the gains in reverse time order."""
-    sys, horizon, F, K, L, mu0, mean0, cov0 = finite_instance(rng)
+    sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     xhat0 = mu0 @ mean0
     order = slice(None, None, -1 if mutant else 1)
     exact = finite_horizon_cost(sys, F[order], K[order], L[order], mean0, cov0, mu0, xhat0)
@@ -54,7 +54,7 @@ def check_3_28(rng, mutant=False):
 def check_3_29(rng, mutant=False):
     """Lemma 3.29: sum_i tr[P~_0^i X~_0^i] + mu_0^i omega_{i,0} by the backward recursion (3.64)
     against the forward sum (3.62). Mutant: the recursion without the noise term omega."""
-    sys, horizon, F, K, L, mu0, mean0, cov0 = finite_instance(rng)
+    sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     xhat0 = mu0 @ mean0
     forward = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
     n = sys.nx
@@ -112,7 +112,7 @@ def bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=True):
 def check_3_31(rng, mutant=False):
     """Thm. 3.31: J_0 <= Jbar_0 for fixed gains (the exact cost from (3.57)-(3.58)).
     Mutant: Jbar_0 without the noise's share omega."""
-    sys, horizon, F, K, L, mu0, mean0, cov0 = finite_instance(rng)
+    sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     optimised = bool(rng.random() < 0.5)
     if optimised:                                                     # the gains Alg. 3.3 returns
         run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0,
@@ -173,7 +173,7 @@ def check_3_33(rng, mutant=False):
     """Thm. 3.33: Alg. 3.3 gives non-increasing Jbar_0 and its parameters converge
     (20 further iterations after the stop change them by < 1e-4 relative).
     Mutant: Alg. 3.3 stopped after 2 iterations."""
-    sys, horizon, _, _, _, mu0, mean0, cov0 = finite_instance(rng, max_states=2, max_modes=2)
+    sys, horizon, _, _, _, mu0, mean0, cov0 = _finite_instance(rng, max_states=2, max_modes=2)
     seed = int(rng.integers(2**32))
     kwargs = dict(horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0, warn=False)
     run = finite_horizon_dynamic_output_feedback(sys, init=np.random.default_rng(seed), max_iter=2 if mutant else 300,

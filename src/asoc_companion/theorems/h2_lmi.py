@@ -24,10 +24,9 @@ from .instances import (Z_SCORE, ModeOperator, best_scalar_gain, draw_system, in
                         verdict)
 from .mean_square import moment_map_radius
 
-__all__ = ["check_3_7", "check_3_10", "BOUNDARY_SHARE", "boundary_point", "check_3_8", "check_3_11",
-           "check_3_9", "decide_3_9", "failure_kind", "check_3_12", "summarise_lmi",
-           "MARGIN_SOLVERS", "MARGIN_AGREEMENT", "lmi_margin", "certified_margins",
-           "lmi_C12_margin"]
+__all__ = ["check_3_7", "check_3_10", "BOUNDARY_SHARE", "check_3_8", "check_3_11", "check_3_9",
+           "decide_3_9", "check_3_12", "summarise_lmi", "MARGIN_SOLVERS", "MARGIN_AGREEMENT",
+           "lmi_margin", "certified_margins", "lmi_C12_margin"]
 
 
 def _stationary_check(rng, mode_dependent, mutant):
@@ -76,7 +75,7 @@ def _random_scaled_spd(rng, count, n, scale):
 BOUNDARY_SHARE = 0.5     # share of the lemmas' draws at the BMI's boundary (all of the mutants')
 
 
-def boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
+def _boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
     """(Y, G) near the boundary of the BMI (3.15): Y solves Y_i = s Acl_i D_i(Y) Acl_i^T + mu_i H_i
     H_i^T + delta I and G_i = D_i(Y) (Lemma 3.8, one G: the largest multiple of sum_i mu_i D_i(Y)
     below every D_i(Y)), so that with G_i = D_i(Y) the BMI's Schur
@@ -104,7 +103,7 @@ def boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
 def _lemma_bmi(rng, mode_dependent, mutant):
     """Lemmas 3.8 / 3.11: a point (L, G, Y) satisfying the BMI (3.15) gives D(Y) feasible for
     (3.14), hence a stabilising L, and an objective >= ||G||_2^2 of L. Half the draws (all of the
-    mutant's) lie near the BMI's boundary (:func:`boundary_point`), the others draw Y and G
+    mutant's) lie near the BMI's boundary (``_boundary_point``), the others draw Y and G
     independently of L's Lyapunov equation; the BMI decides the premise.
     Mutant: the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)."""
     sys = draw_system(rng)
@@ -117,7 +116,7 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     Acl, mu, M, n = acl(sys), sys.mu_inf, sys.M, sys.nx
     HHt = sys.H @ transpose(sys.H)
     if boundary:
-        Y, G, s = boundary_point(rng, sys, Acl, HHt, mode_dependent, target)
+        Y, G, s = _boundary_point(rng, sys, Acl, HHt, mode_dependent, target)
         P = np.einsum("ji,jab->iab", sys.T, Y)
     else:
         scale = float(np.trace(HHt.mean(axis=0)) / n) * np.exp(rng.uniform(1.0, 4.0))
@@ -173,11 +172,11 @@ def decide_3_9(sys, mu=None, mutant=False):
     gain = -lmi.L if mutant else lmi.L
     rho = moment_map_radius(closed_loop(sys, gain), sys.T)
     if not rho < 1:
-        numbers["failure_kind"] = failure_kind(sys, lmi, gain)
+        numbers["failure_kind"] = _failure_kind(sys, lmi, gain)
     return outcome(verdict(rho < 1), sys, lmi_L=np.ravel(gain), rho_of_lmi_gain=rho, **numbers)
 
 
-def failure_kind(sys, lmi, gain):
+def _failure_kind(sys, lmi, gain):
     """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the recovered gain with
     the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not stabilise),
     "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G)."""
@@ -199,7 +198,7 @@ def check_3_12(rng, mutant=False):
         return outcome("not_applicable", sys, lmi_feasible=False, lmi_status=lmi.status, lmi_margin=lmi.margin)
     gains = -lmi.L if mutant else lmi.L
     rho = moment_map_radius(sys.A + sys.B @ gains @ sys.C, sys.T)
-    kind = {} if rho < 1 else {"failure_kind": failure_kind(sys, lmi, gains)}
+    kind = {} if rho < 1 else {"failure_kind": _failure_kind(sys, lmi, gains)}
     return outcome(verdict(rho < 1), sys, lmi_feasible=True, lmi_margin=lmi.margin, rho_of_lmi_gains=rho, **kind)
 
 

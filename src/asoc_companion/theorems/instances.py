@@ -17,13 +17,13 @@ from asoc.mjls import closed_loop, ms_spectral_radius, random_mjls
 
 from .statement import Outcome
 
-__all__ = ["FAMILIES", "Z_SCORE", "draw_system", "size", "system_data", "rescaled", "radius_to",
-           "BOUND_MARGIN", "BOUND_FLOOR", "BOUND_SEEDS", "scalar_closed_loops", "scalar_gain_radii",
-           "radius_lower_bounds", "walk_lower_bounds", "grid_minimum", "best_scalar_gain",
-           "best_gain", "ModeChain", "initial_modes", "RunModes", "ModeOperator", "moment_estimate",
-           "indicator_moment_estimate", "stationary_average", "random_spd", "random_spd_stack",
-           "min_eig", "trace_sum", "verdict", "outcome", "stabilised", "sym_noise",
-           "gaussian_mixture", "sample_mixture", "z_scores", "norm_scale"]
+__all__ = ["FAMILIES", "Z_SCORE", "draw_system", "size", "rescaled", "BOUND_MARGIN", "BOUND_FLOOR",
+           "BOUND_SEEDS", "scalar_gain_radii", "radius_lower_bounds", "walk_lower_bounds",
+           "grid_minimum", "best_scalar_gain", "best_gain", "ModeChain", "initial_modes",
+           "RunModes", "ModeOperator", "moment_estimate", "indicator_moment_estimate",
+           "stationary_average", "random_spd", "random_spd_stack", "min_eig", "trace_sum",
+           "verdict", "outcome", "stabilised", "gaussian_mixture", "sample_mixture", "z_scores",
+           "norm_scale"]
 
 
 FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
@@ -50,7 +50,7 @@ def size(sys):
     return {"n_states": sys.nx, "n_modes": sys.M, "n_inputs": sys.nu, "n_outputs": sys.ny}
 
 
-def system_data(sys):
+def _system_data(sys):
     """The system's matrices as nested lists (a counterexample is saved as data)."""
     data = {name: np.asarray(getattr(sys, name)).tolist() for name in ("A", "B", "C", "H", "Q", "R", "T")}
     data["J"] = None if sys.J is None else np.asarray(sys.J).tolist()
@@ -62,7 +62,7 @@ def rescaled(sys, factor):
     return sys.replace(A=factor * sys.A, B=factor * sys.B)
 
 
-def radius_to(sys, Acl, target):
+def _radius_to(sys, Acl, target):
     """Scale factor c with rho(c Acl) = target (rho of Cor. 3.2 is homogeneous of degree 2)."""
     return float(np.sqrt(target / ms_spectral_radius(Acl, sys.T)))
 
@@ -74,7 +74,7 @@ BOUND_FLOOR = 1e-3    # with the best rho taken >= this (near rho = 0 rounding i
 BOUND_SEEDS = 16      # gains of smallest lower bound whose rho gives the first estimate of the minimum
 
 
-def scalar_closed_loops(sys, gains):
+def _scalar_closed_loops(sys, gains):
     """A_i + L B_i C_i for u = L y with scalar L (SISO), for every L in ``gains``: shape (G, M, n, n)."""
     bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
     return sys.A[None] + gains[:, None, None, None] * bc[None]
@@ -83,7 +83,7 @@ def scalar_closed_loops(sys, gains):
 def scalar_gain_radii(sys, gains):
     """rho of Cor. 3.2 for u = L y with scalar L (SISO), for every L in ``gains`` at once."""
     M, n = sys.M, sys.nx
-    Acl = scalar_closed_loops(sys, gains)
+    Acl = _scalar_closed_loops(sys, gains)
     kron = np.einsum("giab,gicd->giacbd", Acl, Acl).reshape(len(gains), M, n * n, n * n)
     op = np.einsum("ij,gixy->gjxiy", sys.T, kron).reshape(len(gains), M * n * n, M * n * n)
     return np.max(np.abs(np.linalg.eigvals(op)), axis=1)
@@ -108,7 +108,7 @@ def radius_lower_bounds(sys, gains):
     """Lower bounds of :func:`scalar_gain_radii` without eigenvalues: |tr(M^k)| <= N rho^k for the
     N x N matrix M of Cor. 3.2 (N = M nx^2), the largest of (tr(M^k) / N)^(1/k) over k = 1..M (every
     closed walk of the mode chain is counted once its length is <= M; a bound of 0 skips nothing)."""
-    Acl = scalar_closed_loops(sys, gains)
+    Acl = _scalar_closed_loops(sys, gains)
     size = sys.M * sys.nx ** 2
     return np.max([(_power_trace(sys.T, Acl, k) / size) ** (1 / k) for k in range(1, sys.M + 1)], axis=0)
 
@@ -126,7 +126,7 @@ def walk_lower_bounds(sys, gains):
     >>> bool(np.all(walk_lower_bounds(sys, gains) <= scalar_gain_radii(sys, gains) * (1 + 1e-12)))
     True
     """
-    Acl = scalar_closed_loops(sys, gains)
+    Acl = _scalar_closed_loops(sys, gains)
     T, M = sys.T, sys.M
     walks = ([(i,) for i in range(M) if T[i, i] > 0]
              + [(i, j) for i in range(M) for j in range(i + 1, M) if T[i, j] * T[j, i] > 0])
@@ -387,20 +387,15 @@ def outcome(verdict, sys=None, **numbers):
     if sys is not None:
         clean.update(size(sys))
         if verdict == "fails":
-            clean["system"] = system_data(sys)
+            clean["system"] = _system_data(sys)
     return Outcome(verdict, clean)
 
 
 def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
     """Rescale A_i, B_i so that the closed loop of ``gain_fn(sys)`` has rho uniform in [low, high]."""
     target = rng.uniform(low, high)
-    factor = radius_to(sys, gain_fn(sys), target)
+    factor = _radius_to(sys, gain_fn(sys), target)
     return rescaled(sys, factor), target
-
-
-def sym_noise(rng, m, n):
-    """m random symmetric n x n matrices with standard normal entries (symmetrised)."""
-    return sym(rng.standard_normal((m, n, n)))
 
 
 # ---------------------------------------------------------------- Gaussian-mixture initial states

@@ -33,10 +33,9 @@ from asoc import gp
 from .statement import Outcome
 
 __all__ = ["EPS", "BOX", "STOP", "LOG_SCALES", "MOVES", "STALL", "FAMILIES", "COVARIANCE_NAMES",
-           "MUTANT_COVARIANCE", "random_covariance", "covariance", "pair_distance",
-           "distance_matrix", "gram_certificate", "check_kernels_sec_2_6_3",
-           "search_counterexample", "replay_kernel_counterexample", "distance_label",
-           "DISTANCE_LABELS", "summarise_kernels"]
+           "MUTANT_COVARIANCE", "random_covariance", "covariance", "distance_matrix",
+           "gram_certificate", "check_kernels_sec_2_6_3", "search_counterexample",
+           "replay_kernel_counterexample", "distance_label", "DISTANCE_LABELS", "summarise_kernels"]
 
 
 EPS = float(np.finfo(float).eps)
@@ -117,14 +116,14 @@ def _step_density(weights):
     return lambda x: B * w[min(int(x * B), B - 1)] if 0.0 <= x <= 1.0 else 0.0
 
 
-def pair_distance(family, config, a, b, interval=(0.0, 1.0)):
+def _pair_distance(family, config, a, b, interval=(0.0, 1.0)):
     """The library's distance of Sec. 2.6.3 between two distributions of a configuration (``interval``:
     the integration limits of the quadrature distances).
 
     Examples
     --------
-    >>> h = pair_distance("hellinger", {"exponent": "usual"}, [0.0, 1.0], [1.0, 1.0])
-    >>> round(h, 4), round(pair_distance("hellinger", {"exponent": "printed"}, [0.0, 1.0], [1.0, 1.0]), 6)
+    >>> h = _pair_distance("hellinger", {"exponent": "usual"}, [0.0, 1.0], [1.0, 1.0])
+    >>> round(h, 4), round(_pair_distance("hellinger", {"exponent": "printed"}, [0.0, 1.0], [1.0, 1.0]), 6)
     (0.3428, 0.013807)
     """
     if family == "mcvmd":
@@ -149,7 +148,7 @@ def distance_matrix(family, config, interval=(0.0, 1.0)):
     D = np.zeros((len(items), len(items)))
     for i in range(len(items)):
         for j in range(i + 1, len(items)):
-            D[i, j] = D[j, i] = pair_distance(family, config, items[i], items[j], interval)
+            D[i, j] = D[j, i] = _pair_distance(family, config, items[i], items[j], interval)
     return D
 
 
@@ -188,7 +187,7 @@ def _search(rng, family, layout, config, name, shape):
         i = int(rng.integers(N))
         trial = theta[i] + sigma * rng.standard_normal(theta[i].shape)
         moved = _decode(family, trial)
-        row = [0.0 if j == i else pair_distance(family, config, moved, _decode(family, theta[j])) for j in range(N)]
+        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family, theta[j])) for j in range(N)]
         D_trial = D.copy()
         D_trial[i, :] = D_trial[:, i] = row
         trial_value, trial_factor = _objective(D_trial, name, shape)

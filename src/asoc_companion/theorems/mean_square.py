@@ -18,8 +18,7 @@ from asoc.mjls.moment_operator import ms_operator
 from .instances import draw_system, min_eig, outcome, random_spd, random_spd_stack, verdict
 
 __all__ = ["DECISIVE", "moment_map_matrix", "moment_map_radius", "BOUNDARY_SHARE", "near_cycle",
-           "boundary_system", "coupled_lyapunov_solutions", "check_3_1", "printed_matrix",
-           "check_3_2", "check_3_5"]
+           "boundary_system", "check_3_1", "check_3_2", "check_3_5"]
 
 
 DECISIVE = 1e-9       # |rho - 1| below this leaves mean-square stability undecided by rounding
@@ -84,7 +83,7 @@ def boundary_system(rng, radius_of, against=None):
     return A * np.sqrt(target / radius_of(A, T)), T
 
 
-def coupled_lyapunov_solutions(A, T, S):
+def _coupled_lyapunov_solutions(A, T, S):
     """Q of the two forms of Thm. 3.1 for S: A_i^T E_i(Q) A_i - Q_i = -S_i and
     D_j(A Q A^T) - Q_j = -S_j."""
     M, n, _ = A.shape
@@ -109,7 +108,7 @@ def check_3_1(rng, mutant=False):
         A, T = sys.A, sys.T
     S = random_spd_stack(rng, *A.shape[:2])
     try:
-        Q_first, Q_second = coupled_lyapunov_solutions(A, premise_T(T), S)
+        Q_first, Q_second = _coupled_lyapunov_solutions(A, premise_T(T), S)
     except np.linalg.LinAlgError:
         return outcome("not_applicable", sys, reason="singular coupled Lyapunov operator")
     eig_first, eig_second = min_eig(Q_first), min_eig(Q_second)
@@ -121,12 +120,12 @@ def check_3_1(rng, mutant=False):
     return outcome(verdict(rho < 1), sys, **numbers)
 
 
-def printed_matrix(A, T):
+def _printed_matrix(A, T):
     """The matrix of Cor. 3.2 as printed: diag[A_1 (x) A_1, ..., A_M (x) A_M] (T^T (x) I_{n^2}).
 
     Examples
     --------
-    >>> printed_matrix(np.array([[[2.0]]]), np.array([[1.0]]))
+    >>> _printed_matrix(np.array([[[2.0]]]), np.array([[1.0]]))
     array([[4.]])
     """
     M, n, _ = A.shape
@@ -141,7 +140,7 @@ def check_3_2(rng, mutant=False):
     decided by :func:`moment_map_radius`. Half the draws (all of the mutant's) come from
     :func:`boundary_system`, scaled at the printed matrix's boundary. Mutant: M built with T^T."""
     radius = lambda matrix: float(np.max(np.abs(np.linalg.eigvals(matrix))))
-    printed = lambda A, T: radius(printed_matrix(A, T.T if mutant else T))
+    printed = lambda A, T: radius(_printed_matrix(A, T.T if mutant else T))
     if mutant or rng.random() < BOUNDARY_SHARE:
         A, T = boundary_system(rng, printed, against=printed if mutant else None)
         sys, data = None, dict(A=A, T=T)

@@ -4,7 +4,6 @@ import re
 import json
 from pathlib import Path
 
-import numpy as np
 
 from ..atomic_files import atomic_write_json
 from ..plan import values_folder
@@ -13,10 +12,9 @@ from .statement import Outcome
 from .engine import verdict_text
 from .typeset import CHECKS_TEX, CORRECTIONS_TEX, MUTANTS_TEX
 
-__all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "trim_systems",
-           "load_counterexamples", "margin", "shown_counterexample", "describe", "system_from",
-           "mutant_text", "markdown_text", "typeset", "mutant_markdown", "statements_markdown",
-           "StatementsPage"]
+__all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "load_counterexamples",
+           "margin", "shown_counterexample", "describe", "mutant_text", "typeset",
+           "statements_markdown", "StatementsPage"]
 
 
 COUNTEREXAMPLES = "theorems_counterexamples.json"
@@ -27,13 +25,13 @@ def save_counterexamples(results, seed, folder) -> Path:
     """Every failing instance (statement, index, its deciding numbers and system) as JSON, atomically."""
     statements = {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
                   for key, res in results.items() if res.failures}
-    data = {"seed": int(seed), "statements": {key: trim_systems(key, entries) for key, entries in statements.items()}}
+    data = {"seed": int(seed), "statements": {key: _trim_systems(key, entries) for key, entries in statements.items()}}
     # shaped like a notebook's values file, which every reader of figures/values expects
     return atomic_write_json(values_folder(folder) / COUNTEREXAMPLES,
                              {"notebook": COUNTEREXAMPLES.removesuffix(".json"), "values": data})
 
 
-def trim_systems(key, entries, keep=SYSTEMS_KEPT):
+def _trim_systems(key, entries, keep=SYSTEMS_KEPT):
     """Keep the system matrices of the ``keep`` smallest counterexamples (the order of
     :func:`shown_counterexample`); the others keep their numbers and re-run from (seed, key, index)."""
     order = sorted(entries, key=lambda e: _order(key, e))
@@ -84,13 +82,6 @@ def describe(key, outcome: Outcome) -> str:
     return "\n".join(lines)
 
 
-def system_from(numbers):
-    """The MJLS of a saved counterexample."""
-    from asoc.mjls import MJLS
-
-    return MJLS(**{k: np.array(v) for k, v in numbers["system"].items() if v is not None})
-
-
 def mutant_text(record) -> str:
     """"caught in 37 of 100" (or "NOT caught in 0 of 100", "-" when the mutant was not run)."""
     mutant = record.get("mutant")
@@ -105,12 +96,12 @@ def mutant_text(record) -> str:
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_\[\]<>#|])")
 
 
-def markdown_text(text: str) -> str:
+def _markdown_text(text: str) -> str:
     """``text`` for MyST Markdown: Markdown's special characters escaped outside ``$...$`` math.
 
     Examples
     --------
-    >>> markdown_text(r"x_k [a] and $\\mathbf x_k$")
+    >>> _markdown_text(r"x_k [a] and $\\mathbf x_k$")
     'x\\\\_k \\\\[a\\\\] and $\\\\mathbf x_k$'
     """
     parts = text.split("$")
@@ -122,10 +113,10 @@ def markdown_text(text: str) -> str:
 
 def typeset(table: dict, text: str) -> str:
     """``text`` as Markdown: its typeset form from ``table`` (theorems.typeset), else escaped."""
-    return table.get(text) or markdown_text(text)
+    return table.get(text) or _markdown_text(text)
 
 
-def mutant_markdown(mutant) -> str:
+def _mutant_markdown(mutant) -> str:
     """A mutant's description with its math typeset (``MUTANTS_TEX``), as Markdown."""
     return typeset(MUTANTS_TEX, mutant["description"])
 
@@ -170,7 +161,7 @@ def statements_markdown(statements, records, findings) -> str:
                  f"- *One instance checks:* {typeset(CHECKS_TEX, st.checked)}"]
         if st.check is None:
             rows.append(f"| {title} | not checkable | - |")
-            lines.append(f"- *Not checkable:* {markdown_text(st.not_checkable)}")
+            lines.append(f"- *Not checkable:* {_markdown_text(st.not_checkable)}")
         else:
             verdict = verdict_text(record)
             rows.append(f"| {title} | {'**' + verdict + '**' if record['fails'] else verdict} "
@@ -178,7 +169,7 @@ def statements_markdown(statements, records, findings) -> str:
             links = _links(st, record, findings)
             lines.append(f"- *Verdict:* {verdict}" + (f" ({links})" if links else ""))
             if record.get("mutant"):
-                mutant = mutant_markdown(record["mutant"])
+                mutant = _mutant_markdown(record["mutant"])
                 lines.append(f"- *Mutant:* {mutant}; {mutant_text(record)}")
         lines += _correction_lines(record)
         sections.append("\n".join(lines))
@@ -188,17 +179,17 @@ def statements_markdown(statements, records, findings) -> str:
 def _correction_lines(record) -> list:
     lines = []
     if record.get("diagnosis"):
-        lines.append(f"- *Diagnosis:* {markdown_text(record['diagnosis'])}")
+        lines.append(f"- *Diagnosis:* {_markdown_text(record['diagnosis'])}")
     if record.get("corrected"):
         corrected = record["corrected"]
         statement = typeset(CORRECTIONS_TEX, corrected["statement"])
         text = (f"- *Corrected statement:* {statement} "
                 f"(*{verdict_text({**corrected, 'not_applicable': 0})}*")
         if corrected.get("mutant"):
-            text += f"; mutant {mutant_markdown(corrected['mutant'])}: {mutant_text(corrected)}"
+            text += f"; mutant {_mutant_markdown(corrected['mutant'])}: {mutant_text(corrected)}"
         lines.append(text + ")")
     elif record.get("no_correction"):
-        lines.append(f"- *No correction found:* {markdown_text(record['no_correction'])}")
+        lines.append(f"- *No correction found:* {_markdown_text(record['no_correction'])}")
     return lines
 
 

@@ -22,8 +22,8 @@ from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, best_scalar_
                         scalar_gain_radii, stabilised, trace_sum, verdict, z_scores)
 from .mean_square import moment_map_matrix
 
-__all__ = ["check_3_14", "check_3_15", "summarise_3_15", "lagrangian_dense", "check_3_16",
-           "check_3_17", "check_3_18", "check_3_19", "decide_3_19", "summarise_3_19"]
+__all__ = ["check_3_14", "check_3_15", "summarise_3_15", "check_3_16", "check_3_17", "check_3_18",
+           "check_3_19", "decide_3_19", "summarise_3_19"]
 
 
 def check_3_14(rng, mutant=False):
@@ -95,14 +95,14 @@ def summarise_3_15(outcomes):
                           "holds": holds, "fails": len(outcomes) - holds, "instances": len(outcomes)}}
 
 
-def lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
+def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
     """The Lagrangian of (3.30): sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + <P, map(X) + noise - X>,
     with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per mode).
 
     Examples
     --------
     >>> one = np.ones((1, 1, 1))
-    >>> lagrangian_dense(0.5 * one, one, one, np.zeros((1, 1)), one, one, one, np.eye(1), np.ones(1), 2 * one, one)
+    >>> _lagrangian_dense(0.5 * one, one, one, np.zeros((1, 1)), one, one, one, np.eye(1), np.ones(1), 2 * one, one)
     1.5
     """
     Acl = A + B @ L @ C
@@ -125,7 +125,7 @@ def check_3_16(rng, mutant=False):
     LC = L @ sys.C
     weight = sys.Q + transpose(LC) @ sys.R @ LC
     stated = trace_sum(weight, X) - trace_sum(P, X) + trace_sum(successor_average(sys.T, P), inner)
-    dense = lagrangian_dense(sys.A, sys.B, sys.C, L, sys.Q, sys.R, sys.H, sys.T, mu, X, P)
+    dense = _lagrangian_dense(sys.A, sys.B, sys.C, L, sys.Q, sys.R, sys.H, sys.T, mu, X, P)
     scale = trace_sum(weight, X) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P), inner))
     rel = abs(stated - dense) / scale
     return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense, relative_difference=rel)

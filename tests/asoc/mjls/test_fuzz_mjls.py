@@ -75,6 +75,8 @@ CALLS = {
     "exact_dynamic_output_feedback": (mjls.exact_dynamic_output_feedback,
                                       dict(sys=SYS, init=(F2, K2, L2), nc=None, tol=1e-8, max_iter=2,
                                            warn=False, progress=False)),
+    "exact_static_output_feedback": (mjls.exact_static_output_feedback,
+                                     dict(sys=SYS, gtol=1e-6, max_iter=2, warn=False, alg31=None)),
     "min_radius_dynamic_output_feedback": (mjls.min_radius_dynamic_output_feedback,
                                            dict(sys=SYS, init=(F2, K2, L2), nc=None, max_iter=2,
                                                 progress=False)),
