@@ -36,7 +36,7 @@ PORTABLE_TESTS := -q -p no:cacheprovider -n $(JOBS) --dist loadgroup -m "not boo
 TEX_PACKAGES := texlive-xetex texlive-latex-extra texlive-science texlive-fonts-recommended latexmk \
                 fonts-freefont-otf poppler-utils
 
-.PHONY: venv figures ledger book html pdf test test-native test-portable bench clean chromium tex
+.PHONY: lint venv figures ledger book html pdf test test-native test-portable bench clean chromium tex
 
 venv: $(STAMP)
 
@@ -78,8 +78,12 @@ tex:
 # The whole suite once, on the farthest corner of the emulation matrix: the oldest OpenBLAS
 # kernels and NumPy without its AVX2 and AVX-512 code paths (as fast as the native kernels on
 # these small matrices). Results must not depend on the last bits of a CPU.
-test: venv chromium tex
+test: venv chromium tex lint
 	OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" $(PY) -m pytest -n $(JOBS) --dist loadgroup
+
+# The linter (configured in pyproject.toml): fails on a finding.
+lint: venv
+	$(VENV)/bin/ruff check --no-cache src tests
 
 # The same suite with this machine's own kernels.
 test-native: venv chromium tex

@@ -65,7 +65,8 @@ class BFGSResult(IterativeResult):
 
 class _InverseHessian:
     """The BFGS inverse-Hessian approximation: dense, or limited-memory (the last ``memory``
-    pairs, two-loop recursion) for many variables; empty means a scaled identity."""
+    pairs, two-loop recursion) for many variables; empty means a scaled identity.
+    """
 
     def __init__(self, n, memory):
         self.n, self.memory = n, memory

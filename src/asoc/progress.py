@@ -1,6 +1,7 @@
 """Progress bars for long computations: shown on an interactive terminal, kept out of
 executed notebooks (papermill records stderr into the notebook, and the book would show
-every refresh of the bar)."""
+every refresh of the bar).
+"""
 
 from tqdm import tqdm
 

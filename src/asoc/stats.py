@@ -116,7 +116,7 @@ def settling_iteration(series, band: float = 0.02) -> int:
     The classical settling time (e.g. 2% band) applied to iteration histories: for each
     series s_0..s_N with final value s_N, the band is ``band * max|s_eta - s_N|``. This
     turns "converges after about N iterations", read off a plot, into a number that does
-    not depend on the series' scale. 
+    not depend on the series' scale.
 
     Parameters
     ----------

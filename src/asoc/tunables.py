@@ -103,7 +103,8 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         INT(1),
         "Iterations for the non-Perron part of the resolvent stack that tightens the upper bound of "
         "rho where the Perron stack is singular (asoc.mjls.certificate.deflated_resolvent_bounds): they "
-        "contract at the second-largest eigenvalue modulus over rho; Alg. 3.2's closed loop at n = 32, M = 8 needs 45 (0.012 s)."),
+        "contract at the second-largest eigenvalue modulus over rho; Alg. 3.2's closed loop at n = 32, M = 8 needs 45 "
+        "(0.012 s)."),
     # --- the certified rho (asoc.mjls.stability -> certificate -> spectral_estimate), issue 33
     "mjls.mode_scale_spread": (
         64,

@@ -30,8 +30,8 @@ else:
     from .figures import STYLE, apply_style, markdown_table
     from .ledger import ledger_markdown, write_ledger
     from .prose import fill, prose
-    from .reference import Entry, load_reference, status
     from .recorder import Recorder, active, record, save_figure, save_table, setup
+    from .reference import Entry, load_reference, status
     from .values import CorruptValuesError, load_all_values, load_values
 
 __all__ = ["figure_caption", "STYLE", "apply_style", "markdown_table", "save_figure", "save_table",

@@ -21,6 +21,7 @@ import sys
 from . import paths
 from .requirements import INSTALL_HINT, missing_requirements
 
+
 def plain(text: str) -> str:
     """``text`` without reStructuredText markup, for the terminal: ``x``, `x`, :role:`x` become x.
 
@@ -138,8 +139,8 @@ def _ledger(fidelity):
 
 
 def _write_if_changed(path, text, remark=""):
-    from .build import rel as _rel
     from .atomic_files import atomic_write_text
+    from .build import rel as _rel
 
     if path.exists() and path.read_text() == text:
         print(f"{_rel(path)}: up to date")

@@ -1,5 +1,6 @@
 """Links from a ledger row to the notebook section that computes it: the heading above the code
-cell that records a value, and the HTML id Sphinx gives that heading."""
+cell that records a value, and the HTML id Sphinx gives that heading.
+"""
 
 import json
 import re

@@ -178,7 +178,8 @@ def path_cost(sys, gains, x0, mu0):
 
 def brute_force_optimum(sys, horizon, x0, mu0):
     """The minimum of :func:`path_cost` over all gain sequences: the grid ``GRID`` over every entry,
-    the ``POLISHED`` best points refined by Nelder-Mead. Returns (cost, gains)."""
+    the ``POLISHED`` best points refined by Nelder-Mead. Returns (cost, gains).
+    """
     shape = (horizon, sys.nu, sys.ny)
     grid = np.array(list(itertools.product(GRID, repeat=int(np.prod(shape))))).reshape(
         (-1,) + shape

@@ -262,7 +262,8 @@ def public_names(module) -> list:
 
 def _attribute_docs(module) -> dict:
     """``{name: docstring}`` of the module's data documented in its source (``#:`` comments or
-    a string right after the assignment); data without one would show its type's docstring."""
+    a string right after the assignment); data without one would show its type's docstring.
+    """
     from sphinx.pycode import ModuleAnalyzer
 
     try:
@@ -336,7 +337,8 @@ def _expand_blocks(app, docname, source):
 
 def _generated_pages(app, env, added, changed, removed):
     """Pages with generated blocks are read again on every build: the modules they list change
-    without the page's own text changing."""
+    without the page's own text changing.
+    """
     return [doc for doc in env.found_docs
             if (Path(app.srcdir) / f"{doc}.md").exists()
             and re.search(r"<!-- (api |layout:)", (Path(app.srcdir) / f"{doc}.md").read_text())]

@@ -127,7 +127,8 @@ def reproduce(fidelity, force=False, jobs=None) -> int:
                 run_and_record(plan)
             except Exception as err:           # noqa: BLE001 -- report, go on with the others
                 failed.append(name)
-                print(f"{plan.notebook.path.name}: FAILED: {type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}",
+                print(f"{plan.notebook.path.name}: FAILED: {type(err).__name__}: "
+                      f"{str(err).splitlines()[0] if str(err) else ''}",
                       flush=True)
         return 1 if failed else 0
     print(f"running {len(todo)} notebook(s), {jobs} at a time", flush=True)
@@ -160,7 +161,8 @@ def _longest_first(names, seconds) -> list:
 
 def _schedule(pool, todo, waits, jobs, out, done, failed):
     """Submit each plan when its dependencies are done, longest first (by the manifest in
-    ``out``); write its manifest entry when it finishes."""
+    ``out``); write its manifest entry when it finishes.
+    """
     running = {}
     order = _longest_first(list(todo), manifest.last_seconds(out))
     while len(done) + len(failed) < len(todo):

@@ -148,7 +148,8 @@ def bounded(costs, bounds, rtol=1e-7):
 
 def lmi_separates(infeasible_case, feasible_case):
     """Whether the LMI check separates: infeasible for the printed outputs and feasible for a
-    case where it must be (state feedback, C = I). Arguments: ``LMIResult`` objects."""
+    case where it must be (state feedback, C = I). Arguments: ``LMIResult`` objects.
+    """
     return {
         "holds": bool(not infeasible_case.feasible and feasible_case.feasible),
         "value": f"{infeasible_case.solver_status}; state feedback: {feasible_case.solver_status}",

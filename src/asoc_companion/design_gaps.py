@@ -10,8 +10,12 @@ which is never worse than its start, so the gap is >= 0 up to the optimiser's to
 
 import numpy as np
 
-from asoc.mjls import (dynamic_output_feedback, exact_dynamic_output_feedback,
-                       exact_finite_horizon_dynamic_output_feedback, finite_horizon_dynamic_output_feedback)
+from asoc.mjls import (
+    dynamic_output_feedback,
+    exact_dynamic_output_feedback,
+    exact_finite_horizon_dynamic_output_feedback,
+    finite_horizon_dynamic_output_feedback,
+)
 from asoc.progress import progress_bar
 
 from .theorems.instances import draw_system, random_spd_stack

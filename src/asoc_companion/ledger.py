@@ -11,13 +11,12 @@ import json
 import math
 import re
 
-
+from . import paths
 from .anchors import section_links
+from .atomic_files import atomic_write_text
 from .evidence import evidence_badge, evidence_badges, evidence_text, is_statistic, statistic_text
 from .figures import markdown_table
-from .atomic_files import atomic_write_text
 from .notebooks import notebooks
-from . import paths
 from .prose import fill
 from .reference import load_reference, status
 from .values import load_all_values
@@ -280,7 +279,8 @@ def _notebook_section(notebook, info, mine) -> str:
               _status_cell(r), r["thesis"], r["ours"], r["tolerance"], ref.get(r["key"], "")] for r in mine]
     title = info.title if info else notebook
     where = f"[`{info.path.name}`]({info.path.stem}): " if info else ""
-    return (f"\n({ledger_label(notebook)})=\n## {title}\n\n{where}{_counts_badges(counts(mine))} {evidence_badges(mine)}\n\n"
+    return (f"\n({ledger_label(notebook)})=\n## {title}\n\n{where}{_counts_badges(counts(mine))} "
+            f"{evidence_badges(mine)}\n\n"
             + markdown_table(["key", "status", "thesis", "ours", "tolerance / CI", "note"], table)
             + "\n**Notes**\n\n" + "\n".join(notes))
 

@@ -26,8 +26,8 @@ import json
 from pathlib import Path
 
 from . import paths
-from .imports import notebook_modules
 from .atomic_files import atomic_write_json
+from .imports import notebook_modules
 from .plan import manifest_file
 from .values import CorruptValuesError, read_values_file
 

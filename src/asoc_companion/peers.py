@@ -290,7 +290,7 @@ def policy_value(case, F):
 
 
 def quantecon_comparison(case) -> dict:
-    """This library's observed-mode design [38] beside QuantEcon's recorded P and policy.
+    """The observed-mode design [38] of this library beside QuantEcon's recorded P and policy.
 
     Returns a dict: ``ours`` (P of :func:`asoc.mjls.observed_mode_state_feedback`), ``direct``
     (a root of :func:`coupled_riccati_residual` from P = Q), ``theirs`` (QuantEcon's P),

@@ -175,7 +175,8 @@ def _fit_wide_tables(doctree, width: int = TEXT_WIDTH_CHARACTERS) -> int:
 
 def prune_doctree(app, doctree, docname):
     """Sphinx's ``doctree-resolved`` hook: ``_prune_cells`` for the running builder, and
-    ``_fit_wide_tables`` for the LaTeX builder."""
+    ``_fit_wide_tables`` for the LaTeX builder.
+    """
     _prune_cells(doctree, app.builder.format, docname)
     if app.builder.format == "latex":
         _fit_wide_tables(doctree)

@@ -114,7 +114,8 @@ def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook
     --------
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as stage, tempfile.TemporaryDirectory() as out:
-    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png", "values/a.json", "notebooks/a.ipynb")]
+    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png", "values/a.json",
+    ...     "notebooks/a.ipynb")]
     ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "a.ipynb", Path(out) / "a.ipynb")
     ...     print(sorted(p.relative_to(out).as_posix() for p in Path(out).rglob("*.*")), list(Path(stage).rglob("*.*")))
     ['a.ipynb', 'a.png', 'values/a.json'] []

@@ -59,7 +59,7 @@ def clairvoyant_costs(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scale=1.0
 
 
 def clairvoyant_minimum(sys, theta, final_mode, x0, d):
-    """min over u_0..u_{K-1} of sum_k (x_k^T Q x_k + u_k^T R u_k) + x_K^T Q x_K with
+    """Min over u_0..u_{K-1} of sum_k (x_k^T Q x_k + u_k^T R u_k) + x_K^T Q x_K with
     x_{k+1} = A x_k + B u_k + d_k, for known modes ``theta`` (K, runs), ``final_mode`` (runs,),
     ``x0`` (runs, n) and disturbances ``d`` (K, runs, n); one value per run.
 

@@ -82,7 +82,8 @@ def _shown(path) -> str:
 
 def _repair_hint(path) -> str:
     """How to get a good values file back: the command that regenerates it (and, for a committed
-    file, the git command that restores it)."""
+    file, the git command that restores it).
+    """
     hint = f"regenerate it with `{_regenerate_command(path.stem, path.parent.parent)}`"
     try:
         committed = path.resolve().parent == values_folder(_committed()).resolve()

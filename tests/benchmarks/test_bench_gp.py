@@ -3,8 +3,15 @@
 import numpy as np
 import pytest
 
-from asoc.gp import (DistributionGP, gaussian_dirac_mixtures, mcvmd_matrix, omat_matrix, evaluation_grid,
-                     training_gaussians, modified_rosenbrock)
+from asoc.gp import (
+    DistributionGP,
+    evaluation_grid,
+    gaussian_dirac_mixtures,
+    mcvmd_matrix,
+    modified_rosenbrock,
+    omat_matrix,
+    training_gaussians,
+)
 
 
 @pytest.fixture(scope="module")

@@ -2,19 +2,27 @@
 
 import numpy as np
 import pytest
-
 from alg31_reference import thesis_iteration
+
 from asoc.mjls import static_output_feedback
 from asoc.mjls.baselines import time_variant_feedback
-from asoc.mjls.monte_carlo_comparison import median_costs, table_3_2_designs
-from asoc.mjls.dynamic import dynamic_output_feedback
-from asoc.mjls.examples import (SEC354_X0, SEC373_COV0, SEC373_MEAN0, SEC373_MU0, networked_loop,
-                                networked_loop_lossy, sec354_system, sec373_system)
-from asoc.mjls.exact_static_design import exact_static_output_feedback
-from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
-from asoc.mjls.finite_horizon import finite_horizon_dynamic_output_feedback
 from asoc.mjls.controllers import DynamicOutputFeedback, StaticGain
+from asoc.mjls.dynamic import dynamic_output_feedback
+from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
+from asoc.mjls.exact_static_design import exact_static_output_feedback
+from asoc.mjls.examples import (
+    SEC354_X0,
+    SEC373_COV0,
+    SEC373_MEAN0,
+    SEC373_MU0,
+    networked_loop,
+    networked_loop_lossy,
+    sec354_system,
+    sec373_system,
+)
+from asoc.mjls.finite_horizon import finite_horizon_dynamic_output_feedback
 from asoc.mjls.monte_carlo import simulate
+from asoc.mjls.monte_carlo_comparison import median_costs, table_3_2_designs
 from asoc_companion.timing import alternating_medians
 
 

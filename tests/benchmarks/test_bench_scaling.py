@@ -16,13 +16,19 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from asoc.mjls import (StaticGain, dynamic_output_feedback, exact_dynamic_output_feedback,
-                       exact_static_output_feedback, ms_spectral_radius, simulate,
-                       static_output_feedback)
-from asoc_companion.scaling import published_size_system, scaling_system
-from asoc_companion.timing import fitted_exponent, time_call
+from asoc.mjls import (
+    StaticGain,
+    dynamic_output_feedback,
+    exact_dynamic_output_feedback,
+    exact_static_output_feedback,
+    ms_spectral_radius,
+    simulate,
+    static_output_feedback,
+)
 from asoc.mjls.moment_operator import ms_operator
 from asoc.mjls.stability import mean_square_stability
+from asoc_companion.scaling import published_size_system, scaling_system
+from asoc_companion.timing import fitted_exponent, time_call
 
 
 def system(n, M):

@@ -11,11 +11,10 @@ import nbformat
 import pytest
 
 from asoc_companion import __main__ as cli
-from asoc_companion import manifest
+from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
-from asoc_companion.atomic_files import atomic_write_json
-from asoc_companion import paths
 from asoc_companion import plan as plan_module
+from asoc_companion.atomic_files import atomic_write_json
 from asoc_companion.paths import ROOT
 from asoc_companion.plan import make_plan, output_folder
 

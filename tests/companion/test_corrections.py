@@ -11,8 +11,13 @@ import pytest
 
 from asoc.mjls import MJLS, static_output_feedback
 from asoc_companion.theorems import bounds, corrections
-from asoc_companion.theorems.counterexamples import (THM_3_19_SYSTEM, kernel_example, prop_3_26_example,
-                                                     thm_3_19_example, thm_3_31_example)
+from asoc_companion.theorems.counterexamples import (
+    THM_3_19_SYSTEM,
+    kernel_example,
+    prop_3_26_example,
+    thm_3_19_example,
+    thm_3_31_example,
+)
 
 
 def _verdicts(check, n, seed=3):
@@ -144,8 +149,8 @@ def test_mcvmd_integral_matches_quadrature_and_the_closed_form_fails_when_spread
 
 
 def test_thm_3_9_c12_infeasibility_is_certified_by_two_solvers():
-    from asoc_companion.theorems.h2_lmi import certified_margins, lmi_C12_margin
     from asoc.mjls.examples import sec354_system
+    from asoc_companion.theorems.h2_lmi import certified_margins, lmi_C12_margin
     margins = lmi_C12_margin()
     assert all(m["verdict"] == "infeasible" for m in margins.values())
     assert all(v < 0 for m in margins.values() for v in m["margins"].values())

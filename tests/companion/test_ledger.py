@@ -50,10 +50,9 @@ def test_notebooks_have_figures_in_figures_folder():
 import json
 import re
 
-from asoc_companion.captions import caption_markdown, load_claims
 from asoc_companion.anchors import heading_anchor
-from asoc_companion.ledger import (decimals, intro_markdown, ledger_rows, note_groups,
-                               section_links)
+from asoc_companion.captions import caption_markdown, load_claims
+from asoc_companion.ledger import decimals, intro_markdown, ledger_rows, note_groups, section_links
 from asoc_companion.notebooks import notebooks
 from asoc_companion.reference import Entry
 

@@ -15,9 +15,9 @@ import pytest
 from asoc_companion import __main__ as cli
 from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
-from asoc_companion.plan import make_plan
-from asoc_companion.imports import closure, imported_names
 from asoc_companion.atomic_files import atomic_write_json
+from asoc_companion.imports import closure, imported_names
+from asoc_companion.plan import make_plan
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 

@@ -10,9 +10,9 @@ from asoc.mjls.examples import sec354_system
 from asoc_companion.theorems import STATEMENTS, Outcome
 from asoc_companion.theorems.chapter3 import STATEMENTS as CHAPTER_3
 from asoc_companion.theorems.dynamic_feedback import check_3_26
+from asoc_companion.theorems.engine import instance_seed, run_instance, run_study, verdict_text
 from asoc_companion.theorems.h2_lmi import decide_3_9
 from asoc_companion.theorems.static_feedback import decide_3_19
-from asoc_companion.theorems.engine import instance_seed, run_instance, run_study, verdict_text
 
 CHAPTER_3_NUMBERS = [1, 2, 5, 7, 8, 9, 10, 11, 12, 14, 15, 16, 17, 18, 19, 20, 23, 24, 25, 26, 27, 28, 29,
                      30, 31, 32, 33]          # 3.3, 3.4, 3.13, 3.22 are definitions; 3.6, 3.21 problems
@@ -35,8 +35,13 @@ def test_instance_seed_is_the_spawned_child_so_one_instance_reruns_alone():
 
 
 def test_grid_minimum_skips_only_gains_that_cannot_be_the_smallest():
-    from asoc_companion.theorems.instances import (draw_system, grid_minimum, radius_lower_bounds,
-                                                   scalar_gain_radii, walk_lower_bounds)
+    from asoc_companion.theorems.instances import (
+        draw_system,
+        grid_minimum,
+        radius_lower_bounds,
+        scalar_gain_radii,
+        walk_lower_bounds,
+    )
     rng = np.random.default_rng(3)
     gains = np.tan(np.linspace(-1.5, 1.5, 301))
     for _ in range(20):

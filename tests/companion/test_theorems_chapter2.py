@@ -8,7 +8,8 @@ import zlib
 import numpy as np
 import pytest
 
-from asoc_companion.theorems import Outcome, chapter2 as c2, kernels
+from asoc_companion.theorems import Outcome, kernels
+from asoc_companion.theorems import chapter2 as c2
 from asoc_companion.theorems.engine import run_instance
 
 CHEAP = ["statement_2_1", "statement_2_4", "statement_2_5", "statement_2_7"]

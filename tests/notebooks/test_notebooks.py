@@ -1,4 +1,5 @@
-"""Every notebook runs at ci fidelity (once per session, under nbval: conftest's ``ci_execution``); recorded values are checked against
+"""Every notebook runs at ci fidelity (once per session, under nbval: conftest's ``ci_execution``); recorded values are
+checked against
 the reference file (deterministic values against the thesis or, where the ledger
 documents a deviation, against our full-fidelity value) and against our own
 full-fidelity values (Monte Carlo medians, within ``ci_rtol``). A ``ci_rtol`` tighter than
@@ -10,7 +11,6 @@ import pytest
 from asoc_companion import load_reference, load_values, status
 from asoc_companion.figures import file_stem
 from asoc_companion.reference import agrees_with_full, monte_carlo_rtol
-
 from conftest import NOTEBOOKS
 
 REFERENCE = load_reference()

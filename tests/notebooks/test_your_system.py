@@ -6,9 +6,8 @@ differences a run can show; on one machine the run is bit-identical)."""
 import numpy as np
 import pytest
 
-from asoc_companion import load_reference, load_values
+from asoc_companion import load_reference, load_values, paths
 from asoc_companion import notebooks as nbs
-from asoc_companion import paths
 from asoc_companion.plan import make_plan
 from asoc_companion.reference import agrees_with_full
 

@@ -1,4 +1,5 @@
-"""The arrow runs one way (the architecture page, book/architecture.md): the library ``asoc`` never imports the companion's
+"""The arrow runs one way (the architecture page, book/architecture.md): the library ``asoc`` never imports the
+companion's
 tooling ``asoc_companion``, nor the book's tools. Checked statically (every import statement
 of every file under src/asoc, including imports inside functions) and by importing every
 module of the library in a fresh interpreter."""

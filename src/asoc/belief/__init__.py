@@ -14,21 +14,37 @@
 * simulate: closed-loop Monte Carlo of both controllers; sweep: Alg. 2.2 over perturbations.
 """
 
+from .damped import DampedResult, optimize_damped
 from .ekf import ekf_step
 from .filters import BeliefFilter, DiracMixture, next_estimate_covariance, sigma_points
 from .improvement import LineSearch, affine_policy_value, improved_policy_value, line_search, policy_step
-from .models import (GaussianNoise, LandmarkExample, NonlinearModel, QuadraticCost, landmark_example,
-                     linear_gaussian_model)
+from .models import (
+                     GaussianNoise,
+                     LandmarkExample,
+                     NonlinearModel,
+                     QuadraticCost,
+                     landmark_example,
+                     linear_gaussian_model,
+)
 from .particle import ParticleFilter
+from .planning import bend_toward_landmark, covariance_aware_optimum
 from .policy import AffinePolicy, MeanAffineController
 from .simulate import ClosedLoop, Noise, draw_noise, simulate
 from .stage import Expansion, StageProblem, Value, terminal_value
-from .taylor import (QuadraticExpansion, sigma_point_linearizations, statistical_taylor_expansion,
-                     statistical_taylor_linearization_error)
-from .trajectory import (IndefiniteStep, Reference, TrajectoryOptimizationResult, backward_pass,
-                         optimize_belief_trajectory, reference_trajectory)
-from .damped import DampedResult, optimize_damped
-from .planning import bend_toward_landmark, covariance_aware_optimum
+from .taylor import (
+                     QuadraticExpansion,
+                     sigma_point_linearizations,
+                     statistical_taylor_expansion,
+                     statistical_taylor_linearization_error,
+)
+from .trajectory import (
+                     IndefiniteStep,
+                     Reference,
+                     TrajectoryOptimizationResult,
+                     backward_pass,
+                     optimize_belief_trajectory,
+                     reference_trajectory,
+)
 from .ukf import UKF
 from .vdberg import BeliefAffineController, BeliefDynamics, BeliefILQGResult, belief_ilqg, belief_vector
 

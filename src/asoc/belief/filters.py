@@ -206,7 +206,7 @@ def points_around(mean, L):
 
 
 def unscented_weights(n, kappa):
-    """kappa / (n + kappa) for the mean and 1 / (2 (n + kappa)) for the other 2n sigma points.
+    """Kappa / (n + kappa) for the mean and 1 / (2 (n + kappa)) for the other 2n sigma points.
 
     Examples
     --------

@@ -24,7 +24,8 @@ def _expansion(exp, name="exp"):
     tilde = exp.tilde
     lam = np.linalg.eigvalsh(tilde[3]).min()
     if not lam > 0:
-        raise ValueError(f"{name}: expected R~_k positive definite (Assumption 2.3), found smallest eigenvalue {lam:.3g}")
+        raise ValueError(f"{name}: expected R~_k positive definite (Assumption 2.3), found smallest eigenvalue "
+                         f"{lam:.3g}")
     return tilde
 
 

@@ -88,7 +88,8 @@ class ClosedLoop:
     >>> from asoc.belief import AffinePolicy, MeanAffineController, landmark_example
     >>> ex = landmark_example(K=2)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 5, np.random.default_rng(0))
-    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2)), noise)
+    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2)),
+    ...     noise)
     >>> run.x.shape, run.u.shape, run.costs.shape
     ((5, 3, 2), (5, 2, 2), (5,))
     """

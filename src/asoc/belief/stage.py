@@ -161,7 +161,8 @@ class StageProblem:
     """phi_k of eq. (2.13) at time step k for the reference estimate p_bar_k.
 
     phi_k(x, u) = sum_m beta_m [C_k(x, u) + s_{k+1} + v_{k+1}^T a(x, u, w_m)
-    + 1/2 a^T V_{k+1} a] + 1/2 tr[S_{k+1} C_{k+1}(u)], where C_{k+1}(u) is the covariance of the next estimate from Lemma 2.1 (the filter's
+    + 1/2 a^T V_{k+1} a] + 1/2 tr[S_{k+1} C_{k+1}(u)], where C_{k+1}(u) is the covariance of the next estimate from
+    Lemma 2.1 (the filter's
     ``covariance_map``), which is what makes the controller dual. ``covariance_term=False``
     drops that term (the certainty-equivalent control run of the notebook).
 

@@ -16,11 +16,11 @@ import numpy as np
 
 from .. import validation as check
 from ..progress import progress_bar
+from .damped import optimize_damped
 from .models import NonlinearModel, cost_for
+from .planning import bend_toward_landmark
 from .policy import AffinePolicy, MeanAffineController
 from .simulate import simulate
-from .damped import optimize_damped
-from .planning import bend_toward_landmark
 from .trajectory import optimize_belief_trajectory
 from .ukf import UKF
 
@@ -151,7 +151,8 @@ def _mean_cost(model, cost, mean0, cov0, noise, policy) -> float:
 
 def _member(model, cost, mean0, cov0, noise, child, scale, options):
     """One member of the sweep: (iterations, converged, mean cost, share of diverged iterates) and
-    the warnings it raised (recorded, since a worker process's warnings would not reach the caller)."""
+    the warnings it raised (recorded, since a worker process's warnings would not reach the caller).
+    """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         zero = AffinePolicy.zero(cost.K, model.n_u, model.n_x)
@@ -184,7 +185,8 @@ def _reissued(member_outputs):
 
 def _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs, progress):
     """The members on ``n_jobs`` worker processes (joblib/loky, which pickles the model's local
-    functions); each member's generator travels with it, so the rows equal the serial ones."""
+    functions); each member's generator travels with it, so the rows equal the serial ones.
+    """
     try:
         import joblib
     except ImportError as err:                                   # the optional extra asoc[studies]

@@ -1,5 +1,6 @@
 """Statistical second-order Taylor expansion at a Dirac mixture (Definition 2.2) and the
-linearisation example of Fig. 2.2."""
+linearisation example of Fig. 2.2.
+"""
 
 from dataclasses import dataclass
 

@@ -227,7 +227,8 @@ class IndefiniteStep(np.linalg.LinAlgError):
 def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, alpha_min, covariance_hessian,
                    covariance_term, damping=None):
     """Steps 3-8 of Alg. 2.2; ``damping`` mu adds mu I to every R_k^i (so to R~_k) and raises
-    :class:`IndefiniteStep` where R~_k + mu I is still indefinite (the damped variant)."""
+    :class:`IndefiniteStep` where R~_k + mu I is still indefinite (the damped variant).
+    """
     K = ref.u_bar.shape[0]
     value = terminal_value(cost, filt.mixture(ref.estimates[K]))
     L_new, d_new = policy.L.copy(), policy.d.copy()

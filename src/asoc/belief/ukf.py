@@ -12,8 +12,18 @@ import numpy as np
 from scipy.linalg import lapack
 
 from .. import validation as check
-from .filters import (KAPPA, DiracMixture, checked_estimate, conditional_covariance, covariance_root,
-                      points_around, sigma_points, unscented_weights, weighted_covariance, weighted_moments)
+from .filters import (
+    KAPPA,
+    DiracMixture,
+    checked_estimate,
+    conditional_covariance,
+    covariance_root,
+    points_around,
+    sigma_points,
+    unscented_weights,
+    weighted_covariance,
+    weighted_moments,
+)
 from .models import NonlinearModel
 
 __all__ = ["UKF"]
@@ -194,7 +204,8 @@ class UKF:
 
     def next_covariance(self, estimate, u):
         """C_{k+1} after predicting with ``u`` and fusing any measurement (Lemma 2.1 at the
-        sigma points; it does not depend on the measurement's value)."""
+        sigma points; it does not depend on the measurement's value).
+        """
         mean, cov, u = self._checked(*_pair(estimate), u, self.model.n_u, "u")
         return self._next_covariance((mean, cov), u)
 
@@ -206,7 +217,7 @@ class UKF:
         return self._measurement(*self._propagate(prior, u))[2]
 
     def covariance_map(self, estimate):
-        """u -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once.
+        """U -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once.
 
         The returned function does not check u (a float array (n_u,)): the stage problem
         (2.13) differentiates it numerically, thousands of evaluations for the same

@@ -67,7 +67,7 @@ def _psd_sqrt(M):
 
 
 def belief_vector(mean, cov):
-    """b = (mean, vech(sqrt(cov))), broadcasting over leading axes.
+    """B = (mean, vech(sqrt(cov))), broadcasting over leading axes.
 
     Parameters
     ----------

@@ -33,16 +33,37 @@ piecewise-constant densities (heights (N, B) on common cells) for :func:`lq_dist
 :func:`hellinger_matrix` and :func:`jensen_shannon_matrix`.
 """
 
-from .densities import (hellinger, hellinger_gaussian, hellinger_gaussian_matrix, hellinger_matrix, jensen_shannon,
-                        jensen_shannon_matrix, lq_distance, lq_distance_matrix)
-from .experiment import error_metrics, evaluation_grid, modified_rosenbrock, quadratic_function, training_gaussians
-from .kernels import (COVARIANCES, TABLE_2_1, bilinear_product, exponential, gamma_exponential,
-                      matern, mean_kernel_dirac, mean_kernel_gaussian, rational_quadratic,
-                      squared_exponential)
 from .cramer_von_mises import lcd_dirac, lcd_gaussian, mcvmd, mcvmd_constant, mcvmd_matrix, mcvmd_quadrature
+from .densities import (
+                        hellinger,
+                        hellinger_gaussian,
+                        hellinger_gaussian_matrix,
+                        hellinger_matrix,
+                        jensen_shannon,
+                        jensen_shannon_matrix,
+                        lq_distance,
+                        lq_distance_matrix,
+)
+from .experiment import error_metrics, evaluation_grid, modified_rosenbrock, quadratic_function, training_gaussians
+from .kernels import (
+                        COVARIANCES,
+                        TABLE_2_1,
+                        bilinear_product,
+                        exponential,
+                        gamma_exponential,
+                        matern,
+                        mean_kernel_dirac,
+                        mean_kernel_gaussian,
+                        rational_quadratic,
+                        squared_exponential,
+)
 from .regression import DistributionGP, FitResult, MeanKernelGP
-from .sampling import (DiracApproximation, gaussian_dirac_mixtures, mcvmd_standard_normal_dirac,
-                       standard_normal_dirac_approximation)
+from .sampling import (
+                        DiracApproximation,
+                        gaussian_dirac_mixtures,
+                        mcvmd_standard_normal_dirac,
+                        standard_normal_dirac_approximation,
+)
 from .study import KernelStudy, kernel_study
 from .transport import omat, omat_matrix, ospa, ospa_matrix, wasserstein_gaussian, wasserstein_gaussian_matrix
 

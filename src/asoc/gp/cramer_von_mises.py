@@ -290,7 +290,7 @@ def lcd_gaussian(mean, cov, m, b) -> np.ndarray:
 
 def mcvmd_quadrature(lcd1, lcd2, b_max: float = DEFAULT_B_MAX, center: float = 0.0,
                      spread: float = 1.0, points=(), n_m: int = 400) -> float:
-    r"""mCvMd from its definition by numerical quadrature (1-D; any pair of distributions).
+    r"""MCvMd from its definition by numerical quadrature (1-D; any pair of distributions).
 
     :math:`d = (\int_0^{b_{\max}} \int w(b) (P_1(m, b) - P_2(m, b))^2\,dm\,db)^{1/2}` with
     :math:`w(b) = 1` in one dimension (Sec. 2.6.3). ``lcd1``, ``lcd2`` are callables

@@ -1,5 +1,6 @@
 """Input checks of asoc.gp on top of :mod:`asoc.validation`: Dirac mixtures, sets of mixtures,
-distances and integration limits (ValueError/TypeError naming the argument)."""
+distances and integration limits (ValueError/TypeError naming the argument).
+"""
 
 import numpy as np
 

@@ -23,9 +23,9 @@ The prior mean is the constant :math:`m = \\bar y` (the sample mean of the train
 outputs), a reading: the thesis leaves :math:`m` open.
 """
 
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass, field
-import warnings
 
 import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
@@ -76,6 +76,7 @@ class FitResult(IterativeResult):
     >>> gp.result.status, gp.result.gradient_norm < config.defaults["gp.gradient_tol"]
     ('converged', True)
     """
+
     alpha: float            #: signal standard deviation (kernel amplitude alpha^2)
     l: float                #: length scale
     sigma_n: float          #: noise standard deviation

@@ -12,9 +12,9 @@ standard-normal approximation transformed by the square root of the covariance, 
 do for general Gaussians).
 """
 
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
-import warnings
 
 import numpy as np
 from scipy.optimize import minimize
@@ -61,6 +61,7 @@ class DiracApproximation(IterativeResult):
     >>> a.status, a.x.round(3).tolist()
     ('converged', [-1.259, -0.317, 0.317, 1.259])
     """
+
     x: np.ndarray          #: (L,) sorted locations of the equally weighted components
     distance: float        #: mCvMd between N(0, 1) and the mixture at the optimum
     iterations: int        #: BFGS iterations
@@ -82,7 +83,7 @@ def _b_nodes(b_max, per_panel=24):
 
 
 def mcvmd_standard_normal_dirac(x, wx=None, b_max: float = DEFAULT_B_MAX, nodes=None) -> float:
-    r"""mCvMd (Sec. 2.6.3, item 5) between :math:`\mathcal N(0, 1)` and a 1-D Dirac mixture (continuous/Dirac pair).
+    r"""MCvMd (Sec. 2.6.3, item 5) between :math:`\mathcal N(0, 1)` and a 1-D Dirac mixture (continuous/Dirac pair).
 
     The inner integral over :math:`m` of :math:`(P_1 - P_2)^2` is done in closed form
     (products of Gaussians in :math:`m`); with :math:`w(b) = 1` in one dimension,

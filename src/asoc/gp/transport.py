@@ -213,7 +213,8 @@ def _mean_optimal_assignment_costs(X, Y, q, symmetric, rows):
 
 def _mean_sorted_matching_costs(x, y, q, symmetric, rows):
     """``_mean_optimal_assignment_costs`` of scalar locations ``x`` (N, m), ``y`` (M, m) by sorting:
-    each location is matched with the location of the same rank in its partner."""
+    each location is matched with the location of the same rank in its partner.
+    """
     x_sorted, y_sorted = np.sort(x, axis=1), np.sort(y, axis=1)
     out = np.zeros((len(x), len(y)))
     for i in rows:

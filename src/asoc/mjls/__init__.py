@@ -70,28 +70,30 @@ thesis), ``costs`` (the exact average cost (3.9)), ``monte_carlo`` (simulation),
 and what every design's result shares), ``examples`` (the thesis's examples), ``random``.
 """
 
+from .closed_loops import closed_loop
+from .controllers import Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain, TimeVariantGain
 from .costs import average_cost
-from .dynamic import (DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback,
-                      steady_state_cost)
-from .exact_cost_design import (ExactDynamicOutputFeedbackResult, ExactFiniteHorizonResult, exact_dynamic_output_feedback,
-                    exact_finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback)
+from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback, steady_state_cost
+from .exact_cost_design import (
+                      ExactDynamicOutputFeedbackResult,
+                      ExactFiniteHorizonResult,
+                      exact_dynamic_output_feedback,
+                      exact_finite_horizon_dynamic_output_feedback,
+                      min_radius_dynamic_output_feedback,
+)
+from .exact_static_design import ExactStaticOutputFeedbackResult, exact_static_output_feedback
+from .finite_horizon import FiniteHorizonResult, finite_horizon_cost, finite_horizon_dynamic_output_feedback
 from .gradients import average_cost_and_gradient, radius_and_gradient
-from .finite_horizon import (FiniteHorizonResult, finite_horizon_cost,
-                             finite_horizon_dynamic_output_feedback)
 from .lmi import LMIResult, static_output_lmi
+from .moment_operator import ms_operator
 from .moments import h2_cost, second_moment_step, second_moments, steady_state_second_moment
+from .monte_carlo import SimulationResult, simulate
 from .observed_mode_feedback import ObservedModeResult, observed_mode_state_feedback
 from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
 from .random import random_mjls
-from .controllers import (Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain,
-                          TimeVariantGain)
-from .monte_carlo import SimulationResult, simulate
-from .closed_loops import closed_loop
-from .moment_operator import ms_operator
-from .stability import mean_square_stability, MeanSquareStability, ms_spectral_radius, Verdict
+from .stability import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
 from .static import StaticOutputFeedbackResult, gain_from_moments, static_cost, static_output_feedback
-from .exact_static_design import ExactStaticOutputFeedbackResult, exact_static_output_feedback
-from .system import MJLS, predecessor_sum, successor_average, stationary_distribution
+from .system import MJLS, predecessor_sum, stationary_distribution, successor_average
 
 __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator", "ms_spectral_radius",
            "mean_square_stability", "MeanSquareStability", "Verdict",

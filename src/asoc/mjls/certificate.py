@@ -211,7 +211,8 @@ def _power_steps(bracket, X, Y, rho, rtol):
 def _power_method(bracket, X, Y, rtol):
     """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of rho,
     until the bracket is narrow, or X has converged (to ``mjls.power_tol``, e.g. to a singular
-    Perron stack, where the bracket stays wide), or L(X) = 0, or ``mjls.power_max_steps``."""
+    Perron stack, where the bracket stays wide), or L(X) = 0, or ``mjls.power_max_steps``.
+    """
     rho = np.inf
     for _ in range(config.defaults["mjls.power_max_steps"]):
         rho = float(np.trace(Y, axis1=1, axis2=2).sum() / np.trace(X, axis1=1, axis2=2).sum())
@@ -279,7 +280,7 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
 
 
 def _residual_lower_bound(A, T, rho, X, P, upper):
-    """rho - 10 s ||E|| for an eigen-pair estimate (rho, X) of Cor. 3.2's operator and its left Perron stack P.
+    """Rho - 10 s ||E|| for an eigen-pair estimate (rho, X) of Cor. 3.2's operator and its left Perron stack P.
 
     The pair is exact for L + E with ||E|| = ||L(X) - rho X|| / ||X|| (plus the rounding of that
     residual, bounded as in the Collatz-Wielandt margin), and rho moves by at most s ||E|| to first
@@ -310,7 +311,8 @@ def _resolvent_stacks(A, T, radii):
     """(r, X) with X the solution of r X - L(X) = I, for each r: X > 0 iff r > rho(L), and then
     L(X) < r X. Dense up to M n^2 = ``mjls.dense_fallback_radius`` (one mode: the Lyapunov solver),
     a sparse LU for scalar modes, else restarted GMRES on the matrix-free operator (an approximate
-    X only costs tightness: its bounds are computed from L(X))."""
+    X only costs tightness: its bounds are computed from L(X)).
+    """
     M, n, _ = A.shape
     dim = M * n * n
     eye = np.broadcast_to(np.eye(n), (M, n, n))
@@ -367,7 +369,7 @@ def lyapunov_upper_bound(A, T, rho, unit=1.0):
 
 
 def _residual_upper_bound(A, T, X, r):
-    """r - min_j delta_j / lambda_max(X_j) where r X - L(X) >= delta I is proven (inf where not)."""
+    """R - min_j delta_j / lambda_max(X_j) where r X - L(X) >= delta I is proven (inf where not)."""
     M, n, _ = A.shape
     lam_X = np.linalg.eigvalsh(X)
     if not np.all(lam_X[:, 0] > 10.0 * n * EPS * lam_X[:, -1]):
@@ -388,7 +390,8 @@ def _residual_upper_bound(A, T, X, r):
 
 
 def certify(A, T, method, unit=1.0):
-    """(lower, upper, rho, X, estimate) of the balanced (A, T): ``_certify_estimates`` with BLAS on one thread: its work is small products and M small
+    """(lower, upper, rho, X, estimate) of the balanced (A, T): ``_certify_estimates`` with BLAS on one thread: its work
+    is small products and M small
     eigenproblems, where threads only cost (a stack of 8 eigh of 32 x 32: 0.49 s with threads on a
     loaded 2-core machine, 1 ms without).
 
@@ -406,7 +409,8 @@ def certify(A, T, method, unit=1.0):
 def _certify_estimates(A, T, method, unit):
     """(lower, upper, rho, X, estimate) for the balanced (A, T): the first estimate inside a narrow bracket
     (relative width ``mjls.bracket_warn_rtol``), else the narrowest (a subdominant eigenvalue from a small
-    Krylov space fails the test: the bracket holds rho, not it)."""
+    Krylov space fails the test: the bracket holds rho, not it).
+    """
     best = None
     for estimate in estimates(A, T, method):
         lower, upper, rho, X = _refine(A, T, estimate.X, estimate.rho)

@@ -17,8 +17,7 @@ import numpy as np
 
 from ..linalg import transpose
 from ..validation import real_array
-from .controllers import (Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain,
-                          as_controller)
+from .controllers import Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain, as_controller
 from .system import check_system
 
 __all__ = ["is_controller", "closed_loop", "gain_matrix", "noise_covariances",

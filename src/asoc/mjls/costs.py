@@ -1,7 +1,7 @@
 """The exact average cost (3.9) of a time-invariant controller without mode observation."""
 
-from .dynamic import steady_state_cost
 from .controllers import DynamicOutputFeedback, StaticGain, as_controller
+from .dynamic import steady_state_cost
 from .static import static_cost
 from .system import check_system
 
@@ -43,7 +43,8 @@ def average_cost(sys, controller):
     >>> from asoc.mjls import exact_dynamic_output_feedback, static_output_feedback
     >>> from asoc.mjls.examples import networked_loop
     >>> sys = networked_loop()
-    >>> round(average_cost(sys, static_output_feedback(sys)), 4), round(average_cost(sys, exact_dynamic_output_feedback(sys)), 4)
+    >>> round(average_cost(sys, static_output_feedback(sys)), 4), round(average_cost(sys,
+    ...     exact_dynamic_output_feedback(sys)), 4)
     (0.1412, 0.1376)
     """
     check_system(sys)

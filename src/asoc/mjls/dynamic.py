@@ -47,13 +47,13 @@ import numpy as np
 from .. import config
 from ..result import Status
 from ..validation import boolean, choice, integer, real_scalar
-from .moment_bounds import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
-from .moments import certified_second_moment
 from .closed_loops import augmented_closed_loop, noise_covariances
 from .controllers import DynamicOutputFeedback
 from .design_result import CertifiedDesignResult
-from .stability import mean_square_stability
+from .moment_bounds import bound_cost, bound_costate_step, bound_moment_step, initial_bounds
+from .moments import certified_second_moment
 from .optimality import METHODS, GainSolve, solve_gains
+from .stability import mean_square_stability
 from .stopping import StoppingRule
 from .system import check_system, successor_average
 

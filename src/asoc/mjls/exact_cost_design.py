@@ -21,15 +21,25 @@ from .. import config
 from ..linalg import pack, transpose, unpack
 from ..optimize import BFGS_STATUS, bfgs
 from ..validation import boolean, integer, real_scalar
-from .dynamic import iterate_bounds
-from .finite_horizon import (augmented_initial_moment, check_initial_state, finite_horizon_cost,
-                             finite_horizon_dynamic_output_feedback, initial_gains,
-                             mode_distributions, stages)
-from .gradients import (average_cost_and_gradient, closed_loop_radius, finite_horizon_cost_and_gradient,
-                        radius_and_gradient)
 from .closed_loops import augmented_closed_loop
 from .controllers import DynamicOutputFeedback
 from .design_result import CertifiedDesignResult, DesignResult
+from .dynamic import iterate_bounds
+from .finite_horizon import (
+    augmented_initial_moment,
+    check_initial_state,
+    finite_horizon_cost,
+    finite_horizon_dynamic_output_feedback,
+    initial_gains,
+    mode_distributions,
+    stages,
+)
+from .gradients import (
+    average_cost_and_gradient,
+    closed_loop_radius,
+    finite_horizon_cost_and_gradient,
+    radius_and_gradient,
+)
 from .stability import mean_square_stability
 from .system import check_system
 
@@ -161,7 +171,8 @@ def averaged_lqg(sys, nc):
 
 def _bounded_alg32(sys, nc):
     """Alg. 3.2's controller after at most ``mjls.exact_warm_start_iterations`` iterations,
-    padded with zeros or cut to nc states (None when Alg. 3.2 fails at once)."""
+    padded with zeros or cut to nc states (None when Alg. 3.2 fails at once).
+    """
     run = iterate_bounds(sys, config.defaults["mjls.exact_warm_start_tol"],
                          config.defaults["mjls.exact_warm_start_iterations"])
     if run.best is None:
@@ -190,7 +201,8 @@ def _given_gains(sys, init, nc):
 def _starts(sys, init, nc):
     """The candidate starts (packed), best first, their exact costs (3.42) (inf where not
     stabilising) and the shapes of F, K, L: ``init`` when given, else Alg. 3.2's bounded run
-    and the averaged LQG compensator (``averaged_lqg`` in this module)."""
+    and the averaged LQG compensator (``averaged_lqg`` in this module).
+    """
     if init is not None:
         candidates = [_given_gains(sys, init, nc)]
     else:
@@ -208,7 +220,8 @@ def _stabilising_start(sys, starts, costs, shapes):
     is added, and rho is minimised from each candidate (in order of rho) until it falls below
     ``mjls.rho_start`` and the exact cost there is finite (an estimate of rho below 1 is not a
     certificate: rho exactly 1 rounds either way). Returns (z, stabilising), the smallest rho
-    reached when none stabilises."""
+    reached when none stabilises.
+    """
     for z, cost in zip(starts, costs):
         if np.isfinite(cost):
             return z, True
@@ -231,7 +244,8 @@ def _stabilising_start(sys, starts, costs, shapes):
 
 def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False, patience=None):
     """BFGS on rho (Cor. 3.2) over (F, K, L) from z, stopping early once rho <= target (or, with
-    ``patience``, once that many steps lowered rho by less than ``_RADIUS_STALL`` relative)."""
+    ``patience``, once that many steps lowered rho by less than ``_RADIUS_STALL`` relative).
+    """
     fun = lambda v: _flat(radius_and_gradient(sys, *unpack(v, shapes)))
     return bfgs(fun, z, config.defaults["mjls.min_radius_tol"], max_iter, progress, "min rho", target=target, patience=patience,
                 stall=_RADIUS_STALL)
@@ -259,7 +273,8 @@ def _bfgs_message(status, it, value, name):
 
 def _controller_result(sys, z, shapes, status, it, history, name, start, message=None):
     """The result of a BFGS run over the gains of (3.37): the certified stability verdict of
-    the final controller and its exact cost."""
+    the final controller and its exact cost.
+    """
     F, K, L = unpack(z, shapes)
     stability = mean_square_stability(augmented_closed_loop(sys, F, K, L)[0], sys.T)
     cost = average_cost_and_gradient(sys, F, K, L)[0] if stability.stable else np.inf

@@ -160,7 +160,8 @@ def _scaled_gradient(cost, gradient, L):
 
 def _minimise(sys, L0, gtol, max_iter):
     """BFGS from L0 (restarted from its end point while it stops short of gtol and still
-    lowers the cost). Returns (L, cost, scaled gradient, bfgs status, iterations, history)."""
+    lowers the cost). Returns (L, cost, scaled gradient, bfgs status, iterations, history).
+    """
     shape = L0.shape
     fun = lambda z: _flat(static_cost_and_gradient(sys, z.reshape(shape)))
     z, history, iterations, status = L0.ravel(), [], 0, "max_iterations"

@@ -1,4 +1,6 @@
-"""The numerical examples of Chapter 3, with the thesis's parameters, and a networked loop that loses input packets (not in the thesis)."""
+"""The numerical examples of Chapter 3, with the thesis's parameters, and a networked loop that loses input packets (not
+in the thesis).
+"""
 
 import numpy as np
 

@@ -29,12 +29,12 @@ from ..linalg import transpose
 from ..progress import progress_bar
 from ..result import Status
 from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
-from .moment_bounds import bound_costate_step, bound_moment_step
-from .dynamic import dynamic_output_feedback
-from .moments import second_moment_step
 from .closed_loops import noise_covariances
 from .controllers import DynamicOutputFeedback
 from .design_result import DesignResult
+from .dynamic import dynamic_output_feedback
+from .moment_bounds import bound_costate_step, bound_moment_step
+from .moments import second_moment_step
 from .optimality import METHODS, gains_from_bounds
 from .system import MJLS, successor_average
 

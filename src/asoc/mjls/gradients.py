@@ -16,8 +16,8 @@ import numpy as np
 
 from .. import config
 from ..linalg import transpose
-from .lyapunov import coupled_lyapunov_solver
 from .closed_loops import augmented_closed_loop, noise_covariances
+from .lyapunov import coupled_lyapunov_solver
 from .stability import mean_square_stability, perron_pair
 from .system import predecessor_sum, successor_average
 

@@ -61,7 +61,8 @@ def psi(x_next, x, u, a, b, g, T, pi, Q=1.0, R=1.0):
 
 def _psi(x_next, x, u, a, b, g, T, pi, Q, R):
     """:func:`psi` on checked arguments. The modes run along a new first axis: reductions over
-    them are then elementwise operations between whole arrays, not over a short last axis."""
+    them are then elementwise operations between whole arrays, not over a short last axis.
+    """
     modes = (slice(None),) + (None,) * np.broadcast(x_next, x, u).ndim
     resid = (x_next - a[modes] * x - b[modes] * u) / g
     logw = -0.5 * resid ** 2 + np.log(pi)[modes]

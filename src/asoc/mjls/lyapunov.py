@@ -19,10 +19,10 @@ import scipy.sparse.linalg
 
 from .. import config
 from ..linalg import sym
-from ..validation import real_array, stochastic_matrix
-from .moment_operator import costate_map, kronecker_stack, linear_operator, second_moment_map
 from ..threads import single_threaded
+from ..validation import real_array, stochastic_matrix
 from .certificate import certified_upper_bound
+from .moment_operator import costate_map, kronecker_stack, linear_operator, second_moment_map
 from .stability import mean_square_stability
 
 __all__ = ["ITERATIVE", "LyapunovSolution", "residual", "solve_coupled_lyapunov",
@@ -200,7 +200,8 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=None):
 
 def _iterative(A, T, W, adjoint, method, tol, auto, x0=None):
     """X, its residual, the method(s) used and the iterations; BiCGSTAB continued by GMRES for
-    ``auto`` (from ``x0``, e.g. the solution for a nearby closed loop, when given)."""
+    ``auto`` (from ``x0``, e.g. the solution for a nearby closed loop, when given).
+    """
     X, it = _iterative_solve(A, T, W, adjoint, method, tol, x0=x0)
     X, used = sym(X), method
     res = residual(A, T, X, W, adjoint)
@@ -243,7 +244,7 @@ def _iterative_solve(A, T, W, adjoint, method, tol, max_iter=5000, x0=None):
 
 
 def radius_and_moments(A, T, W, check=True):
-    """rho of Cor. 3.2 and, when stability is certified, the solution X of X = L(X) + W (Prop. 3.7).
+    """Rho of Cor. 3.2 and, when stability is certified, the solution X of X = L(X) + W (Prop. 3.7).
 
     For searches over a gain: from one Kronecker matrix at small sizes (its eigenvalues give
     rho, its LU factorisation X and the certificate Y = L(Y) + I, whose positive definiteness

@@ -116,8 +116,10 @@ def ms_operator(A_stack, T=None, check=True):
     Block (j, i) is p_ij A_i (x) A_i, i.e. the matrix is (T^T (x) I_{n^2}) diag[A_1 (x) A_1, ...,
     A_M (x) A_M], the product of the same two factors as the thesis's
     M = diag[A_i (x) A_i] (T^T (x) I_{n^2}) in the other order: BC and CB have the same
-    eigenvalues, and this order is the matrix of :func:`~asoc.mjls.moment_operator.second_moment_map` (its transpose that
-    of :func:`~asoc.mjls.moment_operator.costate_map`). vec(A X A^T) = (A (x) A) vec X holds for row- and column-major vec
+    eigenvalues, and this order is the matrix of :func:`~asoc.mjls.moment_operator.second_moment_map` (its transpose
+    that
+    of :func:`~asoc.mjls.moment_operator.costate_map`). vec(A X A^T) = (A (x) A) vec X holds for row- and column-major
+    vec
     alike, so the convention only fixes the order of the blocks. Size (M n^2)^2: for small
     systems only.
 

@@ -4,10 +4,10 @@ import numpy as np
 
 from ..linalg import transpose
 from ..validation import integer, probability_vector, real_array, semidefinite, stochastic_matrix
-from .lyapunov import solve_coupled_lyapunov
 from .closed_loops import controller_closed_loop, gain_matrix, is_controller
+from .lyapunov import solve_coupled_lyapunov
 from .moment_operator import second_moment_map
-from .stability import mean_square_stability, MeanSquareStability
+from .stability import MeanSquareStability, mean_square_stability
 from .system import MJLS, check_system, predecessor_sum
 
 __all__ = ["second_moment_step", "second_moments", "steady_state_second_moment",
@@ -229,7 +229,8 @@ def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
     if not stability.stable:
         raise np.linalg.LinAlgError(
             f"no stationary second moment: the closed loop is not certified mean-square stable (rho = "
-            f"{stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], {stability.verdict.value}; "
+            f"{stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], "
+            f"{stability.verdict.value}; "
             f"Cor. 3.2)")
     solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt, check=False))
     if not solution.accepted:

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from threadpoolctl import threadpool_limits
-from ..progress import progress_bar
 
+from ..progress import progress_bar
 from ..validation import boolean, generator, integer, probability_vector, real_array, semidefinite
 from .controllers import as_controller
 from .system import check_system
@@ -69,7 +69,8 @@ def _psd_sqrt(c, i):
 
 def _next_mode(theta, r, cumT):
     """theta_{k+1} = #{j < M-1 : r > cumT[theta_k, j]} for uniform r: inverse-CDF sampling of
-    the row theta_k of T."""
+    the row theta_k of T.
+    """
     nxt = np.zeros_like(theta)
     for j in range(cumT.shape[1] - 1):
         nxt += r > cumT[theta, j]
@@ -79,7 +80,8 @@ def _next_mode(theta, r, cumT):
 class _ModeStack:
     """Mode-dependent products for all runs at once: one matrix product per quantity for
     all modes (BLAS), then each run's row picked by its mode, instead of gathering an
-    (N, n, n) stack of matrices per step."""
+    (N, n, n) stack of matrices per step.
+    """
 
     def __init__(self, sys):
         self.M, self.nx, self.nu = sys.M, sys.nx, sys.nu
@@ -116,7 +118,8 @@ class _ModeStack:
 def _stacked_columns(*blocks):
     """``np.concatenate(blocks, axis=1)`` for (N, k) blocks with small k, as the transpose of a
     (sum k, N) array: copying a narrow block into a row stripe is several times faster than into
-    a column stripe, and the values are the same."""
+    a column stripe, and the values are the same.
+    """
     out = np.empty((sum(b.shape[1] for b in blocks), blocks[0].shape[0]))
     start = 0
     for b in blocks:
@@ -127,7 +130,8 @@ def _stacked_columns(*blocks):
 
 class _ModeGroups:
     """The same products as :class:`_ModeStack`, computed per mode on the runs in that mode:
-    N n^2 instead of M N n^2 operations per step, for large systems (nx >= GROUPED_MIN_NX)."""
+    N n^2 instead of M N n^2 operations per step, for large systems (nx >= GROUPED_MIN_NX).
+    """
 
     def __init__(self, sys):
         T = lambda S: np.ascontiguousarray(np.swapaxes(S, 1, 2))

@@ -1,20 +1,21 @@
 """Table 3.2's Monte Carlo comparison of controllers: the designs of its rows, simulated with
 common random numbers, and medians with exact bootstrap intervals. Exact average costs are in
-:mod:`asoc.mjls.costs`."""
+:mod:`asoc.mjls.costs`.
+"""
 
 import time
 from dataclasses import dataclass
 
 import numpy as np
-from ..progress import progress_bar
 
+from ..progress import progress_bar
 from ..stats import bootstrap_median_ci
 from ..validation import boolean, integer, real_scalar
 from .baselines import do_val_h2_state_feedback, time_variant_feedback
-from .examples import sec354_system
-from .observed_mode_feedback import observed_mode_state_feedback
 from .controllers import ModeDependentGain, StaticGain, TimeVariantGain
+from .examples import sec354_system
 from .monte_carlo import simulate
+from .observed_mode_feedback import observed_mode_state_feedback
 from .static import static_output_feedback
 
 __all__ = ["TABLE_3_2_ROWS", "Design", "table_3_2_designs", "median_costs"]

@@ -50,7 +50,8 @@ class ObservedModeResult(CertifiedDesignResult):
         state is the output of the systems this design is for, C = I).
     converged, status, message
         Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
-        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i singular).
+        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i
+        singular).
     iterations : int
     seconds : float
 

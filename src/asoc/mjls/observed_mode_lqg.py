@@ -36,9 +36,8 @@ import numpy as np
 
 from ..linalg import transpose
 from ..validation import real_array
-from .finite_horizon import (augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions,
-                             stages)
 from .controllers import Controller
+from .finite_horizon import augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions, stages
 from .system import check_system
 
 __all__ = ["ModeObservedResult", "ModeObservedLQG", "mode_observed_lqg"]
@@ -174,7 +173,8 @@ def _markov_jump_filter(st, Y0, mu):
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.finite_horizon import mode_distributions, stages
     >>> st = stages(sys, 3)
-    >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st, sys.mu_inf))
+    >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st,
+    ...     sys.mu_inf))
     >>> Mf.shape, Y.shape
     ((3, 2, 2, 1), (4, 2, 2, 2))
     """

@@ -16,8 +16,8 @@ import scipy.sparse.linalg
 
 from .. import config
 from ..linalg import pack, transpose, unpack
-from ..validation import choice
 from ..threads import single_threaded
+from ..validation import choice
 
 __all__ = ["METHODS", "optimality_vector", "optimality_system", "OptimalityOperator",
            "KroneckerPreconditioner", "GainSolve", "solve_optimality_cg", "gains_from_bounds",
@@ -341,7 +341,7 @@ def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=
 
 
 def _conjugate_gradients(A, b, inverse, atol, max_iter):
-    """x with ||A x - b|| <= atol by scipy's preconditioned CG from 0, and the iteration count."""
+    """X with ||A x - b|| <= atol by scipy's preconditioned CG from 0, and the iteration count."""
     count = [0]
 
     def callback(_):

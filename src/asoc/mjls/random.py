@@ -30,7 +30,8 @@ def _matrix_with_radius(rng, n, radius):
 def _transition_matrix(rng, n_modes, concentration, sparse):
     """Rows ~ Dirichlet(concentration * 1); ``sparse``: each row keeps its successor on the
     cycle 1 -> 2 -> ... -> M -> 1 (so the chain stays irreducible) and every other entry
-    with probability 1/2; the kept entries are Dirichlet(concentration * 1)."""
+    with probability 1/2; the kept entries are Dirichlet(concentration * 1).
+    """
     T = np.zeros((n_modes, n_modes))
     for i in range(n_modes):
         keep = rng.random(n_modes) < 0.5 if sparse else np.ones(n_modes, dtype=bool)

@@ -223,7 +223,8 @@ def balance(A, T):
 
 def _normal(scaled, A):
     """A product by a power of 2 is exact iff it neither overflows nor lands below the normal range:
-    every entry finite, and every nonzero entry of A still nonzero and at least the smallest normal."""
+    every entry finite, and every nonzero entry of A still nonzero and at least the smallest normal.
+    """
     live = A != 0
     magnitude = np.abs(scaled)
     return bool(np.all(np.isfinite(scaled)) and np.all(magnitude[live] >= np.finfo(float).tiny))
@@ -232,7 +233,8 @@ def _normal(scaled, A):
 def _osborne_exponents(T, e):
     """Integer t balancing the weights w_ij = log2 p_ij + 2 e_i + t_i - t_j (i != j): Osborne's
     iteration equates, mode by mode, the log-sums of each mode's outgoing and incoming weights
-    (exact in the log domain: no weight is formed before it is balanced)."""
+    (exact in the log domain: no weight is formed before it is balanced).
+    """
     M = len(T)
     with np.errstate(divide="ignore"):
         w = np.log2(T) + 2.0 * e[:, None]
@@ -297,7 +299,7 @@ def estimates(A, T, method):
 
 
 def estimate(A, T, method, adjoint=False):
-    """rho and a PSD eigenvector of L (or L*) from the eigen-solver ``method`` (a name of
+    """Rho and a PSD eigenvector of L (or L*) from the eigen-solver ``method`` (a name of
     :data:`METHODS`, or one that ``_resolve_method`` returns).
 
     Examples
@@ -336,7 +338,8 @@ def estimate(A, T, method, adjoint=False):
 
 def _single_mode(A, p, adjoint):
     """M = 1: rho = p rho(A)^2 with eigenvector Re(v v^H) for A v = lambda v (A^T for the adjoint);
-    p = T[0, 0] as given (1 up to the row-sum tolerance of the validation: used, not rounded)."""
+    p = T[0, 0] as given (1 up to the row-sum tolerance of the validation: used, not rounded).
+    """
     A = A.T if adjoint else A
     lam, left, right = scipy.linalg.eig(A, left=True, right=True)
     k = np.argmax(np.abs(lam))
@@ -350,7 +353,8 @@ def _noda(a, T, adjoint):
     """Scalar modes: L is the nonnegative M x M matrix K = (diag(a^2) T)^T (its transpose for L*).
     Noda's inverse iteration x <- (r I - K)^-1 x with r = max_j (K x)_j / x_j, the Collatz-Wielandt
     upper bound, which stays >= rho and falls to it superlinearly, also on periodic chains (Noda,
-    Numer. Math. 17, 1971); x stays positive because (r I - K)^-1 >= I / r. One sparse LU a step."""
+    Numer. Math. 17, 1971); x stays positive because (r I - K)^-1 >= I / r. One sparse LU a step.
+    """
     K = scipy.sparse.csr_matrix((T * (a * a)[:, None]) if adjoint else (T * (a * a)[:, None]).T)
     x = np.ones(len(a))
     eye = scipy.sparse.identity(len(a), format="csc")
@@ -377,7 +381,8 @@ def _noda(a, T, adjoint):
 def _first_order_lower(K, lam, left, right):
     """max_k |lambda_k| - s_k ||E||: a computed eigenvalue is exact for K + E with ||E|| <= 10 N eps ||K||_F
     (backward stable QR algorithm), and moves by at most s_k ||E|| to first order, s_k = 1 / |w_k^H v_k|
-    its condition number (Wilkinson). Useless (0) for defective eigenvalues, where s_k is huge."""
+    its condition number (Wilkinson). Useless (0) for defective eigenvalues, where s_k is huge.
+    """
     with np.errstate(divide="ignore"):
         s = 1.0 / np.abs(np.einsum("ik,ik->k", np.conj(left), right))
     error = 10.0 * len(K) * _EPS * np.linalg.norm(K)
@@ -387,8 +392,10 @@ def _first_order_lower(K, lam, left, right):
 
 def _arnoldi(A, T, adjoint):
     """Estimates by ARPACK on L (or L*), one per Krylov-space size of ``mjls.arnoldi_subspaces`` (after 20
-    from M n^2 = ``mjls.arnoldi_lean_from`` on) that converges: the largest-modulus eigenvalue; when it is not real positive (periodic chains), again on
-    L + |lambda| I, where the Perron eigenvalue is strictly dominant."""
+    from M n^2 = ``mjls.arnoldi_lean_from`` on) that converges: the largest-modulus eigenvalue; when it is not real
+    positive (periodic chains), again on
+    L + |lambda| I, where the Perron eigenvalue is strictly dominant.
+    """
     M, n, _ = A.shape
     dim = M * n * n
     v0 = np.broadcast_to(np.eye(n), (M, n, n)).ravel()

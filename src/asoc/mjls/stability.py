@@ -282,7 +282,8 @@ mean_square_stability(sys, controller)
 
 def _loop(A_stack, T):
     """(A_stack, T) as given, the closed loop of (sys, controller), or the certificate a design
-    result holds."""
+    result holds.
+    """
     if isinstance(A_stack, MJLS) and is_controller(T):
         return controller_closed_loop(A_stack, T, "T")[0], A_stack.T
     if not is_controller(A_stack):
@@ -303,7 +304,7 @@ def _loop(A_stack, T):
 
 
 def perron_pair(A, T, method="auto"):
-    """rho of Cor. 3.2 with right and left Perron stacks: L(X) = rho X and L*(P) = rho P, X, P >= 0.
+    """Rho of Cor. 3.2 with right and left Perron stacks: L(X) = rho X and L*(P) = rho P, X, P >= 0.
 
     On a periodic chain (e.g. T = [[0, 1], [1, 0]]) several eigenvalues share the modulus rho;
     the real positive one and its positive semidefinite eigenvectors are returned (Arnoldi on
@@ -362,7 +363,8 @@ def _certified(A, T, method):
 
 def _scaled(value, g, direction):
     """2^g value, rounded outwards (towards ``direction``) where it leaves the normal range:
-    ldexp is exact except for subnormal results, whose rounding must not cut the bracket."""
+    ldexp is exact except for subnormal results, whose rounding must not cut the bracket.
+    """
     result = float(np.ldexp(value, g))
     if result < np.finfo(float).tiny and value != 0:
         result = max(0.0, float(np.nextafter(result, direction)))

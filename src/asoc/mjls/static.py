@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import config
-from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from ..linalg import transpose
-from .lyapunov import coupled_lyapunov_solver
+from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .closed_loops import closed_loop, gain_matrix, noise_covariances
 from .design_result import CertifiedDesignResult
+from .lyapunov import coupled_lyapunov_solver
 from .stability import mean_square_stability
 from .static_iterates import Recursion, UntilStabilizing, exact_iteration, gain_sdp, step_iteration
 from .stopping import StopStatus
@@ -180,7 +180,8 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
         stabilising gain once the rate of its last 10 changes predicts more than
         ``config.defaults["mjls.auto_switch_iterations"]`` further iterations (checked after
         10 iterations, then at doubling intervals). An easy system converges before the
-        switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's iteration (one step of each recursion (3.35) per gain
+        switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's iteration (one step of
+        each recursion (3.35) per gain
         update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
         thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with
         the exact solution of the two moment equations (3.32)-(3.33) for the current gain
@@ -256,7 +257,8 @@ def _iterate(sys, tol, max_iter, init, method, until):
 
 def _cheapest_member(sys, run):
     """(L, X, P, (cost, stability)) of the returned iterate: the last, or on a cycle the member
-    of the period of smallest exact cost (3.9)."""
+    of the period of smallest exact cost (3.9).
+    """
     members = run.members or [(run.L, run.X, run.P)]
     costs = [_static_cost(sys, L)[::2] for L, _, _ in members]
     best = min(range(len(members)), key=lambda i: costs[i][0])
@@ -327,7 +329,6 @@ def static_cost(sys, L):
     >>> round(static_cost(sys, [[-0.4]])[0], 4), round(static_cost(noisy, [[-0.4]])[0], 4)
     (0.7999, 1.7781)
     """
-
     check_system(sys)
     return _static_cost(sys, gain_matrix(L, "L", sys.nu, sys.ny))
 

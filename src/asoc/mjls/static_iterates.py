@@ -126,7 +126,8 @@ class Recursion:
 
     def terms(self, Xs, EP, cX, cP):
         """S_i = R_i cP + B_i^T E_i(P) B_i, W_i = C_i Xs_i C_i^T + cX mu_i J_i J_i^T and
-        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables."""
+        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables.
+        """
         BtEP = self.Bt @ EP
         S = cP * self.R + BtEP @ self.B
         XCt = Xs @ self.Ct
@@ -135,7 +136,8 @@ class Recursion:
 
     def gain(self, Xs, EP, cX, cP, method="vec"):
         """(3.34) with R scaled by cP = 1 / s_P and the measurement noise by cX = 1 / s_X
-        (``method="sdp"``: the SDP of Prop. 3.18)."""
+        (``method="sdp"``: the SDP of Prop. 3.18).
+        """
         S, W, N = self.terms(Xs, EP, cX, cP)
         if method == "sdp":
             return gain_sdp(S, W, N)
@@ -146,7 +148,8 @@ class Recursion:
 
     def noise(self, L):
         """mu_i (H_i H_i^T + B_i L J_i J_i^T L^T B_i^T): the constant term of (3.35) for the gain
-        L."""
+        L.
+        """
         if self.muJJt is None:
             return self.muHHt
         BL = self.B @ L
@@ -202,8 +205,9 @@ class ScaledPair:
         self._logs = [self.log_scales]
 
     def largest_entries(self):
-        """max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a
-        NaN, and 1 where it is zero (a zero iterate, e.g. of a system without noise, stays zero)."""
+        """Max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a
+        NaN, and 1 where it is zero (a zero iterate, e.g. of a system without noise, stays zero).
+        """
         largest = np.abs(self.next, out=self._magnitudes).max(axis=(1, 2, 3), keepdims=True)
         return np.where(largest == 0.0, 1.0, largest)
 
@@ -222,7 +226,7 @@ class ScaledPair:
         return np.exp(log_scales) * stack
 
     def traces(self):
-        """tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
+        """Tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
         traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(
             axis=3
         )
@@ -333,7 +337,8 @@ class _Rate:
     """When the thesis's iteration is slow: its change falls by a rate r per iteration,
     estimated over the last ``window`` iterations; it is slow when log(tol / change) / log r,
     the iterations still to go, exceeds ``mjls.auto_switch_iterations``. Checked after
-    ``window`` iterations, then at doubling intervals (each check may cost a spectral radius)."""
+    ``window`` iterations, then at doubling intervals (each check may cost a spectral radius).
+    """
 
     window = 10
 
@@ -412,7 +417,8 @@ def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=Non
 
 def _costate(sys, L, x0=None):
     """The closed loop of L, its solver, and the solution P of P = L*(P) + Q + C^T L^T R L C with
-    its weight."""
+    its weight.
+    """
     Acl = closed_loop(sys, L, check=False)
     solve = coupled_lyapunov_solver(Acl, sys.T)
     LC = L @ sys.C
@@ -425,7 +431,8 @@ def _stabilizes(sys, L, P_guess):
     certificate (:func:`lyapunov_certified`, one solve from the iterate ``P_guess``), else
     rho < 1 (Cor.
     3.2). The same verdict as rho alone, since a certified P implies rho < 1, at the cost of a
-    solve (which the exact iteration reuses) instead of a certified spectral radius."""
+    solve (which the exact iteration reuses) instead of a certified spectral radius.
+    """
     Acl, _, P_solution, weight = _costate(sys, L, x0=P_guess)
     stable = (
         lyapunov_certified(P_solution, weight)

@@ -65,7 +65,8 @@ class StoppingRule:
 
     def status(self, it, parts):
         """The :class:`StopStatus` after iteration ``it`` with the new iterate ``parts`` (a
-        sequence of arrays, or one array whose first axis lists the parts), or None."""
+        sequence of arrays, or one array whose first axis lists the parts), or None.
+        """
         new = [np.ravel(part) for part in parts]
         if not self.recent:
             self.recent.append(new)
@@ -93,7 +94,7 @@ class StoppingRule:
         return self.early_cycles and change < np.sqrt(self.tol) and change < 1e-4 * change_1
 
     def _progress(self, it):
-        """ "diverged" or "no_progress" from the last two windows of changes, else None."""
+        """Return "diverged" or "no_progress" from the last two windows of changes, else None."""
         w = self.window
         if len(self.smallest) < 2 * w:
             return None

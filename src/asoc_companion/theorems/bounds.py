@@ -37,8 +37,9 @@ def blocks(Z, n):
 
 
 def moment_bound(X, factor=2.0):
-    """factor [[Xbar + X2, X2], [X2, X2]] with Xbar = X1 - X12 - X12^T + X2, X2 = X22 (3.43): the
-    corrected bound of X~ (factor 2); factor 1 is Prop. 3.26 as printed."""
+    """Factor [[Xbar + X2, X2], [X2, X2]] with Xbar = X1 - X12 - X12^T + X2, X2 = X22 (3.43): the
+    corrected bound of X~ (factor 2); factor 1 is Prop. 3.26 as printed.
+    """
     n = X.shape[-1] // 2
     X1, X12, X2 = blocks(X, n)
     Xbar = X1 - X12 - _T(X12) + X2
@@ -46,11 +47,12 @@ def moment_bound(X, factor=2.0):
 
 
 def costate_bound(P, factor=2.0, sign=1.0):
-    """factor [[Pbar + P2, -P2], [-P2, P2]] with Pbar = P1 + sign (P12 + P12^T) + P2.
+    """Factor [[Pbar + P2, -P2], [-P2, P2]] with Pbar = P1 + sign (P12 + P12^T) + P2.
 
     With sign = +1, z^T (bound / factor) z = x^T Pbar x + e^T P2 e for z = [x; x^], and
     z = [x; x] + [0; -e] gives P~ <= 2 (.) (the corrected bound). sign = -1, factor = 1 is
-    Prop. 3.26 as printed (Pbar = P1 - P12 - P12^T + P2)."""
+    Prop. 3.26 as printed (Pbar = P1 - P12 - P12^T + P2).
+    """
     n = P.shape[-1] // 2
     P1, P12, P2 = blocks(P, n)
     Pbar = P1 + sign * (P12 + _T(P12)) + P2
@@ -72,7 +74,8 @@ def costate(At, Qt, T):
 def _error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
     """One step of (3.66)-(3.67), the two transported terms multiplied by ``factor``.
 
-    factor = 1 is the printed recursion; factor = 2 the corrected one (an upper bound)."""
+    factor = 1 is the printed recursion; factor = 2 the corrected one (an upper bound).
+    """
     HHt = sys.H @ _T(sys.H)
     KJJK = np.zeros_like(Xbar) if sys.J is None else K @ sys.J @ _T(sys.J) @ K.T
     KC = K @ sys.C
@@ -93,7 +96,8 @@ def _initial_error_blocks(mean0, cov0, mu0, xhat0):
 def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
     """Sum over k of sum_i tr[Q~_i factor [[Xbar + Xu, Xu], [Xu, Xu]]] with (3.66)-(3.67) (transported
     terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56) (Thm. 3.31
-    corrected); with factor 1 the cost of the printed recursions (no bound)."""
+    corrected); with factor 1 the cost of the printed recursions (no bound).
+    """
     Xbar, Xunder = _initial_error_blocks(mean0, cov0, mu0, xhat0)
     mu, total = mu0, 0.0
     for k in range(len(F)):
@@ -155,7 +159,8 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
     """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as E_i(Pbar + Punder)).
 
     ``cross`` is the factor of the term 2 E_i(Pbar + Punder) B L Xunder A^T (2 as printed; the
-    mutant of the corrected Thm. 3.32 drops it to 1)."""
+    mutant of the corrected Thm. 3.32 drops it to 1).
+    """
     A, B, C, E, U = sys.A, sys.B, sys.C, EPbar, EPunder
     S, BL, KC = Xbar + Xunder, B @ L, K @ C
     terms = (_tr(sys.Q, S) + _tr(L.T @ sys.R @ L, Xunder) + _tr(E + U, A @ S @ _T(A))
@@ -167,7 +172,8 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
 
 def difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder):
     """sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i] with Z = Q~ + A~^T [[E(Pbar) + E(Pu), -E(Pu)], [-E(Pu), E(Pu)]] A~:
-    the amount by which (3.65) exceeds (B.4) (derived by expanding both)."""
+    the amount by which (3.65) exceeds (B.4) (derived by expanding both).
+    """
     n = sys.nx
     At = np.block([[sys.A, np.broadcast_to(sys.B @ L, sys.A.shape)],
                    [K @ sys.C, np.broadcast_to(F, sys.A.shape)]])

@@ -21,8 +21,8 @@ claim of Sec. 2.6.3 is checked in :mod:`.kernels`.
 
 import numpy as np
 
-from .statement import Outcome, Statement
 from .kernels import check_kernels_sec_2_6_3, random_covariance, summarise_kernels
+from .statement import Outcome, Statement
 
 __all__ = ["EPS", "check_lemma_2_1", "check_theorem_2_4", "expected_cost_of_affine_policy",
            "lq_tracking_policy", "check_theorem_2_5", "check_proposition_2_7", "STATEMENTS"]
@@ -57,9 +57,18 @@ def _lib_terminal_value(Q_K, x_target, points, weights):
 def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_ref, mean0, cov0, eps):
     """Alg. 2.1 (nominal reference under the affine policy L_ref, d_ref with the UKF), then
     Theorem 2.4 and Theorem 2.5 backwards with the steps ``eps``; returns the value at k = 0
-    as (s, v, V, S) and the policy (2.17) of every step."""
-    from asoc.belief import (UKF, AffinePolicy, QuadraticCost, StageProblem, improved_policy_value,
-                             reference_trajectory, sigma_points, terminal_value)
+    as (s, v, V, S) and the policy (2.17) of every step.
+    """
+    from asoc.belief import (
+        UKF,
+        AffinePolicy,
+        QuadraticCost,
+        StageProblem,
+        improved_policy_value,
+        reference_trajectory,
+        sigma_points,
+        terminal_value,
+    )
     model = _lib_linear_gaussian_model(A, B, H, C, J)
     cost = QuadraticCost(Q, R, Q_K, x_target, K)
     filt = UKF(model)
@@ -289,7 +298,8 @@ def check_theorem_2_5(rng: np.random.Generator, mutant=False) -> Outcome:
 
 def _table_2_1(name, D, l, shape):
     """Table 2.1, written out independently of the library (unit variance)."""
-    from scipy.special import gamma as gamma_fn, kv
+    from scipy.special import gamma as gamma_fn
+    from scipy.special import kv
     r = D / l
     if name == "se":
         return np.exp(-0.5 * r ** 2)

@@ -16,14 +16,21 @@ one instance from its ``rng`` and decides it:
 Each check also runs against its mutant (``check(rng, mutant=True)``), described here.
 """
 
-from .statement import Statement
 from .dynamic_feedback import check_3_20, check_3_23, check_3_24, check_3_25, check_3_26, check_3_27
-from .finite_horizon import (check_3_28, check_3_29, check_3_30, check_3_31, check_3_32, check_3_33,
-                             summarise_3_31)
+from .finite_horizon import check_3_28, check_3_29, check_3_30, check_3_31, check_3_32, check_3_33, summarise_3_31
 from .h2_lmi import check_3_7, check_3_8, check_3_9, check_3_10, check_3_11, check_3_12, summarise_lmi
 from .mean_square import check_3_1, check_3_2, check_3_5
-from .static_feedback import (check_3_14, check_3_15, check_3_16, check_3_17, check_3_18, check_3_19,
-                              summarise_3_15, summarise_3_19)
+from .statement import Statement
+from .static_feedback import (
+                             check_3_14,
+                             check_3_15,
+                             check_3_16,
+                             check_3_17,
+                             check_3_18,
+                             check_3_19,
+                             summarise_3_15,
+                             summarise_3_19,
+)
 
 __all__ = ["MC", "WHY_NOT_LMI", "STATEMENTS", "SHOW", "MARGIN"]
 

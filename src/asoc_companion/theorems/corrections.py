@@ -18,14 +18,28 @@ import numpy as np
 import scipy.linalg
 
 from asoc import gp
-from asoc.mjls import (augmented_closed_loop, dynamic_output_feedback, finite_horizon_cost,
-                       finite_horizon_dynamic_output_feedback, ms_spectral_radius, static_output_feedback,
-                       steady_state_cost, successor_average)
+from asoc.mjls import (
+    augmented_closed_loop,
+    dynamic_output_feedback,
+    finite_horizon_cost,
+    finite_horizon_dynamic_output_feedback,
+    ms_spectral_radius,
+    static_output_feedback,
+    steady_state_cost,
+    successor_average,
+)
 from asoc.progress import progress_bar
 
 from . import bounds
-from .counterexamples import (kernel_example, mcvmd_integral, prop_3_26_example, thm_3_19_example,
-                              thm_3_19_noiseless_example, thm_3_27_fixed_points, thm_3_31_example)
+from .counterexamples import (
+    kernel_example,
+    mcvmd_integral,
+    prop_3_26_example,
+    thm_3_19_example,
+    thm_3_19_noiseless_example,
+    thm_3_27_fixed_points,
+    thm_3_31_example,
+)
 from .instances import draw_system, random_spd_stack, rescaled
 
 __all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "SPREAD", "check_kernels",
@@ -64,7 +78,8 @@ SPREAD = 100.0          # spread-out Dirac sets: means on [0, 4 SPREAD], beyond 
 
 def _gram_verdict(D, name, relative_scale, reference=None):
     """(verdict, lowest eigenvalue) of the Gram matrix at relative_scale times the median of the
-    positive distances of ``reference`` (default ``D``)."""
+    positive distances of ``reference`` (default ``D``).
+    """
     reference = D if reference is None else reference
     gram = gp.COVARIANCES[name](D, relative_scale * np.median(reference[reference > 0]))
     lowest = _min_eig(gram)
@@ -77,7 +92,8 @@ def check_kernels(rng):
     sets spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a PSD Gram matrix;
     the mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule. Third entry, on
     the spread sets only: (verdict, lowest eigenvalue) of the closed form with b_max = 100
-    (``gp.mcvmd``), which the corrected statement excludes."""
+    (``gp.mcvmd``), which the corrected statement excludes.
+    """
     n = int(rng.integers(3, 8))
     m, s = np.sort(rng.uniform(0.0, 4.0, n)), rng.uniform(0.5, 1.5, n)
     kind = ("hellinger", "l2", "mcvmd", "mcvmd_spread")[rng.integers(4)]
@@ -151,7 +167,8 @@ def check_3_19(rng):
     Riccati equation. Premise: the DARE has a stabilising solution (Q > 0). Mutant: the limit is the
     LQ gain for 2 R. A quarter of the draws have H = 0: the hypothesis excludes them
     (``not_applicable``), and the third entry says whether Alg. 3.1 still reached the LQ gain there
-    (None on the others)."""
+    (None on the others).
+    """
     singular = rng.random() < SINGULAR_NOISE_SHARE
     sys = draw_system(rng, max_modes=1)
     sys = sys.replace(C=np.eye(sys.nx)[None], J=None, H=0 * sys.H if singular else sys.H)
@@ -224,7 +241,8 @@ def _stabilised_loop(rng, sys):
 def check_3_26(rng, with_sign=False):
     """Corrected Prop. 3.26: X~ <= 2 [[Xbar + X2, X2], [X2, X2]] and P~ <= 2 [[Pbar + P2, -P2], [-P2, P2]]
     (Pbar = P1 + P12 + P12^T + P2) for the exact X~_inf, P~_inf of a random stabilising (F, K, L).
-    Mutant: factor 1 (the printed bound). ``with_sign`` adds the P-bound with the printed sign and factor 2."""
+    Mutant: factor 1 (the printed bound). ``with_sign`` adds the P-bound with the printed sign and factor 2.
+    """
     sys, F, K, L = _stabilised_loop(rng, draw_system(rng))
     _, X, _ = steady_state_cost(sys, F, K, L)
     At, _, Qt = augmented_closed_loop(sys, F, K, L)
@@ -263,7 +281,8 @@ def _record_3_26(outcomes, sign_outcomes):
 
 def _lqg(sys, r_factor=1.0):
     """The LQG controller (3.37) of a one-mode system: F = A + B L - K C, K the Kalman predictor gain,
-    L the LQ gain (for r_factor R)."""
+    L the LQ gain (for r_factor R).
+    """
     A, B, C, H, Q, R = sys.A[0], sys.B[0], sys.C[0], sys.H[0], sys.Q[0], r_factor * sys.R[0]
     JJt = sys.J[0] @ sys.J[0].T
     Xf = scipy.linalg.solve_discrete_are(A.T, C.T, H @ H.T, JJt)
@@ -275,7 +294,8 @@ def _lqg(sys, r_factor=1.0):
 
 def check_3_27(rng):
     """Corrected Thm. 3.27 (M = 1): the converged, stabilising solution of Alg. 3.2 has the exact cost of
-    the LQG controller. Mutant: compared with the LQG controller for 2 R."""
+    the LQG controller. Mutant: compared with the LQG controller for 2 R.
+    """
     sys = draw_system(rng, max_states=2, max_modes=1)
     run = dynamic_output_feedback(sys, max_iter=3000, warn=False)
     if not (run.converged and run.stabilizing):
@@ -337,7 +357,8 @@ def _finite_instance(rng):
 
 def check_3_31(rng):
     """Corrected Thm. 3.31: J_0 <= the doubled forward bound (random gains or Alg. 3.3's, horizons 2-8).
-    Mutant: factor 1 (the printed recursions (3.66)-(3.67) summed forward). Third entry: bound / J_0."""
+    Mutant: factor 1 (the printed recursions (3.66)-(3.67) summed forward). Third entry: bound / J_0.
+    """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     if rng.random() < 0.5:
         run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0,
@@ -378,7 +399,8 @@ def _record_3_31(outcomes, ratios):
 def check_3_32(rng):
     """Corrected Thm. 3.32: the solution of (3.70) minimises (B.4) (symmetric differences vanish and random
     perturbations do not lower it). Mutant: (B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T dropped.
-    Third entry: relative error of (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i]."""
+    Third entry: relative error of (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i].
+    """
     sys = draw_system(rng)
     M, n = sys.M, sys.nx
     Xbar, Xunder = random_spd_stack(rng, M, n), random_spd_stack(rng, M, n)
@@ -424,7 +446,8 @@ def _record_3_32(outcomes, identity_errors):
 
 def check_3_33(rng):
     """Alg. 3.3 from random gains, with the Step 5 safeguard and with the literal Step 5 (safeguard=False):
-    whether Jbar_0 increases (beyond 1e-8 relative) anywhere, and the largest relative increase."""
+    whether Jbar_0 increases (beyond 1e-8 relative) anywhere, and the largest relative increase.
+    """
     sys = draw_system(rng, max_states=2, max_modes=2)
     horizon = int(rng.integers(2, 9))
     mu0 = rng.dirichlet(np.ones(sys.M))
@@ -455,7 +478,8 @@ def _record_3_33(rises):
         "of (3.66)-(3.67): a decrease at step k need not carry to Jbar_0. On random instances Jbar_0 rises "
         f"in {int(guarded.sum())} of {len(rises)} runs with the project's Step 5 safeguard (largest relative "
         f"rise {rises[guarded, 0].max() if guarded.any() else 0.0:.1e}) and in {int(literal.sum())} with the "
-        f"literal Step 5 ({int(np.isinf(rises[:, 1]).sum())} of these diverging until the moments lose symmetry). The convergence of the gains has no argument in B.3: a monotone, bounded cost "
+        f"literal Step 5 ({int(np.isinf(rises[:, 1]).sum())} of these diverging until the moments lose symmetry). The "
+        "convergence of the gains has no argument in B.3: a monotone, bounded cost "
         "sequence converges, its arguments need not."),
         "no_correction": (
             "Tried: (i) the literal Step 5 (compare with the previous iteration's Jbar_k): more increases; "
@@ -477,7 +501,8 @@ def _counts(verdicts):
 
 def _tally(outcomes, statement, mutant, why_not=""):
     """``outcomes``: (corrected verdict, mutant verdict or None) per instance; ``why_not``: why the
-    mutant cannot be caught in half of its draws (recorded with it)."""
+    mutant cannot be caught in half of its draws (recorded with it).
+    """
     corrected = [c for c, _ in outcomes if c != "not_applicable"]
     holds = sum(c == "holds" for c in corrected)
     record = {"description": mutant, **_counts([m for _, m in outcomes if m is not None])}

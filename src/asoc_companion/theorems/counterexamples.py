@@ -16,8 +16,8 @@ import scipy.special
 from asoc import gp
 from asoc.gp.cramer_von_mises import DEFAULT_B_MAX
 from asoc.mjls import MJLS, dynamic_output_feedback, static_output_feedback, successor_average
-from asoc.mjls.moment_bounds import bound_costate_step, bound_moment_step
 from asoc.mjls.closed_loops import noise_covariances
+from asoc.mjls.moment_bounds import bound_costate_step, bound_moment_step
 from asoc.mjls.optimality import optimality_system
 
 from .instances import draw_system
@@ -226,7 +226,8 @@ def _fixed_point_residuals(sys, run):
     """How well Alg. 3.2's last iterate solves (3.45)-(3.49): the largest relative change of Xbar,
     Xu, Pbar, Pu under one more step (3.45)-(3.48) with the iterate's gains, the relative residual
     ||H z + rho|| / ||rho|| of (3.49) (z = [vec F; vec K; vec L], column-stacking), and the smallest
-    eigenvalues of Xu and Pu (both invertible where positive)."""
+    eigenvalues of Xu and Pu (both invertible where positive).
+    """
     Xbar, Xunder, Pbar, Punder = run.Xbar, run.Xunder, run.Pbar, run.Punder
     HHt, JJt = noise_covariances(sys)
     EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
@@ -257,7 +258,7 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
     >>> [round(p["cost"], 3) for p in ex["fixed_points"]]
     [1.952, 2.424]
     """
-    from .engine import instance_seed         # engine imports the statements, which import this
+    from .engine import instance_seed  # engine imports the statements, which import this
 
     rng = np.random.default_rng(instance_seed("statement_3_27", seed, index))
     sys = draw_system(rng, max_states=2, max_modes=2)

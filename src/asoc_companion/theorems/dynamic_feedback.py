@@ -12,15 +12,37 @@ import numpy as np
 from scipy.linalg import block_diag
 
 from asoc.linalg import sym, transpose
-from asoc.mjls import average_cost_and_gradient, dynamic_output_feedback, ms_spectral_radius, predecessor_sum
-from asoc.mjls import steady_state_cost, successor_average
+from asoc.mjls import (
+    average_cost_and_gradient,
+    dynamic_output_feedback,
+    ms_spectral_radius,
+    predecessor_sum,
+    steady_state_cost,
+    successor_average,
+)
 from asoc.mjls.closed_loops import augmented_closed_loop, noise_covariances
 from asoc.mjls.finite_horizon import augmented_initial_moment
 from asoc.mjls.moment_operator import ms_operator
 
-from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, draw_system, gaussian_mixture, initial_modes,
-                        min_eig, norm_scale, outcome, random_spd_stack, rescaled, sample_mixture,
-                        stationary_average, trace_sum, verdict, z_scores)
+from .instances import (
+    Z_SCORE,
+    ModeChain,
+    ModeOperator,
+    RunModes,
+    draw_system,
+    gaussian_mixture,
+    initial_modes,
+    min_eig,
+    norm_scale,
+    outcome,
+    random_spd_stack,
+    rescaled,
+    sample_mixture,
+    stationary_average,
+    trace_sum,
+    verdict,
+    z_scores,
+)
 from .mean_square import moment_map_matrix
 
 __all__ = ["check_3_20", "loop_step", "quadratic_form", "check_3_23", "check_3_24", "check_3_25",
@@ -61,7 +83,8 @@ def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
 
 def loop_step(sys):
     """One step of plant (3.36) and controller (3.37) for all runs: ``step((x, x^), modes, r, F, K, L)``
-    with x, x^ of shape (runs, nx) and ``modes`` the runs' RunModes; the new (x, x^)."""
+    with x, x^ of shape (runs, nx) and ``modes`` the runs' RunModes; the new (x, x^).
+    """
     J = np.zeros((sys.M, sys.ny, 1)) if sys.J is None else sys.J
     C, meas, A, B, H = (ModeOperator(S) for S in (sys.C, J, sys.A, sys.B, sys.H))
 
@@ -81,7 +104,8 @@ def quadratic_form(S, theta, x):
 
 def check_3_23(rng, mutant=False):
     """Prop. 3.23: the printed block recursion of X~ against Monte Carlo, k = 1..3.
-    Mutant: the recursion without the process noise mu_k^i H_i H_i^T."""
+    Mutant: the recursion without the process noise mu_k^i H_i H_i^T.
+    """
     sys = draw_system(rng)
     F, K, L = _dynamic_gains(rng, sys)
     c = norm_scale(rng, augmented_closed_loop(sys, F, K, L)[0])
@@ -116,7 +140,8 @@ def check_3_23(rng, mutant=False):
 
 def check_3_24(rng, mutant=False):
     """Prop. 3.24: sum_i tr[Q~_i X~_inf^i] against the Monte Carlo stationary average cost of the loop.
-    Mutant: Q~ without the input's block L^T R_i L."""
+    Mutant: Q~ without the input's block L^T R_i L.
+    """
     sys = draw_system(rng)
     sys, F, K, L, target = _stabilised_dynamic(rng, sys)
     exact, Xt, rho = steady_state_cost(sys, F, K, L)
@@ -156,7 +181,8 @@ def _augmented_dense(sys, F, K, L):
 
 def check_3_25(rng, mutant=False):
     """Prop. 3.25: the stated Hamiltonian of (3.42) (with E_i(P~)) against its Lagrangian built densely.
-    Mutant: the stated form without the noise term mu_i H~_i H~_i^T."""
+    Mutant: the stated form without the noise term mu_i H~_i H~_i^T.
+    """
     sys = draw_system(rng)
     F, K, L = _dynamic_gains(rng, sys)
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
@@ -177,7 +203,8 @@ def check_3_25(rng, mutant=False):
 def check_3_26(rng, mutant=False):
     """Prop. 3.26 as printed: X~ <= [[Xbar + Xu, Xu], [Xu, Xu]] and P~ <= [[Pbar + Pu, -Pu], [-Pu, Pu]]
     with Xbar = X1 - X12 - X12^T + X2, Xu = X2 (3.43) of the exact X~_inf, P~_inf of a stabilising (F, K, L).
-    Mutant: the inequalities flipped (the bounds read as lower bounds)."""
+    Mutant: the inequalities flipped (the bounds read as lower bounds).
+    """
     sys = draw_system(rng)
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
     _, Xt, rho = steady_state_cost(sys, F, K, L)
@@ -200,7 +227,8 @@ def check_3_26(rng, mutant=False):
 
 def check_3_27(rng, mutant=False):
     """Thm. 3.27: a stabilising solution of (3.45)-(3.49) (Alg. 3.2 converged) is the optimal (3.37):
-    the gradient of the exact cost (3.42) vanishes there. Mutant: the solution's L scaled by 1.2."""
+    the gradient of the exact cost (3.42) vanishes there. Mutant: the solution's L scaled by 1.2.
+    """
     sys = draw_system(rng, max_states=2, max_modes=2)
     run = dynamic_output_feedback(sys, max_iter=3000, warn=False)
     numbers = dict(alg_converged=run.converged, alg_stabilizing=run.stabilizing, alg_iterations=run.iterations)

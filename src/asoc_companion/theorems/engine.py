@@ -133,7 +133,8 @@ def _tally(key, n, results, seconds):
 def _mutant_record(key, results):
     """What the mutant's instances gave: ``{"description", "fails", "instances"}`` (+ premise-false and
     errors when there were any, and the statement's ``why_not``). The mutant is caught when ``fails
-    > 0``; it has power when it is caught in at least half of its draws."""
+    > 0``; it has power when it is caught in at least half of its draws.
+    """
     verdicts = [out if isinstance(out, tuple) else out.verdict for _, out in results]
     record = {"description": statement(key).mutant, "fails": verdicts.count("fails"), "instances": len(verdicts)}
     if statement(key).why_not:

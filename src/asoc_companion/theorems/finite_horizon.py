@@ -1,19 +1,31 @@
 """Checks of Sec. 3.7 (finite horizon, Alg. 3.3): the moment form of the cost (Prop. 3.28), the
 cost-to-go (Lemma 3.29), the trace inequality (Lemma 3.30), the bound (Thm. 3.31), the conditions
-of its minimiser (Thm. 3.32) and Alg. 3.3's monotonicity and convergence (Thm. 3.33)."""
+of its minimiser (Thm. 3.32) and Alg. 3.3's monotonicity and convergence (Thm. 3.33).
+"""
 
 import numpy as np
 
 from asoc.linalg import transpose
 from asoc.mjls import finite_horizon_cost, finite_horizon_dynamic_output_feedback, successor_average
-from asoc.mjls.moment_bounds import bound_costate_step, bound_moment_step
 from asoc.mjls.closed_loops import augmented_closed_loop, noise_covariances
-from asoc.mjls.optimality import optimality_system
 from asoc.mjls.finite_horizon import augmented_initial_moment, initial_bounds
+from asoc.mjls.moment_bounds import bound_costate_step, bound_moment_step
+from asoc.mjls.optimality import optimality_system
 
 from .dynamic_feedback import loop_step, quadratic_form
-from .instances import (Z_SCORE, ModeChain, RunModes, draw_system, gaussian_mixture, moment_estimate, outcome,
-                        random_spd_stack, sample_mixture, trace_sum, verdict)
+from .instances import (
+    Z_SCORE,
+    ModeChain,
+    RunModes,
+    draw_system,
+    gaussian_mixture,
+    moment_estimate,
+    outcome,
+    random_spd_stack,
+    sample_mixture,
+    trace_sum,
+    verdict,
+)
 
 __all__ = ["check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31", "summarise_3_31",
            "check_3_32", "check_3_33"]
@@ -32,7 +44,8 @@ def _finite_instance(rng, max_states=3, max_modes=3):
 
 def check_3_28(rng, mutant=False):
     """Prop. 3.28: the expected cost (3.56) by the moment recursion (3.57)-(3.58) against Monte Carlo.
-    Mutant: the moment form evaluated with the gains in reverse time order."""
+    Mutant: the moment form evaluated with the gains in reverse time order.
+    """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     xhat0 = mu0 @ mean0
     order = slice(None, None, -1 if mutant else 1)
@@ -53,7 +66,8 @@ def check_3_28(rng, mutant=False):
 
 def check_3_29(rng, mutant=False):
     """Lemma 3.29: sum_i tr[P~_0^i X~_0^i] + mu_0^i omega_{i,0} by the backward recursion (3.64)
-    against the forward sum (3.62). Mutant: the recursion without the noise term omega."""
+    against the forward sum (3.62). Mutant: the recursion without the noise term omega.
+    """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     xhat0 = mu0 @ mean0
     forward = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
@@ -74,7 +88,8 @@ def check_3_29(rng, mutant=False):
 def check_3_30(rng, mutant=False):
     """Lemma 3.30: X >= A >= 0 and Y >= B >= 0 imply tr[AB] <= tr[XY] (rank-deficient draws
     included, increments X - A, Y - B at a scale log-uniform on [0.01, 1]: near the equality X = A,
-    Y = B). Mutant: the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative)."""
+    Y = B). Mutant: the hypotheses A, B >= 0 dropped (A, B = psd - 4 psd, mostly negative).
+    """
     n = int(rng.integers(1, 5))
 
     def psd():
@@ -91,7 +106,8 @@ def check_3_30(rng, mutant=False):
 
 def bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=True):
     """Jbar_0 (3.65) for fixed gains by (3.66)-(3.69) (the library's step functions) and omega
-    (``noise=False``: without omega, a mutant)."""
+    (``noise=False``: without omega, a mutant).
+    """
     horizon = len(F)
     HHt, JJt = noise_covariances(sys)
     _, Xbar, Xunder = initial_bounds(mean0, cov0, mu0)
@@ -111,7 +127,8 @@ def bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=True):
 
 def check_3_31(rng, mutant=False):
     """Thm. 3.31: J_0 <= Jbar_0 for fixed gains (the exact cost from (3.57)-(3.58)).
-    Mutant: Jbar_0 without the noise's share omega."""
+    Mutant: Jbar_0 without the noise's share omega.
+    """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     optimised = bool(rng.random() < 0.5)
     if optimised:                                                     # the gains Alg. 3.3 returns
@@ -138,7 +155,8 @@ def check_3_32(rng, mutant=False):
     """Thm. 3.32 at k = 0: with X_0 given and P_1 > 0 (the later gains fixed), Jbar_0 (3.65) with
     (3.68)-(3.69) is a quadratic in (F_0, K_0, L_0); at its minimiser (3.70) must hold, so the
     solution of (3.70) must not be improved by random perturbations.
-    Mutant: the solution of (3.70) moved by a random step of 10% of its norm."""
+    Mutant: the solution of (3.70) moved by a random step of 10% of its norm.
+    """
     sys = draw_system(rng)
     M, n = sys.M, sys.nx
     Xbar, Xunder = random_spd_stack(rng, M, n), random_spd_stack(rng, M, n)         # X_0 of a horizon >= 2
@@ -172,7 +190,8 @@ def check_3_32(rng, mutant=False):
 def check_3_33(rng, mutant=False):
     """Thm. 3.33: Alg. 3.3 gives non-increasing Jbar_0 and its parameters converge
     (20 further iterations after the stop change them by < 1e-4 relative).
-    Mutant: Alg. 3.3 stopped after 2 iterations."""
+    Mutant: Alg. 3.3 stopped after 2 iterations.
+    """
     sys, horizon, _, _, _, mu0, mean0, cov0 = _finite_instance(rng, max_states=2, max_modes=2)
     seed = int(rng.integers(2**32))
     kwargs = dict(horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0, warn=False)

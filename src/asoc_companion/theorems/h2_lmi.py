@@ -19,9 +19,21 @@ from asoc.mjls import closed_loop, static_output_lmi, steady_state_second_moment
 from asoc.mjls.examples import sec354_system
 from asoc.mjls.lmi import performance_output, solve_quietly
 
-from .instances import (Z_SCORE, ModeOperator, best_scalar_gain, draw_system, initial_modes, min_eig, outcome,
-                        random_spd_stack, rescaled, stabilised, stationary_average, trace_sum,
-                        verdict)
+from .instances import (
+    Z_SCORE,
+    ModeOperator,
+    best_scalar_gain,
+    draw_system,
+    initial_modes,
+    min_eig,
+    outcome,
+    random_spd_stack,
+    rescaled,
+    stabilised,
+    stationary_average,
+    trace_sum,
+    verdict,
+)
 from .mean_square import moment_map_radius
 
 __all__ = ["check_3_7", "check_3_10", "BOUNDARY_SHARE", "check_3_8", "check_3_11", "check_3_9",
@@ -31,7 +43,8 @@ __all__ = ["check_3_7", "check_3_10", "BOUNDARY_SHARE", "check_3_8", "check_3_11
 
 def _stationary_check(rng, mode_dependent, mutant):
     """Props. 3.7 / 3.10: sum_i tr[(D+ELC) X (D+ELC)^T] against the Monte Carlo stationary E{z^T z}.
-    Mutant: the formula with D_i in place of D_i + E_i L C_i (the input's share of z dropped)."""
+    Mutant: the formula with D_i in place of D_i + E_i L C_i (the input's share of z dropped).
+    """
     sys = draw_system(rng)
     shape = (sys.M, sys.nu, sys.ny) if mode_dependent else (sys.nu, sys.ny)
     L = 0.5 * rng.standard_normal(shape)
@@ -67,7 +80,8 @@ def check_3_10(rng, mutant=False):
 
 def _random_scaled_spd(rng, count, n, scale):
     """``count`` random SPD n x n matrices scale exp(N(0, 0.15^2)) (I + u W_i), u uniform on [0, 0.5] and W_i
-    random SPD: spread around a multiple of I, with no relation to any equation of the system."""
+    random SPD: spread around a multiple of I, with no relation to any equation of the system.
+    """
     spread = np.eye(n) + rng.uniform(0.0, 0.5) * random_spd_stack(rng, count, n)
     return spread * (scale * np.exp(0.15 * rng.standard_normal(count)))[:, None, None]
 
@@ -81,7 +95,8 @@ def _boundary_point(rng, sys, Acl, HHt, mode_dependent, rho):
     below every D_i(Y)), so that with G_i = D_i(Y) the BMI's Schur
     complement is (1 - s) Acl_i D_i(Y) Acl_i^T + delta I: s uniform on [0.5, min(1.5, 0.999 / rho)]
     puts the draws on both sides of the boundary s = 1, delta = 1e-3 tr(mean H H^T) / n (a thin
-    margin)."""
+    margin).
+    """
     M, n, mu = sys.M, sys.nx, sys.mu_inf
     s = rng.uniform(0.5, min(1.5, 0.999 / rho))
     delta = 1e-3 * float(np.trace(HHt.mean(axis=0)) / n)
@@ -105,7 +120,8 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     (3.14), hence a stabilising L, and an objective >= ||G||_2^2 of L. Half the draws (all of the
     mutant's) lie near the BMI's boundary (``_boundary_point``), the others draw Y and G
     independently of L's Lyapunov equation; the BMI decides the premise.
-    Mutant: the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)."""
+    Mutant: the BMI with its corner block G + G^T in place of G + G^T - D_i(Y).
+    """
     sys = draw_system(rng)
     shape = (sys.M, sys.nu, sys.ny) if mode_dependent else (sys.nu, sys.ny)
     L = 0.5 * rng.standard_normal(shape)
@@ -153,14 +169,16 @@ def check_3_11(rng, mutant=False):
 
 def check_3_9(rng, mutant=False):
     """Thm. 3.9: LMIs feasible (verified certificate) -> L = F M^{-1} stabilises; also records SOF
-    stabilisability (search). Mutant: the gain recovered with a sign error, L = -F M^{-1}."""
+    stabilisability (search). Mutant: the gain recovered with a sign error, L = -F M^{-1}.
+    """
     return decide_3_9(draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable")), mutant=mutant)
 
 
 def decide_3_9(sys, mu=None, mutant=False):
     """Thm. 3.9 on one SISO system. ``mu``: the mode weights of the noise term mu_i H_i H_i^T in the
     LMIs (default the stationary distribution, as printed); another ``mu`` is imposed through the
-    equivalent noise H_i sqrt(mu_i / mu_inf_i), since ``static_output_lmi`` uses mu_inf."""
+    equivalent noise H_i sqrt(mu_i / mu_inf_i), since ``static_output_lmi`` uses mu_inf.
+    """
     if mu is not None:
         sys = sys.replace(H=sys.H * np.sqrt(np.asarray(mu) / sys.mu_inf)[:, None, None])
     lmi = static_output_lmi(sys)
@@ -179,7 +197,8 @@ def decide_3_9(sys, mu=None, mutant=False):
 def _failure_kind(sys, lmi, gain):
     """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the recovered gain with
     the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not stabilise),
-    "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G)."""
+    "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G).
+    """
     G, Y = lmi.variables["G"], np.stack(lmi.variables["Y"])
     G = np.stack(G) if len(G) == sys.M else np.broadcast_to(G[0], Y.shape)
     Acl = sys.A + sys.B @ gain @ sys.C
@@ -191,7 +210,8 @@ def _failure_kind(sys, lmi, gain):
 
 def check_3_12(rng, mutant=False):
     """Thm. 3.12: LMIs (mode observed) feasible -> L_i = F_i M_i^{-1} stabilise the mode-observed loop.
-    Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}."""
+    Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}.
+    """
     sys = draw_system(rng, max_states=2)
     lmi = static_output_lmi(sys, mode_observed=True)
     if not lmi.feasible:
@@ -253,7 +273,8 @@ def lmi_margin(sys, solver="CLARABEL"):
 def certified_margins(sys):
     """:func:`lmi_margin` by each of :data:`MARGIN_SOLVERS` and the verdict: "infeasible" when all
     are negative beyond :data:`MARGIN_AGREEMENT` and agree to it, "feasible" when all are positive
-    beyond it, else "undecided"."""
+    beyond it, else "undecided".
+    """
     margins = {solver: lmi_margin(sys, solver) for solver in MARGIN_SOLVERS}
     values = np.array(list(margins.values()))
     agree = np.ptp(values) <= MARGIN_AGREEMENT
@@ -264,5 +285,6 @@ def certified_margins(sys):
 
 def lmi_C12_margin():
     """:func:`certified_margins` for the example of Sec. 3.5.4 with C1 = [1 2], C2 = [2 1], per T:
-    the thesis says Thm. 3.9's LMIs are feasible there (``sec3_5.lmi_C12_T1``, ``_T2``)."""
+    the thesis says Thm. 3.9's LMIs are feasible there (``sec3_5.lmi_C12_T1``, ``_T2``).
+    """
     return {f"T{t}": certified_margins(sec354_system(t, "C1=[1 2], C2=[2 1]")) for t in (1, 2)}

@@ -81,7 +81,7 @@ def _scalar_closed_loops(sys, gains):
 
 
 def scalar_gain_radii(sys, gains):
-    """rho of Cor. 3.2 for u = L y with scalar L (SISO), for every L in ``gains`` at once."""
+    """Rho of Cor. 3.2 for u = L y with scalar L (SISO), for every L in ``gains`` at once."""
     M, n = sys.M, sys.nx
     Acl = _scalar_closed_loops(sys, gains)
     kron = np.einsum("giab,gicd->giacbd", Acl, Acl).reshape(len(gains), M, n * n, n * n)
@@ -92,7 +92,8 @@ def scalar_gain_radii(sys, gains):
 def _power_trace(T, Acl, k):
     """tr(M^k) of the matrix M of Cor. 3.2 for each stack of ``Acl`` (G, M, n, n): the sum over the
     closed walks i_0 -> ... -> i_{k-1} -> i_0 of the mode chain of p_{i_0 i_1} ... p_{i_{k-1} i_0}
-    tr(Acl_{i_{k-1}} ... Acl_{i_0})^2 (every term >= 0)."""
+    tr(Acl_{i_{k-1}} ... Acl_{i_0})^2 (every term >= 0).
+    """
     total = np.zeros(len(Acl))
     for walk in itertools.product(range(len(T)), repeat=k):
         weight = np.prod([T[walk[t], walk[(t + 1) % k]] for t in range(k)])
@@ -107,7 +108,8 @@ def _power_trace(T, Acl, k):
 def radius_lower_bounds(sys, gains):
     """Lower bounds of :func:`scalar_gain_radii` without eigenvalues: |tr(M^k)| <= N rho^k for the
     N x N matrix M of Cor. 3.2 (N = M nx^2), the largest of (tr(M^k) / N)^(1/k) over k = 1..M (every
-    closed walk of the mode chain is counted once its length is <= M; a bound of 0 skips nothing)."""
+    closed walk of the mode chain is counted once its length is <= M; a bound of 0 skips nothing).
+    """
     Acl = _scalar_closed_loops(sys, gains)
     size = sys.M * sys.nx ** 2
     return np.max([(_power_trace(sys.T, Acl, k) / size) ** (1 / k) for k in range(1, sys.M + 1)], axis=0)
@@ -144,7 +146,8 @@ def grid_minimum(sys, gains):
     only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m >= the
     minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then :func:`walk_lower_bounds`)
     exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin covers the rounding of the
-    bounds and of the eigenvalues) and is skipped (a seed is not evaluated twice)."""
+    bounds and of the eigenvalues) and is skipped (a seed is not evaluated twice).
+    """
     bounds = radius_lower_bounds(sys, gains)
     seeds = np.argsort(bounds, kind="stable")[:BOUND_SEEDS]
     radii = np.full(len(gains), np.inf)
@@ -158,8 +161,9 @@ def grid_minimum(sys, gains):
 
 
 def best_scalar_gain(sys, points=2001):
-    """min over scalar L of rho: a grid in L = tan(s), s in (-pi/2, pi/2) (all real gains),
-    refined by a bounded scalar search between the grid neighbours of the best point."""
+    """Min over scalar L of rho: a grid in L = tan(s), s in (-pi/2, pi/2) (all real gains),
+    refined by a bounded scalar search between the grid neighbours of the best point.
+    """
     s = np.linspace(-np.pi / 2, np.pi / 2, points + 2)[1:-1]
     best, rho = grid_minimum(sys, np.tan(s))
     lo, hi = s[max(best - 1, 0)], s[min(best + 1, points - 1)]
@@ -171,8 +175,9 @@ def best_scalar_gain(sys, points=2001):
 
 
 def best_gain(sys, rng, starts=20):
-    """min over L (nu x ny) of rho: the scalar grid for SISO, else Nelder-Mead from ``starts``
-    starts (L = 0 and standard normal draws). Returns (L, rho)."""
+    """Min over L (nu x ny) of rho: the scalar grid for SISO, else Nelder-Mead from ``starts``
+    starts (L = 0 and standard normal draws). Returns (L, rho).
+    """
     if sys.nu == sys.ny == 1:
         L, rho = best_scalar_gain(sys)
         return np.array([[L]]), rho
@@ -370,7 +375,7 @@ def trace_sum(A, B):
 
 
 def verdict(ok):
-    """ "holds" if ``ok`` else "fails"."""
+    """Return "holds" if ``ok`` else "fails"."""
     return "holds" if ok else "fails"
 
 
@@ -419,7 +424,8 @@ def sample_mixture(rng, mu0, mean0, cov0, n_runs):
 def z_scores(x, theta, exact, mu, min_hits=100):
     """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over the
     runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
-    modes have too few samples for a normal standard error)."""
+    modes have too few samples for a normal standard error).
+    """
     mean, se = indicator_moment_estimate(x, theta, len(mu))
     seen = mu * len(x) >= min_hits
     if not seen.any():
@@ -431,5 +437,6 @@ def z_scores(x, theta, exact, mu, min_hits=100):
 def norm_scale(rng, Acl):
     """Factor making max_i ||Acl_i||_2 uniform on [0.5, 1.5]. A Monte Carlo estimate of a moment is only
     trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i multiplies
-    x x^T by 9 per step, and a few samples decide the mean (the standard error then misleads)."""
+    x x^T by 9 per step, and a few samples decide the mean (the standard error then misleads).
+    """
     return float(rng.uniform(0.5, 1.5) / np.max(np.linalg.norm(Acl, ord=2, axis=(1, 2))))

@@ -63,7 +63,8 @@ def random_covariance(rng):
 
 def covariance(name, shape, D, l):
     """The library's covariance ``name`` of Table 2.1 at distances ``D`` and length scale ``l``
-    (or the mutant's exp(-(D/l)^4))."""
+    (or the mutant's exp(-(D/l)^4)).
+    """
     if name == MUTANT_COVARIANCE:
         return np.exp(-(np.asarray(D) / l) ** 4)
     params = {("alpha" if key == "alpha_rq" else key): value for key, value in shape.items()}

@@ -58,7 +58,8 @@ BOUNDARY_SHARE = 0.5  # share of the checks' draws from boundary_system (all of 
 def near_cycle(rng, M, reverse=False):
     """A random asymmetric transition matrix: one random M-cycle of the modes (run backwards when
     ``reverse``), mixed with Dirichlet(1) rows at a weight uniform on [0, 0.3] (T^T is far from
-    T)."""
+    T).
+    """
     order = rng.permutation(M)
     cycle = np.zeros((M, M))
     cycle[order, np.roll(order, -1)] = 1.0                      # order[k] -> order[k + 1]
@@ -74,7 +75,8 @@ def boundary_system(rng, radius_of, against=None):
     spectra. With ``against`` (a mutant's radius), the cycle runs in the direction in which
     ``against`` understates the library's ``ms_spectral_radius`` more (reversing the cycle is what
     transposing T does, so in a family symmetric under reversal the mutant's premise errs on the
-    safe side in half the draws)."""
+    safe side in half the draws).
+    """
     M, n = 3, int(rng.integers(2, 4))
     A, candidates = rng.standard_normal((M, n, n)), near_cycle(rng, M)
     T = candidates[0] if against is None else max(
@@ -85,7 +87,8 @@ def boundary_system(rng, radius_of, against=None):
 
 def _coupled_lyapunov_solutions(A, T, S):
     """Q of the two forms of Thm. 3.1 for S: A_i^T E_i(Q) A_i - Q_i = -S_i and
-    D_j(A Q A^T) - Q_j = -S_j."""
+    D_j(A Q A^T) - Q_j = -S_j.
+    """
     M, n, _ = A.shape
     op = ms_operator(A, T, check=False)
     eye = np.eye(M * n * n)
@@ -97,7 +100,8 @@ def check_3_1(rng, mutant=False):
     """Thm. 3.1: PD solutions Q of the coupled Lyapunov equations (either form) for PD S imply MSS.
     Half the draws (all of the mutant's) come from :func:`boundary_system`, scaled at the premise's
     own boundary. Mutant: the equations solved with T^T in place of T (nx >= 2, a 3-cycle T: with nx
-    = 1 or M = 2 the two spectra coincide)."""
+    = 1 or M = 2 the two spectra coincide).
+    """
     premise_T = (lambda T: T.T) if mutant else (lambda T: T)
     premise_radius = lambda A, T: moment_map_radius(A, premise_T(T))
     if mutant or rng.random() < BOUNDARY_SHARE:
@@ -138,7 +142,8 @@ def _printed_matrix(A, T):
 def check_3_2(rng, mutant=False):
     """Cor. 3.2 with the text's remark ([112]: also necessary): rho(M) < 1 of the printed M iff MSS,
     decided by :func:`moment_map_radius`. Half the draws (all of the mutant's) come from
-    :func:`boundary_system`, scaled at the printed matrix's boundary. Mutant: M built with T^T."""
+    :func:`boundary_system`, scaled at the printed matrix's boundary. Mutant: M built with T^T.
+    """
     radius = lambda matrix: float(np.max(np.abs(np.linalg.eigvals(matrix))))
     printed = lambda A, T: radius(_printed_matrix(A, T.T if mutant else T))
     if mutant or rng.random() < BOUNDARY_SHARE:
@@ -156,7 +161,8 @@ def check_3_2(rng, mutant=False):
 
 def check_3_5(rng, mutant=False):
     """Prop. 3.5 at step K-1: J*_{K-1} = x^T Psi x + Delta, against a numerical minimisation over u.
-    Mutant: the closed form without Delta (the noise's cost dropped)."""
+    Mutant: the closed form without Delta (the noise's cost dropped).
+    """
     sys = draw_system(rng, max_states=2)
     A, B, Q, R, T, M = sys.A, sys.B, sys.Q, sys.R, sys.T, sys.M
     W = random_spd(rng, sys.nx, 0.1)                               # covariance of w_k (3.2)

@@ -1,15 +1,14 @@
 """Counterexamples of the theorems study: saved as data, the one to show chosen, printed rounded."""
 
-import re
 import json
+import re
 from pathlib import Path
-
 
 from ..atomic_files import atomic_write_json
 from ..plan import values_folder
 from .chapter3 import MARGIN, SHOW
-from .statement import Outcome
 from .engine import verdict_text
+from .statement import Outcome
 from .typeset import CHECKS_TEX, CORRECTIONS_TEX, MUTANTS_TEX
 
 __all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "load_counterexamples",
@@ -33,7 +32,8 @@ def save_counterexamples(results, seed, folder) -> Path:
 
 def _trim_systems(key, entries, keep=SYSTEMS_KEPT):
     """Keep the system matrices of the ``keep`` smallest counterexamples (the order of
-    :func:`shown_counterexample`); the others keep their numbers and re-run from (seed, key, index)."""
+    :func:`shown_counterexample`); the others keep their numbers and re-run from (seed, key, index).
+    """
     order = sorted(entries, key=lambda e: _order(key, e))
     kept = {e["index"] for e in order[:keep]}
     return [e if e["index"] in kept else {"index": e["index"],
@@ -54,7 +54,8 @@ def margin(key, numbers) -> float:
 
 def shown_counterexample(key, entries):
     """Among the failing instances with the fewest states, then modes, the one that fails most clearly
-    (largest margin: its verdict survives rounding and other BLAS kernels); ties by index."""
+    (largest margin: its verdict survives rounding and other BLAS kernels); ties by index.
+    """
     if not entries:
         return None
     return min(entries, key=lambda e: _order(key, e))
@@ -195,7 +196,8 @@ def _correction_lines(record) -> list:
 
 class StatementsPage:
     """The statements of the theorems page for display in a notebook: Markdown (MyST) only, so
-    that the HTML and the PDF render the same table and sections (:func:`statements_markdown`)."""
+    that the HTML and the PDF render the same table and sections (:func:`statements_markdown`).
+    """
 
     def __init__(self, statements, records, findings):
         self.markdown = statements_markdown(statements, records, findings)

@@ -12,14 +12,38 @@ import numpy as np
 import scipy.optimize
 
 from asoc.linalg import sym, transpose
-from asoc.mjls import (closed_loop, gain_from_moments, h2_cost, predecessor_sum, second_moments,
-                       static_output_feedback, steady_state_second_moment, successor_average)
+from asoc.mjls import (
+    closed_loop,
+    gain_from_moments,
+    h2_cost,
+    predecessor_sum,
+    second_moments,
+    static_output_feedback,
+    steady_state_second_moment,
+    successor_average,
+)
 from asoc.mjls.lyapunov import radii_and_moments, radius_and_moments
 from asoc.mjls.moment_operator import ms_operator
 
-from .instances import (Z_SCORE, ModeChain, ModeOperator, RunModes, best_scalar_gain, draw_system,
-                        gaussian_mixture, norm_scale, outcome, random_spd_stack, rescaled, sample_mixture,
-                        scalar_gain_radii, stabilised, trace_sum, verdict, z_scores)
+from .instances import (
+    Z_SCORE,
+    ModeChain,
+    ModeOperator,
+    RunModes,
+    best_scalar_gain,
+    draw_system,
+    gaussian_mixture,
+    norm_scale,
+    outcome,
+    random_spd_stack,
+    rescaled,
+    sample_mixture,
+    scalar_gain_radii,
+    stabilised,
+    trace_sum,
+    verdict,
+    z_scores,
+)
 from .mean_square import moment_map_matrix
 
 __all__ = ["check_3_14", "check_3_15", "summarise_3_15", "check_3_16", "check_3_17", "check_3_18",
@@ -28,7 +52,8 @@ __all__ = ["check_3_14", "check_3_15", "summarise_3_15", "check_3_16", "check_3_
 
 def check_3_14(rng, mutant=False):
     """Prop. 3.14: X_k^i of (3.29) against Monte Carlo E{x_k x_k^T 1(theta_k = i)}, k = 1..3.
-    Mutant: the recursion without the noise term mu_k^i H_i H_i^T."""
+    Mutant: the recursion without the noise term mu_k^i H_i H_i^T.
+    """
     sys = draw_system(rng)
     L = 0.5 * rng.standard_normal((sys.nu, sys.ny))
     sys = rescaled(sys, norm_scale(rng, closed_loop(sys, L)))
@@ -54,7 +79,8 @@ def check_3_15(rng, mutant=False):
     cost of the moment recursion over steps h..2h-1, rho^h <= 1e-13) equals (3.30)'s objective
     sum_i tr[(Q_i + L^T R_i L) X_inf^i] (defined when n_y = n_x); the corrected reading with
     C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected reading with
-    X_inf solved without the noise term (the instance's verdict is then the corrected reading's)."""
+    X_inf solved without the noise term (the instance's verdict is then the corrected reading's).
+    """
     sys = draw_system(rng)
     L = 0.5 * rng.standard_normal((sys.nu, sys.ny))
     sys, target = stabilised(rng, sys, lambda s: closed_loop(s, L), 0.2, 0.95)
@@ -91,7 +117,8 @@ def summarise_3_15(outcomes):
                           "(3.30) copies it; the substitution of u_k holds only for C_i = I. Prop. "
                           "3.16 and Thm. 3.17 use the weight with C_i."),
             "corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
-                                       "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf R_i\\mathbf L\\mathbf C_i$",
+                                       "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf R_i\\mathbf L\\mathbf "
+                                       "C_i$",
                           "holds": holds, "fails": len(outcomes) - holds, "instances": len(outcomes)}}
 
 
@@ -115,7 +142,8 @@ def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
 
 def check_3_16(rng, mutant=False):
     """Prop. 3.16: the stated Hamiltonian (with E_i(P)) against the Lagrangian of (3.30) built densely.
-    Mutant: the stated form without the noise term mu_i H_i H_i^T."""
+    Mutant: the stated form without the noise term mu_i H_i H_i^T.
+    """
     sys = draw_system(rng)
     L = rng.standard_normal((sys.nu, sys.ny))
     X, P = random_spd_stack(rng, sys.M, sys.nx), random_spd_stack(rng, sys.M, sys.nx)
@@ -133,7 +161,8 @@ def check_3_16(rng, mutant=False):
 
 def _gain_residual(sys, L, X, P, weight_R=True):
     """(3.31): sum_i (R_i + B_i^T E_i(P) B_i) L C_i X_i C_i^T + B_i^T E_i(P) A_i X_i C_i^T, and its scale
-    (``weight_R=False``: the residual without R_i, a mutant)."""
+    (``weight_R=False``: the residual without R_i, a mutant).
+    """
     EP = successor_average(sys.T, P)
     first = ((sys.R if weight_R else 0) + transpose(sys.B) @ EP @ sys.B) @ L @ sys.C @ X @ transpose(sys.C)
     second = transpose(sys.B) @ EP @ sys.A @ X @ transpose(sys.C)
@@ -151,7 +180,8 @@ def _costate(sys, L):
 
 def check_3_17(rng, mutant=False):
     """Thm. 3.17: the minimiser of the cost (found by a grid and a scalar search over L) satisfies (3.31).
-    Mutant: the residual of (3.31) without R_i."""
+    Mutant: the residual of (3.31) without R_i.
+    """
     sys = draw_system(rng, siso=True)
     s = np.linspace(-np.pi / 2, np.pi / 2, 403)[1:-1]
     radii = scalar_gain_radii(sys, np.tan(s))
@@ -162,7 +192,8 @@ def check_3_17(rng, mutant=False):
 
     def cost(t):
         """The H2 cost of L = tan(t) (inf when not stabilising), on the system validated once: the
-        library's check=False paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost."""
+        library's check=False paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost.
+        """
         L = np.array([[np.tan(t)]])
         _, X = radius_and_moments(closed_loop(sys, L, check=False), sys.T, noise, check=False)
         return np.inf if X is None else h2_cost(sys, L, X, check=False)
@@ -187,7 +218,8 @@ def check_3_17(rng, mutant=False):
 
 def check_3_18(rng, mutant=False):
     """Prop. 3.18: the printed vec formula (column-major vec, C X C^T (x) (R + B^T E(P) B)) solves (3.31).
-    Mutant: the formula with 2 R_i in place of R_i (a factor changed)."""
+    Mutant: the formula with 2 R_i in place of R_i (a factor changed).
+    """
     sys = draw_system(rng)
     X, P = random_spd_stack(rng, sys.M, sys.nx), random_spd_stack(rng, sys.M, sys.nx)
     EP = successor_average(sys.T, P)
@@ -207,7 +239,8 @@ def check_3_19(rng, mutant=False):
     """Thm. 3.19: SOF-stabilisable (grid over scalar L) -> Alg. 3.1 converges to a stabilising,
     unique solution (same limit from X = P = 1e-4 I and from X = P = I), on the thesis's model (3.7),
     which has no measurement noise (J = None; Alg. 3.1 with J is the library's generalisation).
-    Mutant: Alg. 3.1 stopped after 3 iterations."""
+    Mutant: Alg. 3.1 stopped after 3 iterations.
+    """
     sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable", "sparse_T")).replace(J=None)
     return decide_3_19(sys, max_iter=3 if mutant else 20000)
 
@@ -229,7 +262,8 @@ def decide_3_19(sys, max_iter=20000):
 
 def summarise_3_19(outcomes):
     """Thm. 3.19: how the failures fail (no convergence; a non-stabilising limit; another limit from I),
-    and how many have one mode (plain linear systems)."""
+    and how many have one mode (plain linear systems).
+    """
     fails = [o.numbers for o in outcomes if o.verdict == "fails"]
     return {"not_converged": sum(not n["alg_converged"] for n in fails),
             "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1 for n in fails),

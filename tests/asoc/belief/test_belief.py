@@ -4,14 +4,34 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from asoc.belief import (UKF, AffinePolicy, DiracMixture, GaussianNoise, ParticleFilter, QuadraticCost,
-                         affine_policy_value, optimize_belief_trajectory, belief_ilqg, draw_noise, ekf_step,
-                         landmark_example, next_estimate_covariance, linear_gaussian_model, reference_trajectory,
-                         sigma_points, statistical_taylor_expansion, statistical_taylor_linearization_error,
-                         improved_policy_value)
-from asoc.belief import StageProblem, Value, backward_pass, terminal_value
+from asoc.belief import (
+    UKF,
+    AffinePolicy,
+    DiracMixture,
+    GaussianNoise,
+    ParticleFilter,
+    QuadraticCost,
+    StageProblem,
+    Value,
+    affine_policy_value,
+    backward_pass,
+    belief_ilqg,
+    draw_noise,
+    ekf_step,
+    improved_policy_value,
+    landmark_example,
+    linear_gaussian_model,
+    next_estimate_covariance,
+    optimize_belief_trajectory,
+    reference_trajectory,
+    sigma_points,
+    statistical_taylor_expansion,
+    statistical_taylor_linearization_error,
+    terminal_value,
+)
 
 # a linear-Gaussian model (the LQG case of Sec. 2.3)
 A = np.array([[1.0, 0.1], [0.0, 1.0]])
@@ -456,7 +476,7 @@ def _random_models(rng):
     for n_y in (1, 2):
         yield linear_gaussian_model(np.eye(n_x) + 0.3 * rng.normal(size=(n_x, n_x)), rng.normal(size=(n_x, 2)),
                                     rng.normal(size=(n_x, 2)), rng.normal(size=(n_y, n_x)), np.eye(n_y))
-    from asoc.belief import NonlinearModel       # a measurement that says nothing: C^{yy} = 0
+    from asoc.belief import NonlinearModel  # a measurement that says nothing: C^{yy} = 0
     yield NonlinearModel(a=lambda x, u, w: np.sin(x) + u + w, h=lambda x, v: 0.0 * x[..., :1] + 0.0 * v,
                          w=GaussianNoise(np.zeros(n_x), np.eye(n_x)), v=GaussianNoise([0.0], [[1.0]]),
                          n_x=n_x, n_u=n_x)

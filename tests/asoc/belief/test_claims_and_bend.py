@@ -13,7 +13,6 @@ from asoc.belief.planning import (
 )
 from asoc.stats import decide_claim
 
-
 # -- decide_claim: a planted false variant must not pass
 
 

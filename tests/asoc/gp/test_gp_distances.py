@@ -3,10 +3,11 @@
 import itertools
 
 import numpy as np
-from scipy.special import xlogy
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from scipy.special import xlogy
 from scipy.stats import norm
 
 from asoc import gp

@@ -10,7 +10,7 @@ from asoc import config
 from asoc.mjls import ms_operator, ms_spectral_radius, steady_state_second_moment
 from asoc.mjls.lyapunov import radius_and_moments, solve_coupled_lyapunov
 from asoc.mjls.moment_operator import costate_map, second_moment_map
-from asoc.mjls.stability import mean_square_stability, perron_pair, Verdict
+from asoc.mjls.stability import Verdict, mean_square_stability, perron_pair
 
 
 def dense_rho(A, T):

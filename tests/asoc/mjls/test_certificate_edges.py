@@ -281,9 +281,10 @@ def test_exact_dynamic_design_on_a_plant_at_rho_one_says_why(seed):
     """rho = 1 up to rounding and B = 0: no controller can stabilise. The start search took an
     estimate of rho below 1 for a certificate, and BFGS raised "z0: the start is outside the domain"
     (z0 is not the user's argument); now the design stops with a status and a message."""
+    from test_adversarial import random_chain, random_stack
+
     from asoc.mjls import MJLS
     from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
-    from test_adversarial import random_chain, random_stack
 
     rng = np.random.default_rng(seed)
     T = random_chain(rng, 2)

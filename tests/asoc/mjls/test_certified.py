@@ -6,9 +6,9 @@ import pytest
 
 from asoc import config
 from asoc.mjls import MJLS, ms_operator, ms_spectral_radius
-from asoc.mjls.examples import SEC32_A, SEC32_T, SEC354_A, SEC354_T, sec32_system
 from asoc.mjls.certificate import certified_upper_bound
-from asoc.mjls.stability import mean_square_stability, Verdict
+from asoc.mjls.examples import SEC32_A, SEC32_T, SEC354_A, SEC354_T, sec32_system
+from asoc.mjls.stability import Verdict, mean_square_stability
 
 
 def dense_rho(A, T):

@@ -14,8 +14,8 @@ from asoc.mjls import (
     static_output_feedback,
     static_output_lmi,
 )
-from asoc.mjls.examples import networked_loop_lossy, sec354_system, sec373_system
 from asoc.mjls.exact_static_design import averaged_output_gain, static_cost_and_gradient
+from asoc.mjls.examples import networked_loop_lossy, sec354_system, sec373_system
 from asoc.optimize import bfgs
 
 

@@ -4,8 +4,13 @@ import numpy as np
 import pytest
 
 from asoc.mjls.examples import SEC34_A, SEC34_B, SEC34_G, SEC34_PI, SEC34_T
-from asoc.mjls.intractability import (expected_cost_two_steps_before_horizon, hessian, hessian_min_eigenvalue, min_curvature_in_u,
-                                      nonconvex_radius)
+from asoc.mjls.intractability import (
+    expected_cost_two_steps_before_horizon,
+    hessian,
+    hessian_min_eigenvalue,
+    min_curvature_in_u,
+    nonconvex_radius,
+)
 
 
 def J(x, u, terms="full", g=SEC34_G):

@@ -7,9 +7,20 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from asoc.mjls import (MJLS, dynamic_output_feedback, ModeDependentGain, StaticGain, TimeVariantGain, closed_loop, h2_cost,
-                       ms_spectral_radius, second_moments, simulate, static_output_feedback,
-                       steady_state_second_moment)
+from asoc.mjls import (
+    MJLS,
+    ModeDependentGain,
+    StaticGain,
+    TimeVariantGain,
+    closed_loop,
+    dynamic_output_feedback,
+    h2_cost,
+    ms_spectral_radius,
+    second_moments,
+    simulate,
+    static_output_feedback,
+    steady_state_second_moment,
+)
 from asoc.mjls.baselines import do_val_h2_state_feedback, time_variant_feedback
 from asoc.mjls.examples import sec354_system
 from asoc.mjls.intractability import expected_cost_two_steps_before_horizon

@@ -9,12 +9,11 @@ from scipy.linalg import solve_discrete_are
 from asoc import config
 from asoc.linalg import pack, unpack
 from asoc.mjls import MJLS, optimality, second_moments, simulate
-from asoc.mjls.dynamic import dynamic_output_feedback, steady_state_cost
 from asoc.mjls.closed_loops import augmented_closed_loop, noise_covariances
-from asoc.mjls.optimality import gains_from_bounds
-from asoc.mjls.finite_horizon import (finite_horizon_cost, finite_horizon_dynamic_output_feedback,
-                                      initial_bounds)
+from asoc.mjls.dynamic import dynamic_output_feedback, steady_state_cost
+from asoc.mjls.finite_horizon import finite_horizon_cost, finite_horizon_dynamic_output_feedback, initial_bounds
 from asoc.mjls.observed_mode_lqg import mode_observed_lqg
+from asoc.mjls.optimality import gains_from_bounds
 from asoc.mjls.system import successor_average
 
 

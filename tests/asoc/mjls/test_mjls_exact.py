@@ -4,23 +4,28 @@ import warnings
 
 import numpy as np
 import pytest
+from test_mjls_dynamic import initial_state, random_system
 
-from asoc.mjls import (MJLS, dynamic_output_feedback, exact_dynamic_output_feedback,
-                       exact_finite_horizon_dynamic_output_feedback, finite_horizon_cost,
-                       finite_horizon_dynamic_output_feedback, min_radius_dynamic_output_feedback,
-                       radius_and_gradient, static_output_feedback)
 from asoc import config
 from asoc.linalg import pack, unpack
-from asoc.mjls.dynamic import steady_state_cost
-from asoc.mjls.examples import (SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system,
-                                sec373_system)
-from asoc.mjls.exact_cost_design import averaged_lqg
-from asoc.mjls.gradients import (average_cost_and_gradient, closed_loop_radius,
-                                 finite_horizon_cost_and_gradient)
+from asoc.mjls import (
+    MJLS,
+    dynamic_output_feedback,
+    exact_dynamic_output_feedback,
+    exact_finite_horizon_dynamic_output_feedback,
+    finite_horizon_cost,
+    finite_horizon_dynamic_output_feedback,
+    min_radius_dynamic_output_feedback,
+    ms_spectral_radius,
+    radius_and_gradient,
+    static_output_feedback,
+)
 from asoc.mjls.closed_loops import augmented_closed_loop
+from asoc.mjls.dynamic import steady_state_cost
+from asoc.mjls.exact_cost_design import averaged_lqg
+from asoc.mjls.examples import SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system, sec373_system
 from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
-from asoc.mjls import ms_spectral_radius
-from test_mjls_dynamic import initial_state, random_system
+from asoc.mjls.gradients import average_cost_and_gradient, closed_loop_radius, finite_horizon_cost_and_gradient
 
 EPS = np.finfo(float).eps
 COST_RTOL = 1e-12   # two solvers of the same Lyapunov system (LU here, np.linalg.solve in

@@ -8,7 +8,7 @@ from asoc import config
 from asoc.mjls import ms_operator, ms_spectral_radius
 from asoc.mjls.lyapunov import coupled_lyapunov_solver, radii_and_moments, radius_and_moments, solve_coupled_lyapunov
 from asoc.mjls.moment_operator import costate_map, second_moment_map
-from asoc.mjls.stability import mean_square_stability, Verdict
+from asoc.mjls.stability import Verdict, mean_square_stability
 from asoc_companion.scaling import scaling_system
 from asoc_companion.timing import fitted_exponent
 
@@ -62,7 +62,8 @@ def test_auto_switches_at_the_measured_sizes():
 @pytest.mark.parametrize("adjoint", [False, True])
 def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
     s = scaling_system(np.random.default_rng(5), 5, 3)
-    A = s.A * np.sqrt(0.97 / mean_square_stability(s.A, s.T, check=False).rho)              # rho = 0.97: slow contraction
+    # rho = 0.97: slow contraction
+    A = s.A * np.sqrt(0.97 / mean_square_stability(s.A, s.T, check=False).rho)
     W = stack(np.random.default_rng(6), 3, 5)
     sol = solve_coupled_lyapunov(A, s.T, W, adjoint=adjoint, method=method)
     assert sol.residual < 1e-11
