@@ -27,7 +27,7 @@ KeyError: "unknown configuration key 'mjls.rank_rol'; did you mean 'mjls.rank_rt
 >>> config.defaults["mjls.rank_rtol"] = "1e-8"
 Traceback (most recent call last):
     ...
-TypeError: mjls.rank_rtol: expected a real number in (0, 1), found str '1e-8'
+TypeError: mjls.rank_rtol: expected a real number in (0, 1) or None, found str '1e-8'
 """
 
 import contextlib
@@ -230,7 +230,7 @@ def accepts_settings(*keys):
     >>> threshold(rank_rtol="tight")
     Traceback (most recent call last):
         ...
-    TypeError: rank_rtol (mjls.rank_rtol): expected a real number in (0, 1), found str 'tight'
+    TypeError: rank_rtol (mjls.rank_rtol): expected a real number in (0, 1) or None, found str 'tight'
     """
     names = {_checked_key(key).split(".", 1)[1]: key for key in keys}
 

@@ -3,6 +3,7 @@
 Examples
 --------
 >>> REAL(0, 1).check("mjls.rank_rtol", 1e-8)
+>>> REAL(0, 1, optional=True).check("mjls.rank_rtol", None)
 >>> INT(0).check("mjls.dense_max_radius", -1)
 Traceback (most recent call last):
     ...
@@ -18,11 +19,13 @@ __all__ = ["Allowed", "REAL", "INT", "SIZES", "REALS"]
 class Allowed:
     """The values one tunable accepts: a type and an interval, checked when the value is set."""
 
-    def __init__(self, kind, low, high=math.inf, item=None):
-        self.kind, self.low, self.high, self.item = kind, low, high, item
+    def __init__(self, kind, low, high=math.inf, item=None, optional=False):
+        self.kind, self.low, self.high, self.item, self.optional = kind, low, high, item, optional
 
     def check(self, key, value):
         """Raise TypeError or ValueError naming ``key`` unless ``value`` is allowed."""
+        if value is None and self.optional:
+            return
         if self.kind is tuple:
             if not isinstance(value, tuple) or not value:
                 raise TypeError(f"{key}: expected {self}, found {type(value).__name__} {value!r}")
@@ -48,12 +51,15 @@ class Allowed:
         if self.kind is int:
             return f"an integer >= {self.low}"
         bracket = "]" if self.kind == "closed" else ")"
-        return f"a real number in ({self.low:g}, {self.high:g}{bracket}"
+        text = f"a real number in ({self.low:g}, {self.high:g}{bracket}"
+        return text + " or None" if self.optional else text
 
 
-def REAL(low, high, closed=False):  # noqa: N802 (reads as a type in the table)
-    """A real number in the open interval (low, high), or (low, high] when ``closed``."""
-    return Allowed("closed" if closed else float, low, high)
+def REAL(low, high, closed=False, optional=False):  # noqa: N802 (reads as a type in the table)
+    """A real number in the open interval (low, high), or (low, high] when ``closed``; also None
+    when ``optional`` (a setting whose None means the solver's own default).
+    """
+    return Allowed("closed" if closed else float, low, high, optional=optional)
 
 
 def INT(low):  # noqa: N802

@@ -7,7 +7,7 @@ Examples
 --------
 >>> value, allowed, why = TUNABLES["mjls.rank_rtol"]
 >>> value, str(allowed)
-(1e-10, 'a real number in (0, 1)')
+(1e-10, 'a real number in (0, 1) or None')
 """
 
 import math
@@ -22,8 +22,9 @@ __all__ = ["TUNABLES"]
 TUNABLES: dict[str, tuple[object, Allowed, str]] = {
     "mjls.rank_rtol": (
         1e-10,
-        REAL(0, 1),
-        "Relative singular-value threshold of the minimum-norm solution of (3.51) in Alg. 3.2. "
+        REAL(0, 1, optional=True),
+        "Relative singular-value threshold of the minimum-norm solution of (3.51) in Alg. 3.2 "
+        "(None: LAPACK's default). "
         "Its matrix becomes singular at the fixed point when the controller state does not "
         "excite every direction; LAPACK's default threshold (about 1e-13 at n = 8) lets rounding "
         "noise into those directions and the iteration diverges (Scaling page, n = 8, 16)."),

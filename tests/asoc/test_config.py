@@ -26,7 +26,7 @@ def test_a_typo_is_refused_with_the_closest_key():
     "key, value, error",
     [
         ("mjls.rank_rtol", "1e-8", TypeError),
-        ("mjls.rank_rtol", None, TypeError),
+        ("mjls.cg_tolerance", None, TypeError),
         ("mjls.rank_rtol", True, TypeError),
         ("mjls.rank_rtol", 0.0, ValueError),
         ("mjls.rank_rtol", 2.0, ValueError),
