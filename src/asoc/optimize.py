@@ -118,7 +118,7 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
     below the step ``config.defaults["optimize.min_step"]``; a step out of the domain
     (f = inf) is rejected like any other. The iteration stops (converged) when the decrease
     the quasi-Newton model predicts, g^T H^-1 g / 2, is below ``tol * |f|``, when the scaled
-    gradient ||g|| max(1, ||z||) / |f| is below ``gtol``, or once f <= ``target``.
+    gradient ``||g|| max(1, ||z||) / |f|`` is below ``gtol``, or once f <= ``target``.
 
     Parameters
     ----------
@@ -140,7 +140,7 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
     target : float
         Stop as soon as f <= target.
     gtol : float
-        Stop (converged) once ||g|| max(1, ||z||) / |f| < gtol (0: never).
+        Stop (converged) once ``||g|| max(1, ||z||) / |f| < gtol`` (0: never).
     patience, stall : int or None, float
         Stop (``"no_progress"``) once the last ``patience`` accepted steps together lowered f
         by less than ``stall * |f|`` (None: never): for objectives, like a spectral radius,
