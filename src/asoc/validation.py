@@ -14,7 +14,7 @@ import numpy as np
 __all__ = ["SYMMETRY_RTOL", "WEIGHT_ATOL", "integer", "real_scalar", "real_array", "symmetric",
            "semidefinite", "probability_vector", "generator", "instance", "function",
            "stochastic_matrix", "choice", "boolean", "covariance", "vector", "weights_or_equal",
-           "probability_rows"]
+           "probability_rows", "process_count"]
 
 
 SYMMETRY_RTOL = 1e-9
@@ -45,6 +45,24 @@ def integer(value, name: str, minimum: int | None = None, maximum: int | None = 
         raise ValueError(f"{name}: expected an integer >= {minimum}, found {value}")
     if maximum is not None and value > maximum:
         raise ValueError(f"{name}: expected an integer <= {maximum}, found {value}")
+    return value
+
+
+def process_count(value, name: str) -> int:
+    """A number of worker processes as joblib reads it: a positive count or -1 (all cores).
+
+    Examples
+    --------
+    >>> process_count(-1, "n_jobs")
+    -1
+    >>> process_count(0, "n_jobs")
+    Traceback (most recent call last):
+    ...
+    ValueError: n_jobs: expected a positive number of processes or -1 (all cores), found 0
+    """
+    value = integer(value, name)
+    if value == 0 or value < -1:
+        raise ValueError(f"{name}: expected a positive number of processes or -1 (all cores), found {value}")
     return value
 
 

@@ -125,9 +125,7 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     n_members = check.integer(n_members, "n_members", minimum=1)
     scale = check.real_scalar(scale, "scale", low=0, low_open=True)
     progress = check.boolean(progress, "progress")
-    n_jobs = check.integer(n_jobs, "n_jobs")
-    if n_jobs == 0 or n_jobs < -1:
-        raise ValueError(f"n_jobs: expected a positive number of processes or -1 (all cores), found {n_jobs}")
+    n_jobs = check.process_count(n_jobs, "n_jobs")
     simulate(model, cost, mean0, cov0, MeanAffineController(model, AffinePolicy.zero(cost.K, model.n_u, model.n_x)),
              noise)                                                 # checks mean0, cov0 and noise before the runs
 

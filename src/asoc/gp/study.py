@@ -115,7 +115,7 @@ def kernel_study(
     rng = check.generator(rng)
     n_train = check.integer(n_train, "n_train", minimum=3)
     grid_step = check.real_scalar(grid_step, "grid_step", low=0, low_open=True)
-    n_jobs = check.integer(n_jobs, "n_jobs")
+    n_jobs = check.process_count(n_jobs, "n_jobs")
     progress = check.boolean(progress, "progress")
     settings = (
         n_train,
