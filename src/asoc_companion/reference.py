@@ -203,7 +203,9 @@ def status(entry: Entry, ours) -> str:
 
 def _estimate(record):
     """The number of a record: the value itself, or a Monte Carlo record's ``value``/``median``."""
-    return record.get("value", record.get("median")) if isinstance(record, dict) else record
+    if isinstance(record, dict) and ("value" in record or "median" in record):
+        return record.get("value", record.get("median"))
+    return record
 
 
 Z_MONTE_CARLO = 4.0   # standard errors: two-sided false alarm 6e-5 per value under normality
@@ -247,6 +249,15 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
     >>> cost = Entry("demo.cost", where="an example", kind="monte_carlo", thesis=10.0, ci_rtol=0.02)
     >>> agrees_with_full(cost, {"median": 10.4, "ci": [9.4, 11.4]}, {"median": 10.0, "ci": [9.5, 10.5]})
     (False, 'relative |ci - full| = 0.04, ci_rtol 0.02')
+
+    A measured record may nest fields; its words (a verdict, a version) must be equal:
+
+    >>> margin = Entry("demo.margin", where="an example", kind="measured", ci_rtol=1e-3)
+    >>> agrees_with_full(margin, {"m": -0.03832, "verdict": "infeasible"},
+    ...                  {"m": -0.03833, "verdict": "infeasible"})
+    (True, 'relative |ci - full| = 0.000261, ci_rtol 0.001')
+    >>> agrees_with_full(margin, {"m": 0.1, "verdict": "feasible"}, {"m": -0.1, "verdict": "infeasible"})
+    (False, "verdict: ci 'feasible', full 'infeasible'")
     """
     if entry.kind == "deterministic":
         diff = _max_abs_diff(ours_ci, ours_full)
@@ -259,7 +270,28 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
     a, b = _estimate(ours_ci), _estimate(ours_full)
     if entry.ci_rtol is None:
         return True, "compared at full fidelity only"
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    scale = np.maximum(np.abs(b), 1e-12)
-    rel = float(np.max(np.abs(a - b) / scale)) if a.shape == b.shape else float("inf")
+    leaves_a, leaves_b = dict(_leaves(a)), dict(_leaves(b))
+    if leaves_a.keys() != leaves_b.keys():
+        return False, f"fields differ: ci {sorted(leaves_a)}, full {sorted(leaves_b)}"
+    words = [path for path, leaf in leaves_b.items() if isinstance(leaf, (str, bool))]
+    if any(leaves_a[path] != leaves_b[path] for path in words):
+        return False, "; ".join(f"{'.'.join(p) or 'value'}: ci {leaves_a[p]!r}, full {leaves_b[p]!r}" for p in words
+                                if leaves_a[p] != leaves_b[p])
+    rel = max((_relative_difference(leaves_a[p], leaves_b[p]) for p in leaves_b if p not in words), default=0.0)
     return rel <= entry.ci_rtol, f"relative |ci - full| = {rel:.3g}, ci_rtol {entry.ci_rtol}"
+
+
+def _leaves(value, path=()):
+    """(path, leaf) of a nested record: a dict's fields in turn, anything else as one leaf."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            yield from _leaves(item, (*path, str(key)))
+    else:
+        yield path, value
+
+
+def _relative_difference(a, b) -> float:
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape:
+        return float("inf")
+    return float(np.max(np.abs(a - b) / np.maximum(np.abs(b), 1e-12))) if a.size else 0.0

@@ -28,7 +28,7 @@ MODULES = {
     "asoc/mjls/__init__.py": "from .system import MJLS\n",
     "asoc/mjls/system.py": "from ..stats import median\n\nclass MJLS:\n    pass\n",
     "asoc/stats.py": "def median(x):\n    return x\n",
-    "asoc_companion/__init__.py": "from .session import record\nfrom asoc.stats import median\n",
+    "asoc_companion/__init__.py": "from .recorder import record\nfrom asoc.stats import median\n",
     "asoc_companion/recorder.py": "def record(key, value):\n    return value\n",
     "asoc_companion/manifest.py": "def entry():\n    pass\n",
 }
@@ -101,7 +101,7 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     # an edit to the harness's own machinery re-runs nothing; one to recording re-runs all
     (project.src / "asoc_companion" / "manifest.py").write_text("def entry():\n    return 1\n")
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": ["depends"]}
-    (project.src / "asoc_companion" / "session.py").write_text("def record(key, value):\n    return 2 * value\n")
+    (project.src / "asoc_companion" / "recorder.py").write_text("def record(key, value):\n    return 2 * value\n")
     assert all(any("asoc_companion/recorder.py" in c for c in changed) for changed in _entries(project).values())
 
 
