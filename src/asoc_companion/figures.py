@@ -8,6 +8,7 @@ the thesis does not have (the own-system chapter) gets an id of its own, ``own.<
 import csv
 import io
 import re
+import struct
 from pathlib import Path
 
 import matplotlib
@@ -15,7 +16,7 @@ import matplotlib.pyplot as plt
 
 from .atomic_files import atomic_write_bytes, atomic_write_text
 
-__all__ = ["PALETTE", "PRINT_WIDTH_INCHES", "MIN_FONT_POINTS", "STYLE", "SAVE_METADATA",
+__all__ = ["PALETTE", "PRINT_WIDTH_INCHES", "MIN_FONT_POINTS", "MIN_AXES_INCHES", "STYLE", "SAVE_METADATA",
            "apply_style", "colour_name", "fit_for_print", "NUMBER", "file_stem", "save_figure",
            "markdown_table", "save_table", "close"]
 
@@ -29,6 +30,8 @@ PALETTE = {"blue": "#0072B2", "vermillion": "#D55E00", "bluish green": "#009E73"
 PRINT_WIDTH_INCHES = 6.2
 """The width a figure is printed at: the PDF's text width (A4 with 1 in margins is 6.27 in)."""
 MIN_FONT_POINTS = 9
+MIN_AXES_INCHES = 2.0
+"""The narrowest figure :func:`save_figure` makes to fit content beside the axes in print."""
 """The smallest text size of a figure, in points at :data:`PRINT_WIDTH_INCHES`."""
 
 STYLE = {
@@ -183,12 +186,47 @@ def save_figure(fig, number: str, output_dir):
     out = Path(output_dir)
     stem = file_stem("fig", number)
     fit_for_print(fig)
-    paths = []
-    for ext in ("png", "pdf"):
-        buf = io.BytesIO()
-        fig.savefig(buf, format=ext, metadata=SAVE_METADATA[ext])
-        paths.append(atomic_write_bytes(out / f"{stem}.{ext}", buf.getvalue()))
+    png = _shrink_to_printed_width(fig)
+    paths = [atomic_write_bytes(out / f"{stem}.png", png),
+             atomic_write_bytes(out / f"{stem}.pdf", _render(fig, "pdf"))]
     return paths[0]
+
+
+def _render(fig, ext) -> bytes:
+    """The file ``fig`` saves to, cut to its drawn content (what the page prints)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format=ext, metadata=SAVE_METADATA[ext], bbox_inches="tight",
+                dpi=STYLE["savefig.dpi"])
+    return buf.getvalue()
+
+
+def _shrink_to_printed_width(fig, attempts=6) -> bytes:
+    """The PNG of ``fig``, made narrower until its drawn content (a legend or a label outside
+    the axes included) is at most :data:`PRINT_WIDTH_INCHES` wide.
+
+    Text keeps its size, so each attempt takes the measured excess off the figure's width.
+
+    Raises
+    ------
+    RuntimeError
+        If the content is still wider after ``attempts`` tries (text alone wider than a page).
+    """
+    for _ in range(attempts):
+        png = _render(fig, "png")
+        printed = struct.unpack(">I", png[16:20])[0] / STYLE["savefig.dpi"]
+        if printed <= PRINT_WIDTH_INCHES:
+            return png
+        if fig.get_layout_engine() is None:       # first lay it out, then measure again
+            fig.set_layout_engine("tight")
+            continue
+        width, height = fig.get_size_inches()
+        narrower = width - (printed - PRINT_WIDTH_INCHES) - 0.02
+        if narrower < MIN_AXES_INCHES:
+            break
+        fig.set_size_inches(narrower, height * narrower / width)
+    raise RuntimeError(f"the figure's content stays {printed:.2f} in wide, more than the printed "
+                       f"{PRINT_WIDTH_INCHES} in: text wider than the page (a legend in one row?) "
+                       f"does not shrink with the figure; give it more rows")
 
 
 def markdown_table(header, rows) -> str:

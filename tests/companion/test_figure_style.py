@@ -36,6 +36,31 @@ def test_a_wide_figure_is_shrunk_to_the_printed_width_with_legible_text(tmp_path
     assert min(sizes) >= figures.MIN_FONT_POINTS
 
 
+@pytest.mark.parametrize("layout", [None, "constrained"])
+def test_content_outside_the_axes_is_printed_within_the_width(tmp_path, layout):
+    # a legend beside the axes makes the saved (tight) PNG wider than the figure itself
+    with matplotlib.rc_context(figures.STYLE):
+        fig = Figure(figsize=(figures.PRINT_WIDTH_INCHES, 3.0), layout=layout)
+        ax = fig.add_subplot()
+        ax.plot([0, 1], [0, 1], label="a long legend label beside the axes")
+        ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5))
+        png = figures.save_figure(fig, "own.9", tmp_path)
+    inches = struct.unpack(">I", png.read_bytes()[16:20])[0] / figures.STYLE["savefig.dpi"]
+    assert figures.PRINT_WIDTH_INCHES - 0.5 < inches <= figures.PRINT_WIDTH_INCHES
+
+
+def test_a_legend_wider_than_the_page_is_refused_with_a_reason(tmp_path):
+    with matplotlib.rc_context(figures.STYLE):
+        fig = Figure(figsize=(6.4, 3.0))
+        ax = fig.add_subplot()
+        for k in range(4):
+            ax.plot([0, 1], [k, k], label=f"a long description of controller number {k}")
+        ax.legend(ncol=4, loc="lower center", bbox_to_anchor=(0.5, 1.02))
+        with pytest.raises(RuntimeError, match="more rows"):
+            figures.save_figure(fig, "own.9", tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("number", [n for info in notebooks().values() for n in info.figures])
 def test_committed_figures_print_at_most_the_text_width(number):
     """The committed PNG (saved at savefig.dpi) is no wider than the printed width, so its text,

@@ -139,7 +139,7 @@ class StaticGain(Controller):
     Parameters
     ----------
     L : array_like, shape (nu, ny)
-    stability : MeanSquareStability, optional
+    stability : asoc.mjls.MeanSquareStability, optional
         The certificate of the closed loop on the system the gain was designed for.
 
     Examples
@@ -193,7 +193,7 @@ class ModeDependentGain(Controller):
     Parameters
     ----------
     L : array_like, shape (M, nu, ny)
-    stability : MeanSquareStability, optional
+    stability : asoc.mjls.MeanSquareStability, optional
         The certificate of the closed loop on the system the gains were designed for.
 
     Examples
@@ -270,7 +270,7 @@ class DynamicOutputFeedback(Controller):
         Shapes (nc, nc), (nc, ny), (nu, nc), or each with a leading horizon (3.55).
     xhat0 : array_like, shape (nc,), optional
         The controller's initial state, default zero.
-    stability : MeanSquareStability, optional
+    stability : asoc.mjls.MeanSquareStability, optional
         The certificate of the closed loop on the system it was designed for.
 
     Examples

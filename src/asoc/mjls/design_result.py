@@ -70,19 +70,13 @@ stable))
 class CertifiedDesignResult(DesignResult):
     """A time-invariant design's result with the certificate of its closed loop.
 
+    Its properties ``rho``, ``rho_bracket`` and ``stabilizing`` read ``stability``.
+
     Attributes
     ----------
-    stability : MeanSquareStability or None
+    stability : asoc.mjls.MeanSquareStability or None
         rho of the closed loop (Cor. 3.2), its certified bracket and the verdict
         (:func:`asoc.mjls.mean_square_stability`); None when the design returned no gain.
-    rho : float
-        ``stability.rho``: the mean-square spectral radius of the closed loop (nan without a
-        gain).
-    rho_bracket : tuple of float
-        ``stability.bracket``: (rho_lower, rho_upper), the certified bracket of rho.
-    stabilizing : bool or None
-        ``stability.stabilizing``: True when the certified bracket of rho lies below 1, False
-        when it lies at or above 1 (or there is no gain), None when it straddles 1 (undecided).
 
     Examples
     --------

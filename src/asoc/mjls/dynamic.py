@@ -142,7 +142,7 @@ class DynamicOutputFeedbackResult(CertifiedDesignResult):
         repeat), ``"max_iterations"``, ``"diverged"`` (the bounds grew beyond
         ``mjls.divergence_threshold``) or ``"linalg_error"`` (solving (3.51) failed).
     iterations : int
-    stability : MeanSquareStability
+    stability : asoc.mjls.MeanSquareStability
         The certificate of the augmented closed loop (3.39) (Cor. 3.2); ``rho``,
         ``rho_bracket`` and ``stabilizing`` read it
         (:class:`asoc.mjls.design_result.CertifiedDesignResult`).

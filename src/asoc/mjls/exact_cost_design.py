@@ -62,7 +62,7 @@ class ExactDynamicOutputFeedbackResult(CertifiedDesignResult):
         tol * objective, or rho fell below its target), ``"max_iterations"`` or
         ``"no_progress"`` (no descent step, or no mean-square stabilising start was found).
     iterations : int
-    stability : MeanSquareStability
+    stability : asoc.mjls.MeanSquareStability
         The closed loop's certificate (Cor. 3.2); ``rho``, ``rho_bracket`` and ``stabilizing``
         read it (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float

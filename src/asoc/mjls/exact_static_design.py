@@ -54,7 +54,7 @@ class ExactStaticOutputFeedbackResult(CertifiedDesignResult):
         (no descent step, or no stabilising start).
     iterations : int
         BFGS iterations of the run that gave L.
-    stability : MeanSquareStability
+    stability : asoc.mjls.MeanSquareStability
         The certificate of the closed loop (Cor. 3.2); ``rho``, ``rho_bracket`` and
         ``stabilizing`` read it (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float

@@ -139,12 +139,11 @@ def _lossy_plant(dt=0.1):
 def networked_loop_lossy() -> MJLS:
     """An unstable 3-state plant (pole 1.08, 2 outputs) losing input packets; not in the thesis.
 
-    The loop of issue 33: mode 1 the packet arrives, mode 2 it is lost (u = 0);
-    T = [[0.9, 0.1], [0.6, 0.4]], Q = I, R = 0.1, H = 0.05 I, J = 0.01 I. The issue did not
-    give its plant's matrices; this one (``_lossy_plant``) has the stated poles, sampling
-    and outputs, and Alg. 3.1 cycles on it as on the issue's: its iterates settle into a
-    2-cycle between a stabilising and a non-stabilising gain, so which one a fixed
-    ``max_iter`` returns depends on its parity.
+    A networked loop on which Alg. 3.1 cycles: mode 1 the packet arrives, mode 2 it is lost
+    (u = 0); T = [[0.9, 0.1], [0.6, 0.4]], Q = I, R = 0.1, H = 0.05 I, J = 0.01 I. The
+    plant (``_lossy_plant``) has the poles, sampling and outputs of a user's report whose
+    matrices were not given; its iterates settle into a 2-cycle between a stabilising and a
+    non-stabilising gain, so which one a fixed ``max_iter`` returns depends on its parity.
 
     Examples
     --------

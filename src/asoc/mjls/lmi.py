@@ -58,7 +58,7 @@ class LMIResult(CertifiedDesignResult):
         sum_i tr W_i, an upper bound of the H2 cost (3.23); inf if not feasible.
     solver_status : str
         The solver's own status string (e.g. "optimal", "infeasible").
-    stability : MeanSquareStability or None
+    stability : asoc.mjls.MeanSquareStability or None
         The certificate of the closed loop with L (Cor. 3.2), None without a gain; ``rho``
         (nan without a gain), ``rho_bracket`` and ``stabilizing`` (False without a gain) read
         it (:class:`asoc.mjls.design_result.CertifiedDesignResult`). ``controller`` is a

@@ -42,7 +42,7 @@ class ObservedModeResult(CertifiedDesignResult):
         Mode-dependent state-feedback gains.
     P : numpy.ndarray, shape (M, nx, nx)
         Solution of the coupled algebraic Riccati equations.
-    stability : MeanSquareStability or None
+    stability : asoc.mjls.MeanSquareStability or None
         The closed loop's certificate (Cor. 3.2), None when the last Riccati step failed;
         ``rho``, ``rho_bracket`` and ``stabilizing`` read it
         (:class:`asoc.mjls.design_result.CertifiedDesignResult`). ``controller`` is

@@ -140,7 +140,7 @@ def left_perron_stack(A, T, rho, method):
 class Balanced:
     """Modes and weights similar to (A, T) up to a power of 2: rho(L_{A,T}) = 2^g rho(L_{A', W}).
 
-    With one diagonal D (powers of 2, ``scipy.linalg.matrix_balance`` of sum_i |A_i|), mode
+    With one diagonal D (powers of 2, ``scipy.linalg.matrix_balance`` of ``sum_i abs(A_i)``), mode
     exponents e_i and similarity exponents t_i,
     A_i = 2^{e_i} D A'_i D^-1 and W_ij = p_ij 2^{2 e_i + t_i - t_j - g}, because the similarity
     X_i -> 2^{t_i} D X_i D of the stack turns L(X)_j = sum_i p_ij A_i X_i A_i^T into
@@ -188,7 +188,7 @@ def balance(A, T):
     ([4.0, 0.5], 6, True, [[1.0]], True)
 
     Scalar modes a_1 = 1e80, a_2 = 1e-80 on a 2-cycle: L is [[0, a_2^2], [a_1^2, 0]] with
-    rho = |a_1 a_2|; balanced, both weights are about |a_1 a_2| / 2^g:
+    rho = ``abs(a_1 a_2)``; balanced, both weights are about ``abs(a_1 a_2) / 2^g``:
 
     >>> b = balance(np.array([[[1e80]], [[1e-80]]]), np.array([[0.0, 1.0], [1.0, 0.0]]))
     >>> bool(np.all(b.W.sum(axis=1) > 0.25) and np.all(b.W.sum(axis=1) < 4)), b.exact

@@ -51,7 +51,7 @@ class StaticOutputFeedbackResult(CertifiedDesignResult):
         iterate became non-finite) or ``"linalg_error"`` (the gain equation (3.34) was
         singular).
     iterations : int
-    stability : MeanSquareStability
+    stability : asoc.mjls.MeanSquareStability
         The closed loop's certificate (Cor. 3.2); ``rho``, ``rho_bracket`` and ``stabilizing``
         read it (:class:`asoc.mjls.design_result.CertifiedDesignResult`).
     cost : float
@@ -311,7 +311,7 @@ def static_cost(sys, L):
         inf unless the closed loop is certified mean-square stable.
     X : numpy.ndarray, shape (M, nx, nx), or None
         The stationary second moments (None when not stable).
-    stability : MeanSquareStability
+    stability : asoc.mjls.MeanSquareStability
         rho of Cor. 3.2 and its verdict (:func:`asoc.mjls.mean_square_stability`).
 
     Raises
