@@ -179,7 +179,9 @@ def decide_claim(samples, above=None, below=None, level: float = 0.95, what: str
     Returns
     -------
     dict
-        ``verdict``, ``n``, ``estimate`` (the median), ``ci_low``, ``ci_high``, ``test``.
+        ``verdict``, ``n``, ``estimate`` (the median), ``ci_low``, ``ci_high``, ``test``, and
+        the evidence it was decided on: ``above``, ``below``, ``level`` and ``samples`` (a
+        list), so the decision can be repeated on the record alone.
 
     Raises
     ------
@@ -217,5 +219,10 @@ def decide_claim(samples, above=None, below=None, level: float = 0.95, what: str
                                              None if below is None else f"< {below:g}") if text)
     test = (f"claim: median of the {what} {bounds}; exact percentile-bootstrap {level:.0%} interval of "
             f"the median over n = {ci['n']}: inside holds, outside fails, straddling not resolved")
+    if low == high and np.ptp(np.asarray(samples, dtype=float)) == 0:
+        test += (f"; all {ci['n']} samples are equal, so the quantity does not vary between them "
+                 f"and the verdict is exact, not statistical")
     return {"verdict": verdict, "n": ci["n"], "estimate": ci["value"], "ci_low": float(low),
-            "ci_high": float(high), "test": test}
+            "ci_high": float(high), "test": test, "above": None if above is None else lo_bound,
+            "below": None if below is None else hi_bound, "level": float(level),
+            "samples": np.asarray(samples, dtype=float).ravel().tolist()}

@@ -1,4 +1,4 @@
-"""The qualitative claims of Secs. 3.4-3.7 as predicates with planted false variants.
+"""The qualitative claims of Secs. 2.6 and 3.2-3.7 as predicates with planted false variants.
 
 The notebooks decide a claim by calling the predicate here; :func:`ledger_mutants` feeds each
 predicate its planted false variant (a controller that does not settle, a quadratic cost, a
@@ -24,12 +24,14 @@ Thresholds:
 
 import numpy as np
 
+from asoc.mjls import ms_spectral_radius
 from asoc.mjls.intractability import hessian_min_eigenvalue, quadratic_fit_residual
 from asoc.stats import settling_iteration
 
 __all__ = ["BANDS", "ROUNDING", "settles_about", "relative_rms_difference", "not_quadratic",
            "not_convex", "converged_not_stabilizing", "non_increasing", "bounded", "lmi_separates",
-           "ordered", "almost_equal_then_slightly_worse"]
+           "ordered", "almost_equal_then_slightly_worse", "mean_square_unstable", "diverges",
+           "matches", "resembles"]
 
 
 BANDS = (0.01, 0.02, 0.05, 0.1)
@@ -213,3 +215,101 @@ def almost_equal_then_slightly_worse(steady, transient, printed_steady, printed_
         "almost_equal": almost,
         "slightly_worse": slightly,
     }
+
+
+def mean_square_unstable(A, T):
+    """Whether the autonomous MJLS (A, T) is mean-square unstable: rho of Cor. 3.2 above 1.
+
+    Returns
+    -------
+    dict
+        ``holds`` and ``value`` (the mean-square spectral radius).
+
+    Examples
+    --------
+    >>> A = np.array([[[2.0]], [[0.5]]])
+    >>> mean_square_unstable(A, np.full((2, 2), 0.5))["holds"]
+    True
+    >>> mean_square_unstable(A / 4, np.full((2, 2), 0.5))["holds"]
+    False
+    """
+    rho = float(ms_spectral_radius(A, T))
+    return {"holds": rho > 1, "value": rho}
+
+
+def diverges(final_states, x0, factor=10.0):
+    """Whether trajectories diverge: the mean of ||x_K||^2 over runs exceeds ``factor`` ||x_0||^2.
+
+    Parameters
+    ----------
+    final_states : array_like, (runs, n)
+        x_K of each run.
+    x0 : array_like, (n,)
+        The common initial state.
+    factor : float
+        The growth of the second moment that counts as divergence.
+
+    Returns
+    -------
+    dict
+        ``holds`` and ``value`` (the growth E||x_K||^2 / ||x_0||^2).
+
+    Examples
+    --------
+    >>> diverges([[30.0, 0.0], [0.0, 40.0]], [1.0, 0.0])["holds"]
+    True
+    >>> diverges([[0.1, 0.0], [0.0, 0.2]], [1.0, 0.0])["holds"]
+    False
+    """
+    final_states, x0 = np.asarray(final_states, dtype=float), np.asarray(x0, dtype=float)
+    growth = float(np.mean(np.sum(final_states**2, axis=1)) / np.sum(x0**2))
+    return {"holds": growth > factor, "value": growth}
+
+
+def matches(value, reference, rtol=1e-4):
+    """Whether ``value`` equals ``reference`` (e.g. a closed form and the quadrature of its
+    definition) to the relative tolerance ``rtol``.
+
+    Returns
+    -------
+    dict
+        ``holds`` and ``value`` (the relative difference ``|value / reference - 1|``).
+
+    Examples
+    --------
+    >>> matches(1.00001, 1.0)["holds"], matches(1.001, 1.0)["holds"]
+    (True, False)
+    """
+    relative = abs(float(value) / float(reference) - 1.0)
+    return {"holds": relative < rtol, "value": relative}
+
+
+def resembles(samples, truth, threshold=0.5):
+    """Whether function samples follow a true function: the median over samples of their RMS
+    deviation from it is at most ``threshold``.
+
+    Parameters
+    ----------
+    samples : array_like, (S, N)
+        S function samples on N points.
+    truth : array_like, (N,)
+        The true function on the same points.
+    threshold : float
+        The largest median RMS deviation that counts as resembling.
+
+    Returns
+    -------
+    dict
+        ``holds`` and ``value`` (the median RMS deviation).
+
+    Examples
+    --------
+    >>> x = np.linspace(-2, 2, 41)
+    >>> resembles([np.sin(x) + 0.1, np.sin(x) - 0.2], np.sin(x))["holds"]
+    True
+    >>> resembles([np.sin(x) + 1.0], np.sin(x))["holds"]
+    False
+    """
+    samples, truth = np.atleast_2d(np.asarray(samples, dtype=float)), np.asarray(truth, dtype=float)
+    deviation = float(np.median(np.sqrt(np.mean((samples - truth) ** 2, axis=1))))
+    return {"holds": deviation <= threshold, "value": deviation}

@@ -17,6 +17,7 @@ from . import paths
 from .atomic_files import atomic_write_text
 from .plan import values_file
 from .reference import load_reference
+from .values import load_all_values
 
 __all__ = ["NOT_PLANTED", "ledger_mutants", "mutants_path", "write_ledger_mutants"]
 
@@ -79,6 +80,66 @@ def _swapped_163():
     )
 
 
+def _beyond_the_bound(record):
+    """A recorded :func:`asoc.stats.decide_claim` decision repeated on its samples shifted so
+    that every one lies beyond the claimed bound (past ``below``, else below ``above``).
+    """
+    from asoc.stats import decide_claim
+
+    samples, above, below = np.asarray(record["samples"]), record["above"], record["below"]
+    margin = max(float(np.ptp(samples)), abs(below if below is not None else above), 1.0) * 1e-3
+    shifted = (samples - samples.min() + below + margin if below is not None
+               else samples - samples.max() + above - margin)
+    decision = decide_claim(shifted, above=above, below=below, level=record["level"])
+    return {"holds": decision["verdict"] == "holds"}
+
+
+def _decided_variant(record):
+    bound = f"< {record['below']:g}" if record["below"] is not None else f"> {record['above']:g}"
+    return (f"the recorded n = {len(record['samples'])} samples shifted so that each one violates "
+            f"the claimed median {bound}, decided again",
+            lambda: _beyond_the_bound(record))
+
+
+def _decided_claims(values):
+    """``{claim key: variant}`` of every recorded value decided by :func:`asoc.stats.decide_claim`."""
+    return {key: _decided_variant(value) for key, value in values.items()
+            if isinstance(value, dict) and {"samples", "above", "below", "level"} <= set(value)}
+
+
+def _sec32_variants():
+    from asoc.mjls.examples import SEC32_A, SEC32_T, SEC32_X0
+
+    steps = 20
+    return {
+        "sec3_2.mjls_unstable": (
+            "the modes of Sec. 3.2 with A_i halved (rho / 4 < 1)",
+            lambda: checks.mean_square_unstable(np.asarray(SEC32_A) / 2, SEC32_T),
+        ),
+        "sec3_2.mjls_trajectory_diverges": (
+            f"1,000 runs contracting by half a step: x_K = 2^-K x_0 after K = {steps} steps",
+            lambda: checks.diverges(np.tile(np.asarray(SEC32_X0) * 0.5**steps, (1000, 1)), SEC32_X0),
+        ),
+    }
+
+
+def _sec26_variants():
+    x = np.linspace(-2.4, 2.4, 97)
+    truth = 0.25 * x + np.sin(x)
+    off_by = (
+        "a closed form 1e-3 (relative) off the quadrature of the definition",
+        lambda: checks.matches(1.001, 1.0),
+    )
+    return {
+        "sec2_6.mcvmd_closed_form_matches_definition": off_by,
+        "sec2_6.thesis_c_b_matches_definition": off_by,
+        "sec2_6.fig26_samples_resemble_true_function": (
+            "20 samples of the true function of Fig. 2.6 shifted by 0.6 (RMS deviation 0.6 > 0.5)",
+            lambda: checks.resembles(np.tile(truth + 0.6, (20, 1)), truth),
+        ),
+    }
+
+
 def _variants():
     """``{claim key: (description, callable returning the check's record on the variant)}``."""
     slow = (
@@ -137,11 +198,15 @@ def _variants():
         )
     out["findings.lmi_C12_feasible"] = out["sec3_5.lmi_C12_T1"]
     out["findings.lmi_C12_feasible_author_mu"] = out["sec3_5.lmi_C12_T1"]
-    return out
+    return {**out, **_sec26_variants(), **_sec32_variants()}
 
 
-def ledger_mutants(reference=None) -> dict:
+def ledger_mutants(reference=None, values=None) -> dict:
     """``{claim key: {"description", "caught"}}`` for every claim of the reference.
+
+    A claim the notebook decided by :func:`asoc.stats.decide_claim` gets its variant from its
+    recorded decision in ``values`` (default: the committed values): the same samples shifted
+    past the claimed bound.
 
     Examples
     --------
@@ -149,9 +214,15 @@ def ledger_mutants(reference=None) -> dict:
     >>> claim = Entry("sec3_6.optimal_38_best", where="Table 3.3", kind="claim", thesis="[38] best")
     >>> ledger_mutants({claim.key: claim})["sec3_6.optimal_38_best"]["caught"]
     True
+    >>> from asoc.stats import decide_claim
+    >>> decided = Entry("demo.smaller", where="an example", kind="claim", thesis="smaller")
+    >>> record = decide_claim(-1.0 - np.arange(9.0), below=0.0)
+    >>> ledger_mutants({decided.key: decided}, {decided.key: record})["demo.smaller"]
+    {'description': 'the recorded n = 9 samples shifted so that each one violates the claimed median < 0, decided again', 'caught': True}
     """
     reference = reference if reference is not None else load_reference()
-    variants = _variants()
+    values = load_all_values() if values is None else values
+    variants = {**_decided_claims(values), **_variants()}
     out = {}
     for key, entry in reference.items():
         if entry.kind != "claim":
