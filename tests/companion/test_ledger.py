@@ -215,3 +215,11 @@ def test_every_claim_has_a_planted_variant():
 def test_a_statistical_claim_without_its_recorded_decision_has_no_variant():
     claim = REFERENCE["sec2_5.claim_min_trace_smaller"]
     assert ledger_mutants({claim.key: claim}, values={})[claim.key]["description"] == NOT_PLANTED
+
+
+def test_every_tolerance_is_a_number():
+    # YAML 1.1 reads 1e-09 as text (write 1.0e-9); a text ci_rtol broke the ci comparison
+    bad = [(key, field, getattr(e, field)) for key, e in REFERENCE.items() for field in ("tol", "ci_rtol")
+           if getattr(e, field) is not None and (isinstance(getattr(e, field), bool)
+                                                 or not isinstance(getattr(e, field), (int, float)))]
+    assert bad == []
