@@ -253,34 +253,23 @@ def test_valid_calls_run(name):
     assert_no_nan(call(name, dict(CALLS[name][1])), name)
 
 
-# Open defects the fuzz found, each kept as a strict xfail below until it is fixed (then the
-# xfail fails and the entry goes): the message names the helper's argument, not the caller's;
-# the GP fit on the fuzz's 5-Gaussian training set with the mCvMd width b_max = 2.5 meets a
-# Sigma_y that stays indefinite with jitter; no offsets at all fail inside min().
-OPEN_DEFECTS = [("kernel_study", "grid_step", 10**6), ("kernel_study", "b_max", 2.5),
-                ("covariance_aware_optimum", "offsets", [])]
+# Defects the fuzz found, each now a named error: a grid step the grid refuses (the message
+# named the helper's `step`), an mCvMd width too small for the closed form (it returned 0
+# between distinct mixtures, and the GP fit then met an indefinite kernel), no offsets at all.
+FOUND_BY_THE_FUZZ = [("kernel_study", "grid_step", 10**6), ("kernel_study", "b_max", 2.5),
+                     ("covariance_aware_optimum", "offsets", [])]
 
 
-def _is_open_defect(case, bad):
-    return any(case == (name, arg) and type(bad) is type(value) and bad == value
-               for name, arg, value in OPEN_DEFECTS)
-
-
-@pytest.mark.parametrize("name, arg, value", OPEN_DEFECTS)
-@pytest.mark.xfail(strict=True, reason="open defect found by the fuzz (OPEN_DEFECTS)")
-def test_open_defect(name, arg, value):
-    kwargs = dict(CALLS[name][1], **{arg: value})
-    try:
-        call(name, kwargs)
-    except (ValueError, TypeError) as err:
-        assert str(err).startswith(f"{arg}:"), str(err)
+@pytest.mark.parametrize("name, arg, value", FOUND_BY_THE_FUZZ)
+def test_found_defect_is_a_named_error(name, arg, value):
+    with pytest.raises(ValueError, match=f"^{arg}: expected .* found"):
+        call(name, dict(CALLS[name][1], **{arg: value}))
 
 
 @settings(max_examples=2500, deadline=None, report_multiple_bugs=False)
 @given(st.sampled_from(CASES), st.sampled_from(BAD))
 def test_malformed_argument_is_named_or_harmless(case, bad):
     assume(not (case in WORK_SIZES and type(bad) is int and bad == 10**6))
-    assume(not _is_open_defect(case, bad))
     name, arg = case
     kwargs = dict(CALLS[name][1], **{arg: bad})
     try:

@@ -161,7 +161,8 @@ def covariance_aware_optimum(
     example : LandmarkExample
         The model, cost and initial belief of Sec. 2.5.3.
     offsets : array_like, (m,)
-        Sideways shifts of the middle input of the straight plan, one start each (finite).
+        Sideways shifts of the middle input of the straight plan, one start each (finite, at
+        least one).
     gtol : float
         BFGS's gradient tolerance, > 0.
     **noise
@@ -184,6 +185,8 @@ def covariance_aware_optimum(
     """
     example = check.instance(example, LandmarkExample, "example")
     offsets = check.real_array(offsets, "offsets", ndim=1)
+    if offsets.size == 0:
+        raise ValueError("offsets: expected at least one shift (one start each), found none")
     gtol = check.real_scalar(gtol, "gtol", low=0, low_open=True)
     K = example.cost.K
     zero = np.zeros(2 * K)

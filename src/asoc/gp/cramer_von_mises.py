@@ -17,13 +17,16 @@ from .. import validation as check
 from ..progress import progress_bar
 from . import mixture_checks as v
 
-__all__ = ["EULER_GAMMA", "DEFAULT_B_MAX", "mcvmd_constant", "mcvmd", "mcvmd_matrix", "lcd_dirac",
+__all__ = ["EULER_GAMMA", "DEFAULT_B_MAX", "ROUNDING_RTOL", "mcvmd_constant", "mcvmd", "mcvmd_matrix", "lcd_dirac",
            "lcd_gaussian", "mcvmd_quadrature"]
 
 
 EULER_GAMMA = float(np.euler_gamma)
 #: The "large constant" b_max of the mCvMd's kernel widths (Sec. 2.6.3, item 5).
 DEFAULT_B_MAX = 100.0
+ROUNDING_RTOL = 1e-9
+"""A closed-form square below 0 by at most this share of its terms' magnitudes is rounding."""
+
 
 def mcvmd_constant(b_max: float) -> float:
     r"""The constant :math:`c_b` of the large-``b_max`` closed form of the mCvMd (Sec. 2.6.3, item 5).
@@ -94,7 +97,8 @@ def mcvmd(x, wx, y, wy, b_max: float = DEFAULT_B_MAX) -> float:
     ------
     ValueError, TypeError
         If locations are empty, non-finite or of different dimensions, weights are negative,
-        of the wrong shape or do not sum to 1.
+        of the wrong shape or do not sum to 1, or ``b_max`` is too small for the closed form
+        (its square negative beyond rounding).
 
     Examples
     --------
@@ -113,8 +117,8 @@ def mcvmd(x, wx, y, wy, b_max: float = DEFAULT_B_MAX) -> float:
     D2 = wy @ _xlog_sq(y[:, None], y[None]) @ wy
     D12 = wx @ _xlog_sq(x[:, None], y[None]) @ wy
     Dm = float(np.sum((wx @ x - wy @ y) ** 2))
-    d2 = np.pi ** (x.shape[1] / 2) / 8 * (D1 - 2 * D12 + D2 + 2 * cb * Dm)
-    return float(np.sqrt(max(d2, 0.0)))
+    terms = np.array([D1, -2 * D12, D2, 2 * cb * Dm])
+    return float(_root_of_square(np.sum(terms), np.sum(np.abs(terms)), x.shape[1], b_max))
 
 
 def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
@@ -148,7 +152,7 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     ------
     ValueError, TypeError
         If the sets are empty, non-finite or of different dimensions, a weight row is
-        invalid, or a ``b_max`` is not a positive number.
+        invalid, or a ``b_max`` is not a positive number or too small for the closed form.
 
     Examples
     --------
@@ -171,16 +175,33 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     chunk = check.integer(chunk, "chunk", minimum=1)
     progress = check.boolean(progress, "progress")
     sums = _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress)
-    out = [_combined(sums, cb, X.shape[2], symmetric) for cb in constants]
+    widths = b_max if several else [b_max]
+    out = [_combined(sums, cb, X.shape[2], symmetric, b) for cb, b in zip(constants, widths)]
     return np.stack(out) if several else out[0]
 
 
-def _combined(sums, cb, d, symmetric):
+def _root_of_square(square, scale, d, b_max):
+    """The root of the closed form's (pi^(d/2) / 8) (D1 - 2 D12 + D2 + 2 c_b Dm).
+
+    Rounding below 0 gives 0. A square negative beyond rounding (relative to ``scale``, the
+    sum of the terms' magnitudes) means ``b_max`` is too small for the large-``b_max``
+    expansion.
+    """
+    square, scale = np.asarray(square, dtype=float), np.asarray(scale, dtype=float)
+    if np.any(square < -ROUNDING_RTOL * scale):
+        worst = float(np.min(square / np.maximum(scale, np.finfo(float).tiny)))
+        raise ValueError(f"b_max: expected a width large against the distances between the Dirac "
+                         f"locations (the closed form holds for large b_max; its square is "
+                         f"{worst:.2g} of its terms), found {b_max}")
+    return np.sqrt(np.clip(square, 0.0, None) * np.pi ** (d / 2) / 8)
+
+
+def _combined(sums, cb, d, symmetric, b_max):
     """The mCvMd matrix from the b_max-independent sums of ``_mcvmd_sums`` and the constant c_b."""
     D1, D2, D12, Dm = sums
-    out = D1[:, None] - 2 * D12 + D2[None] + 2 * cb * Dm
-    out *= np.pi ** (d / 2) / 8
-    out = np.sqrt(np.clip(out, 0.0, None))
+    terms = (D1[:, None], -2 * D12, D2[None], 2 * cb * Dm)
+    scale = sum(np.abs(t) for t in terms)
+    out = _root_of_square(sum(terms), scale, d, b_max)
     if symmetric:
         np.fill_diagonal(out, 0.0)
         out = 0.5 * (out + out.T)

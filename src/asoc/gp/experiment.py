@@ -4,12 +4,13 @@ import numpy as np
 
 from .. import validation as check
 
-__all__ = ["MU_RANGE", "VAR_RANGE", "quadratic_function", "modified_rosenbrock",
+__all__ = ["MU_RANGE", "VAR_RANGE", "GRID_STEP_RANGE", "quadratic_function", "modified_rosenbrock",
            "training_gaussians", "evaluation_grid", "error_metrics"]
 
 
 MU_RANGE = (-5.0, 5.0)           #: range of the means, Sec. 2.6.4
 VAR_RANGE = (0.1**2, 2.0**2)     #: range of the variances, Sec. 2.6.4
+GRID_STEP_RANGE = (1e-3, 10.0)   #: the steps of the test grid one can ask for (Sec. 2.6.4 uses 0.1)
 
 
 def quadratic_function(mu, var):
@@ -145,7 +146,7 @@ def evaluation_grid(step: float = 0.1):
     >>> len(mu), len(var), mu[:3].tolist(), var[:2].tolist()
     (21, 8, [-5.0, -4.5, -4.0], [0.01, 0.51])
     """
-    step = check.real_scalar(step, "step", low=1e-3, high=10)
+    step = check.real_scalar(step, "step", low=GRID_STEP_RANGE[0], high=GRID_STEP_RANGE[1])
     mu = np.round(np.arange(MU_RANGE[0], MU_RANGE[1] + 1e-9, step), 10)
     var = np.round(np.arange(VAR_RANGE[0], VAR_RANGE[1] + 1e-9, step), 10)
     return mu, var

@@ -17,6 +17,7 @@ from .. import validation as check
 from ..progress import progress_bar
 from .cramer_von_mises import mcvmd_matrix
 from .experiment import (
+    GRID_STEP_RANGE,
     error_metrics,
     evaluation_grid,
     modified_rosenbrock,
@@ -83,7 +84,8 @@ def kernel_study(
     n_train : int
         Training inputs per set (200 in the thesis), >= 3.
     grid_step : float
-        Step of the test grid in mean and variance (0.1 in the thesis; coarser for speed).
+        Step of the test grid in mean and variance (0.1 in the thesis; coarser for speed), in
+        :data:`asoc.gp.experiment.GRID_STEP_RANGE`.
     n_dirac : int
         Dirac components per input distribution (10 in the thesis).
     b_max : float
@@ -114,7 +116,7 @@ def kernel_study(
     n_seeds = check.integer(n_seeds, "n_seeds", minimum=1)
     rng = check.generator(rng)
     n_train = check.integer(n_train, "n_train", minimum=3)
-    grid_step = check.real_scalar(grid_step, "grid_step", low=0, low_open=True)
+    grid_step = check.real_scalar(grid_step, "grid_step", low=GRID_STEP_RANGE[0], high=GRID_STEP_RANGE[1])
     n_jobs = check.process_count(n_jobs, "n_jobs")
     progress = check.boolean(progress, "progress")
     settings = (
