@@ -85,7 +85,7 @@ def kernel_study(
         Training inputs per set (200 in the thesis), >= 3.
     grid_step : float
         Step of the test grid in mean and variance (0.1 in the thesis; coarser for speed), in
-        :data:`asoc.gp.experiment.GRID_STEP_RANGE`.
+        [1e-3, 10] (``GRID_STEP_RANGE`` of ``asoc.gp.experiment``).
     n_dirac : int
         Dirac components per input distribution (10 in the thesis).
     b_max : float

@@ -16,10 +16,8 @@ import warnings
 
 import numpy as np
 import scipy.linalg
-import scipy.special
 
 from asoc import gp
-from asoc.gp.cramer_von_mises import DEFAULT_B_MAX
 from asoc.mjls import (
     augmented_closed_loop,
     dynamic_output_feedback,
@@ -36,6 +34,7 @@ from . import bounds
 from .counterexamples import (
     kernel_example,
     mcvmd_integral,
+    printed_closed_form,
     prop_3_26_example,
     thm_3_19_example,
     thm_3_19_noiseless_example,
@@ -88,20 +87,6 @@ def _gram_verdict(D, name, relative_scale, reference=None):
     return ("holds" if lowest >= -EIG_TOL * len(D) else "fails"), lowest
 
 
-def _printed_closed_form(a, b, b_max=DEFAULT_B_MAX):
-    """The large-b_max closed form of the mCvMd (Sec. 2.6.3, item 5) of two equally weighted 1-D
-    Dirac sets, its square clipped at 0: the formula itself, also where ``gp.mcvmd`` refuses it
-    (a negative square, here on sets spread far beyond b_max).
-    """
-    def xlog_mean(u, v):
-        sq = (u[:, None] - v[None]) ** 2
-        return float(np.mean(scipy.special.xlogy(sq, sq)))
-
-    square = (xlog_mean(a, a) - 2 * xlog_mean(a, b) + xlog_mean(b, b)
-              + 2 * gp.mcvmd_constant(b_max) * (a.mean() - b.mean()) ** 2)
-    return float(np.sqrt(max(square, 0.0) * np.sqrt(np.pi) / 8))
-
-
 def check_kernels(rng):
     """Corrected Sec. 2.6.3 on 3-7 random 1-D Gaussians: a Hilbert-embeddable distance (usual Hellinger,
     L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the definition on
@@ -126,7 +111,7 @@ def check_kernels(rng):
         points = [scale * (mi + si * np.array([-1.0, 0.0, 1.0])) for mi, si in zip(m, s)]
         pairwise = lambda distance: np.array([[distance(a, b) for b in points] for a in points])
         if kind == "mcvmd_spread":
-            D, closed = pairwise(mcvmd_integral), pairwise(_printed_closed_form)
+            D, closed = pairwise(mcvmd_integral), pairwise(printed_closed_form)
             closed_form = _gram_verdict(closed, name, relative_scale, reference=D)
         else:
             D = pairwise(lambda a, b: gp.mcvmd(a, None, b, None))

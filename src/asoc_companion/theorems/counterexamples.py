@@ -24,7 +24,7 @@ from .instances import draw_system
 
 __all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "thm_3_19_example",
            "THM_3_19_NOISELESS", "thm_3_19_noiseless_example", "kernel_example",
-           "THM_3_27_INSTANCE", "thm_3_27_fixed_points", "mcvmd_integral"]
+           "THM_3_27_INSTANCE", "thm_3_27_fixed_points", "mcvmd_integral", "printed_closed_form"]
 
 
 # ------------------------------------------------------------------ exact 2 x 2 algebra
@@ -296,8 +296,12 @@ def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
     >>> round(mcvmd_integral([0.0], [0.3], 10.0), 3)         # gp.mcvmd_quadrature: 0.593
     0.593
     >>> x, y = [0.0, 1.0], [300.0]
-    >>> round(mcvmd_integral(x, y, 100.0), 1), gp.mcvmd(x, None, y, None)   # closed form: clipped
-    (131.3, 0.0)
+    >>> round(mcvmd_integral(x, y, 100.0), 1)          # the closed form refuses this b_max
+    131.3
+    >>> gp.mcvmd(x, None, y, None)
+    Traceback (most recent call last):
+    ...
+    ValueError: b_max: expected a width large against the distances between the Dirac locations (the closed form holds for large b_max; its square is -0.017 of its terms), found 100.0
     """
     points = np.concatenate([np.ravel(x), np.ravel(y)])
     c = np.concatenate([np.full(np.size(x), 1 / np.size(x)), np.full(np.size(y), -1 / np.size(y))])
@@ -306,3 +310,25 @@ def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
     g = S * np.exp(-a / S) - a * scipy.special.exp1(np.maximum(a, 1e-300) / S)
     g[a == 0] = S
     return float(np.sqrt(max(np.sqrt(np.pi) / 2 * (c @ g @ c), 0.0)))
+
+
+def printed_closed_form(a, b, b_max=DEFAULT_B_MAX):
+    """The large-b_max closed form of the mCvMd (Sec. 2.6.3, item 5) of two equally weighted 1-D
+    Dirac sets, its square clipped at 0: the formula itself, also where ``gp.mcvmd`` refuses it
+    (a negative square, here on sets spread far beyond b_max).
+
+    Examples
+    --------
+    >>> x, y = np.array([0.0, 1.0, 2.5]), np.array([-1.0, 0.3, 4.0])
+    >>> bool(abs(printed_closed_form(x, y) - gp.mcvmd(x, None, y, None)) < 1e-12)
+    True
+    >>> printed_closed_form(np.array([0.0, 1.0]), np.array([300.0]))      # square < 0: clipped
+    0.0
+    """
+    def xlog_mean(u, v):
+        sq = (u[:, None] - v[None]) ** 2
+        return float(np.mean(scipy.special.xlogy(sq, sq)))
+
+    square = (xlog_mean(a, a) - 2 * xlog_mean(a, b) + xlog_mean(b, b)
+              + 2 * gp.mcvmd_constant(b_max) * (a.mean() - b.mean()) ** 2)
+    return float(np.sqrt(max(square, 0.0) * np.sqrt(np.pi) / 8))
