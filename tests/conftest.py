@@ -66,7 +66,8 @@ def ci_execution():
 
     One execution serves both notebook tests: nbval re-executes the committed notebook with
     papermill's ci parameters injected and compares the cells tagged ``nbval-check-output``
-    with their stored outputs (tests/notebooks/test_nbval.py), and the same execution records the values,
+    with their stored outputs (tests/notebooks/test_nbval.py), and the same execution records the
+    values,
     figures and tables that tests/notebooks/test_notebooks.py checks against the reference.
     """
     done = {}
@@ -82,7 +83,8 @@ def ci_execution():
             nbformat.write(nb, copy)
             proc = subprocess.run(
                 [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
-                 "-o", "addopts=", "--nbval-lax", "--nbval-sanitize-with", str(HERE / "notebooks" / "nbval_sanitize.cfg"),
+                 "-o", "addopts=", "--nbval-lax", "--nbval-sanitize-with",
+                 str(HERE / "notebooks" / "nbval_sanitize.cfg"),
                  str(copy)],
                 cwd=out, capture_output=True, text=True, timeout=1800,
                 # the kernel runs next to the copy, outside book/: name the project explicitly

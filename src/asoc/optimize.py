@@ -3,7 +3,8 @@
 :func:`bfgs` minimises a smooth function z -> (f, grad f) by BFGS (dense inverse Hessian) or
 L-BFGS (the last few curvature pairs), with a backtracking Armijo line search that rejects
 steps out of the domain (f = inf) like any other step that does not decrease f. The
-exact-cost designs of :mod:`asoc.mjls.exact_cost_design` use it on the mean-square stabilising set, where
+exact-cost designs of :mod:`asoc.mjls.exact_cost_design` use it on the mean-square stabilising set,
+where
 the cost is finite; nothing in it is specific to them.
 
 Nocedal and Wright, Numerical Optimization, 2nd ed., 2006: Alg. 6.1 (BFGS), Alg. 7.4
@@ -160,7 +161,8 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
     Examples
     --------
     >>> fun = lambda z: ((z[0] - 1) ** 2 + 10 * (z[1] - z[0] ** 2) ** 2,
-    ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2), 20 * (z[1] - z[0] ** 2)]))
+    ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2),
+    ...     20 * (z[1] - z[0] ** 2)]))
     >>> result = bfgs(fun, [-1.0, 1.0], 1e-14, 200)
     >>> result.status, result.z.round(4)
     ('converged', array([1., 1.]))

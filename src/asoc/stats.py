@@ -156,7 +156,8 @@ def settling_iteration(series, band: float = 0.02) -> int:
 VERDICTS = ("holds", "fails", "not resolved")
 
 
-def decide_claim(samples, above=None, below=None, level: float = 0.95, what: str = "samples") -> dict:
+def decide_claim(samples, above=None, below=None, level: float = 0.95,
+                 what: str = "samples") -> dict:
     """Decide a claim "above < median < below" from paired samples by a bootstrap interval.
 
     The claim is about the median of ``samples`` (e.g. paired differences of two methods over
@@ -217,7 +218,8 @@ def decide_claim(samples, above=None, below=None, level: float = 0.95, what: str
         verdict = "not resolved"
     bounds = " and ".join(text for text in (None if above is None else f"> {above:g}",
                                              None if below is None else f"< {below:g}") if text)
-    test = (f"claim: median of the {what} {bounds}; exact percentile-bootstrap {level:.0%} interval of "
+    test = (f"claim: median of the {what} {bounds}; exact percentile-bootstrap {level:.0%} "
+            "interval of "
             f"the median over n = {ci['n']}: inside holds, outside fails, straddling not resolved")
     if low == high and np.ptp(np.asarray(samples, dtype=float)) == 0:
         test += (f"; all {ci['n']} samples are equal, so the quantity does not vary between them "

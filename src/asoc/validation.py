@@ -62,12 +62,14 @@ def process_count(value, name: str) -> int:
     """
     value = integer(value, name)
     if value == 0 or value < -1:
-        raise ValueError(f"{name}: expected a positive number of processes or -1 (all cores), found {value}")
+        raise ValueError(f"{name}: expected a positive number of processes or -1 (all cores), "
+                         f"found {value}")
     return value
 
 
 def real_scalar(value, name: str, *, low=None, high=None, low_open=False, high_open=False) -> float:
-    """A finite real number, optionally in ``[low, high]`` (``low_open``/``high_open`` exclude the end).
+    """A finite real number, optionally in ``[low, high]`` (``low_open``/``high_open`` exclude the
+    end).
 
     Examples
     --------
@@ -78,7 +80,8 @@ def real_scalar(value, name: str, *, low=None, high=None, low_open=False, high_o
     ...
     ValueError: eps: expected a finite real number > 0, found -1
     """
-    if isinstance(value, (bool, np.bool_, str, bytes)) or not isinstance(value, (numbers.Real, np.ndarray)):
+    if isinstance(value, (bool, np.bool_, str, bytes)) or not isinstance(value, (numbers.Real,
+                                                                                 np.ndarray)):
         raise TypeError(f"{name}: expected a real number, found {_describe(value)}")
     if isinstance(value, np.ndarray):
         if value.shape != () or not np.issubdtype(value.dtype, np.number) or np.iscomplexobj(value):
@@ -118,18 +121,22 @@ def real_array(value, name: str, *, shape=None, ndim=None, finite=True) -> np.nd
         raise TypeError(f"{name}: expected a real array, found {_describe(value)}") from err
     if np.iscomplexobj(array):
         raise TypeError(f"{name}: expected a real array, found complex dtype {array.dtype}")
-    if array.dtype == bool or not (np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)):
+    if array.dtype == bool or not (np.issubdtype(array.dtype,
+                                                 np.integer) or np.issubdtype(array.dtype,
+                                                                              np.floating)):
         raise TypeError(f"{name}: expected a real array, found dtype {array.dtype}")
     array = array.astype(float)
     if ndim is not None and array.ndim != ndim:
         raise ValueError(f"{name}: expected a {ndim}-dimensional array, found shape {array.shape}")
     if shape is not None:
         want = tuple(shape)
-        if array.ndim != len(want) or any(w is not None and w != s for w, s in zip(want, array.shape)):
+        if array.ndim != len(want) or any(w is not None and w != s for w,
+                                          s in zip(want, array.shape)):
             text = "(" + ", ".join("any" if w is None else str(w) for w in want) + ("," if len(want) == 1 else "") + ")"
             raise ValueError(f"{name}: expected shape {text}, found shape {array.shape}")
     if finite and not np.all(np.isfinite(array)):
-        raise ValueError(f"{name}: expected finite entries, found {int(np.size(array) - np.isfinite(array).sum())} "
+        raise ValueError(f"{name}: expected finite entries, found "
+                         f"{int(np.size(array) - np.isfinite(array).sum())} "
                          f"non-finite")
     return array
 
@@ -172,9 +179,11 @@ def semidefinite(array, name: str, *, definite=False) -> np.ndarray:
     lam = np.linalg.eigvalsh(array).min()
     scale = max(1.0, np.abs(array).max())
     if definite and lam <= 0:
-        raise ValueError(f"{name}: expected a positive definite matrix, found smallest eigenvalue {lam:.3g}")
+        raise ValueError(f"{name}: expected a positive definite matrix, found smallest eigenvalue "
+                         f"{lam:.3g}")
     if lam < -SYMMETRY_RTOL * scale:
-        raise ValueError(f"{name}: expected a positive semi-definite matrix, found smallest eigenvalue {lam:.3g}")
+        raise ValueError(f"{name}: expected a positive semi-definite matrix, found smallest "
+                         f"eigenvalue {lam:.3g}")
     return array
 
 
@@ -235,7 +244,8 @@ def instance(value, types, name: str, what: str | None = None):
     """
     if not isinstance(value, types):
         names = " or ".join(t.__name__ for t in (types if isinstance(types, tuple) else (types,)))
-        raise TypeError(f"{name}: expected {what or 'a ' + names}, found {type(value).__name__} {_describe(value)}")
+        raise TypeError(f"{name}: expected {what or 'a ' + names}, found {type(value).__name__} "
+                        f"{_describe(value)}")
     return value
 
 
@@ -252,7 +262,8 @@ def function(value, name: str):
     TypeError: g: expected a callable, found float 1.0
     """
     if not callable(value):
-        raise TypeError(f"{name}: expected a callable, found {type(value).__name__} {_describe(value)}")
+        raise TypeError(f"{name}: expected a callable, found {type(value).__name__} "
+                        f"{_describe(value)}")
     return value
 
 
@@ -274,14 +285,17 @@ def stochastic_matrix(value, name: str, size: int | None = None) -> np.ndarray:
     """
     matrix = real_array(value, name, ndim=2)
     if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
-        raise ValueError(f"{name}: expected a square (M, M) matrix with M >= 1, found shape {matrix.shape}")
+        raise ValueError(f"{name}: expected a square (M, M) matrix with M >= 1, found shape "
+                         f"{matrix.shape}")
     if size is not None and matrix.shape[0] != size:
         raise ValueError(f"{name}: expected shape ({size}, {size}), found shape {matrix.shape}")
     for i, row in enumerate(matrix):
         if np.any(row < 0):
-            raise ValueError(f"{name}: expected non-negative probabilities, found {row.min():.3g} in row {i}")
+            raise ValueError(f"{name}: expected non-negative probabilities, found {row.min():.3g} "
+                             f"in row {i}")
         if abs(row.sum() - 1.0) > WEIGHT_ATOL:
-            raise ValueError(f"{name}: expected rows summing to 1, found sum {row.sum():.10g} in row {i}")
+            raise ValueError(f"{name}: expected rows summing to 1, found sum {row.sum():.10g} in "
+                             f"row {i}")
     return matrix
 
 
@@ -325,7 +339,8 @@ def boolean(value, name: str) -> bool:
     return bool(value)
 
 
-def covariance(value, name: str, size: int | None = None, *, definite=False, scalar=False) -> np.ndarray:
+def covariance(value, name: str, size: int | None = None, *, definite=False,
+               scalar=False) -> np.ndarray:
     """A symmetric positive semi-definite (``definite=True``: definite) ``(size, size)`` matrix.
 
     ``scalar=True`` also accepts a number or a 1-element vector as a ``(1, 1)`` matrix.
@@ -345,7 +360,8 @@ def covariance(value, name: str, size: int | None = None, *, definite=False, sca
     want = "(n, n)" if size is None else f"({size}, {size})"
     if array.ndim != 2 or array.shape[0] != array.shape[1] or array.shape[0] == 0 \
             or (size is not None and array.shape[0] != size):
-        raise ValueError(f"{name}: expected a square matrix of shape {want}, found shape {array.shape}")
+        raise ValueError(f"{name}: expected a square matrix of shape {want}, found shape "
+                         f"{array.shape}")
     return semidefinite(array, name, definite=definite)
 
 
@@ -401,9 +417,11 @@ def probability_rows(value, name: str, shape) -> np.ndarray:
     """
     rows = real_array(value, name, shape=tuple(shape))
     if np.any(rows < 0):
-        raise ValueError(f"{name}: expected non-negative probabilities, found minimum {rows.min():.3g}")
+        raise ValueError(f"{name}: expected non-negative probabilities, found minimum "
+                         f"{rows.min():.3g}")
     sums = rows.sum(axis=-1)
     worst = np.argmax(np.abs(sums - 1.0)) if sums.size else None
     if worst is not None and abs(sums.flat[worst] - 1.0) > WEIGHT_ATOL:
-        raise ValueError(f"{name}: expected each row to sum to 1, found a sum {sums.flat[worst]:.10g}")
+        raise ValueError(f"{name}: expected each row to sum to 1, found a sum "
+                         f"{sums.flat[worst]:.10g}")
     return rows

@@ -23,7 +23,8 @@ if missing_requirements():
     def __getattr__(name):
         if name not in __all__:
             raise AttributeError(f"module 'asoc_companion' has no attribute {name!r}")
-        raise ModuleNotFoundError(f"asoc_companion.{name} needs {', '.join(missing_requirements())}: "
+        raise ModuleNotFoundError(f"asoc_companion.{name} needs "
+                                  f"{', '.join(missing_requirements())}: "
                                   f"{INSTALL_HINT}")
 else:
     from .captions import figure_caption
@@ -36,5 +37,6 @@ else:
 
 __all__ = ["figure_caption", "STYLE", "apply_style", "markdown_table", "save_figure", "save_table",
            "ledger_markdown", "write_ledger", "fill", "prose", "Entry", "load_reference", "status",
-           "bootstrap_ci", "bootstrap_median_ci", "settling_iteration", "load_all_values", "load_values",
+           "bootstrap_ci", "bootstrap_median_ci", "settling_iteration", "load_all_values",
+           "load_values",
            "CorruptValuesError", "Recorder", "active", "record", "setup"]

@@ -1,4 +1,5 @@
-"""Command line: ``python -m asoc_companion list | run NAME | figure N | table N | reproduce | ledger``.
+"""Command line:
+``python -m asoc_companion list | run NAME | figure N | table N | reproduce | ledger``.
 
 Each command takes ``--fidelity full|ci``. ``full`` runs the thesis's settings and
 updates ``figures/`` and the executed notebooks in ``book/``; ``ci`` runs small
@@ -37,7 +38,9 @@ FIDELITY_HELP = ("full: the thesis's settings, updates figures/ and book/; "
                  "ci: small Monte Carlo sizes, writes to book/_build/ci/ only (default: full)")
 
 def _short(value) -> str:
-    """A recorded value in a few characters (Monte Carlo record -> its estimate, claim -> verdict)."""
+    """A recorded value in a few characters (Monte Carlo record -> its estimate, claim ->
+    verdict).
+    """
     if isinstance(value, dict):
         if "holds" in value:
             return f"{'holds' if value['holds'] else 'fails'} ({_short(value.get('value'))})"
@@ -53,7 +56,8 @@ def _short(value) -> str:
 
 
 def compare_with_committed(name, output_dir, fidelity="ci") -> str:
-    """Table of ``name``'s values in ``output_dir`` next to the committed ones (key, committed, this run).
+    """Table of ``name``'s values in ``output_dir`` next to the committed ones (key, committed, this
+    run).
 
     The committed values come from the full-fidelity run; the column headers say so, and
     give this run's ``fidelity``.
@@ -135,7 +139,8 @@ def _ledger(fidelity):
         from .mutants import write_ledger_mutants
         write_ledger_mutants()                      # which claim checks catch their planted variant
     if fidelity == "full" and intro.exists():
-        _write_if_changed(intro, intro_markdown(intro.read_text(), ledger_rows(values=values)), " (summary)")
+        _write_if_changed(intro, intro_markdown(intro.read_text(), ledger_rows(values=values)),
+                          " (summary)")
 
 
 def _write_if_changed(path, text, remark=""):
@@ -157,7 +162,8 @@ def _parser():
                                        "else the nearest one above the current directory)")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, help_ in [("list", "list notebooks, figures and tables"),
-                        ("reproduce", "run every notebook whose inputs changed, then write the ledger"),
+                        ("reproduce",
+                         "run every notebook whose inputs changed, then write the ledger"),
                         ("ledger", "write the ledger page from the recorded values")]:
         p = sub.add_parser(name, help=help_, description=help_)
         p.add_argument("--fidelity", choices=("full", "ci"), default="full", help=FIDELITY_HELP)
@@ -167,8 +173,10 @@ def _parser():
                            help="notebooks run at the same time (default: the number of cores)")
     for name, what, help_, what_help in [
             ("figure", "number", "regenerate one figure by its number, e.g. 3.4 or own.1",
-             "the figure's number in the thesis (e.g. 3.4), or own.N for the companion's own figures"),
-            ("table", "number", "regenerate one table by its number, e.g. 3.2", "the table's number in the thesis"),
+             "the figure's number in the thesis (e.g. 3.4), or own.N for the companion's own "
+             "figures"),
+            ("table", "number", "regenerate one table by its number, e.g. 3.2",
+             "the table's number in the thesis"),
             ("run", "name", "run one notebook by its name, e.g. sec3_5 or findings",
              "the notebook's file name without .ipynb (list shows them)")]:
         p = sub.add_parser(name, help=help_, description=help_)
@@ -216,7 +224,8 @@ def _command(args) -> int:
         print(notebook_list(nbs.notebooks().values()))
         return 0
     if args.command in ("figure", "table", "run"):
-        info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command, args.number)
+        info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command,
+                                                                             args.number)
         overrides = nbs.parse_overrides(info, args.parameter)
         plan = make_plan(paths.project(), info, args.fidelity, overrides)
         if not overrides:

@@ -1,4 +1,6 @@
-"""Atomic file writing: a failed run leaves the previous file in place (the architecture page, book/architecture.md)."""
+"""Atomic file writing: a failed run leaves the previous file in place (the architecture page,
+book/architecture.md).
+"""
 
 import json
 import os
@@ -50,7 +52,8 @@ def to_jsonable(value):
 
     Examples
     --------
-    >>> to_jsonable({"rho": np.float64(0.25), 1: np.arange(3), "ok": np.bool_(True), "t": (1, None)})
+    >>> to_jsonable({"rho": np.float64(0.25), 1: np.arange(3), "ok": np.bool_(True), "t": (1,
+    ...     None)})
     {'rho': 0.25, '1': [0, 1, 2], 'ok': True, 't': [1, None]}
     >>> to_jsonable({1, 2})
     Traceback (most recent call last):
@@ -80,7 +83,8 @@ def atomic_write_json(path, obj) -> Path:
     Examples
     --------
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     print(atomic_write_json(Path(folder) / "v.json", {"b": np.int64(2), "a": [0.5]}).read_text(), end="")
+    ...     print(atomic_write_json(Path(folder) / "v.json", {"b": np.int64(2),
+    ...     "a": [0.5]}).read_text(), end="")
     {
      "a": [
       0.5

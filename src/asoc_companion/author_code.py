@@ -39,7 +39,8 @@ def load_reference(root=None) -> dict:
     The file of the checkout this runs in:
 
     >>> record = load_reference()
-    >>> record["author_code"]["repository"], {case["kind"] for case in record["cases"]} == {"alg31", "rho"}
+    >>> record["author_code"]["repository"], {case["kind"] for case in record["cases"]} == {"alg31",
+    ...     "rho"}
     ('https://github.com/Mxttak/MJLS', True)
     """
     return json.loads(paths.project(root).root.joinpath(*REFERENCE_FILE).read_text())
@@ -48,7 +49,8 @@ def load_reference(root=None) -> dict:
 def _require(mapping, keys, name):
     """``mapping`` if it is a dict with ``keys``, else a TypeError or ValueError naming ``name``."""
     if not isinstance(mapping, dict):
-        raise TypeError(f"{name}: expected a dict as in {'/'.join(REFERENCE_FILE)}, found {type(mapping).__name__}")
+        raise TypeError(f"{name}: expected a dict as in {'/'.join(REFERENCE_FILE)}, found "
+                        f"{type(mapping).__name__}")
     missing = [key for key in keys if key not in mapping]
     if missing:
         raise ValueError(f"{name}: missing {', '.join(missing)} (see {'/'.join(REFERENCE_FILE)})")
@@ -107,7 +109,8 @@ def comparison_table(record: dict):
               "gain vs author's (relative)", "speed-up of the default"]
     rows = []
     for i, case in enumerate(record["cases"]):
-        _require(case, ("kind", "n", "M", "open_loop_rho", "octave_seconds", "library_seconds"), f"record['cases'][{i}]")
+        _require(case, ("kind", "n", "M", "open_loop_rho", "octave_seconds", "library_seconds"),
+                 f"record['cases'][{i}]")
         lib, octave = case["library_seconds"], case["octave_seconds"]
         if case["kind"] == "alg31":
             its = case["library_iterations"]
@@ -126,10 +129,12 @@ def machine_sentence(record: dict) -> str:
 
     Examples
     --------
-    >>> print(machine_sentence({"machine": {"cpu": "AMD EPYC", "cores": 2, "octave": "7.3.0", "numpy": "2.1.0",
+    >>> print(machine_sentence({"machine": {"cpu": "AMD EPYC", "cores": 2, "octave": "7.3.0",
+    ...     "numpy": "2.1.0",
     ...     "blas": "scipy-openblas 0.3.27", "python": "3.11.7", "date": "2026-11-25",
     ...     "load_average_1min": [0.2, 1.1]},
-    ...     "author_code": {"commit": "94a92e9d"}, "cases": [{"repetitions": 3}, {"repetitions": 1}]}))
+    ...     "author_code": {"commit": "94a92e9d"}, "cases": [{"repetitions": 3},
+    ...     {"repetitions": 1}]}))
     Measured on 2026-11-25 on one AMD EPYC machine with 2 cores (1-minute load average 0.2 before, 1.1 after): the author's code (commit 94a92e9) under Octave 7.3.0; this library under Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27. Each time is the best of its case's runs: 3 for 1 case, 1 for 1 case.
     """
     m = _require(_require(record, ("machine", "author_code"), "record")["machine"],
@@ -139,6 +144,8 @@ def machine_sentence(record: dict) -> str:
     runs = Counter(case["repetitions"] for case in record.get("cases", []) if "repetitions" in case)
     runs = ("" if not runs else " Each time is the best of its case's runs: " + ", ".join(
         f"{r} for {k} case{'s' * (k != 1)}" for r, k in sorted(runs.items(), reverse=True)) + ".")
-    return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores{load}: the author's code "
-            f"(commit {record['author_code']['commit'][:7]}) under Octave {m['octave']}; this library under "
+    return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores{load}: the "
+            "author's code "
+            f"(commit {record['author_code']['commit'][:7]}) under Octave {m['octave']}; this "
+            "library under "
             f"Python {m['python']}, NumPy {m['numpy']} with {m['blas']}.{runs}")

@@ -59,7 +59,8 @@ def _mathjax_source() -> Path:
     """
     spec = find_spec("mathjax")
     if spec is None or not spec.submodule_search_locations:
-        raise RuntimeError("MathJax not installed: pip install 'asoc[companion]' (django-static-mathjax)")
+        raise RuntimeError("MathJax not installed: pip install 'asoc[companion]' "
+                           "(django-static-mathjax)")
     return Path(list(spec.submodule_search_locations)[0]) / "static" / "mathjax" / "es5"
 
 
@@ -89,7 +90,8 @@ def _unused_script(script, body: str, seen: set) -> bool:
     True
     >>> _unused_script(_JavaScript("_static/mathjax/a11y/sre.js"), "", set())
     True
-    >>> _unused_script(_JavaScript(f"_static/mathjax/{MATHJAX_BUNDLE}"), '<span class="math">x</span>', set())
+    >>> _unused_script(_JavaScript(f"_static/mathjax/{MATHJAX_BUNDLE}"),
+    ...     '<span class="math">x</span>', set())
     False
     """
     name = str(script.filename)
@@ -115,13 +117,16 @@ def _prune_page_assets(app, pagename, templatename, context, doctree):
     if app.builder.format != "html" or "script_files" not in context:
         return
     seen, body = set(), context.get("body", "")
-    context["script_files"][:] = [s for s in context["script_files"] if not _unused_script(s, body, seen)]
+    context["script_files"][:] = [s for s in context["script_files"] if not _unused_script(s, body,
+                                                                                           seen)]
     css_seen = set()
     context["css_files"][:] = [c for c in context["css_files"]
                                if not (c.filename in css_seen or css_seen.add(c.filename))]
 
 
-THEBE_BODY = re.compile(r"\s*<script type=\"text/x-thebe-config\">.*?</script>\s*<script>kernelName = [^<]*</script>",
+THEBE_BODY = re.compile(r"\s*<script "
+                        r"type=\"text/x-thebe-config\">.*?</script>\s*<script>kernelName = "
+                        r"[^<]*</script>",
                         re.DOTALL)
 """What sphinx-thebe (loaded by Jupyter Book on every book) appends to each page's body."""
 
@@ -175,7 +180,8 @@ def _configure(app, config):
     config.mathjax_path = f"mathjax/{MATHJAX_BUNDLE}"
     config.release = config.version = version("asoc")
     config.latex_elements = {**config.latex_elements, **LATEX_ELEMENTS,
-                             "maketitle": _title_page(config.html_title or config.project, config.release)}
+                             "maketitle": _title_page(config.html_title or config.project,
+                                                      config.release)}
     config.latex_use_xindy = False          # makeindex comes with TeX Live; xindy is a package more
     # Jupyter Book listed every .js under _static (a MathJax folder left there by an old
     # build would add 70 scripts): keep the book's own scripts only
@@ -255,7 +261,8 @@ def public_names(module) -> list:
             return False
         if getattr(obj, "__module__", None) == module.__name__:
             return True
-        return not (inspect.isclass(obj) or callable(obj)) and re.search(rf"^{name}\b.*=", source, re.M)
+        return not (inspect.isclass(obj) or callable(obj)) and re.search(rf"^{name}\b.*=", source,
+                                                                         re.M)
 
     return [name for name, obj in vars(module).items() if defined_here(name, obj)]
 
@@ -276,7 +283,8 @@ def _attribute_docs(module) -> dict:
 def documented(module, names) -> list:
     """``names`` without the module's data that has no documentation of its own."""
     docs = _attribute_docs(module)
-    return [n for n in names if inspect.isclass(getattr(module, n)) or callable(getattr(module, n)) or n in docs]
+    return [n for n in names if inspect.isclass(getattr(module, n)) or callable(getattr(module,
+                                                                                        n)) or n in docs]
 
 
 def _directive(module, name) -> str:
@@ -321,7 +329,8 @@ def api_markdown(module_name: str, groups: str) -> str:
         sections.append(("More" if sections else "", rest))
     order = [n for _, members in sections for n in members]
     table = "\n".join(f"   {n}" for n in order)
-    parts = [f"```{{eval-rst}}\n.. currentmodule:: {module_name}\n\n.. autosummary::\n   :nosignatures:\n\n{table}\n```"]
+    parts = [f"```{{eval-rst}}\n.. currentmodule:: {module_name}\n\n.. autosummary::\n   "
+             f":nosignatures:\n\n{table}\n```"]
     for title, members in sections:
         body = "\n".join(_directive(module, n) for n in members)
         parts.append((f"## {title}\n\n" if title else "") + f"```{{eval-rst}}\n{body}```")
@@ -331,7 +340,8 @@ def api_markdown(module_name: str, groups: str) -> str:
 def _expand_blocks(app, docname, source):
     text = source[0]
     if LAYOUT_MARKER in text:
-        text = text.replace(LAYOUT_MARKER, f"```text\n{_layout_tree(Path(app.srcdir).parent / 'src')}\n```")
+        text = text.replace(LAYOUT_MARKER,
+                            f"```text\n{_layout_tree(Path(app.srcdir).parent / 'src')}\n```")
     source[0] = API_BLOCK.sub(lambda m: api_markdown(m["module"], m["groups"]), text)
 
 

@@ -103,7 +103,8 @@ def _pending(plans, force) -> list:
 
 
 def reproduce(fidelity, force=False, jobs=None) -> int:
-    """Run every notebook whose inputs changed (all with ``force``), ``jobs`` at a time; 0 if all succeeded.
+    """Run every notebook whose inputs changed (all with ``force``), ``jobs`` at a time; 0 if all
+    succeeded.
 
     A notebook starts when the notebooks it depends on (``metadata.asoc.depends``) have
     finished; a failed notebook's dependants are skipped, the others still run.
@@ -153,7 +154,8 @@ def _longest_first(names, seconds) -> list:
 
     Examples
     --------
-    >>> _longest_first(["sec3_2", "theorems", "new", "sec2_5"], {"sec3_2": 6.0, "theorems": 300.0, "sec2_5": 90.0})
+    >>> _longest_first(["sec3_2", "theorems", "new", "sec2_5"], {"sec3_2": 6.0, "theorems": 300.0,
+    ...     "sec2_5": 90.0})
     ['new', 'theorems', 'sec2_5', 'sec3_2']
     """
     return sorted(names, key=lambda name: -seconds.get(name, float("inf")))

@@ -54,14 +54,17 @@ def load_claims(path=None) -> dict:
 
 
 def verdict(keys, reference, values) -> str:
-    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is absent,
+    """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is
+    absent,
     else ``not-resolved`` if a statistical claim among them is not resolved.
 
     Examples
     --------
     >>> from asoc_companion.reference import Entry
-    >>> reference = {"sec_demo.rho": Entry("sec_demo.rho", where="p. 1", kind="deterministic", thesis=0.25, tol=5e-5)}
-    >>> verdict(["sec_demo.rho"], reference, {"sec_demo.rho": 0.25}), verdict(["sec_demo.rho"], reference, {})
+    >>> reference = {"sec_demo.rho": Entry("sec_demo.rho", where="p. 1", kind="deterministic",
+    ...     thesis=0.25, tol=5e-5)}
+    >>> verdict(["sec_demo.rho"], reference, {"sec_demo.rho": 0.25}), verdict(["sec_demo.rho"],
+    ...     reference, {})
     ('reproduced', 'missing')
     """
     statuses = [status(reference[k], values.get(k)) for k in keys]
@@ -89,7 +92,8 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
     claims = claims if claims is not None else load_claims()
     reference = reference if reference is not None else load_reference()
     if number not in claims:
-        raise ValueError(f"number: figure {number!r} has no entry in {CLAIMS_NAME}; known: {', '.join(claims)}")
+        raise ValueError(f"number: figure {number!r} has no entry in {CLAIMS_NAME}; known: "
+                         f"{', '.join(claims)}")
     spec = claims[number]
     unknown = [k for k in spec["keys"] if k not in reference]
     if unknown:
@@ -99,7 +103,8 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
         line = f"**Ours:** {badge('new', 'nothing to check')} the thesis makes no checkable claim about this figure."
     else:
         st = verdict(spec["keys"], reference, values or {})
-        n_ok = sum(status(reference[k], (values or {}).get(k)) == "reproduced" for k in spec["keys"])
+        n_ok = sum(status(reference[k],
+                          (values or {}).get(k)) == "reproduced" for k in spec["keys"])
         notebooks = dict.fromkeys(k.split(".", 1)[0] for k in spec["keys"])
         where = ", ".join(f"{{ref}}`ledger <{ledger_label(n)}>`" for n in notebooks)
         words = "shows it" if st == "reproduced" else "shows it in part" if st == "deviates" and n_ok else STATUS_WORDS[st]
@@ -108,7 +113,8 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
     return f":::{{container}} asoc-caption\n{head}\n\n{line}\n:::\n"
 
 
-STATUS_WORDS = {"deviates": "does not show it", "missing": "not computed", "not-resolved": "not resolved"}
+STATUS_WORDS = {"deviates": "does not show it", "missing": "not computed",
+                "not-resolved": "not resolved"}
 
 
 def figure_caption(number: str):
@@ -138,7 +144,8 @@ def figure_caption(number: str):
 def _caption_cell(number, output, count):
     import nbformat
 
-    cell = nbformat.v4.new_code_cell(f'repro.figure_caption("{number}")', metadata={"tags": ["remove-input"]})
+    cell = nbformat.v4.new_code_cell(f'repro.figure_caption("{number}")',
+                                     metadata={"tags": ["remove-input"]})
     if output is not None:
         cell.execution_count = count          # nbval rejects stored outputs of a cell never run
         cell.outputs = [nbformat.v4.new_output("display_data", data={
@@ -147,7 +154,8 @@ def _caption_cell(number, output, count):
 
 
 def _insert_caption_cells(path, with_output=False) -> list:
-    """Add a ``repro.figure_caption`` cell after each figure of the notebook at ``path`` that lacks one.
+    """Add a ``repro.figure_caption`` cell after each figure of the notebook at ``path`` that lacks
+    one.
 
     The cell goes right after the cell that saves the figure (after its Markdown caption, if
     one follows). Other cells are left untouched; ``with_output`` stores the caption rendered
@@ -182,14 +190,17 @@ def _insert_caption_cells(path, with_output=False) -> list:
         if any(call in c.source for c in nb.cells):
             continue
         saves = [i for i, c in enumerate(nb.cells) if c.cell_type == "code"
-                 and re.search(rf',\s*"{re.escape(number)}"\)', c.source)]      # save_figure(fig, "N"), f(..., "N")
+                 # save_figure(fig, "N"), f(..., "N")
+                 and re.search(rf',\s*"{re.escape(number)}"\)', c.source)]
         if not saves:
             raise ValueError(f"path: {path} saves no figure {number}")
         at = saves[0] + 1
         if at < len(nb.cells) and nb.cells[at].cell_type == "markdown" and nb.cells[at].source.startswith("**Figure"):
             at += 1
-        count = max((c.get("execution_count") or 0 for c in nb.cells[:at] if c.cell_type == "code"), default=0)
-        nb.cells.insert(at, _caption_cell(number, caption_markdown(number, values=values) if with_output else None,
+        count = max((c.get("execution_count") or 0 for c in nb.cells[:at] if c.cell_type == "code"),
+                    default=0)
+        nb.cells.insert(at, _caption_cell(number, caption_markdown(number,
+                                                                   values=values) if with_output else None,
                                           count))
         added.append(number)
     if added:

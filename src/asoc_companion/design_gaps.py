@@ -32,7 +32,8 @@ def _draw(rng):
 
 
 def _infinite_horizon_gap(rng):
-    """Relative gap of Alg. 3.2's controller to the exact-cost design started from it (None if Alg. 3.2
+    """Relative gap of Alg. 3.2's controller to the exact-cost design started from it (None if Alg.
+    3.2
     does not converge to a stabilising controller).
 
     Examples
@@ -67,12 +68,14 @@ def _finite_horizon_gap(rng, horizon=20):
     mean0, cov0 = rng.standard_normal((sys.M, sys.nx)), random_spd_stack(rng, sys.M, sys.nx, 0.2)
     kwargs = dict(horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0, warn=False)
     run = finite_horizon_dynamic_output_feedback(sys, max_iter=300, **kwargs)
-    best = exact_finite_horizon_dynamic_output_feedback(sys, init=(run.F, run.K, run.L), max_iter=1000, **kwargs)
+    best = exact_finite_horizon_dynamic_output_feedback(sys, init=(run.F, run.K, run.L),
+                                                        max_iter=1000, **kwargs)
     return float((run.cost - best.cost) / best.cost)
 
 
 def design_gaps(seed_sequence, n_systems, horizon=20, progress=False):
-    """Relative gaps of Alg. 3.2 and Alg. 3.3 over ``n_systems`` seeded systems each (one child per system).
+    """Relative gaps of Alg. 3.2 and Alg. 3.3 over ``n_systems`` seeded systems each (one child per
+    system).
 
     Returns ``{"alg_3_2": [...], "alg_3_3": [...], "alg_3_2_not_applicable": int}``.
 
@@ -83,7 +86,8 @@ def design_gaps(seed_sequence, n_systems, horizon=20, progress=False):
     (2, True)
     """
     if not isinstance(seed_sequence, np.random.SeedSequence):
-        raise TypeError(f"seed_sequence: expected a numpy.random.SeedSequence, found {type(seed_sequence).__name__}")
+        raise TypeError("seed_sequence: expected a numpy.random.SeedSequence, found "
+                        f"{type(seed_sequence).__name__}")
     if isinstance(n_systems, bool) or not isinstance(n_systems, (int, np.integer)) or n_systems < 1:
         raise ValueError(f"n_systems: expected a positive integer, found {n_systems!r}")
     infinite, finite = seed_sequence.spawn(2)

@@ -126,7 +126,8 @@ def evidence_text(evidence) -> str:
     head = f"*Evidence, {EVIDENCE_BADGE[kind][1]}:*"
     if kind == "thesis-error":
         body = (
-            f"{_sentence(evidence['certificate'])} Computed in {_section_link(evidence['section'])}."
+            f"{_sentence(evidence['certificate'])} Computed in "
+            f"{_section_link(evidence['section'])}."
         )
     elif kind == "unspecified":
         readings = "; ".join(str(r).rstrip(".") for r in evidence["readings"])

@@ -16,7 +16,8 @@ import matplotlib.pyplot as plt
 
 from .atomic_files import atomic_write_bytes, atomic_write_text
 
-__all__ = ["PALETTE", "PRINT_WIDTH_INCHES", "MIN_FONT_POINTS", "MIN_AXES_INCHES", "STYLE", "SAVE_METADATA",
+__all__ = ["PALETTE", "PRINT_WIDTH_INCHES", "MIN_FONT_POINTS", "MIN_AXES_INCHES", "STYLE",
+           "SAVE_METADATA",
            "apply_style", "colour_name", "fit_for_print", "NUMBER", "file_stem", "save_figure",
            "markdown_table", "save_table", "close"]
 
@@ -130,7 +131,8 @@ NUMBER = re.compile(r"(\d+)\.(\d+)|own\.(\d+)")
 
 
 def file_stem(kind: str, number: str) -> str:
-    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other numbers.
+    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other
+    numbers.
 
     Examples
     --------
@@ -143,7 +145,8 @@ def file_stem(kind: str, number: str) -> str:
     """
     match = NUMBER.fullmatch(str(number))
     if match is None:
-        raise ValueError(f"number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis), "
+        raise ValueError("number must look like '3.4' (thesis numbering) or 'own.1' (not in the "
+                         "thesis), "
                          f"found {number!r}")
     return f"{kind}{match[1]}_{match[2]}" if match[3] is None else f"{kind}_own_{match[3]}"
 
@@ -284,7 +287,8 @@ def save_table(number: str, header, rows, output_dir) -> str:
     Raises
     ------
     ValueError
-        If ``number`` does not look like "3.2" or "own.1", or a row has a different number of cells than
+        If ``number`` does not look like "3.2" or "own.1", or a row has a different number of cells
+        than
         ``header``.
 
     Examples

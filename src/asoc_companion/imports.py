@@ -106,7 +106,8 @@ def closure(names, src, exclude=()) -> dict:
     ...     _ = (Path(src) / "pkg" / "__init__.py").write_text("")
     ...     _ = (Path(src) / "pkg" / "a.py").write_text("import numpy; from . import b")
     ...     _ = (Path(src) / "pkg" / "b.py").write_text("")
-    ...     print(sorted(closure(["pkg.a"], src)), sorted(closure(["pkg.a"], src, exclude=("pkg.b",))))
+    ...     print(sorted(closure(["pkg.a"], src)), sorted(closure(["pkg.a"], src,
+    ...     exclude=("pkg.b",))))
     ['pkg', 'pkg.a', 'pkg.b'] ['pkg', 'pkg.a']
     """
     src = Path(src)
@@ -129,7 +130,8 @@ def closure(names, src, exclude=()) -> dict:
 
 
 def notebook_modules(path, src, exclude=()) -> dict:
-    """``{module name: file}`` of the project modules the notebook at ``path`` imports, transitively.
+    """``{module name: file}`` of the project modules the notebook at ``path`` imports,
+    transitively.
 
     A cell that does not parse makes the whole of ``src`` count (a conservative answer).
 

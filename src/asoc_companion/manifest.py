@@ -61,8 +61,10 @@ def source_hash(path) -> str:
     (True, False, 64)
     """
     nb = json.loads(Path(path).read_text())
-    cells = [[c["cell_type"], "".join(c["source"]) if isinstance(c["source"], list) else c["source"]]
-             for c in nb["cells"] if "injected-parameters" not in c.get("metadata", {}).get("tags", [])]
+    cells = [[c["cell_type"], "".join(c["source"]) if isinstance(c["source"],
+                                                                 list) else c["source"]]
+             for c in nb["cells"] if "injected-parameters" not in c.get("metadata", {}).get("tags",
+                                                                                            [])]
     return _sha256(json.dumps([cells, nb["metadata"].get("asoc")], sort_keys=True).encode())
 
 
@@ -109,7 +111,8 @@ def module_hashes(notebook_path, src=None) -> dict:
     ...     for name in ("__init__.py", "a.py", "b.py"):
     ...         _ = (src / "pkg" / name).write_text("")
     ...     cells = [{"cell_type": "code", "source": "import pkg.a", "metadata": {}}]
-    ...     _ = (Path(folder) / "demo.ipynb").write_text(json.dumps({"cells": cells, "metadata": {}}))
+    ...     _ = (Path(folder) / "demo.ipynb").write_text(json.dumps({"cells": cells,
+    ...     "metadata": {}}))
     ...     print(sorted(module_hashes(Path(folder) / "demo.ipynb", src)))
     ['pkg/__init__.py', 'pkg/a.py']
     """
@@ -126,13 +129,15 @@ def dependencies(path) -> list:
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = Path(folder) / "findings.ipynb"
-    ...     _ = path.write_text(json.dumps({"cells": [], "metadata": {"asoc": {"depends": ["sec3_5"]}}}))
+    ...     _ = path.write_text(json.dumps({"cells": [],
+    ...     "metadata": {"asoc": {"depends": ["sec3_5"]}}}))
     ...     print(dependencies(path))
     ['sec3_5']
     """
     depends = json.loads(Path(path).read_text())["metadata"].get("asoc", {}).get("depends", [])
     if isinstance(depends, str) or not all(isinstance(d, str) for d in depends):
-        raise ValueError(f"{Path(path).name}: metadata.asoc.depends must be a list of notebook names, "
+        raise ValueError(f"{Path(path).name}: metadata.asoc.depends must be a list of notebook "
+                         "names, "
                          f"found {depends!r}")
     return list(depends)
 
@@ -151,7 +156,8 @@ def entry(plan) -> dict:
     ...     for name in ("src/pkg/__init__.py", "environment.txt"):
     ...         _ = (root / name).write_text("")
     ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}}]
-    ...     _ = (root / "book" / "demo.ipynb").write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
+    ...     _ = (root / "book" / "demo.ipynb").write_text(json.dumps({"cells": cells,
+    ...     "metadata": {"asoc": {}}}))
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
     ...     hashes = entry(make_plan(paths.project(), info, "ci"))
     >>> sorted(hashes), list(hashes["modules"]), hashes["depends"]
@@ -229,7 +235,8 @@ def _incomplete_outputs(plan, reference=None) -> list:
     >>> from asoc_companion.notebooks import NotebookInfo
     >>> from asoc_companion.reference import Entry
     >>> from asoc_companion.recorder import Recorder
-    >>> reference = {f"demo.{k}": Entry(f"demo.{k}", where="an example", kind="measured") for k in ("rho", "gain")}
+    >>> reference = {f"demo.{k}": Entry(f"demo.{k}", where="an example",
+    ...     kind="measured") for k in ("rho", "gain")}
     >>> from asoc_companion.plan import make_plan
     >>> with paths.scratch_project() as root:
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
@@ -254,7 +261,8 @@ def _incomplete_outputs(plan, reference=None) -> list:
         missing = [e.name for e in reference.values()
                    if e.notebook == plan.name and e.name not in recorded]
         if missing:
-            problems.append(f"values missing: {', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''}")
+            problems.append("values missing: "
+                            f"{', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''}")
     try:
         why = incomplete_notebook(executed) if executed.exists() else "no executed notebook"
     except (ValueError, KeyError):
@@ -269,7 +277,8 @@ def last_seconds(output_dir) -> dict:
     --------
     >>> import tempfile
     >>> out = Path(tempfile.mkdtemp())
-    >>> _ = atomic_write_json(manifest_file(out), {"sec3_2": {"seconds": 4.0}, "sec3_4": {"source": "ab12"}})
+    >>> _ = atomic_write_json(manifest_file(out), {"sec3_2": {"seconds": 4.0},
+    ...     "sec3_4": {"source": "ab12"}})
     >>> last_seconds(out)
     {'sec3_2': 4.0}
     """
@@ -293,7 +302,8 @@ def changed_inputs(plan) -> list:
     ...     (root / "src/pkg").mkdir(parents=True)
     ...     for name in ("src/pkg/__init__.py", "environment.txt"):
     ...         _ = (root / name).write_text("")
-    ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {}, "execution_count": 1}]
+    ...     cells = [{"cell_type": "code", "source": "import pkg", "metadata": {},
+    ...     "execution_count": 1}]
     ...     info = NotebookInfo("demo", root / "book" / "demo.ipynb", "Demo", (), ())
     ...     _ = info.path.write_text(json.dumps({"cells": cells, "metadata": {"asoc": {}}}))
     ...     plan = make_plan(paths.project(), info, "full")      # executed in place
@@ -319,7 +329,8 @@ def changed_inputs(plan) -> list:
         if key == "modules" and isinstance(old.get(key), dict):
             edited = sorted(p for p in set(new[key]) | set(old[key]) if new[key].get(p) != old[key].get(p))
             if edited:
-                changed.append(f"modules ({', '.join(edited[:3])}{', ...' if len(edited) > 3 else ''})")
+                changed.append("modules "
+                               f"({', '.join(edited[:3])}{', ...' if len(edited) > 3 else ''})")
         elif old.get(key) != new[key]:
             changed.append(key)
     return changed
@@ -341,7 +352,8 @@ def update_manifest(plan, seconds=None) -> dict:
     ...     _ = info.path.write_text(json.dumps({"cells": [], "metadata": {"asoc": {}}}))
     ...     plan = make_plan(paths.project(), info, "ci")
     ...     recorded = update_manifest(plan, seconds=12.34)
-    ...     print(recorded["seconds"], list(load_manifest(plan.output_dir)), recorded["environment"])
+    ...     print(recorded["seconds"], list(load_manifest(plan.output_dir)),
+    ...     recorded["environment"])
     12.3 ['demo'] None
     """
     manifest = load_manifest(plan.output_dir)

@@ -102,7 +102,9 @@ def _decided_variant(record):
 
 
 def _decided_claims(values):
-    """``{claim key: variant}`` of every recorded value decided by :func:`asoc.stats.decide_claim`."""
+    """``{claim key: variant}`` of every recorded value decided by
+    :func:`asoc.stats.decide_claim`.
+    """
     return {key: _decided_variant(value) for key, value in values.items()
             if isinstance(value, dict) and {"samples", "above", "below", "level"} <= set(value)}
 
@@ -118,7 +120,8 @@ def _sec32_variants():
         ),
         "sec3_2.mjls_trajectory_diverges": (
             f"1,000 runs contracting by half a step: x_K = 2^-K x_0 after K = {steps} steps",
-            lambda: checks.diverges(np.tile(np.asarray(SEC32_X0) * 0.5**steps, (1000, 1)), SEC32_X0),
+            lambda: checks.diverges(np.tile(np.asarray(SEC32_X0) * 0.5**steps, (1000, 1)),
+                                    SEC32_X0),
         ),
     }
 

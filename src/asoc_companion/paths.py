@@ -137,7 +137,8 @@ def _find_root(start=None) -> Path:
     for folder in (here, *here.parents):
         if _is_project(folder):
             return folder
-    raise RuntimeError(f"no checkout of the companion found above {here} (a folder with book/_toc.yml and "
+    raise RuntimeError(f"no checkout of the companion found above {here} (a folder with "
+                       "book/_toc.yml and "
                        f"figures/): run from inside one, pass --root, or set {ENV_VAR}")
 
 
@@ -154,8 +155,10 @@ def project(root=None) -> Project:
 
 @contextmanager
 def scratch_project():
-    """An empty project in a temporary folder (``book/_toc.yml``, ``figures/``, the reference folder),
-    made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root, removes it after.
+    """An empty project in a temporary folder (``book/_toc.yml``, ``figures/``, the reference
+    folder),
+    made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root, removes it
+    after.
 
     For Examples and experiments that write into a project without touching the checkout.
 

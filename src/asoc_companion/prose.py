@@ -1,4 +1,5 @@
-"""Numbers in prose come from recorded values (the architecture page, book/architecture.md, "Portability").
+"""Numbers in prose come from recorded values (the architecture page, book/architecture.md,
+"Portability").
 
 Text (a ledger note, a notebook paragraph, the findings page) names a recorded value by a
 placeholder ``{{path:spec}}`` and :func:`fill` replaces it by the value formatted with the
@@ -10,7 +11,8 @@ Python format ``spec``:
 - inside a notebook, ``thesis_<notebook>.<key>`` is the value the thesis prints for a
   reference entry (``tests/reference/thesis_values``), so quotes of printed numbers are not
   typed either: ``{{thesis_sec3_5.rho_open_T1:.4f}}``;
-- a Monte Carlo record (a dict with ``value`` or ``median`` and ``ci``) prints as ``m [lo, hi]``, a claim
+- a Monte Carlo record (a dict with ``value`` or ``median`` and ``ci``) prints as ``m [lo, hi]``, a
+  claim
   record (``holds``, ``value``) prints its value, a bool prints ``yes``/``no``.
 
 An unknown path raises ``KeyError`` naming it: a number is never typed in its place.
@@ -61,7 +63,8 @@ def _format_value(value, spec: str = "") -> str:
 
     Examples
     --------
-    >>> _format_value({"median": 1.5, "ci": [1.25, 1.75]}, ".2f"), _format_value(True), _format_value([0.5, 1], ".1f")
+    >>> _format_value({"median": 1.5, "ci": [1.25, 1.75]},
+    ...     ".2f"), _format_value(True), _format_value([0.5, 1], ".1f")
     ('1.50 [1.25, 1.75]', 'yes', '[0.5, 1.0]')
     """
     if isinstance(value, dict):
@@ -100,10 +103,12 @@ def fill(text: str, values: dict, notebook: str | None = None) -> str:
 
     Examples
     --------
-    >>> fill("rho = {{sec3_5.rho:.3f}}, stable: {{stable}}", {"sec3_5.rho": 0.25, "sec3_5.stable": True}, "sec3_5")
+    >>> fill("rho = {{sec3_5.rho:.3f}}, stable: {{stable}}", {"sec3_5.rho": 0.25,
+    ...     "sec3_5.stable": True}, "sec3_5")
     'rho = 0.250, stable: yes'
     """
-    return PLACEHOLDER.sub(lambda m: _format_value(_lookup(m.group(1), values, notebook), m.group(2) or ""), text)
+    return PLACEHOLDER.sub(lambda m: _format_value(_lookup(m.group(1), values, notebook),
+                                                   m.group(2) or ""), text)
 
 
 def thesis_values(reference=None) -> dict:

@@ -1,7 +1,8 @@
 """The recorder of one notebook run (book/architecture.md, "The flow of one number").
 
 A notebook calls :func:`setup` once, right after its ``parameters`` cell; it creates a
-:class:`Recorder` and makes it the *active* one (:func:`active`), which :func:`record`, :func:`save_figure`,
+:class:`Recorder` and makes it the *active* one (:func:`active`), which :func:`record`,
+:func:`save_figure`,
 :func:`save_table`, :func:`asoc_companion.prose` and :func:`asoc_companion.figure_caption`
 use (the notebook-facing calls stay one-liners, as ``matplotlib.pyplot`` keeps a current
 figure). Code outside a notebook creates a :class:`Recorder` and calls its methods.
@@ -46,7 +47,8 @@ class Recorder:
     >>> from asoc_companion.values import load_values
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     recorder = Recorder("demo", "ci", folder)
-    ...     print(recorder.record("rho", 0.25), recorder.qualified_values(), load_values("demo", folder))
+    ...     print(recorder.record("rho", 0.25), recorder.qualified_values(), load_values("demo",
+    ...     folder))
     0.25 {'demo.rho': 0.25} {'rho': 0.25}
     >>> Recorder("sec3.5")
     Traceback (most recent call last):
@@ -85,7 +87,8 @@ class Recorder:
     def write(self) -> Path:
         """Write the values recorded so far (atomically); return the file."""
         return atomic_write_json(values_file(self.output_dir, self.notebook),
-                                 {"notebook": self.notebook, "fidelity": self.fidelity, "values": self.values})
+                                 {"notebook": self.notebook, "fidelity": self.fidelity,
+                                  "values": self.values})
 
     def save_figure(self, fig, number: str) -> Path:
         """:func:`asoc_companion.save_figure` into this run's folder."""
@@ -154,7 +157,8 @@ def scratch_run(notebook: str = "demo", output_dir=None):
     --------
     >>> before = active(required=False)
     >>> with scratch_run() as out:
-    ...     print(active().notebook, record("rho", 0.25), [p.name for p in (out / "values").iterdir()])
+    ...     print(active().notebook, record("rho", 0.25),
+    ...     [p.name for p in (out / "values").iterdir()])
     demo 0.25 ['demo.json']
     >>> active(required=False) is before
     True
@@ -171,7 +175,8 @@ def scratch_run(notebook: str = "demo", output_dir=None):
 
 
 def active(required: bool = True) -> Recorder | None:
-    """The recorder of the running notebook (:func:`setup`); None if there is none and not ``required``.
+    """The recorder of the running notebook (:func:`setup`); None if there is none and not
+    ``required``.
 
     Raises
     ------
@@ -197,7 +202,8 @@ def active(required: bool = True) -> Recorder | None:
 
 
 def record(key: str, value):
-    """Record ``value`` under ``key`` with the active recorder; return ``value`` (see :meth:`Recorder.record`).
+    """Record ``value`` under ``key`` with the active recorder; return ``value`` (see
+    :meth:`Recorder.record`).
 
     Examples
     --------
@@ -210,7 +216,8 @@ def record(key: str, value):
 
 
 def save_figure(fig, number: str, output_dir=None) -> Path:
-    """Save ``fig`` as ``fig<number>.png`` and ``.pdf`` into ``output_dir`` (default: the active run's folder).
+    """Save ``fig`` as ``fig<number>.png`` and ``.pdf`` into ``output_dir`` (default: the active
+    run's folder).
 
     Examples
     --------
@@ -223,7 +230,8 @@ def save_figure(fig, number: str, output_dir=None) -> Path:
 
 
 def save_table(number: str, header, rows, output_dir=None) -> str:
-    """Save a table as ``table<number>.csv`` and ``.md`` (default folder: the active run's); return the Markdown.
+    """Save a table as ``table<number>.csv`` and ``.md`` (default folder: the active run's); return
+    the Markdown.
 
     Examples
     --------

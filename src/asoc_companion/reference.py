@@ -1,6 +1,8 @@
-"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and the status of each value.
+"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and the status of each
+value.
 
-Each notebook has its own file (so work on one section does not touch another's). Each entry is keyed
+Each notebook has its own file (so work on one section does not touch another's). Each entry is
+keyed
 ``<notebook>.<key>`` and holds
 
 ``where``    where the thesis prints it (section, figure, table, page);
@@ -65,7 +67,8 @@ class Entry:
 
     Examples
     --------
-    >>> entry = Entry("sec3_5.rho_open_T1", where="an example", kind="deterministic", thesis=0.25, tol=5e-5)
+    >>> entry = Entry("sec3_5.rho_open_T1", where="an example", kind="deterministic", thesis=0.25,
+    ...     tol=5e-5)
     >>> entry.notebook, entry.name, entry.expect
     ('sec3_5', 'rho_open_T1', 'reproduced')
     """
@@ -90,7 +93,8 @@ class Entry:
 
 
 def load_reference(path=None) -> dict:
-    """Load and validate the reference files (a folder of YAML files, or one file); return ``{key: Entry}``.
+    """Load and validate the reference files (a folder of YAML files, or one file); return
+    ``{key: Entry}``.
 
     Parameters
     ----------
@@ -132,7 +136,8 @@ def load_reference(path=None) -> dict:
                 if key in raw:
                     raise ValueError(f"reference key {key!r} appears twice (in {file.name})")
                 if path.is_dir() and not key.startswith(file.stem + "."):
-                    raise ValueError(f"reference key {key!r} belongs in {key.split('.')[0]}.yaml, not {file.name}")
+                    raise ValueError(f"reference key {key!r} belongs in {key.split('.')[0]}.yaml, "
+                                     f"not {file.name}")
                 raw[key] = spec
     entries = {}
     for key, spec in raw.items():
@@ -142,7 +147,8 @@ def load_reference(path=None) -> dict:
         if entry.kind not in KINDS:
             raise ValueError(f"reference {key}: kind must be one of {KINDS}, found {entry.kind!r}")
         if entry.expect not in EXPECT:
-            raise ValueError(f"reference {key}: expect must be one of {EXPECT}, found {entry.expect!r}")
+            raise ValueError(f"reference {key}: expect must be one of {EXPECT}, found "
+                             f"{entry.expect!r}")
         if entry.kind == "deterministic" and entry.tol is None:
             raise ValueError(f"reference {key}: a deterministic value needs tol")
         entries[key] = entry
@@ -183,7 +189,8 @@ def status(entry: Entry, ours) -> str:
     >>> status(rho, 0.25003), status(rho, 0.2501), status(rho, None)
     ('reproduced', 'deviates', 'missing')
     >>> cost = Entry("demo.cost", where="an example", kind="monte_carlo", thesis=10.0, tol=0.05)
-    >>> status(cost, {"median": 10.4, "ci": [9.98, 10.9]}), status(cost, {"median": 10.4, "ci": [10.1, 10.9]})
+    >>> status(cost, {"median": 10.4, "ci": [9.98, 10.9]}), status(cost, {"median": 10.4,
+    ...     "ci": [10.1, 10.9]})
     ('reproduced', 'deviates')
     """
     if ours is None:
@@ -223,7 +230,8 @@ def monte_carlo_rtol(ours_ci, ours_full, z: float = Z_MONTE_CARLO):
     Standard errors 2 / 3.92 and 1 / 3.92 from the two 95% intervals, four of them combined,
     relative to the full estimate 10:
 
-    >>> round(monte_carlo_rtol({"median": 10.0, "ci": [9.0, 11.0]}, {"median": 10.0, "ci": [9.5, 10.5]}), 4)
+    >>> round(monte_carlo_rtol({"median": 10.0, "ci": [9.0, 11.0]}, {"median": 10.0, "ci": [9.5,
+    ...     10.5]}), 4)
     0.2282
     >>> print(monte_carlo_rtol(10.0, {"median": 10.0, "ci": [9.5, 10.5]}))
     None
@@ -247,7 +255,8 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
     >>> agrees_with_full(rho, 0.25001, 0.25)
     (True, '|ci - full| = 1e-05, tol 5e-05')
     >>> cost = Entry("demo.cost", where="an example", kind="monte_carlo", thesis=10.0, ci_rtol=0.02)
-    >>> agrees_with_full(cost, {"median": 10.4, "ci": [9.4, 11.4]}, {"median": 10.0, "ci": [9.5, 10.5]})
+    >>> agrees_with_full(cost, {"median": 10.4, "ci": [9.4, 11.4]}, {"median": 10.0, "ci": [9.5,
+    ...     10.5]})
     (False, 'relative |ci - full| = 0.04, ci_rtol 0.02')
 
     A measured record may nest fields; its words (a verdict, a version) must be equal:
@@ -256,7 +265,8 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
     >>> agrees_with_full(margin, {"m": -0.03832, "verdict": "infeasible"},
     ...                  {"m": -0.03833, "verdict": "infeasible"})
     (True, 'relative |ci - full| = 0.000261, ci_rtol 0.001')
-    >>> agrees_with_full(margin, {"m": 0.1, "verdict": "feasible"}, {"m": -0.1, "verdict": "infeasible"})
+    >>> agrees_with_full(margin, {"m": 0.1, "verdict": "feasible"}, {"m": -0.1,
+    ...     "verdict": "infeasible"})
     (False, "verdict: ci 'feasible', full 'infeasible'")
     """
     if entry.kind == "deterministic":
@@ -275,9 +285,11 @@ def agrees_with_full(entry: Entry, ours_ci, ours_full) -> tuple[bool, str]:
         return False, f"fields differ: ci {sorted(leaves_a)}, full {sorted(leaves_b)}"
     words = [path for path, leaf in leaves_b.items() if isinstance(leaf, (str, bool))]
     if any(leaves_a[path] != leaves_b[path] for path in words):
-        return False, "; ".join(f"{'.'.join(p) or 'value'}: ci {leaves_a[p]!r}, full {leaves_b[p]!r}" for p in words
+        return False, "; ".join(f"{'.'.join(p) or 'value'}: ci {leaves_a[p]!r}, full "
+                                f"{leaves_b[p]!r}" for p in words
                                 if leaves_a[p] != leaves_b[p])
-    rel = max((_relative_difference(leaves_a[p], leaves_b[p]) for p in leaves_b if p not in words), default=0.0)
+    rel = max((_relative_difference(leaves_a[p], leaves_b[p]) for p in leaves_b if p not in words),
+              default=0.0)
     return rel <= entry.ci_rtol, f"relative |ci - full| = {rel:.3g}, ci_rtol {entry.ci_rtol}"
 
 

@@ -13,7 +13,8 @@ __all__ = ["PUBLISHED_SIZE", "scaling_system", "published_size_system", "dense_b
            "published_size_timings"]
 
 
-#: The largest MJLS size in public code (a policy-gradient study in C++): states, modes, inputs = outputs, open-loop
+#: The largest MJLS size in public code (a policy-gradient study in C++): states, modes, inputs =
+#: outputs, open-loop
 #: rho.
 PUBLISHED_SIZE = {"n": 100, "M": 100, "inputs": 12, "radius": 0.99}
 
@@ -74,7 +75,8 @@ def published_size_system(rng):
     >>> PUBLISHED_SIZE
     {'n': 100, 'M': 100, 'inputs': 12, 'radius': 0.99}
     """
-    return scaling_system(rng, PUBLISHED_SIZE["n"], PUBLISHED_SIZE["M"], inputs=PUBLISHED_SIZE["inputs"],
+    return scaling_system(rng, PUBLISHED_SIZE["n"], PUBLISHED_SIZE["M"],
+                          inputs=PUBLISHED_SIZE["inputs"],
                           radius=PUBLISHED_SIZE["radius"])
 
 

@@ -1,4 +1,5 @@
-"""Crash-safe execution of a notebook run (book/architecture.md, "The manifest and crash safety"): a run executes
+"""Crash-safe execution of a notebook run (book/architecture.md, "The manifest and crash safety"): a
+run executes
 into a staging folder; :func:`commit` moves its files into place with SIGINT and SIGTERM held off,
 and :func:`remove_stage` removes the folder whatever happened; :func:`one_blas_thread` gives every
 kernel one BLAS thread, so one machine gives one set of numbers.
@@ -18,9 +19,11 @@ __all__ = ["THREAD_VARIABLES", "remove_stage", "one_blas_thread", "commit"]
 
 
 #: Every kernel computes with one BLAS/OpenMP thread, whoever starts it (``make book``, which runs
-#: notebooks side by side, or ``run``/``figure`` alone): a multi-threaded BLAS sums in another order,
+#: notebooks side by side, or ``run``/``figure`` alone): a multi-threaded BLAS sums in another
+#: order,
 #: and an iterative fit that stops unconverged (Sec. 2.6's OMAT GPs) ends elsewhere.
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                    "NUMEXPR_NUM_THREADS")
 
 
 def remove_stage(stage: Path, attempts: int = 5):
@@ -103,7 +106,8 @@ def _move(source: Path, target: Path):
     except OSError as err:
         if err.errno != errno.EXDEV:
             raise
-        atomic_write_bytes(target, source.read_bytes())       # another file system: copy, then rename
+        # another file system: copy, then rename
+        atomic_write_bytes(target, source.read_bytes())
 
 
 def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook: Path):
@@ -114,10 +118,13 @@ def commit(stage: Path, output_dir: Path, staged_notebook: Path, target_notebook
     --------
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as stage, tempfile.TemporaryDirectory() as out:
-    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png", "values/a.json",
+    ...     _ = [atomic_write_bytes(Path(stage) / name, b"{}") for name in ("a.png",
+    ...     "values/a.json",
     ...     "notebooks/a.ipynb")]
-    ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "a.ipynb", Path(out) / "a.ipynb")
-    ...     print(sorted(p.relative_to(out).as_posix() for p in Path(out).rglob("*.*")), list(Path(stage).rglob("*.*")))
+    ...     commit(Path(stage), Path(out), Path(stage) / "notebooks" / "a.ipynb",
+    ...     Path(out) / "a.ipynb")
+    ...     print(sorted(p.relative_to(out).as_posix() for p in Path(out).rglob("*.*")),
+    ...     list(Path(stage).rglob("*.*")))
     ['a.ipynb', 'a.png', 'values/a.json'] []
     """
     files = [p for p in stage.rglob("*") if p.is_file() and p != staged_notebook

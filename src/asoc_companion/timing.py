@@ -90,7 +90,8 @@ def time_call(fn, repeat=1, clock=time.perf_counter):
     if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
         raise ValueError(f"repeat: expected a positive integer, found {repeat!r}")
     if not callable(clock):
-        raise TypeError(f"clock: expected a function returning seconds, e.g. time.process_time, found {clock!r}")
+        raise TypeError("clock: expected a function returning seconds, e.g. time.process_time, "
+                        f"found {clock!r}")
     best, out = np.inf, None
     for _ in range(repeat):
         start = clock()

@@ -28,7 +28,8 @@ class CorruptValuesError(ValueError):
     ...     try:
     ...         read_values_file(path)
     ...     except CorruptValuesError as err:
-    ...         print(isinstance(err, ValueError), "regenerate it with `python -m asoc_companion run demo`" in str(err))
+    ...         print(isinstance(err, ValueError),
+    ...     "regenerate it with `python -m asoc_companion run demo`" in str(err))
     True True
     """
 
@@ -116,7 +117,8 @@ def read_values_file(path) -> dict:
         if not isinstance(data, dict) or not isinstance(data.get("values"), dict):
             raise ValueError("no 'values' object")
     except ValueError as err:      # json.JSONDecodeError is a ValueError
-        raise CorruptValuesError(f"{_shown(path)}: corrupt values file ({err}); {_repair_hint(path)}") from None
+        raise CorruptValuesError(f"{_shown(path)}: corrupt values file ({err}); "
+                                 f"{_repair_hint(path)}") from None
     return data
 
 

@@ -30,7 +30,8 @@ def _collect_result(request):
 
 
 def targets_table(results) -> list:
-    """Lines of the summary: median vs ``target_s``, ratio vs ``target_ratio``; a missed target is marked."""
+    """Lines of the summary: median vs ``target_s``, ratio vs ``target_ratio``; a missed target is
+    marked."""
     lines, missed = [], 0
     width = max([len(name) for name, _, _ in results] + [20])
     for name, median, info in results:
@@ -42,7 +43,8 @@ def targets_table(results) -> list:
         if "ratio" in info and "target_ratio" in info:
             ok = info["ratio"] >= info["target_ratio"]
             missed += not ok
-            lines.append(f"{name:{width}}  {info['ratio']:10.1f} x   target >= {info['target_ratio']:g} x   "
+            lines.append(f"{name:{width}}  {info['ratio']:10.1f} x   target >= "
+                         f"{info['target_ratio']:g} x   "
                          f"{'ok' if ok else 'BELOW TARGET'}")
     lines.append(f"{missed} target(s) missed" if missed else "all targets met")
     return lines
@@ -53,8 +55,10 @@ def pytest_terminal_summary(terminalreporter):
         return
     import numpy as np
 
-    terminalreporter.section("targets (median of the rounds; ratios measured alternately in this process)")
-    terminalreporter.write_line(f"machine: {os.cpu_count()} cores, {platform.processor() or platform.machine()}, "
+    terminalreporter.section("targets (median of the rounds; ratios measured alternately in this "
+                             "process)")
+    terminalreporter.write_line(f"machine: {os.cpu_count()} cores, "
+                                f"{platform.processor() or platform.machine()}, "
                                 f"Python {platform.python_version()}, NumPy {np.__version__}")
     for line in targets_table(RESULTS):
         terminalreporter.write_line(line)

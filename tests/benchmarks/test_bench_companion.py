@@ -8,7 +8,8 @@ from asoc_companion.timing import median_seconds
 
 
 def test_manifest_check_of_every_notebook(benchmark):
-    """Hashes of every notebook's inputs (sources, import closures, values): what `make book` checks first."""
+    """Hashes of every notebook's inputs (sources, import closures, values): what `make book` checks
+    first."""
     infos = list(nbs.notebooks().values())
     plans = [make_plan(paths.project(), info, "full") for info in infos]
 
@@ -20,6 +21,7 @@ def test_manifest_check_of_every_notebook(benchmark):
 
 
 def test_median_seconds_overhead(benchmark):
-    """median_seconds of an empty call, 1000 repeats: the helper adds microseconds, not milliseconds."""
+    """median_seconds of an empty call, 1000 repeats: the helper adds microseconds, not
+    milliseconds."""
     benchmark.extra_info["target_s"] = 0.01
     benchmark.pedantic(median_seconds, args=(lambda: None, 1000), rounds=5)

@@ -1,4 +1,5 @@
-"""Performance targets of Chapter 3: Alg. 3.1-3.3, Monte Carlo, Table 3.2, the variational method [163]."""
+"""Performance targets of Chapter 3: Alg. 3.1-3.3, Monte Carlo, Table 3.2, the variational method
+[163]."""
 
 import numpy as np
 import pytest
@@ -35,13 +36,16 @@ def test_alg31_per_gain(benchmark, t, moments):
     benchmark.pedantic(static_output_feedback, args=(sys,), kwargs={"moments": moments}, rounds=21)
 
 
-@pytest.mark.parametrize("t, moments, target", [(1, "step", 0.5), (1, "exact", 0.5), (2, "step", 0.5),
+@pytest.mark.parametrize("t, moments, target", [(1, "step", 0.5), (1, "exact", 0.5), (2, "step",
+                                                                                      0.5),
                                                 (2, "exact", 5.0)])
 def test_alg31_against_the_plain_thesis_iteration(benchmark, t, moments, target):
-    """Speed-up of static_output_feedback over Alg. 3.1 transcribed in plain NumPy (same process)."""
+    """Speed-up of static_output_feedback over Alg. 3.1 transcribed in plain NumPy (same
+    process)."""
     sys = sec354_system(t)
     reference, ours = alternating_medians(lambda: thesis_iteration(sys),
-                                          lambda: static_output_feedback(sys, moments=moments), repeat=21)
+                                          lambda: static_output_feedback(sys, moments=moments),
+                                          repeat=21)
     benchmark.extra_info.update(ratio=reference / ours, target_ratio=target, reference_s=reference)
     benchmark.pedantic(static_output_feedback, args=(sys,), kwargs={"moments": moments}, rounds=5)
 
@@ -51,7 +55,8 @@ def test_monte_carlo_static(benchmark):
     sys = sec354_system(1)
     controller = StaticGain(static_output_feedback(sys).L)
     benchmark.extra_info["target_s"] = 1.0
-    benchmark.pedantic(simulate, args=(sys, controller, SEC354_X0[2], 100, 100_000, np.random.default_rng(0)),
+    benchmark.pedantic(simulate, args=(sys, controller, SEC354_X0[2], 100, 100_000,
+                                       np.random.default_rng(0)),
                        rounds=3)
 
 
@@ -82,14 +87,17 @@ def test_alg32(benchmark):
 
 
 def test_alg32_networked_loop(benchmark):
-    """Alg. 3.2 on the networked loop of issue 26: it stops on its 2-cycle (before: 10,000 iterations)."""
-    r = benchmark.pedantic(dynamic_output_feedback, args=(networked_loop(),), kwargs={"warn": False}, rounds=5)
+    """Alg. 3.2 on the networked loop of issue 26: it stops on its 2-cycle (before: 10,000
+    iterations)."""
+    r = benchmark.pedantic(dynamic_output_feedback, args=(networked_loop(),),
+                           kwargs={"warn": False}, rounds=5)
     assert r.status == "cycle"
     benchmark.extra_info.update(target_s=0.2, iterations=r.iterations)
 
 
 def test_exact_design_networked_loop(benchmark):
-    """exact_dynamic_output_feedback on the networked loop of issue 26 (3 states, 2 modes), from its default start."""
+    """exact_dynamic_output_feedback on the networked loop of issue 26 (3 states, 2 modes), from its
+    default start."""
     r = benchmark.pedantic(exact_dynamic_output_feedback, args=(networked_loop(),), rounds=5)
     assert r.converged
     benchmark.extra_info.update(target_s=0.2, iterations=r.iterations)
@@ -117,7 +125,8 @@ def test_alg33_horizon_100(benchmark):
     init = dynamic_output_feedback(sys)
     benchmark.extra_info["target_s"] = 2.0
     benchmark.pedantic(finite_horizon_dynamic_output_feedback,
-                       args=(sys, 100, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0), kwargs={"init": init}, rounds=3)
+                       args=(sys, 100, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0),
+                       kwargs={"init": init}, rounds=3)
 
 
 def test_monte_carlo_dynamic(benchmark):
@@ -126,5 +135,6 @@ def test_monte_carlo_dynamic(benchmark):
     r = dynamic_output_feedback(sys)
     controller = DynamicOutputFeedback(r.F, r.K, r.L, xhat0=SEC373_MEAN0[1][0])
     benchmark.extra_info["target_s"] = 2.0
-    benchmark.pedantic(simulate, args=(sys, controller, SEC373_MEAN0[1], 100, 100_000, np.random.default_rng(0)),
+    benchmark.pedantic(simulate, args=(sys, controller, SEC373_MEAN0[1], 100, 100_000,
+                                       np.random.default_rng(0)),
                        kwargs={"mu0": SEC373_MU0, "x0_cov": SEC373_COV0}, rounds=3)

@@ -51,14 +51,16 @@ def test_ms_spectral_radius_n64_m8(benchmark):
     s = system(64, 8)
     rho = benchmark.pedantic(lambda: ms_spectral_radius(s.A, s.T), rounds=3, iterations=1)
     assert 0 < rho < 0.95 ** 2
-    assert rho == pytest.approx(mean_square_stability(s.A, s.T, method="power", check=False).rho, rel=1e-8)
+    assert rho == pytest.approx(mean_square_stability(s.A, s.T, method="power", check=False).rho,
+                                rel=1e-8)
     benchmark.extra_info.update(target_s=1.0, rho=rho)
 
 
 def test_alg31_exact_n64_m8(benchmark):
     """n = 64, M = 8: Alg. 3.1 with moments="exact" under 10 s."""
     s = system(64, 8)
-    r = benchmark.pedantic(lambda: static_output_feedback(s, moments="exact"), rounds=1, iterations=1)
+    r = benchmark.pedantic(lambda: static_output_feedback(s, moments="exact"), rounds=1,
+                           iterations=1)
     assert r.converged and r.stabilizing
     benchmark.extra_info.update(target_s=10.0, iterations=r.iterations)
 
@@ -87,13 +89,15 @@ def test_exact_dynamic_output_feedback(benchmark, n, M, target):
 
 @pytest.fixture(scope="module")
 def published():
-    """n = 100, M = 100, nu = ny = 12, open-loop rho 0.99 (the largest MJLS in public code we found)."""
+    """n = 100, M = 100, nu = ny = 12, open-loop rho 0.99 (the largest MJLS in public code we
+    found)."""
     return published_size_system(np.random.default_rng(26))
 
 
 def test_alg31_n100_m100(benchmark, published):
     """n = 100, M = 100: Alg. 3.1 (moments="auto") to its stopping rule under 4 s (issue 33)."""
-    r = benchmark.pedantic(lambda: static_output_feedback(published, warn=False), rounds=1, iterations=1)
+    r = benchmark.pedantic(lambda: static_output_feedback(published, warn=False), rounds=1,
+                           iterations=1)
     benchmark.extra_info.update(target_s=4.0, iterations=r.iterations, status=r.status)
 
 
@@ -108,13 +112,15 @@ def test_exact_static_design_n100_m100(benchmark, published):
 
 def test_ms_spectral_radius_n100_m100(benchmark, published):
     """n = 100, M = 100: rho of the open loop under 10 s (M n^2 = 1e6)."""
-    rho = benchmark.pedantic(lambda: ms_spectral_radius(published.A, published.T), rounds=1, iterations=1)
+    rho = benchmark.pedantic(lambda: ms_spectral_radius(published.A, published.T), rounds=1,
+                             iterations=1)
     assert rho == pytest.approx(0.99, rel=1e-8)
     benchmark.extra_info.update(target_s=10.0)
 
 
 def _monte_carlo_within_30_s_and_4_gb(benchmark, s, runs):
-    """``runs`` x 100 steps of ``s`` under the zero gain, timed once, its peak memory traced by tracemalloc."""
+    """``runs`` x 100 steps of ``s`` under the zero gain, timed once, its peak memory traced by
+    tracemalloc."""
     gain = StaticGain(np.zeros((s.nu, s.ny)))
 
     def run():
@@ -145,14 +151,17 @@ def test_exponent_ms_spectral_radius_m8(benchmark):
     systems = {n: system(n, 8) for n in sizes}
 
     def run():
-        return [time_call(lambda s=systems[n]: mean_square_stability(s.A, s.T, method="arnoldi", check=False).rho, 3)[0] for n in sizes]
+        return [time_call(lambda s=systems[n]: mean_square_stability(s.A, s.T, method="arnoldi",
+                                                                     check=False).rho,
+                                                                     3)[0] for n in sizes]
     seconds = benchmark.pedantic(run, rounds=1, iterations=1)
     benchmark.extra_info.update(exponent=fitted_exponent(sizes, seconds), target_exponent=3.0,
                                 seconds=dict(zip(map(str, sizes), seconds)))
 
 
 def test_exponent_alg31_exact_per_iteration_m4(benchmark):
-    """Fitted exponent of Alg. 3.1's time per iteration (moments="exact") against n = 16..64 at M = 4 (target <= 3).
+    """Fitted exponent of Alg. 3.1's time per iteration (moments="exact") against n = 16..64 at M =
+    4 (target <= 3).
 
     Per iteration: the number of iterations depends on the system, not on the method; from
     n = 16 on, both phases run matrix-free (at n = 8, M n^2 = 256 is on the dense side)."""

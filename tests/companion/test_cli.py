@@ -19,10 +19,13 @@ from asoc_companion.paths import ROOT
 from asoc_companion.plan import make_plan, output_folder
 
 
-def _notebook(folder, name, source="x = 1", depends=None, params='fidelity = "full"\noutput_dir = "."\nseed = 3'):
+def _notebook(folder, name, source="x = 1", depends=None,
+              params='fidelity = "full"\noutput_dir = "."\nseed = 3'):
     nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [], **({"depends": depends} if depends else {})}
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [],
+                           **({"depends": depends} if depends else {})}
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                 "language": "python"}
     cell = nbformat.v4.new_code_cell(params)
     cell.metadata["tags"] = ["parameters"]
     nb.cells = [cell, nbformat.v4.new_code_cell(source)]
@@ -56,7 +59,8 @@ def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capfd):
     out = make_plan(paths.project(), info, "ci", {"seed": 7}).output_dir
     shutil.rmtree(out, ignore_errors=True)
     assert cli.main(["figure", "3.2", "-p", "seed", "7", "--fidelity", "ci"]) == 0
-    printed, errors = capfd.readouterr()          # capfd: the kernel process writes to the same stderr
+    # capfd: the kernel process writes to the same stderr
+    printed, errors = capfd.readouterr()
     assert "without encryption" not in errors, "the kernel's TCP warning reached the terminal"
     assert "committed (full)" in printed and "this run (ci)" in printed
     assert "does not reach" not in printed, "Fig. 3.2 depends on the seed"
@@ -107,7 +111,8 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
 
     def fake_run(plan, **kwargs):
         ran.append(plan.name)
-        atomic_write_json(out / "values" / f"{plan.name}.json", {"notebook": plan.name, "values": {"a": 1}})
+        atomic_write_json(out / "values" / f"{plan.name}.json", {"notebook": plan.name,
+                                                                 "values": {"a": 1}})
         executed = nbformat.read(plan.notebook.path, as_version=4)
         for count, cell in enumerate(executed.cells, 1):
             cell.execution_count = count
@@ -184,25 +189,30 @@ def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["-p", "seed", "notanumber"], "parameter seed of sec3_2.ipynb (default 3) takes an integer, found 'notanumber'"),
+    (["-p", "seed", "notanumber"],
+     "parameter seed of sec3_2.ipynb (default 3) takes an integer, found 'notanumber'"),
     (["-p", "seed", "-1"], "is a seed: it takes an integer >= 0, found -1"),
     (["-p", "seed", "2.5"], "takes an integer, found 2.5"),
     (["-p", "seed", "True"], "takes an integer, found True"),
-    (["-p", "steps", "0"], "parameter steps of sec3_2.ipynb (default 30) is a count: it takes an integer >= 1, found 0"),
+    (["-p", "steps", "0"],
+     "parameter steps of sec3_2.ipynb (default 30) is a count: it takes an integer >= 1, found 0"),
     (["-p", "steps", "-5"], "is a count: it takes an integer >= 1, found -5"),
     (["-p", "seed", "7", "-p", "seed", "8"], "-p seed given twice (7 and '8'); give it once"),
 ])
 def test_bad_parameter_values_fail_before_anything_runs(args, message, capsys, monkeypatch):
-    monkeypatch.setattr(nbs, "run", lambda *a, **k: pytest.fail("a notebook ran despite a bad -p value"))
+    monkeypatch.setattr(nbs, "run", lambda *a,
+                        **k: pytest.fail("a notebook ran despite a bad -p value"))
     assert cli.main(["figure", "3.2", "--fidelity", "ci", *args]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
 def test_parameter_values_are_checked_against_the_defaults_type(tmp_path):
-    info = _notebook(tmp_path, "secX_3", params='fidelity = "full"\noutput_dir = "."\nseed = 3\nn_runs_ci = 2_000\n'
+    info = _notebook(tmp_path, "secX_3",
+                     params='fidelity = "full"\noutput_dir = "."\nseed = 3\nn_runs_ci = 2_000\n'
                                                  'rate = 0.5\nflag = True\nlabel = "a"\nshift = 0')
-    assert nbs.parse_overrides(info, [("n_runs_ci", "500"), ("rate", "2"), ("flag", "False"), ("label", "b"),
+    assert nbs.parse_overrides(info, [("n_runs_ci", "500"), ("rate", "2"), ("flag", "False"),
+                                      ("label", "b"),
                                       ("shift", "-3"), ("seed", "0")]) == \
         {"n_runs_ci": 500, "rate": 2.0, "flag": False, "label": "b", "shift": -3, "seed": 0}
     for name, value, message in [("n_runs_ci", "-5", "count"), ("rate", "nan", "finite number"),
@@ -211,7 +221,8 @@ def test_parameter_values_are_checked_against_the_defaults_type(tmp_path):
             nbs.parse_overrides(info, [(name, value)])
 
 
-def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_path, capsys, monkeypatch):
+def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_path, capsys,
+                                                                           monkeypatch):
     from asoc_companion.values import CorruptValuesError, load_all_values, load_values
 
     (tmp_path / "values").mkdir()
@@ -229,7 +240,8 @@ def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_p
 
 def test_outside_a_checkout_the_command_says_how_to_find_one(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("ASOC_COMPANION_ROOT", "")        # empty: not configured; restored afterwards
+    # empty: not configured; restored afterwards
+    monkeypatch.setenv("ASOC_COMPANION_ROOT", "")
     assert cli.main(["list"]) == 2
     assert "no checkout of the companion found" in capsys.readouterr().err
     assert cli.main(["--root", str(tmp_path), "list"]) == 2
@@ -251,11 +263,14 @@ def test_every_argument_has_help_text():
 
 
 def test_the_cli_says_when_a_parameter_cannot_change_the_figure():
-    """Fig. 3.4 is computed without the seed (Sec. 3.5's Monte Carlo runs make Table 3.2), Fig. 3.2 with it."""
-    note = cli.unused_parameters(nbs.find("figure", "3.4"), "figure", "3.4", {"seed": 7, "horizon": 20})
+    """Fig. 3.4 is computed without the seed (Sec. 3.5's Monte Carlo runs make Table 3.2), Fig. 3.2
+    with it."""
+    note = cli.unused_parameters(nbs.find("figure", "3.4"), "figure", "3.4", {"seed": 7,
+                                                                              "horizon": 20})
     assert note.startswith("note: seed does not reach") and "horizon" not in note
     assert cli.unused_parameters(nbs.find("figure", "3.2"), "figure", "3.2", {"seed": 7}) == ""
-    assert nbs.parameters_reaching(nbs.find("table", "3.2"), "table", "3.2") >= {"seed", "n_runs_full"}
+    assert nbs.parameters_reaching(nbs.find("table", "3.2"), "table", "3.2") >= {"seed",
+                                                                                 "n_runs_full"}
 
 
 def test_committed_column_names_its_fidelity():
@@ -271,9 +286,11 @@ def test_without_the_companion_extra_the_command_prints_one_line():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 1 and proc.stdout == ""
     assert proc.stderr.strip().splitlines() == [
-        "asoc-companion needs yaml: install the companion's dependencies: pip install 'asoc[companion]'"]
+        "asoc-companion needs yaml: install the companion's dependencies: pip install "
+        "'asoc[companion]'"]
     use = subprocess.run([sys.executable, "-c", "import sys; sys.modules['yaml'] = None\n"
-                          "import asoc_companion; asoc_companion.record"], capture_output=True, text=True)
+                          "import asoc_companion; asoc_companion.record"], capture_output=True,
+                          text=True)
     assert "pip install 'asoc[companion]'" in use.stderr.splitlines()[-1]
 
 

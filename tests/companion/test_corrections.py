@@ -37,7 +37,8 @@ def test_corrected_statement_holds_and_its_mutant_is_caught(check, n):
 def test_prop_3_26_counterexample_is_exact():
     ex = prop_3_26_example()
     assert ex["X"] == [[1, 0], [0, 1]]
-    assert ex["printed_gap_determinant"] == -1                       # not PSD: bound - X~ indefinite
+    # not PSD: bound - X~ indefinite
+    assert ex["printed_gap_determinant"] == -1
     assert ex["corrected_gap_determinant"] > 0 and ex["corrected_gap"][0][0] > 0
 
 
@@ -89,7 +90,8 @@ def test_a_planted_false_bound_is_caught(monkeypatch):
 
 
 def test_records_have_the_interface_the_study_merges():
-    records = corrections.correction_records(np.random.SeedSequence(5), n_instances=3, mutant_instances=2)
+    records = corrections.correction_records(np.random.SeedSequence(5), n_instances=3,
+                                             mutant_instances=2)
     assert sorted(records) == sorted(corrections.STATEMENT_IDS)
     for key, record in records.items():
         assert isinstance(record["diagnosis"], str) and record["diagnosis"]
@@ -102,11 +104,14 @@ def test_records_have_the_interface_the_study_merges():
 
 
 @pytest.mark.parametrize("kwargs, error", [(dict(seed_sequence=2017), TypeError),
-                                           (dict(seed_sequence=np.random.SeedSequence(1), n_instances=0), ValueError),
-                                           (dict(seed_sequence=np.random.SeedSequence(1), mutant_instances=1.5),
+                                           (dict(seed_sequence=np.random.SeedSequence(1),
+                                                 n_instances=0), ValueError),
+                                           (dict(seed_sequence=np.random.SeedSequence(1),
+                                                 mutant_instances=1.5),
                                             ValueError)])
 def test_bad_arguments_are_named(kwargs, error):
-    with pytest.raises(error, match=next(k for k in ("mutant_instances", "n_instances", "seed_sequence")
+    with pytest.raises(error, match=next(k for k in ("mutant_instances", "n_instances",
+                                                     "seed_sequence")
                                          if k in kwargs and (k != "seed_sequence" or error is TypeError))):
         corrections.correction_records(**kwargs)
 
@@ -130,7 +135,8 @@ def test_thm_3_19_needs_nonsingular_noise():
     outcomes = [corrections.check_3_19(np.random.default_rng(c)) for c in np.random.SeedSequence(3).spawn(40)]
     singular = [o for o in outcomes if o[2] is not None]
     assert singular and all(o[:2] == ("not_applicable", "not_applicable") for o in singular)
-    assert any(o[2] == "fails" for o in singular)                 # the hypothesis excludes real failures
+    # the hypothesis excludes real failures
+    assert any(o[2] == "fails" for o in singular)
     assert all(o[0] == "holds" for o in outcomes if o[2] is None and o[0] != "not_applicable")
 
 
@@ -139,7 +145,8 @@ def test_mcvmd_integral_matches_quadrature_and_the_closed_form_fails_when_spread
     from asoc_companion.theorems.counterexamples import mcvmd_integral
     x, y = [0.0, 1.0, 2.5], [0.3, 4.0]
     quadrature = gp.mcvmd_quadrature(lambda m, b: gp.lcd_dirac(x, None, m, b),
-                                     lambda m, b: gp.lcd_dirac(y, None, m, b), b_max=10.0, center=2.0,
+                                     lambda m, b: gp.lcd_dirac(y, None, m, b), b_max=10.0,
+                                     center=2.0,
                                      spread=6.0, points=x + y)
     assert mcvmd_integral(x, y, 10.0) == pytest.approx(quadrature, rel=1e-8)
     outcomes = [corrections.check_kernels(np.random.default_rng(c)) for c in np.random.SeedSequence(3).spawn(60)]
@@ -154,7 +161,8 @@ def test_thm_3_9_c12_infeasibility_is_certified_by_two_solvers():
     margins = lmi_C12_margin()
     assert all(m["verdict"] == "infeasible" for m in margins.values())
     assert all(v < 0 for m in margins.values() for v in m["margins"].values())
-    stable = sec354_system(1).replace(A=0.1 * sec354_system(1).A)     # the margin separates: feasible here
+    # the margin separates: feasible here
+    stable = sec354_system(1).replace(A=0.1 * sec354_system(1).A)
     assert certified_margins(stable)["verdict"] == "feasible"
 
 

@@ -31,7 +31,8 @@ SRC = Path(__file__).resolve().parents[2] / "src"
 
 
 def _git(*args, cwd):
-    return subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, check=True).stdout
+    return subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True,
+                          check=True).stdout
 
 
 @pytest.fixture(scope="module")
@@ -55,8 +56,10 @@ def _as_foreground_command():
 
 def _start(clone):
     env = {**os.environ, "PYTHONPATH": str(SRC), paths.ENV_VAR: str(clone)}
-    return subprocess.Popen([sys.executable, "-m", "asoc_companion", "figure", "3.2"], cwd=clone, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True,
+    return subprocess.Popen([sys.executable, "-m", "asoc_companion", "figure", "3.2"], cwd=clone,
+                            env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            start_new_session=True,
                             preexec_fn=_as_foreground_command)
 
 
@@ -69,7 +72,8 @@ def _wait_for(proc, condition, timeout=60.0):
 
 
 def _values_written(clone, since):
-    """Whether the run has written a values file of Sec. 3.2 anywhere in the clone (staged or not)."""
+    """Whether the run has written a values file of Sec. 3.2 anywhere in the clone (staged or
+    not)."""
     return lambda: any(p.stat().st_mtime > since for p in clone.rglob("sec3_2.json"))
 
 
@@ -81,7 +85,8 @@ POINTS = {
 
 
 @pytest.mark.notebook
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL], ids=lambda s: s.name)
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL],
+                         ids=lambda s: s.name)
 @pytest.mark.parametrize("point", list(POINTS))
 def test_killed_run_leaves_tracked_files_identical(clone, sig, point):
     shutil.rmtree(clone / "book" / "_build" / "staging", ignore_errors=True)
@@ -100,8 +105,10 @@ def test_killed_run_leaves_tracked_files_identical(clone, sig, point):
         except ProcessLookupError:
             pass
     assert proc.returncode != 0
-    assert _git("status", "--porcelain", cwd=clone) == "", f"{sig.name} {point}: tracked files changed"
-    if sig != signal.SIGKILL:                   # a handled interrupt also removes its staging folder
+    assert _git("status", "--porcelain",
+                cwd=clone) == "", f"{sig.name} {point}: tracked files changed"
+    # a handled interrupt also removes its staging folder
+    if sig != signal.SIGKILL:
         left = sorted(str(p.relative_to(clone)) for p in (clone / "book" / "_build" / "staging").rglob("*"))
         assert not left, f"{sig.name} {point}: exit code {proc.returncode}, staging left {left}; output:\n{output[-3000:]}"
 
@@ -120,7 +127,8 @@ def _project(tmp_path, monkeypatch):
 def _notebook(book, name, cells):
     nb = nbformat.v4.new_notebook()
     nb.metadata["asoc"] = {"title": name, "figures": [], "tables": []}
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                 "language": "python"}
     params = nbformat.v4.new_code_cell('fidelity = "full"\noutput_dir = "../figures"')
     params.metadata["tags"] = ["parameters"]
     nb.cells = [params] + [nbformat.v4.new_code_cell(c) for c in cells]
@@ -133,7 +141,8 @@ def test_failed_run_moves_nothing(tmp_path, monkeypatch):
     project = _project(tmp_path, monkeypatch)
     monkeypatch.setenv("PYTHONPATH", str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     info = _notebook(project.book, "secX_9", [
-        "import asoc_companion as repro\nrepro.setup('secX_9', fidelity=fidelity, output_dir=output_dir)",
+        "import asoc_companion as repro\nrepro.setup('secX_9', fidelity=fidelity, "
+        "output_dir=output_dir)",
         "repro.record('a', 2.0)", "raise RuntimeError('the computation failed')"])
     committed = {"notebook": "secX_9", "fidelity": "full", "values": {"a": 1.0}}
     atomic_write_json(project.figures / "values" / "secX_9.json", committed)
@@ -193,8 +202,10 @@ def test_every_kernel_computes_with_one_blas_thread(tmp_path, monkeypatch):
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
     monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
     info = _notebook(project.book, "secX_7", [
-        "import os\nimport asoc_companion as repro\nrepro.setup('secX_7', fidelity=fidelity, output_dir=output_dir)",
-        "repro.record('threads', [os.environ.get(name) for name in ('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS')])"])
+        "import os\nimport asoc_companion as repro\nrepro.setup('secX_7', fidelity=fidelity, "
+        "output_dir=output_dir)",
+        "repro.record('threads', [os.environ.get(name) for name in ('OPENBLAS_NUM_THREADS', "
+        "'OMP_NUM_THREADS')])"])
     nbs.run(make_plan(project, info, "full"), progress_bar=False)
     recorded = json.loads((project.figures / "values" / "secX_7.json").read_text())["values"]
     assert recorded["threads"] == ["1", "1"]
@@ -203,7 +214,8 @@ def test_every_kernel_computes_with_one_blas_thread(tmp_path, monkeypatch):
 
 def test_staging_folder_refilled_by_a_late_write_is_removed(tmp_path, monkeypatch):
     """A kernel still shutting down writes one last values file after the folder was emptied: the
-    removal is repeated until the folder is gone (with one attempt, the planted variant, it stays)."""
+    removal is repeated until the folder is gone (with one attempt, the planted variant, it
+    stays)."""
     from asoc_companion import staging
 
     real_rmtree, calls = shutil.rmtree, []

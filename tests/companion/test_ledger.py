@@ -22,7 +22,8 @@ def test_full_fidelity_status_is_the_expected_one(key):
 def test_every_recorded_value_is_in_the_reference():
     """Every value of a page that has a reference file (the thesis's sections, the findings and
     the own-system pages) has an entry. The theorems study records verdicts of its own checks,
-    not numbers to compare (tests/companion/test_theorems*.py test them), and has no reference file."""
+    not numbers to compare (tests/companion/test_theorems*.py test them), and has no reference
+    file."""
     from asoc_companion.paths import project
     pages = {p.stem for p in (project().reference).glob("*.yaml")}
     missing = sorted(k for k in set(VALUES) - set(REFERENCE) if k.split(".")[0] in pages)
@@ -62,8 +63,10 @@ def test_committed_intro_summary_is_current():
     assert intro_markdown(text) == text, "book/intro.md summary is stale: run `python -m asoc_companion ledger`"
 
 
-@pytest.mark.parametrize("tol, thesis, expected", [(6e-5, 1.297, 4), (5e-7, 0.001343, 6), (5e-8, 0.0019924, 7),
-                                                   (None, 0.025, 3), (None, [0.5, 0.9], 1), (None, "text", None)])
+@pytest.mark.parametrize("tol, thesis, expected", [(6e-5, 1.297, 4), (5e-7, 0.001343, 6),
+                                                   (5e-8, 0.0019924, 7),
+                                                   (None, 0.025, 3), (None, [0.5, 0.9], 1),
+                                                   (None, "text", None)])
 def test_decimals_from_tolerance_or_printed_number(tol, thesis, expected):
     assert decimals(Entry(key="x.y", where="", kind="measured", thesis=thesis, tol=tol)) == expected
 
@@ -76,7 +79,8 @@ def test_ours_is_rounded_to_the_thesis_decimals_plus_two():
 
 
 def test_a_note_shared_by_rows_is_printed_once():
-    rows = [dict(key=f"n.k{i}", name=f"k{i}", note=f"Row {i} is own. " + "A long shared explanation. " * 12,
+    rows = [dict(key=f"n.k{i}", name=f"k{i}",
+                 note=f"Row {i} is own. " + "A long shared explanation. " * 12,
                  claim="", ours_long="", where="w") for i in range(5)]
     groups = note_groups(rows)
     assert len(groups) == 1
@@ -115,8 +119,10 @@ def test_caption_follows_the_ledger_status():
     reference = {"s.a": Entry(key="s.a", where="", kind="deterministic", thesis=1.0, tol=0.01),
                  "s.b": Entry(key="s.b", where="", kind="claim", thesis="c")}
     claims = {"9.9": {"where": "Sec. 9", "claim": "it converges", "keys": ["s.a", "s.b"]}}
-    ok = caption_markdown("9.9", claims, reference, {"s.a": 1.001, "s.b": {"holds": True, "value": 1}})
-    part = caption_markdown("9.9", claims, reference, {"s.a": 1.5, "s.b": {"holds": True, "value": 1}})
+    ok = caption_markdown("9.9", claims, reference, {"s.a": 1.001, "s.b": {"holds": True,
+                                                                           "value": 1}})
+    part = caption_markdown("9.9", claims, reference, {"s.a": 1.5, "s.b": {"holds": True,
+                                                                           "value": 1}})
     assert "“it converges”" in ok and "{bdg-success}`shows it`" in ok and "2 of 2" in ok
     assert "{bdg-warning}`shows it in part`" in part and "1 of 2" in part
     with pytest.raises(ValueError, match="number"):
@@ -156,12 +162,14 @@ def test_thesis_error_sections_link_to_a_page_of_the_book():
 
 
 def test_the_ledger_shows_the_evidence_kind_beside_deviates_and_totals_by_kind():
-    evidence = {"kind": "thesis-error", "certificate": "bound {{s.bound:.1f}} above the printed value",
+    evidence = {"kind": "thesis-error",
+                "certificate": "bound {{s.bound:.1f}} above the printed value",
                 "section": "findings#finding-demo"}
     reference = {"s.a": Entry(key="s.a", where="p. 1", kind="deterministic", thesis=1.0, tol=0.01,
                               expect="deviates", evidence=evidence),
                  "s.b": Entry(key="s.b", where="p. 2", kind="deterministic", thesis=1.0, tol=0.01,
-                              expect="deviates", evidence={"kind": "open", "tried": "two readings"})}
+                              expect="deviates", evidence={"kind": "open",
+                                                           "tried": "two readings"})}
     values = {"s.a": 2.0, "s.b": 3.0, "s.bound": 41.25}
     page = ledger_markdown(reference, values)
     assert "{bdg-warning}`deviates` {bdg-danger-line}`thesis error`" in page
@@ -171,9 +179,11 @@ def test_the_ledger_shows_the_evidence_kind_beside_deviates_and_totals_by_kind()
 
 
 def test_a_statistical_claim_shows_n_interval_and_test_and_counts_apart_from_deviates():
-    record = {"verdict": "not resolved", "n": 30, "estimate": 0.012, "ci_low": -0.02, "ci_high": 0.04,
+    record = {"verdict": "not resolved", "n": 30, "estimate": 0.012, "ci_low": -0.02,
+              "ci_high": 0.04,
               "test": "paired sign test"}
-    entry = Entry(key="s.claim", where="p. 3", kind="claim", thesis="A is better", expect="not-resolved")
+    entry = Entry(key="s.claim", where="p. 3", kind="claim", thesis="A is better",
+                  expect="not-resolved")
     assert status(entry, record) == "not-resolved"
     assert status(entry, {**record, "verdict": "holds"}) == "reproduced"
     assert status(entry, {**record, "verdict": "fails"}) == "deviates"
@@ -202,7 +212,8 @@ def test_ledger_mutants_cover_every_claim_and_the_committed_file_is_current():
         "figures/values/ledger_mutants.json is stale: run `python -m asoc_companion ledger`"
 
 
-@pytest.mark.parametrize("key", sorted(k for k, m in MUTANTS.items() if m["description"] != NOT_PLANTED))
+@pytest.mark.parametrize("key", sorted(k for k,
+                                       m in MUTANTS.items() if m["description"] != NOT_PLANTED))
 def test_each_planted_variant_is_caught(key):
     assert MUTANTS[key]["caught"], f"{key}: the check does not catch {MUTANTS[key]['description']}"
 
@@ -219,7 +230,9 @@ def test_a_statistical_claim_without_its_recorded_decision_has_no_variant():
 
 def test_every_tolerance_is_a_number():
     # YAML 1.1 reads 1e-09 as text (write 1.0e-9); a text ci_rtol broke the ci comparison
-    bad = [(key, field, getattr(e, field)) for key, e in REFERENCE.items() for field in ("tol", "ci_rtol")
+    bad = [(key, field, getattr(e, field)) for key, e in REFERENCE.items() for field in ("tol",
+                                                                                         "ci_rtol")
            if getattr(e, field) is not None and (isinstance(getattr(e, field), bool)
-                                                 or not isinstance(getattr(e, field), (int, float)))]
+                                                 or not isinstance(getattr(e, field),
+                                                                   (int, float)))]
     assert bad == []

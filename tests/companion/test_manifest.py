@@ -49,8 +49,10 @@ def _project(tmp_path, monkeypatch):
 
 def _notebook(book, name, source, depends=None):
     nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [], **({"depends": depends} if depends else {})}
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [],
+                           **({"depends": depends} if depends else {})}
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                 "language": "python"}
     params = nbformat.v4.new_code_cell('fidelity = "full"\noutput_dir = "../figures"')
     params.metadata["tags"] = ["parameters"]
     nb.cells = [params, nbformat.v4.new_code_cell(source)]
@@ -59,7 +61,8 @@ def _notebook(book, name, source, depends=None):
 
 def test_imports_are_read_statically_with_relative_and_lazy_ones():
     code = "import a.b\nfrom c import d, e\nfrom . import f\nfrom ..g import h\ndef k():\n    import lazy\n"
-    assert imported_names(code, package="p.q") == {"a.b", "c", "c.d", "c.e", "p.q", "p.q.f", "p.g", "p.g.h", "lazy"}
+    assert imported_names(code, package="p.q") == {"a.b", "c", "c.d", "c.e", "p.q", "p.q.f", "p.g",
+                                                   "p.g.h", "lazy"}
 
 
 def test_closure_follows_packages_and_relative_imports(tmp_path, monkeypatch):
@@ -77,7 +80,8 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     project = _project(tmp_path, monkeypatch)
     _notebook(project.book, "sec2_6", "import asoc_companion as repro\nfrom asoc import gp")
     _notebook(project.book, "sec3_2", "import asoc_companion as repro\nfrom asoc.mjls import MJLS")
-    _notebook(project.book, "findings", "import asoc_companion as repro", depends=["sec2_6", "sec3_2"])
+    _notebook(project.book, "findings", "import asoc_companion as repro", depends=["sec2_6",
+                                                                                   "sec3_2"])
     out = project.figures
     for name, info in nbs.notebooks().items():
         atomic_write_json(out / "values" / f"{name}.json", {"notebook": name, "values": {"x": 1}})
@@ -93,7 +97,8 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     assert not [p for p in entry if p.startswith("asoc/gp")] and "asoc_companion/manifest.py" not in entry
 
     (project.src / "asoc" / "gp" / "kernels.py").write_text(MODULES["asoc/gp/kernels.py"] + "# edited\n")
-    assert _entries(project) == {"sec2_6": ["modules (asoc/gp/kernels.py)"], "sec3_2": [], "findings": []}
+    assert _entries(project) == {"sec2_6": ["modules (asoc/gp/kernels.py)"], "sec3_2": [],
+                                 "findings": []}
     # Sec. 2.6 re-runs and records a new value: the findings page, which quotes it, follows
     atomic_write_json(out / "values" / "sec2_6.json", {"notebook": "sec2_6", "values": {"x": 2}})
     manifest.update_manifest(make_plan(project, nbs.notebooks()["sec2_6"], "full"))
@@ -111,13 +116,16 @@ def test_every_notebook_of_the_book_hashes_its_own_import_closure():
         modules = manifest.module_hashes(info.path)
         assert modules, f"{name}: no project module found among its imports"
         assert all((src / p).is_file() for p in modules)
-        assert not [p for p in modules if p.startswith(("asoc_companion/__main__", "asoc_companion/notebooks"))]
+        assert not [p for p in modules if p.startswith(("asoc_companion/__main__",
+                                                        "asoc_companion/notebooks"))]
     # the section on MJLS stability never runs the Gaussian-process code
     assert not [p for p in manifest.module_hashes(nbs.notebooks()["sec3_2"].path) if p.startswith("asoc/gp/")]
 
 
 @pytest.mark.notebook
-def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependencies(tmp_path, monkeypatch, capsys):
+def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependencies(tmp_path,
+                                                                                   monkeypatch,
+                                                                                   capsys):
     project = _project(tmp_path, monkeypatch)
     monkeypatch.setenv("PYTHONPATH", str(SRC))
     record = ("import os, time, asoc_companion as repro\n"
@@ -130,7 +138,8 @@ def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependenci
     _notebook(project.book, "findings", record.format(name="findings"), depends=["secA_1"])
     start = time.monotonic()
     # the real entry point: spawned workers must find their functions under `python -m`
-    proc = subprocess.run([sys.executable, "-m", "asoc_companion", "reproduce", "--jobs", "2"], cwd=project.book,
+    proc = subprocess.run([sys.executable, "-m", "asoc_companion", "reproduce", "--jobs", "2"],
+                          cwd=project.book,
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert "2 at a time" in proc.stdout

@@ -17,7 +17,8 @@ def test_fill_formats_records_and_parts():
 
 
 def test_fill_local_keys_inside_a_notebook():
-    assert fill("{{iters:d}} and {{sec9_9.iters[0]}}", VALUES, notebook="sec9_9") == "[13, 26] and 13"
+    assert fill("{{iters:d}} and {{sec9_9.iters[0]}}", VALUES,
+                notebook="sec9_9") == "[13, 26] and 13"
 
 
 @pytest.mark.parametrize("text", ["{{sec9_9.missing}}", "{{sec9_9.iters[5]}}", "{{other.cost}}",
@@ -31,7 +32,8 @@ def test_thesis_values_are_available_to_prose():
     from asoc_companion.prose import thesis_values
     from asoc_companion.reference import Entry
 
-    ref = {"sec9_9.rho": Entry(key="sec9_9.rho", where="", kind="deterministic", thesis=1.297, tol=6e-5),
+    ref = {"sec9_9.rho": Entry(key="sec9_9.rho", where="", kind="deterministic", thesis=1.297,
+                               tol=6e-5),
            "sec9_9.new": Entry(key="sec9_9.new", where="", kind="measured")}
     values = {**thesis_values(ref), **VALUES}
     assert fill("{{thesis_sec9_9.rho:.4f}} vs {{sec9_9.iters[0]}}", values) == "1.2970 vs 13"
@@ -39,7 +41,8 @@ def test_thesis_values_are_available_to_prose():
         fill("{{thesis_sec9_9.new}}", values)
 
 
-@pytest.mark.parametrize("name", sorted(__import__("asoc_companion.notebooks", fromlist=["notebooks"]).notebooks()))
+@pytest.mark.parametrize("name", sorted(__import__("asoc_companion.notebooks",
+                                                   fromlist=["notebooks"]).notebooks()))
 def test_prose_cells_hide_their_template(name):
     """A cell that renders prose from recorded values shows the text, not its template as well."""
     import json

@@ -121,7 +121,8 @@ def test_figures_the_thesis_lacks_get_ids_of_their_own(tmp_path):
     from asoc_companion import notebooks as nbs
     from asoc_companion.figures import file_stem
 
-    assert file_stem("fig", "own.1") == "fig_own_1" and file_stem("table", "own.12") == "table_own_12"
+    assert file_stem("fig", "own.1") == "fig_own_1" and file_stem("table",
+                                                                  "own.12") == "table_own_12"
     assert file_stem("fig", "2.10") == "fig2_10"
     for bad in ("10", "own", "own.x", "own.1.2", "3.4a"):
         with pytest.raises(ValueError, match="own.1"):
@@ -130,6 +131,7 @@ def test_figures_the_thesis_lacks_get_ids_of_their_own(tmp_path):
     fig, ax = plt.subplots()
     assert repro.save_figure(fig, "own.2").name == "fig_own_2.png"
     plt.close(fig)
-    assert nbs.find("figure", "own.1").name == "your_system" and nbs.find("table", "own.1").name == "your_system"
+    assert nbs.find("figure", "own.1").name == "your_system" and nbs.find("table",
+                                                                          "own.1").name == "your_system"
     assert not [n for info in nbs.notebooks().values() for n in info.figures + info.tables
                 if n.split(".")[0].isdigit() and int(n.split(".")[0]) > 3], "a chapter number the thesis lacks"

@@ -1,4 +1,5 @@
-"""The certified evidence on Tables 3.2 and 3.3: the clairvoyant per-sample bound, the median's lower
+"""The certified evidence on Tables 3.2 and 3.3: the clairvoyant per-sample bound, the median's
+lower
 confidence bound, the noise-independent transient and the noise weight of the expected cost."""
 
 import numpy as np
@@ -22,7 +23,8 @@ def test_clairvoyant_minimum_is_the_least_squares_minimum_and_below_other_inputs
     K = 6
     theta, final = rng.integers(0, 2, K), int(rng.integers(0, 2))
     x0, d = rng.standard_normal(2), 0.3 * rng.standard_normal((K, 2))
-    value = tb.clairvoyant_minimum(sys, theta[:, None], np.array([final]), x0[None], d[:, None, :])[0]
+    value = tb.clairvoyant_minimum(sys, theta[:, None], np.array([final]), x0[None], d[:, None,
+                                                                                       :])[0]
     # the cost is quadratic in u: minimise it by least squares on its exact gradient and Hessian
     f = lambda u: _cost(sys, theta, final, x0, d, u.reshape(K, 1))
     e, base = np.eye(K), f(np.zeros(K))
@@ -34,7 +36,8 @@ def test_clairvoyant_minimum_is_the_least_squares_minimum_and_below_other_inputs
 
 
 def test_median_lower_bound_covers():
-    misses = sum(tb.median_lower_bound(np.random.default_rng(s).exponential(size=500), tail=0.05) > np.log(2)
+    misses = sum(tb.median_lower_bound(np.random.default_rng(s).exponential(size=500),
+                                       tail=0.05) > np.log(2)
                  for s in range(200))
     assert misses <= 25                          # P(miss) <= 0.05: 10 expected, 25 is ~5 sigma
 
@@ -53,12 +56,14 @@ def test_transient_gap_is_the_noise_free_cost_and_noise_weight_the_noise_cost():
         total += np.einsum("iab,iba->", stage, X)
         noise_total += np.einsum("iab,iba->", stage, Xn)
         X = np.einsum("ij,iab->jab", sys.T, Acl @ X @ np.swapaxes(Acl, 1, 2))
-        Xn = np.einsum("ij,iab->jab", sys.T, Acl @ Xn @ np.swapaxes(Acl, 1, 2) + mu[:, None, None] * W)
+        Xn = np.einsum("ij,iab->jab", sys.T, Acl @ Xn @ np.swapaxes(Acl, 1, 2) + mu[:, None,
+                                                                                    None] * W)
         mu = mu @ sys.T
     total += np.einsum("iab,iba->", sys.Q, X)
     noise_total += np.einsum("iab,iba->", sys.Q, Xn)
     assert tb.transient_gap(sys, L, x0, mu0, K) == pytest.approx(total, rel=1e-10)
-    assert K * np.trace(tb.noise_weight(sys, L, mu0, K) @ W) == pytest.approx(noise_total, rel=1e-10)
+    assert K * np.trace(tb.noise_weight(sys, L, mu0, K) @ W) == pytest.approx(noise_total,
+                                                                              rel=1e-10)
 
 
 def test_clairvoyant_median_exceeds_the_printed_table_3_3_column():

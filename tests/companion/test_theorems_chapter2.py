@@ -61,7 +61,8 @@ def test_lemma_2_1_check_catches_a_missing_schur_complement(monkeypatch):
 
 def test_theorem_2_4_check_catches_a_wrong_constant(monkeypatch):
     right = c2._lib_terminal_value
-    monkeypatch.setattr(c2, "_lib_terminal_value", lambda *a: (right(*a)[0] + 1e-6,) + right(*a)[1:])
+    monkeypatch.setattr(c2, "_lib_terminal_value",
+                        lambda *a: (right(*a)[0] + 1e-6,) + right(*a)[1:])
     assert c2.check_theorem_2_4(np.random.default_rng(3)).verdict == "fails"
 
 
@@ -93,13 +94,15 @@ def test_theorem_2_5_exact_cost_agrees_with_monte_carlo():
     Q, R, Q_K = np.eye(2), np.eye(1), 2 * np.eye(2)
     x_target, mean, Sigma = np.array([1.0, -1.0]), np.array([0.5, 0.2]), 0.3 * np.eye(2)
     gains, offsets = c2.lq_tracking_policy(A, B, Q, R, Q_K, x_target, 3)
-    exact = c2.expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, mean, Sigma)
+    exact = c2.expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets,
+                                              mean, Sigma)
     n = 100_000
     x = mean + rng.standard_normal((n, 2)) @ np.linalg.cholesky(Sigma).T
     x_hat, S, total = np.tile(mean, (n, 1)), Sigma, 0.0
     for L, d in zip(gains, offsets):
         u = x_hat @ L.T + d
-        total = total + np.einsum("ni,ij,nj->n", x - x_target, Q, x - x_target) + np.einsum("ni,ij,nj->n", u, R, u)
+        total = total + np.einsum("ni,ij,nj->n", x - x_target, Q,
+                                  x - x_target) + np.einsum("ni,ij,nj->n", u, R, u)
         x = x @ A.T + u @ B.T + rng.standard_normal((n, 2)) @ H.T
         P, S_next = c2._kalman_posterior(A, H, C, J, S)
         y = x @ C.T + rng.standard_normal((n, 1)) @ J.T
@@ -123,44 +126,55 @@ def test_gaussian_kernel_over_printed_hellinger_is_not_positive_definite():
 
 def test_gaussian_kernel_over_wasserstein_2_of_2d_gaussians_is_not_positive_definite():
     """Hand-made (rounded from a search): four 2-D Gaussians, SE with l = 30.87."""
-    items = [[[1.74, -3.8], [[7.34, -0.95], [-0.95, 0.18]]], [[-3.01, -3.38], [[0.46, -1.12], [-1.12, 4.27]]],
-             [[-3.57, 0.6], [[0.14, 0.67], [0.67, 12.79]]], [[4.92, 2.75], [[11.29, 4.91], [4.91, 2.29]]]]
+    items = [[[1.74, -3.8], [[7.34, -0.95], [-0.95, 0.18]]], [[-3.01, -3.38], [[0.46, -1.12],
+                                                                               [-1.12, 4.27]]],
+             [[-3.57, 0.6], [[0.14, 0.67], [0.67, 12.79]]], [[4.92, 2.75], [[11.29, 4.91],
+                                                                            [4.91, 2.29]]]]
     cert = kernels.gram_certificate("wasserstein_gaussian", {"items": items}, "se", {}, 30.87)
     assert cert["lambda_min"] < -1e-4 < 0 < 1e3 * cert["tolerance"] < 1e-4
     assert cert["rayleigh_exact"] < -1e-4 and cert["lambda_min_scipy_evr"] < -1e-4
 
 
 def test_quadrature_distances_carry_their_error_into_the_tolerance():
-    config = {"items": [[0.1, 0.2, 0.3, 0.4], [0.4, 0.3, 0.2, 0.1], [0.25, 0.25, 0.25, 0.25]], "q": 1}
+    config = {"items": [[0.1, 0.2, 0.3, 0.4], [0.4, 0.3, 0.2, 0.1], [0.25, 0.25, 0.25, 0.25]],
+              "q": 1}
     cert = kernels.gram_certificate("lq", config, "se", {}, 0.5)
     D = kernels.distance_matrix("lq", config)
-    np.testing.assert_allclose(D[0, 1], 0.8, rtol=1e-8)      # L_1 of the step densities: sum |w - w'|
+    # L_1 of the step densities: sum |w - w'|
+    np.testing.assert_allclose(D[0, 1], 0.8, rtol=1e-8)
     assert 64 * kernels.EPS * D.max() <= cert["delta_D"] < 1e-6
 
 
-@pytest.mark.parametrize("family, fixed", [("mcvmd", {"N": 4, "points": 2}), ("lq", {"N": 4, "bins": 4, "q": 2})])
+@pytest.mark.parametrize("family, fixed", [("mcvmd", {"N": 4, "points": 2}), ("lq", {"N": 4,
+                                                                                     "bins": 4,
+                                                                                     "q": 2})])
 def test_search_finds_nothing_for_hilbert_metrics(family, fixed):
-    """Sanity: mCvMd (an L2 norm of LCDs) and L_2 embed in a Hilbert space, so the SE kernel is PSD."""
+    """Sanity: mCvMd (an L2 norm of LCDs) and L_2 embed in a Hilbert space, so the SE kernel is
+    PSD."""
     outcome = kernels.search_counterexample(np.random.default_rng(0), family, "se", {}, **fixed)
     assert outcome.verdict == "holds"
     assert outcome.numbers["lambda_min"] > -outcome.numbers["tolerance"]
 
 
 def test_search_finds_a_counterexample_for_one_dimensional_hellinger_as_printed():
-    outcome = kernels.search_counterexample(np.random.default_rng(0), "hellinger", "se", {}, N=4, exponent="printed")
+    outcome = kernels.search_counterexample(np.random.default_rng(0), "hellinger", "se", {}, N=4,
+                                            exponent="printed")
     assert outcome.verdict == "fails"
 
 
 def test_search_catches_the_mutant_covariance_over_a_hilbert_metric():
-    """exp(-(d/l)^4) is not positive definite even on the real line: the search must find it over mCvMd."""
-    outcome = kernels.search_counterexample(np.random.default_rng(1), "mcvmd", kernels.MUTANT_COVARIANCE, {},
+    """exp(-(d/l)^4) is not positive definite even on the real line: the search must find it over
+    mCvMd."""
+    outcome = kernels.search_counterexample(np.random.default_rng(1), "mcvmd",
+                                            kernels.MUTANT_COVARIANCE, {},
                                             N=4, points=2)
     assert outcome.verdict == "fails"
 
 
 def test_kernel_check_is_deterministic_and_rerunnable():
     key = "statement_2_6_3_kernels"
-    children = np.random.SeedSequence((2017, zlib.crc32(key.encode()))).spawn(40)      # the engine's seeds
+    # the engine's seeds
+    children = np.random.SeedSequence((2017, zlib.crc32(key.encode()))).spawn(40)
     index = next(i for i, child in enumerate(children)
                  if kernels.FAMILIES[int(np.random.default_rng(child).integers(len(kernels.FAMILIES)))] == "hellinger")
     with warnings.catch_warnings():
@@ -171,7 +185,8 @@ def test_kernel_check_is_deterministic_and_rerunnable():
     summary = kernels.summarise_kernels([outcome, again])
     assert summary["by_distance"][kernels.distance_label(outcome.numbers)]["instances"] == 2
     replay = kernels.replay_kernel_counterexample(outcome.numbers)
-    np.testing.assert_allclose(replay["lambda_min"], outcome.numbers["lambda_min"], rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(replay["lambda_min"], outcome.numbers["lambda_min"], rtol=1e-9,
+                               atol=1e-15)
     assert json.loads(outcome.numbers["configuration"])["items"]
 
 

@@ -45,12 +45,14 @@ def test_each_page_tables_and_lists_every_public_name(html, browser, package):
     contents) link every public function and class of the package."""
     browser.get((html / PAGES[package]).as_uri())
     first_table = browser.execute_script(
-        "const t = document.querySelector('article table'); const d = document.querySelector('article dl.py');"
+        "const t = document.querySelector('article table'); const d = "
+        "document.querySelector('article dl.py');"
         "return t && t.classList.contains('autosummary') && (!d ||"
         " (t.compareDocumentPosition(d) & Node.DOCUMENT_POSITION_FOLLOWING) > 0);")
     assert first_table, f"{PAGES[package]}: no autosummary table before the first entry"
     toc = set(browser.execute_script(
-        "return Array.from(document.querySelectorAll('#pst-page-toc-nav a')).map(a => a.hash.slice(1))"))
+        "return Array.from(document.querySelectorAll('#pst-page-toc-nav a')).map(a => "
+        "a.hash.slice(1))"))
     public = [n for n in public_names(package)
               if inspect.isfunction(getattr(package, n)) or inspect.isclass(getattr(package, n))]
     missing = [n for n in public if f"{package.__name__}.{n}" not in toc]
@@ -85,7 +87,8 @@ def test_api_block_lists_renamed_functions_under_more():
 
 
 def test_docstrings_render_without_sphinx_errors(html):
-    """A docstring that Sphinx misreads (e.g. |P| taken for a substitution) is reported in the build log."""
+    """A docstring that Sphinx misreads (e.g. |P| taken for a substitution) is reported in the build
+    log."""
     log = (html.parent.parent / "build.log").read_text()
     problems = [line for line in log.splitlines() if "docstring of" in line or "WARNING" in line]
     assert not problems, "\n".join(problems)

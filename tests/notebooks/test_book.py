@@ -32,7 +32,8 @@ def test_page_renders_math_and_images(html, browser, page):
     path = html / page
     assert path.exists(), f"{page} was not built"
     browser.get(path.as_uri())
-    n_math_src = browser.execute_script("return document.querySelectorAll('.math, mjx-container').length")
+    n_math_src = browser.execute_script("return document.querySelectorAll('.math, "
+                                        "mjx-container').length")
     if page in NOTEBOOK_PAGES:
         assert n_math_src > 0, f"{page}: no math on the page"
         _wait_for_math(browser)
@@ -132,7 +133,8 @@ def _load_and_log(browser, path):
     browser.get_log("performance"), browser.get_log("browser")      # drop what earlier pages left
     browser.get(path.as_uri())
     time.sleep(0.5)                                                # async and deferred scripts
-    if browser.execute_script("return !!(window.MathJax && MathJax.startup && MathJax.startup.promise)"):
+    if browser.execute_script("return !!(window.MathJax && MathJax.startup && "
+                              "MathJax.startup.promise)"):
         _wait_for_math(browser)
     requests = []
     for entry in browser.get_log("performance"):
@@ -184,7 +186,8 @@ def test_mathjax_is_one_script_loaded_once(html, browser):
 
 # ---- pages that show the computation (item 2) ----------------------------------------------------
 
-WARNING_TEXT = re.compile(r"\b\w*(Warning|Error):|warnings\.warn\(|Traceback \(most recent call last\)")
+WARNING_TEXT = re.compile(r"\b\w*(Warning|Error):|warnings\.warn\(|Traceback \(most recent call "
+                          r"last\)")
 
 
 def warning_blocks(page_html: str) -> list:
@@ -207,7 +210,8 @@ def test_no_warning_text_or_stray_output(html, page):
     assert not warning_blocks(text), f"{page}: {warning_blocks(text)[:5]}"
     # a cell's displayed value is a bare repr (Scaling's `256`, `PosixPath('../figures')`): the book
     # prints numbers rounded, in sentences or tables, and hides the bookkeeping
-    stray = re.findall(r'<div class="output text_plain[^"]*"><div class="highlight"><pre><span></span>'
+    stray = re.findall(r'<div class="output text_plain[^"]*"><div '
+                       r'class="highlight"><pre><span></span>'
                        r"([^<]{0,60})", text)
     assert not stray, f"{page}: stray outputs {stray}"
 

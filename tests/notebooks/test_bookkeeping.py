@@ -34,7 +34,8 @@ def _is_record_call(node) -> bool:
 
 
 def _calls_record(source: str) -> bool:
-    return any(_is_record_call(node) for node in ast.walk(ast.Module(body=_parse(source), type_ignores=[])))
+    return any(_is_record_call(node) for node in ast.walk(ast.Module(body=_parse(source),
+                                                                     type_ignores=[])))
 
 
 def _only_records(statements) -> bool:
@@ -65,7 +66,8 @@ def record_cell_problems(nb) -> list:
         if not HIDDEN_TAGS & set(cell.metadata.get("tags", [])):
             problems.append(f"{name} calls record but is not tagged remove-cell or remove-input")
         if not _only_records(_parse(cell.source)):
-            problems.append(f"{name} does more than record: move the computation into the visible cell above")
+            problems.append(f"{name} does more than record: move the computation into the visible "
+                            "cell above")
         if any(o.output_type != "execute_result" for o in cell.get("outputs", [])):
             problems.append(f"{name} prints or displays: a record cell shows nothing")
     return problems
@@ -81,8 +83,10 @@ def test_record_calls_are_in_hidden_record_cells(name):
 @pytest.mark.parametrize("source, tags, outputs, fault", [
     ("x = solve(sys)\nrepro.record('x', x)", ["remove-cell"], [], "does more than record"),
     ("repro.record('x', x)", [], [], "not tagged"),
-    ("repro.record('x', x)", ["remove-cell"], [nbformat.v4.new_output("stream", text="1\n")], "prints or displays"),
-    ("for t, r in res.items():\n    print(t)\n    repro.record(f'x{t}', r)", ["remove-cell"], [], "does more"),
+    ("repro.record('x', x)", ["remove-cell"], [nbformat.v4.new_output("stream", text="1\n")],
+     "prints or displays"),
+    ("for t, r in res.items():\n    print(t)\n    repro.record(f'x{t}', r)", ["remove-cell"], [],
+     "does more"),
     ("y = repro.record('x', x)", ["remove-cell"], [], "does more than record"),
 ])
 def test_planted_bookkeeping_faults_are_caught(source, tags, outputs, fault):

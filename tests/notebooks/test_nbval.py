@@ -24,7 +24,8 @@ CHECK_TAG = "nbval-check-output"
 def _checked_cells(nb):
     """The cells nbval compares in lax mode: tagged ``nbval-check-output`` (the tag replaces the
     ``# NBVAL_CHECK_OUTPUT`` comment, which readers of the book saw in the code)."""
-    return [c for c in nb.cells if c.cell_type == "code" and CHECK_TAG in c.metadata.get("tags", [])]
+    return [c for c in nb.cells if c.cell_type == "code" and CHECK_TAG in c.metadata.get("tags",
+                                                                                         [])]
 
 
 @pytest.mark.notebook
@@ -36,7 +37,8 @@ def test_nbval_checked_cells(name, ci_execution):
     # every numerical section checks its key numbers; other pages are at least re-executed
     assert checked or not (info.figures or info.tables), f"{name}: no cell is tagged {CHECK_TAG}"
     assert all(c.get("outputs") for c in checked), f"{name}: a checked cell has no stored output"
-    _, proc = ci_execution(name)          # nbval on the committed notebook with ci parameters injected
+    # nbval on the committed notebook with ci parameters injected
+    _, proc = ci_execution(name)
     assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-2000:]
 
 

@@ -1,4 +1,5 @@
-"""Every notebook runs at ci fidelity (once per session, under nbval: conftest's ``ci_execution``); recorded values are
+"""Every notebook runs at ci fidelity (once per session, under nbval: conftest's ``ci_execution``);
+recorded values are
 checked against
 the reference file (deterministic values against the thesis or, where the ledger
 documents a deviation, against our full-fidelity value) and against our own
@@ -40,13 +41,15 @@ def test_notebook_at_ci_fidelity(name, ci_run):
             continue
         if entry.kind == "deterministic" and entry.expect == "reproduced" \
                 and status(entry, ours_ci[entry.name]) != "reproduced":
-            problems.append(f"{entry.key}: {ours_ci[entry.name]} vs thesis {entry.thesis} (tol {entry.tol})")
+            problems.append(f"{entry.key}: {ours_ci[entry.name]} vs thesis {entry.thesis} (tol "
+                            f"{entry.tol})")
         ok, how = agrees_with_full(entry, ours_ci[entry.name], ours_full[entry.name])
         if not ok:
             problems.append(f"{entry.key}: ci run disagrees with committed full run: {how}")
         mc_error = monte_carlo_rtol(ours_ci[entry.name], ours_full[entry.name])
         if entry.ci_rtol is not None and mc_error is not None and entry.ci_rtol < mc_error:
-            problems.append(f"{entry.key}: ci_rtol {entry.ci_rtol} is tighter than the Monte Carlo error "
+            problems.append(f"{entry.key}: ci_rtol {entry.ci_rtol} is tighter than the Monte Carlo "
+                            "error "
                             f"of the comparison, {mc_error:.3g} (4 combined standard errors)")
     assert not problems, "\n".join(problems)
 

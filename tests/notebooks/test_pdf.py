@@ -29,7 +29,8 @@ def pdf(tmp_path_factory):
     """The PDF built once per session; its path (the LaTeX log lies beside it)."""
     missing = [t for t in TOOLS if shutil.which(t) is None]
     if missing:
-        pytest.fail(f"{', '.join(missing)} missing: `make tex` installs Debian's TeX Live and poppler-utils")
+        pytest.fail(f"{', '.join(missing)} missing: `make tex` installs Debian's TeX Live and "
+                    "poppler-utils")
     out = tmp_path_factory.mktemp("pdf")
     subprocess.run([sys.executable, "-m", "asoc_companion.book"], check=True, capture_output=True)
     summary = io.StringIO()
@@ -51,7 +52,8 @@ def bookmarks(pdf_path) -> list:
     xml = subprocess.run(["pdftohtml", "-xml", "-i", "-stdout", "-q", str(pdf_path)],
                          capture_output=True, text=True, check=True).stdout
     outline = xml[xml.find("<outline>"):]
-    return [re.sub(r"<[^>]+>", "", t).strip() for t in re.findall(r"<item[^>]*>(.*?)</item>", outline, re.S)]
+    return [re.sub(r"<[^>]+>", "", t).strip() for t in re.findall(r"<item[^>]*>(.*?)</item>",
+                                                                  outline, re.S)]
 
 
 def _words(text: str) -> str:
@@ -93,14 +95,16 @@ def test_bookmarks_for_every_page_and_finding(pdf):
 @pytest.mark.book
 def test_every_figure_and_table_is_in_the_pdf(pdf):
     n_figures = sum(len(info.figures) for info in notebooks().values())
-    images = subprocess.run(["pdfimages", "-list", str(pdf)], capture_output=True, text=True, check=True).stdout
+    images = subprocess.run(["pdfimages", "-list", str(pdf)], capture_output=True, text=True,
+                            check=True).stdout
     n_images = len(images.splitlines()) - 2                         # two header lines
     assert n_images >= n_figures, f"{n_images} images for {n_figures} figures"
     text = _text(pdf)
     tables = [t for info in notebooks().values() for t in info.tables]
     missing = [t for t in tables if f"Table {t}" not in text]
     assert tables and not missing, f"tables not in the PDF: {missing}"
-    pages = int(re.search(r"Pages:\s+(\d+)", subprocess.run(["pdfinfo", str(pdf)], capture_output=True,
+    pages = int(re.search(r"Pages:\s+(\d+)", subprocess.run(["pdfinfo", str(pdf)],
+                                                            capture_output=True,
                                                              text=True, check=True).stdout)[1])
     assert pages > 100, f"only {pages} pages"
 
@@ -120,7 +124,8 @@ MAX_OVERFULL = 5
 
 @pytest.mark.book
 def test_no_html_repr_in_the_latex(pdf):
-    tex = pdf.with_suffix(".tex").read_text()     # "<" is \PYGZlt{} in a listing, \textless{} in text
+    # "<" is \PYGZlt{} in a listing, \textless{} in text
+    tex = pdf.with_suffix(".tex").read_text()
     found = re.findall(r"IPython\.core\.display\.\w+ object|[\w.]+ object at 0x[0-9a-f]+", tex)
     reprs = sorted(set(found))
     assert not reprs, f"outputs printed as their repr (an HTML-only display?): {reprs}"

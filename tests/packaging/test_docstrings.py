@@ -15,7 +15,13 @@ from docutils.parsers.rst import Parser
 from docutils.utils import new_document
 from sphinx.ext.autosummary import extract_summary
 
-from asoc_companion.book import API_BLOCK, THESIS_ABBREVIATIONS, documented, public_names, use_abbreviations
+from asoc_companion.book import (
+    API_BLOCK,
+    THESIS_ABBREVIATIONS,
+    documented,
+    public_names,
+    use_abbreviations,
+)
 from asoc_companion.paths import BOOK
 
 PARSE_ERRORS = {

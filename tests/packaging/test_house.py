@@ -57,7 +57,8 @@ def internals(folder):
 
 
 def import_graph(folder):
-    """Module stem -> the stems of the modules of the package ``folder`` that it imports relatively."""
+    """Module stem -> the stems of the modules of the package ``folder`` that it imports
+    relatively."""
     stems = {path.stem for path in _modules(folder)}
     graph = {}
     for path in _modules(folder):
@@ -70,7 +71,8 @@ def import_graph(folder):
 
 
 def circles(graph):
-    """Every import circle of ``graph``, as a list of stems that starts and ends with the same one."""
+    """Every import circle of ``graph``, as a list of stems that starts and ends with the same
+    one."""
     found = []
 
     def visit(stem, path):
@@ -131,7 +133,8 @@ def test_the_checks_catch_planted_violations(tmp_path):
     (tmp_path / "trajectory.py").write_text("from .simulate import _simulate, draw_noise\n")
     (tmp_path / "simulate.py").write_text("from .trajectory import AffinePolicy\nfrom . import _validate as v\n")
     (tmp_path / "models.py").write_text("from numpy.linalg import _umath_linalg\nfrom asoc.mjls.static import _Cycle\n")
-    assert private_imports(tmp_path) == ["models.py:2: _Cycle", "simulate.py:2: _validate", "trajectory.py:1: _simulate"]
+    assert private_imports(tmp_path) == ["models.py:2: _Cycle", "simulate.py:2: _validate",
+                                         "trajectory.py:1: _simulate"]
     assert internals(tmp_path) == ["models.py:1: numpy.linalg._umath_linalg"]
     assert circles(import_graph(tmp_path)) == [["simulate", "trajectory", "simulate"],
                                                ["trajectory", "simulate", "trajectory"]]

@@ -1,4 +1,5 @@
-"""The arrow runs one way (the architecture page, book/architecture.md): the library ``asoc`` never imports the
+"""The arrow runs one way (the architecture page, book/architecture.md): the library ``asoc`` never
+imports the
 companion's
 tooling ``asoc_companion``, nor the book's tools. Checked statically (every import statement
 of every file under src/asoc, including imports inside functions) and by importing every
@@ -15,7 +16,8 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / "src"
 LIBRARY = SRC / "asoc"
 TOOLING = ("asoc_companion",)
-BOOK_TOOLS = ("matplotlib", "papermill", "nbformat", "nbclient", "IPython", "sphinx", "yaml", "nbval")
+BOOK_TOOLS = ("matplotlib", "papermill", "nbformat", "nbclient", "IPython", "sphinx", "yaml",
+              "nbval")
 
 
 def _imports(path: Path):
@@ -40,14 +42,17 @@ def test_importing_every_library_module_loads_neither_tooling_nor_book_tools():
                               else p.relative_to(SRC).with_suffix("").parts) for p in LIBRARY.rglob("*.py"))
     probe = ("import importlib, json, sys\n"
              f"for name in {modules!r}: importlib.import_module(name)\n"
-             f"print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & {set(TOOLING + BOOK_TOOLS)!r})))")
-    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300,
+             f"print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & "
+             f"{set(TOOLING + BOOK_TOOLS)!r})))")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=300,
                           env={"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}, cwd="/")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert json.loads(proc.stdout.strip().splitlines()[-1]) == []
 
 
-@pytest.mark.parametrize("name", ["asoc_companion.figures", "asoc_companion.values", "asoc_companion.recorder"])
+@pytest.mark.parametrize("name", ["asoc_companion.figures", "asoc_companion.values",
+                                  "asoc_companion.recorder"])
 def test_the_tooling_has_no_import_circle(name):
     """figures and values do not import each other (the recorder, in session, uses both)."""
     imported = {n for _, n in _imports(SRC / Path(*name.split(".")).with_suffix(".py"))}

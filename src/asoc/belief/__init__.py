@@ -17,7 +17,13 @@
 from .damped import DampedResult, optimize_damped
 from .ekf import ekf_step
 from .filters import BeliefFilter, DiracMixture, next_estimate_covariance, sigma_points
-from .improvement import LineSearch, affine_policy_value, improved_policy_value, line_search, policy_step
+from .improvement import (
+                     LineSearch,
+                     affine_policy_value,
+                     improved_policy_value,
+                     line_search,
+                     policy_step,
+)
 from .models import (
                      GaussianNoise,
                      LandmarkExample,
@@ -46,15 +52,27 @@ from .trajectory import (
                      reference_trajectory,
 )
 from .ukf import UKF
-from .vdberg import BeliefAffineController, BeliefDynamics, BeliefILQGResult, belief_ilqg, belief_vector
+from .vdberg import (
+                     BeliefAffineController,
+                     BeliefDynamics,
+                     BeliefILQGResult,
+                     belief_ilqg,
+                     belief_vector,
+)
 
-__all__ = ["UKF", "BeliefFilter", "DiracMixture", "ParticleFilter", "ekf_step", "next_estimate_covariance",
-           "sigma_points", "GaussianNoise", "LandmarkExample", "NonlinearModel", "QuadraticCost", "landmark_example",
-           "linear_gaussian_model", "BeliefAffineController", "ClosedLoop", "MeanAffineController", "Noise",
+__all__ = ["UKF", "BeliefFilter", "DiracMixture", "ParticleFilter", "ekf_step",
+           "next_estimate_covariance",
+           "sigma_points", "GaussianNoise", "LandmarkExample", "NonlinearModel", "QuadraticCost",
+           "landmark_example",
+           "linear_gaussian_model", "BeliefAffineController", "ClosedLoop", "MeanAffineController",
+           "Noise",
            "draw_noise", "simulate", "QuadraticExpansion", "sigma_point_linearizations",
-           "statistical_taylor_expansion", "statistical_taylor_linearization_error", "AffinePolicy", "Expansion",
+           "statistical_taylor_expansion", "statistical_taylor_linearization_error", "AffinePolicy",
+           "Expansion",
            "LineSearch", "Reference", "StageProblem", "TrajectoryOptimizationResult", "Value",
-           "affine_policy_value", "backward_pass", "improved_policy_value", "line_search", "policy_step",
+           "affine_policy_value", "backward_pass", "improved_policy_value", "line_search",
+           "policy_step",
            "optimize_belief_trajectory", "reference_trajectory", "terminal_value", "BeliefDynamics",
-           "BeliefILQGResult", "belief_ilqg", "belief_vector", "IndefiniteStep", "DampedResult", "optimize_damped",
+           "BeliefILQGResult", "belief_ilqg", "belief_vector", "IndefiniteStep", "DampedResult",
+           "optimize_damped",
            "bend_toward_landmark", "covariance_aware_optimum"]

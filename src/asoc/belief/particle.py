@@ -44,7 +44,8 @@ class ParticleFilter:
     def __init__(self, model, n_particles: int, rng, resample_threshold: float = 0.5):
         self.model = check.instance(model, NonlinearModel, "model")
         if model.likelihood is None:
-            raise ValueError("model: expected a model with a likelihood(y, x) for the particle filter, found "
+            raise ValueError("model: expected a model with a likelihood(y, x) for the particle "
+                             "filter, found "
                              "likelihood None")
         self.M = check.integer(n_particles, "n_particles", minimum=1)
         self.rng = check.generator(rng)
@@ -86,7 +87,8 @@ class ParticleFilter:
         x = m.a(estimate.points, u, m.w.sample(rng, estimate.points.shape[0]))
         w = estimate.weights * m.likelihood(y, x)
         if not np.isfinite(w.sum()) or w.sum() <= 0:
-            raise ValueError("y: expected a measurement with positive likelihood under some particle, found zero under "
+            raise ValueError("y: expected a measurement with positive likelihood under some "
+                             "particle, found zero under "
                              "all")
         w = w / w.sum()
         if 1.0 / np.sum(w ** 2) < self.threshold * w.size:
@@ -100,11 +102,14 @@ class ParticleFilter:
         return self._next_covariance(estimate, u)
 
     def _next_covariance(self, estimate, u):
-        return next_estimate_covariance(estimate, u, self.model, self._w_points, self._v_points, self._beta,
+        return next_estimate_covariance(estimate, u, self.model, self._w_points, self._v_points,
+                                        self._beta,
                                         self._gamma, check=False)
 
     def covariance_map(self, estimate):
-        """U -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once (u unchecked)."""
+        """U -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once (u
+        unchecked).
+        """
         estimate = self._checked(estimate, np.zeros(self.model.n_u))[0]
         return partial(self._next_covariance, estimate)
 

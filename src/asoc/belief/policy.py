@@ -1,4 +1,6 @@
-"""The affine policy u_k = L_k E{x_k} + d_k of eq. (2.18), and the controller that applies it with the UKF."""
+"""The affine policy u_k = L_k E{x_k} + d_k of eq. (2.18), and the controller that applies it with
+the UKF.
+"""
 
 from dataclasses import dataclass
 
@@ -34,14 +36,16 @@ class AffinePolicy:
     def __post_init__(self):
         L = check.real_array(self.L, "L", ndim=3)
         if 0 in L.shape:
-            raise ValueError(f"L: expected a non-empty array of shape (K, n_u, n_x), found shape {L.shape}")
+            raise ValueError("L: expected a non-empty array of shape (K, n_u, n_x), found shape "
+                             f"{L.shape}")
         object.__setattr__(self, "L", L)
         object.__setattr__(self, "d", check.real_array(self.d, "d", shape=L.shape[:2]))
 
     @classmethod
     def zero(cls, K, n_u, n_x):
         """The initial policy L_k = 0, d_k = 0 (Sec. 2.5.2)."""
-        K, n_u, n_x = (check.integer(v, name, minimum=1) for v, name in ((K, "K"), (n_u, "n_u"), (n_x, "n_x")))
+        K, n_u, n_x = (check.integer(v, name, minimum=1) for v, name in ((K, "K"), (n_u, "n_u"),
+                                                                         (n_x, "n_x")))
         return cls(np.zeros((K, n_u, n_x)), np.zeros((K, n_u)))
 
     def __call__(self, k, mean):
@@ -93,7 +97,8 @@ class MeanAffineController:
         model = check.instance(model, NonlinearModel, "model")
         check.instance(policy, AffinePolicy, "policy")
         if policy.L.shape[1:] != (model.n_u, model.n_x):
-            raise ValueError(f"policy: expected gains of shape (K, {model.n_u}, {model.n_x}), found {policy.L.shape}")
+            raise ValueError(f"policy: expected gains of shape (K, {model.n_u}, {model.n_x}), "
+                             f"found {policy.L.shape}")
         self.filter = UKF(model, KAPPA if kappa is None else kappa)
         self.policy, self.horizon = policy, policy.L.shape[0]
 

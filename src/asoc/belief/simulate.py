@@ -88,7 +88,8 @@ class ClosedLoop:
     >>> from asoc.belief import AffinePolicy, MeanAffineController, landmark_example
     >>> ex = landmark_example(K=2)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 5, np.random.default_rng(0))
-    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2)),
+    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model,
+    ...     AffinePolicy.zero(2, 2, 2)),
     ...     noise)
     >>> run.x.shape, run.u.shape, run.costs.shape
     ((5, 3, 2), (5, 2, 2), (5,))
@@ -102,7 +103,8 @@ class ClosedLoop:
 
 
 def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
-    """Closed loop of (2.1)-(2.2) under ``controller`` for the draws ``noise``; costs by (2.3)/(2.19).
+    """Closed loop of (2.1)-(2.2) under ``controller`` for the draws ``noise``; costs by
+    (2.3)/(2.19).
 
     Parameters
     ----------
@@ -145,14 +147,18 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
     N, K = noise.w.shape[:2]
     if (noise.x0.shape != (N, model.n_x) or noise.w.shape != (N, K, model.w.dim)
             or noise.v.shape != (N, K, model.v.dim) or K != cost.K):
-        raise ValueError(f"noise: expected draws x0 (N, {model.n_x}), w (N, {cost.K}, {model.w.dim}), "
-                         f"v (N, {cost.K}, {model.v.dim}), found {noise.x0.shape}, {noise.w.shape}, {noise.v.shape}")
+        raise ValueError(f"noise: expected draws x0 (N, {model.n_x}), w (N, {cost.K}, "
+                         f"{model.w.dim}), "
+                         f"v (N, {cost.K}, {model.v.dim}), found {noise.x0.shape}, "
+                         f"{noise.w.shape}, {noise.v.shape}")
     for method in ("control", "step"):
         if not callable(getattr(controller, method, None)):
-            raise TypeError(f"controller: expected an object with control(k, mean, cov) and step(mean, cov, u, y), "
+            raise TypeError("controller: expected an object with control(k, mean, cov) and "
+                            "step(mean, cov, u, y), "
                             f"found {type(controller).__name__}")
     if getattr(controller, "horizon", K) < K:
-        raise ValueError(f"controller: expected a horizon >= {K} (the draws'), found {controller.horizon}")
+        raise ValueError(f"controller: expected a horizon >= {K} (the draws'), found "
+                         f"{controller.horizon}")
     return _simulate(model, cost, mean0, cov0, controller, noise)
 
 
@@ -171,4 +177,5 @@ def _simulate(model, cost, mean0, cov0, controller, noise):
         mean, cov = controller.step(mean, cov, u, y)
         xs.append(x), means.append(mean), covs.append(cov), us.append(u)
     total += cost.terminal(x)
-    return ClosedLoop(np.stack(xs, 1), np.stack(means, 1), np.stack(covs, 1), np.stack(us, 1), total)
+    return ClosedLoop(np.stack(xs, 1), np.stack(means, 1), np.stack(covs, 1), np.stack(us, 1),
+                      total)

@@ -32,7 +32,8 @@ class Sweep:
     """Per member: ``iterations``, ``converged``, ``costs`` (mean cost (2.19) of the final policy
     on the evaluation draws), ``diverged_iterates`` (fraction of iterates eta >= 1 with J^[eta] >
     J^[0]); ``baseline`` the mean cost of the zero policy on the evaluation draws; ``bends``
-    the bend of the final reference toward the landmark (:func:`~asoc.belief.planning.bend_toward_landmark`,
+    the bend of the final reference toward the landmark
+    (:func:`~asoc.belief.planning.bend_toward_landmark`,
     NaN without a landmark); ``increases`` the largest relative increase of J^[eta] between
     iterations (<= 0 when J never rose).
 
@@ -75,10 +76,12 @@ def distribution(samples) -> dict:
     if x.size == 0:
         raise ValueError("samples: expected at least one sample, found none")
     median = float(np.median(x))
-    return {"value": median, "median": median, "range": [float(x.min()), float(x.max())], "n": int(x.size)}
+    return {"value": median, "median": median, "range": [float(x.min()), float(x.max())],
+            "n": int(x.size)}
 
 
-def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False, n_jobs=1,
+def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False,
+                       n_jobs=1,
                        landmark=None, **options) -> Sweep:
     """Algorithm 2.2 from ``n_members`` perturbed zero policies; costs on the draws ``noise``.
 
@@ -114,7 +117,8 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     >>> from asoc.belief import draw_noise, landmark_example
     >>> ex = landmark_example(K=2)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 10, np.random.default_rng(0))
-    >>> s = perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2, np.random.default_rng(1),
+    >>> s = perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2,
+    ...     np.random.default_rng(1),
     ...                        n_cost_runs=10)
     >>> s.converged.tolist(), bool(np.ptp(s.costs) < 1e-3 * s.costs.mean())
     ([True, True], True)
@@ -126,25 +130,32 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     scale = check.real_scalar(scale, "scale", low=0, low_open=True)
     progress = check.boolean(progress, "progress")
     n_jobs = check.process_count(n_jobs, "n_jobs")
-    simulate(model, cost, mean0, cov0, MeanAffineController(model, AffinePolicy.zero(cost.K, model.n_u, model.n_x)),
-             noise)                                                 # checks mean0, cov0 and noise before the runs
+    simulate(model, cost, mean0, cov0, MeanAffineController(model, AffinePolicy.zero(cost.K,
+                                                                                     model.n_u,
+                                                                                     model.n_x)),
+             # checks mean0, cov0 and noise before the runs
+             noise)
 
     children = rng.spawn(n_members)
-    options = {**options, "landmark": None if landmark is None else check.vector(landmark, "landmark", 2)}
+    options = {**options, "landmark": None if landmark is None else check.vector(landmark,
+                                                                                 "landmark", 2)}
     if n_jobs == 1:
         outputs = [_member(model, cost, mean0, cov0, noise, child, scale, options)
                    for child in progress_bar(children, progress, desc="perturbed Alg. 2.2")]
     else:
-        outputs = _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs, progress)
+        outputs = _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options,
+                                       n_jobs, progress)
     rows = _reissued(outputs)
     it, conv, costs, div, bends, increases = (np.array(c) for c in zip(*rows))
     return Sweep(it, conv.astype(bool), costs, div,
-                 _mean_cost(model, cost, mean0, cov0, noise, AffinePolicy.zero(cost.K, model.n_u, model.n_x)),
+                 _mean_cost(model, cost, mean0, cov0, noise, AffinePolicy.zero(cost.K, model.n_u,
+                                                                               model.n_x)),
                  bends, increases)
 
 
 def _mean_cost(model, cost, mean0, cov0, noise, policy) -> float:
-    return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, policy), noise).costs.mean())
+    return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, policy),
+                          noise).costs.mean())
 
 
 def _member(model, cost, mean0, cov0, noise, child, scale, options):
@@ -161,18 +172,23 @@ def _member(model, cost, mean0, cov0, noise, child, scale, options):
             options.pop("covariance_hessian", None)
             res = optimize_damped(model, cost, mean0, cov0, policy=start, rng=child, **options)
         else:
-            res = optimize_belief_trajectory(model, cost, mean0, cov0, policy=start, rng=child, **options)
+            res = optimize_belief_trajectory(model, cost, mean0, cov0, policy=start, rng=child,
+                                             **options)
         J = np.asarray(res.costs)
         means = [UKF.mean(e) for e in res.reference.estimates] if res.reference is not None else None
         bend = (np.nan if landmark is None or means is None
                 else bend_toward_landmark(means, mean0, cost.x_target, landmark))
-        row = (res.iterations, res.converged, _mean_cost(model, cost, mean0, cov0, noise, res.policy),
-               float(np.mean(J[1:] > J[0])), bend, float(np.max(np.diff(J) / J[:-1])) if J.size > 1 else 0.0)
+        row = (res.iterations, res.converged, _mean_cost(model, cost, mean0, cov0, noise,
+                                                         res.policy),
+               float(np.mean(J[1:] > J[0])), bend,
+               float(np.max(np.diff(J) / J[:-1])) if J.size > 1 else 0.0)
     return row, [(w.message, w.category) for w in caught]
 
 
 def _reissued(member_outputs):
-    """The members' rows, after re-issuing their warnings here, in member order (the caller's filters apply)."""
+    """The members' rows, after re-issuing their warnings here, in member order (the caller's
+    filters apply).
+    """
     rows = []
     for row, caught in member_outputs:
         for message, category in caught:
@@ -181,7 +197,8 @@ def _reissued(member_outputs):
     return rows
 
 
-def _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs, progress):
+def _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, options, n_jobs,
+                         progress):
     """The members on ``n_jobs`` worker processes (joblib/loky, which pickles the model's local
     functions); each member's generator travels with it, so the rows equal the serial ones.
     """
@@ -189,6 +206,7 @@ def _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, optio
         import joblib
     except ImportError as err:                                   # the optional extra asoc[studies]
         raise ImportError("n_jobs != 1 needs joblib: pip install 'asoc[studies]'") from err
-    tasks = (joblib.delayed(_member)(model, cost, mean0, cov0, noise, child, scale, options) for child in children)
+    tasks = (joblib.delayed(_member)(model, cost, mean0, cov0, noise, child, scale,
+                                     options) for child in children)
     rows = joblib.Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
     return list(progress_bar(rows, progress, desc="perturbed Alg. 2.2", total=len(children)))

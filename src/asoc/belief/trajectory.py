@@ -43,12 +43,14 @@ class Reference:
         u_bar = check.real_array(self.u_bar, "u_bar", ndim=2)
         check.instance(self.estimates, (list, tuple), "estimates", "a list of estimates")
         if len(self.estimates) != u_bar.shape[0] + 1:
-            raise ValueError(f"estimates: expected {u_bar.shape[0] + 1} estimates (one more than inputs), "
+            raise ValueError(f"estimates: expected {u_bar.shape[0] + 1} estimates (one more than "
+                             "inputs), "
                              f"found {len(self.estimates)}")
         object.__setattr__(self, "u_bar", u_bar)
 
 
-def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="nominal", rng=None) -> Reference:
+def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="nominal",
+                         rng=None) -> Reference:
     """Algorithm 2.1: simulate the reference estimates under ``policy``.
 
     ``mode="nominal"`` uses the means E{x_k}, E{w_k}, E{v_k} (the variant the thesis
@@ -82,7 +84,8 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=3)
     >>> from asoc.belief import UKF
-    >>> ref = reference_trajectory(ex.model, UKF(ex.model), AffinePolicy.zero(3, 2, 2), ex.mean0, ex.cov0)
+    >>> ref = reference_trajectory(ex.model, UKF(ex.model), AffinePolicy.zero(3, 2, 2), ex.mean0,
+    ...     ex.cov0)
     >>> len(ref.estimates), ref.u_bar.shape
     (4, (3, 2))
     """
@@ -116,7 +119,8 @@ def _reference_trajectory(model, filt, policy, mean0, cov0, mode, rng):
 
 @dataclass(kw_only=True)
 class TrajectoryOptimizationResult(IterativeResult):
-    """Result of Algorithm 2.2 (belief-space trajectory optimisation by statistical Taylor expansion).
+    """Result of Algorithm 2.2 (belief-space trajectory optimisation by statistical Taylor
+    expansion).
 
     ``policy`` the final affine policy; ``policies`` the policy of every iteration
     (policies[0] the initial one); ``costs`` J of each policy in ``policies`` (Monte Carlo
@@ -131,7 +135,8 @@ class TrajectoryOptimizationResult(IterativeResult):
     --------
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=3)
-    >>> res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+    >>> res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0,
+    ...     rng=np.random.default_rng(0),
     ...                                  n_cost_runs=10)
     >>> res.status, res.iterations, round(res.costs[-1], 2) < round(res.costs[0], 2)
     ('converged', 2, True)
@@ -148,7 +153,8 @@ class TrajectoryOptimizationResult(IterativeResult):
 
 
 def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_points, beta,
-                  derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True,
+                  derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd",
+                  covariance_term=True,
                   damping=None):
     """Steps 3-8 of Algorithm 2.2 along ``ref``; returns (new policy, V_0, eps, rejected).
 
@@ -202,7 +208,8 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     check.instance(ref, Reference, "ref")
     K = ref.u_bar.shape[0]
     if K != cost.K or len(ref.estimates) != K + 1:
-        raise ValueError(f"ref: expected a reference of horizon cost.K = {cost.K}, found {K} inputs and "
+        raise ValueError(f"ref: expected a reference of horizon cost.K = {cost.K}, found {K} "
+                         "inputs and "
                          f"{len(ref.estimates)} estimates")
     policy = policy_for(policy, K, model)
     w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
@@ -224,7 +231,8 @@ class IndefiniteStep(np.linalg.LinAlgError):
     """R~_k + mu I is not positive definite at some step of a damped backward pass."""
 
 
-def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, alpha_min, covariance_hessian,
+def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, alpha_min,
+                   covariance_hessian,
                    covariance_term, damping=None):
     """Steps 3-8 of Alg. 2.2; ``damping`` mu adds mu I to every R_k^i (so to R~_k) and raises
     :class:`IndefiniteStep` where R~_k + mu I is still indefinite (the damped variant).
@@ -234,17 +242,20 @@ def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, 
     L_new, d_new = policy.L.copy(), policy.d.copy()
     eps_k, rejected = np.zeros(K), 0
     for k in range(K - 1, -1, -1):
-        stage = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta, covariance_hessian,
+        stage = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta,
+                             covariance_hessian,
                              covariance_term)
         exp = stage.expansion(ref.u_bar[k], derivatives)
         if damping is not None:
             exp = replace(exp, R=exp.R + damping * np.eye(exp.R.shape[-1]))
         lam = np.linalg.eigvalsh(exp.tilde[3]).min()
         if not lam > 0 and damping is not None:
-            raise IndefiniteStep(f"R~_{k} + {damping:g} I is indefinite (minimal eigenvalue {lam:.3g})")
+            raise IndefiniteStep(f"R~_{k} + {damping:g} I is indefinite (minimal eigenvalue "
+                                 f"{lam:.3g})")
         if not lam > 0:
             warnings.warn(f"Assumption 2.3 fails at k={k}: R~_k is not positive definite "
-                          f"(minimal eigenvalue {lam:.3g}); keeping the policy", RuntimeWarning, stacklevel=3)
+                          f"(minimal eigenvalue {lam:.3g}); keeping the policy", RuntimeWarning,
+                          stacklevel=3)
             accepted, eps = False, 0.0
         else:
             ls = line_search(stage, exp, ref.u_bar[k], filt.mean(ref.estimates[k]), alpha_min)
@@ -259,8 +270,10 @@ def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, 
     return AffinePolicy(L_new, d_new), value, eps_k, rejected
 
 
-def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None, max_iterations=50, rtol=1e-4,
-                               n_cost_runs=200, rng=None, derivatives="analytic", reference_mode="nominal",
+def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None, max_iterations=50,
+                               rtol=1e-4,
+                               n_cost_runs=200, rng=None, derivatives="analytic",
+                               reference_mode="nominal",
                                alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True,
                                progress=False) -> TrajectoryOptimizationResult:
     """Algorithm 2.2: belief-space trajectory optimisation by statistical Taylor expansion.
@@ -321,7 +334,8 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     --------
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=3)
-    >>> res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0, rng=np.random.default_rng(0),
+    >>> res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0,
+    ...     rng=np.random.default_rng(0),
     ...                                  n_cost_runs=10)
     >>> res.converged, res.iterations, res.policy.L.shape
     (True, 2, (3, 2, 2))
@@ -332,7 +346,8 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
     filt = filter_for(filt, model)
-    policy = AffinePolicy.zero(K, model.n_u, model.n_x) if policy is None else policy_for(policy, K, model)
+    policy = AffinePolicy.zero(K, model.n_u, model.n_x) if policy is None else policy_for(policy, K,
+                                                                                          model)
     max_iterations = check.integer(max_iterations, "max_iterations", minimum=1)
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     n_cost_runs = check.integer(n_cost_runs, "n_cost_runs", minimum=1)
@@ -344,18 +359,21 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     noise = draw_noise(model, mean0, cov0, K, n_cost_runs, rng)
 
     def J(pol):
-        return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, pol), noise).costs.mean())
+        return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, pol),
+                              noise).costs.mean())
 
     policies, costs, predicted, eps_all, rejected_all = [policy], [J(policy)], [], [], []
     status, ref, error = "max_iterations", None, None
     for _ in progress_bar(range(max_iterations), progress, desc="Alg. 2.2"):
         try:
             ref = _reference_trajectory(model, filt, policy, mean0, cov0, reference_mode, rng)
-            policy, value, eps, rejected = _backward_pass(model, cost, filt, ref, policy, w_points, beta, *options)
+            policy, value, eps, rejected = _backward_pass(model, cost, filt, ref, policy, w_points,
+                                                          beta, *options)
         except np.linalg.LinAlgError as err:
             status, error = "linalg_error", err
             break
-        except ValueError as err:       # the inputs are checked: a non-finite intermediate (value, policy)
+        # the inputs are checked: a non-finite intermediate (value, policy)
+        except ValueError as err:
             status, error = "diverged", err
             break
         policies.append(policy), costs.append(J(policy)), eps_all.append(eps), rejected_all.append(rejected)
@@ -373,15 +391,18 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
         "max_iterations": lambda: f"stopped after max_iterations = {max_iterations} with relative change of J "
                                   f"{_change(costs):.3g} > rtol = {rtol:g}",
         "diverged": lambda: (f"J became non-finite ({costs[-1]}) at iteration {iterations}" if error is None
-                             else f"an iterate became non-finite at iteration {iterations + 1}: {error}"),
+                             else f"an iterate became non-finite at iteration {iterations + 1}: "
+                                  f"{error}"),
         "linalg_error": lambda: f"a linear-algebra step failed at iteration {iterations + 1}: {error}",
     }
     result = TrajectoryOptimizationResult(
-        policy=policy, policies=policies, costs=costs, predicted=predicted, eps=eps_all, rejected=rejected_all,
+        policy=policy, policies=policies, costs=costs, predicted=predicted, eps=eps_all,
+        rejected=rejected_all,
         iterations=iterations, reference=ref, converged=status == "converged", status=status,
         message=messages[status]())
     if not result.converged:
-        warnings.warn(f"Algorithm 2.2 did not converge: {result.message}", RuntimeWarning, stacklevel=2)
+        warnings.warn(f"Algorithm 2.2 did not converge: {result.message}", RuntimeWarning,
+                      stacklevel=2)
     return result
 
 

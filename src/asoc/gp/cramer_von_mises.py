@@ -1,4 +1,5 @@
-"""The modified Cramer-von Mises distance (mCvMd) via localized cumulative distributions (Sec. 2.6.3, item 5).
+"""The modified Cramer-von Mises distance (mCvMd) via localized cumulative distributions (Sec.
+2.6.3, item 5).
 
 Closed form between Dirac mixtures (:func:`mcvmd`, :func:`mcvmd_matrix`), the localized
 cumulative distributions of Dirac mixtures and Gaussians (:func:`lcd_dirac`,
@@ -17,7 +18,8 @@ from .. import validation as check
 from ..progress import progress_bar
 from . import mixture_checks as v
 
-__all__ = ["EULER_GAMMA", "DEFAULT_B_MAX", "ROUNDING_RTOL", "mcvmd_constant", "mcvmd", "mcvmd_matrix", "lcd_dirac",
+__all__ = ["EULER_GAMMA", "DEFAULT_B_MAX", "ROUNDING_RTOL", "mcvmd_constant", "mcvmd",
+           "mcvmd_matrix", "lcd_dirac",
            "lcd_gaussian", "mcvmd_quadrature"]
 
 
@@ -29,7 +31,8 @@ ROUNDING_RTOL = 1e-9
 
 
 def mcvmd_constant(b_max: float) -> float:
-    r"""The constant :math:`c_b` of the large-``b_max`` closed form of the mCvMd (Sec. 2.6.3, item 5).
+    r"""The constant :math:`c_b` of the large-``b_max`` closed form of the mCvMd (Sec. 2.6.3, item
+    5).
 
     Integrating the definition, :math:`\int_0^{b_{\max}} w(b) \int (P_1 - P_2)^2\,dm\,db`,
     term by term with the LCD kernel of Sec. 2.6.3 gives
@@ -159,7 +162,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     >>> D = mcvmd_matrix(np.array([[0.0, 1.0], [0.5, 0.5], [2.0, 3.0]]))
     >>> D.round(3).tolist()
     [[0.0, 0.392, 4.014], [0.392, 0.0, 4.073], [4.014, 4.073, 0.0]]
-    >>> mcvmd_matrix(np.array([[0.0, 1.0], [2.0, 3.0]]), b_max=[10.0, 100.0])[:, 0, 1].round(3).tolist()
+    >>> mcvmd_matrix(np.array([[0.0, 1.0], [2.0, 3.0]]), b_max=[10.0, 100.0])[:, 0,
+    ...     1].round(3).tolist()
     [2.82, 4.014]
     """
     X = v.mixture_set(X, "X")
@@ -170,7 +174,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     v.same_dimension(X, Y, "X, Y")
     several = np.ndim(b_max) == 1
     if several and len(b_max) == 0:
-        raise ValueError("b_max: expected a positive number or a non-empty sequence of them, found an empty sequence")
+        raise ValueError("b_max: expected a positive number or a non-empty sequence of them, found "
+                         "an empty sequence")
     constants = [mcvmd_constant(value) for value in (b_max if several else [b_max])]
     chunk = check.integer(chunk, "chunk", minimum=1)
     progress = check.boolean(progress, "progress")
@@ -226,7 +231,8 @@ def _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress):
 def lcd_dirac(x, wx, m, b) -> np.ndarray:
     r"""Localized cumulative distribution of a Dirac mixture, :math:`P(\underline m, b)`.
 
-    :math:`P(\underline m, b) = \sum_i w_i \exp(-\tfrac12 \|\underline x_i - \underline m\|^2 / b^2)`
+    :math:`P(\underline m, b) = \sum_i w_i \exp(-\tfrac12 \|\underline x_i - \underline m\|^2 /
+    b^2)`
     (Sec. 2.6.3, LCD with the radial basis kernel). ``m``: (K, d) evaluation points,
     ``b``: scalar or (K,) widths. Returns (K,).
 

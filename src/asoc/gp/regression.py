@@ -47,7 +47,8 @@ PARAMS = ("alpha", "l", "sigma_n")
 #: gradient are accurate to far better than gp.gradient_tol. With the earlier bounds (1e3, 1e-4)
 #: the OMAT fits of Sec. 2.6.4, whose likelihood grows without bound along alpha, l -> infinity
 #: (OMAT is Euclidean in (mu, sigma) there and v_1 a polynomial), ran into cond ~ 1e18 with alpha
-#: at its bound, where the jittered Cholesky no longer matches the gradient: they stopped unconverged.
+#: at its bound, where the jittered Cholesky no longer matches the gradient: they stopped
+#: unconverged.
 ALPHA_CAP = 1e2
 NOISE_FLOOR = 1e-3
 #: Polishing restarts of L-BFGS-B from its own end point when the projected gradient is above the
@@ -61,7 +62,8 @@ LOG_ML_TIE = 1e-3
 
 @dataclass(kw_only=True)
 class FitResult(IterativeResult):
-    """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum and why it stopped.
+    """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum and why it
+    stopped.
 
     ``converged`` when the projected gradient of the log marginal likelihood in
     log-parameters is below ``config.defaults["gp.gradient_tol"]`` at the chosen start (the best
@@ -71,7 +73,8 @@ class FitResult(IterativeResult):
     Examples
     --------
     >>> x = np.linspace(-2, 2, 8)
-    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x), np.random.default_rng(0))
+    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x),
+    ...     np.random.default_rng(0))
     >>> from asoc import config
     >>> gp.result.status, gp.result.gradient_norm < config.defaults["gp.gradient_tol"]
     ('converged', True)
@@ -91,14 +94,16 @@ def _cholesky(Ky):
     scale = np.mean(np.diag(Ky))
     for jitter in (0.0, 1e-12, 1e-10, 1e-8, 1e-6):
         try:
-            return cho_factor(Ky if jitter == 0.0 else Ky + jitter * scale * np.eye(len(Ky)), lower=True)
+            return cho_factor(Ky if jitter == 0.0 else Ky + jitter * scale * np.eye(len(Ky)),
+                              lower=True)
         except LinAlgError:
             continue
     raise LinAlgError("Sigma_y is not positive definite even with jitter 1e-6 * mean(diag)")
 
 
 def _projected_gradient(res, log_b) -> float:
-    """Largest component of the gradient projected onto the box ``log_b`` (zero where a bound is active).
+    """Largest component of the gradient projected onto the box ``log_b`` (zero where a bound is
+    active).
 
     On the flat ridges of the likelihood (alpha and l growing together) L-BFGS-B often
     ends with an abnormal line search at a point whose projected gradient is negligible;
@@ -115,7 +120,8 @@ def _status(gradient, iterations, tolerance, max_iterations):
         return "converged", f"projected gradient {gradient:.2g} <= {tolerance:g} after {iterations} iterations"
     if iterations >= max_iterations:
         return "max_iterations", f"stopped after {iterations} iterations with projected gradient {gradient:.2g}"
-    return "no_progress", (f"L-BFGS-B stopped after {iterations} iterations with projected gradient "
+    return "no_progress", (f"L-BFGS-B stopped after {iterations} iterations with projected "
+                           "gradient "
                            f"{gradient:.2g} > {tolerance:g}")
 
 
@@ -174,7 +180,9 @@ class _LikelihoodGP:
                 "sigma_n": (NOISE_FLOOR * sy, 1.0 * sy)}
 
     def neg_log_ml(self, log_theta, grad=True):
-        """Negative log marginal likelihood (and gradient) at ``log(alpha, l, sigma_n)`` (Sec. 2.6.1)."""
+        """Negative log marginal likelihood (and gradient) at ``log(alpha, l, sigma_n)`` (Sec.
+        2.6.1).
+        """
         self._fitted_data()
         log_theta = check.real_array(log_theta, "log_theta", shape=(3,))
         return self._neg_log_ml(log_theta, check.boolean(grad, "grad"))
@@ -186,7 +194,8 @@ class _LikelihoodGP:
     def _neg_log_ml(self, log_theta, grad=True):
         alpha, l, sn = np.exp(log_theta)
         Ku, dKu = self._kernel(l, grad=grad)
-        Ky = alpha**2 * Ku                              # + sn^2 I in place: off the diagonal x + 0 = x (x >= +0)
+        # + sn^2 I in place: off the diagonal x + 0 = x (x >= +0)
+        Ky = alpha**2 * Ku
         Ky.flat[::len(Ky) + 1] += sn**2
         try:
             cf = _cholesky(Ky)
@@ -205,9 +214,12 @@ class _LikelihoodGP:
         return nll, g
 
     def log_marginal_likelihood(self, alpha, l, sigma_n) -> float:
-        """Log marginal likelihood log p(y | X) at the given hyperparameters (for likelihood surfaces)."""
+        """Log marginal likelihood log p(y | X) at the given hyperparameters (for likelihood
+        surfaces).
+        """
         self._fitted_data()
-        theta = [v.positive(value, name) for value, name in ((alpha, "alpha"), (l, "l"), (sigma_n, "sigma_n"))]
+        theta = [v.positive(value, name) for value, name in ((alpha, "alpha"), (l, "l"), (sigma_n,
+                                                                                          "sigma_n"))]
         return -self._neg_log_ml(np.log(theta), grad=False)
 
     def _optimise(self, rng: np.random.Generator):
@@ -229,7 +241,8 @@ class _LikelihoodGP:
                 res = self._minimise(res.x, log_b, max_iterations - iterations)
                 iterations += int(res.nit)
             gradient = _projected_gradient(res, log_b)
-            runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= tolerance, iterations,
+            runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= tolerance,
+                         iterations,
                          gradient))
         best = max(runs, key=lambda run: run[2])
         tied = [run for run in runs if run[3] and run[2] >= best[2] - LOG_ML_TIE]
@@ -237,10 +250,12 @@ class _LikelihoodGP:
         alpha, l, sn = best[1]
         status, message = _status(best[5], best[4], tolerance, max_iterations)
         self.result = FitResult(alpha=float(alpha), l=float(l), sigma_n=float(sn), log_ml=best[2],
-                                iterations=best[4], gradient_norm=best[5], starts=[run[:4] for run in runs],
+                                iterations=best[4], gradient_norm=best[5],
+                                starts=[run[:4] for run in runs],
                                 converged=status == "converged", status=status, message=message)
         if not self.result.converged:
-            warnings.warn(f"{type(self).__name__}.fit: the best start did not converge: {message}", RuntimeWarning)
+            warnings.warn(f"{type(self).__name__}.fit: the best start did not converge: {message}",
+                          RuntimeWarning)
         return self.result
 
     def _minimise(self, x0, log_b, max_iterations):
@@ -251,7 +266,8 @@ class _LikelihoodGP:
     def _factor(self):
         r = self.result
         Ku, _ = self._kernel(r.l)
-        self._kernels = OrderedDict([(float(r.l), self._kernels[float(r.l)])])     # the fit's others: memory
+        # the fit's others: memory
+        self._kernels = OrderedDict([(float(r.l), self._kernels[float(r.l)])])
         self._cf = _cholesky(r.alpha**2 * Ku + r.sigma_n**2 * np.eye(len(Ku)))
         self._a = cho_solve(self._cf, self.y - self.m)
 
@@ -296,7 +312,8 @@ class DistributionGP(_LikelihoodGP):
     Examples
     --------
     >>> x = np.linspace(-3, 3, 12)                        # inputs: Dirac distributions at x
-    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x), np.random.default_rng(0))
+    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x),
+    ...     np.random.default_rng(0))
     >>> mean, var = gp.predict(np.abs(np.array([[0.5]]) - x[None]), return_var=True)
     >>> round(float(mean[0]), 3), bool(var[0] < 1e-3)     # sin(0.5) = 0.479
     (0.479, True)
@@ -308,7 +325,8 @@ class DistributionGP(_LikelihoodGP):
                    "rational_quadratic": {"alpha_rq"}}.get(covariance, set())
         if set(shape) - allowed:
             extra = ", ".join(sorted(set(shape) - allowed))
-            raise TypeError(f"{extra}: expected the shape parameters of {covariance!r}, {sorted(allowed) or 'none'}, "
+            raise TypeError(f"{extra}: expected the shape parameters of {covariance!r}, "
+                            f"{sorted(allowed) or 'none'}, "
                             f"found {sorted(shape)}")
         super().__init__(n_restarts, bounds)
         self.covariance = covariance
@@ -318,7 +336,8 @@ class DistributionGP(_LikelihoodGP):
         if "nu" in shape:
             shape["nu"] = v.positive(shape["nu"], "nu")
         if "gamma" in shape:
-            shape["gamma"] = check.real_scalar(shape["gamma"], "gamma", low=0, high=2, low_open=True)
+            shape["gamma"] = check.real_scalar(shape["gamma"], "gamma", low=0, high=2,
+                                               low_open=True)
         self._kappa = lambda D, l: fn(D, l, **shape)
         # the training distances are checked by fit, the optimiser's l = exp(log l) is positive
         self._kappa_training = lambda l: fn(self.D, float(l), check=False, **shape)
@@ -338,7 +357,9 @@ class DistributionGP(_LikelihoodGP):
 
     @config.accepts_settings("gp.gradient_tol", "gp.max_iterations")
     def fit(self, D, y, rng: np.random.Generator):
-        """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs ``y`` (M,)."""
+        """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs
+        ``y`` (M,).
+        """
         check.generator(rng)
         self._check_training(D, y)
         self._optimise(rng)
@@ -350,11 +371,14 @@ class DistributionGP(_LikelihoodGP):
         if D.ndim != 2 or D.shape[0] != D.shape[1]:
             raise ValueError(f"D: expected a square distance matrix, found shape {D.shape}")
         if not np.allclose(D, D.T) or np.any(np.diag(D) != 0):
-            raise ValueError(f"D: expected a symmetric distance matrix with zero diagonal, found asymmetry "
-                             f"{np.abs(D - D.T).max():.3g} and largest diagonal entry {np.abs(np.diag(D)).max():.3g}")
+            raise ValueError("D: expected a symmetric distance matrix with zero diagonal, found "
+                             "asymmetry "
+                             f"{np.abs(D - D.T).max():.3g} and largest diagonal entry "
+                             f"{np.abs(np.diag(D)).max():.3g}")
         y = self._set_outputs(y)
         if len(y) != len(D):
-            raise ValueError(f"y: expected {len(D)} outputs (one per training input), found {len(y)}")
+            raise ValueError(f"y: expected {len(D)} outputs (one per training input), found "
+                             f"{len(y)}")
         self.D = D
         self._reset_kernels()
 
@@ -364,7 +388,8 @@ class DistributionGP(_LikelihoodGP):
         alpha, l, sigma_n = (v.positive(value, name) for value, name in ((alpha, "alpha"), (l, "l"),
                                                                           (sigma_n, "sigma_n")))
         log_ml = -self._neg_log_ml(np.log([alpha, l, sigma_n]), grad=False)
-        self.result = FitResult(alpha=alpha, l=l, sigma_n=sigma_n, log_ml=float(log_ml), iterations=0,
+        self.result = FitResult(alpha=alpha, l=l, sigma_n=sigma_n, log_ml=float(log_ml),
+                                iterations=0,
                                 converged=True, status="converged",
                                 message="conditioned on given hyperparameters (no estimation)")
         self._factor()
@@ -381,7 +406,8 @@ class DistributionGP(_LikelihoodGP):
         if D_ss.shape != (len(D_star), len(D_star)):
             raise ValueError(f"D_star_star: expected shape {(len(D_star),) * 2}, found {D_ss.shape}")
         Ks = self.result.alpha**2 * self._kappa(D_star, self.result.l)
-        cov = self.result.alpha**2 * self._kappa(D_ss, self.result.l) - Ks @ cho_solve(self._cf, Ks.T)
+        cov = self.result.alpha**2 * self._kappa(D_ss, self.result.l) - Ks @ cho_solve(self._cf,
+                                                                                       Ks.T)
         return mean, 0.5 * (cov + cov.T)
 
     def predict(self, D_star, return_var: bool = False):
@@ -389,7 +415,8 @@ class DistributionGP(_LikelihoodGP):
         self._fitted()
         D_star = np.atleast_2d(v.distances(D_star, "D_star"))
         if D_star.ndim != 2 or D_star.shape[1] != len(self.y):
-            raise ValueError(f"D_star: expected non-negative distances of shape (N, {len(self.y)}), "
+            raise ValueError("D_star: expected non-negative distances of shape (N, "
+                             f"{len(self.y)}), "
                              f"found shape {D_star.shape}")
         return_var = check.boolean(return_var, "return_var")
         return self._predict(self._kappa(D_star, self.result.l), np.ones(len(D_star)), return_var)
@@ -424,7 +451,8 @@ class MeanKernelGP(_LikelihoodGP):
         return float(np.sqrt(np.median(off[off > 0]))) if np.any(off > 0) else 1.0
 
     def _unit_kernel(self, l, grad=False):
-        # eq. (2.22) block row by block row, from the diagonal block on (the kernel is symmetric: half the
+        # eq. (2.22) block row by block row, from the diagonal block on (the kernel is symmetric:
+        # half the
         # exponentials), and its derivative in log l, sum_ab w_ia w_jb exp(-sq / (2 l^2)) sq / l^2
         M, l2 = len(self.W), l**2
         K = np.empty((M, M))
@@ -447,7 +475,8 @@ class MeanKernelGP(_LikelihoodGP):
         self.W = v.set_weights(W, self.X.shape, "W")
         y = self._set_outputs(y)
         if len(y) != len(self.X):
-            raise ValueError(f"y: expected {len(self.X)} outputs (one per training input), found {len(y)}")
+            raise ValueError(f"y: expected {len(self.X)} outputs (one per training input), found "
+                             f"{len(y)}")
         self._prepare_kernel()
         self._optimise(rng)
         self._factor()
@@ -459,7 +488,8 @@ class MeanKernelGP(_LikelihoodGP):
         Block row ``rows`` holds |x_ia - x_jb|^2 as [i, a, j, b] for the mixtures i of ``rows``
         and j from ``rows.start`` on, with its smallest exponent -max(sq) / 2.
         """
-        sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)    # [i, a, j, b]
+        # [i, a, j, b]
+        sq = np.sum((self.X[:, :, None, None, :] - self.X[None, None]) ** 2, axis=-1)
         rows_per_block = config.defaults["gp.mean_kernel_block_rows"]
         self._blocks = []
         for start in range(0, len(self.X), rows_per_block):
@@ -508,7 +538,8 @@ def _view(buffer, shape):
 
 
 def _expected_kernel_rows(V, W, rows, out):
-    """Rows ``rows`` of eq. (2.22) from the diagonal block on, and their mirror below it, into ``out``.
+    """Rows ``rows`` of eq. (2.22) from the diagonal block on, and their mirror below it, into
+    ``out``.
 
     ``V[i, a, j, b]`` (B, L, M - rows.start, L) holds the component kernel of mixture ``i`` of
     ``rows`` (component a) and mixture ``rows.start + j`` (component b); ``W`` the weights (M, L).
@@ -528,13 +559,15 @@ def _read_only(K):
 
 def _bounds(bounds):
     """``{"alpha": (lo, hi), "l": (lo, hi), "sigma_n": (lo, hi)}`` with 0 < lo < hi finite."""
-    check.instance(bounds, dict, "bounds", "a dict {'alpha': (lo, hi), 'l': (lo, hi), 'sigma_n': (lo, hi)}")
+    check.instance(bounds, dict, "bounds",
+                   "a dict {'alpha': (lo, hi), 'l': (lo, hi), 'sigma_n': (lo, hi)}")
     if set(bounds) != set(PARAMS):
         raise ValueError(f"bounds: expected the keys {list(PARAMS)}, found {sorted(bounds)}")
     out = {}
     for name in PARAMS:
         pair = check.real_array(bounds[name], f"bounds[{name!r}]", shape=(2,))
         if not 0 < pair[0] < pair[1]:
-            raise ValueError(f"bounds[{name!r}]: expected 0 < low < high, found ({pair[0]}, {pair[1]})")
+            raise ValueError(f"bounds[{name!r}]: expected 0 < low < high, found ({pair[0]}, "
+                             f"{pair[1]})")
         out[name] = (float(pair[0]), float(pair[1]))
     return out

@@ -116,7 +116,8 @@ def kernel_study(
     n_seeds = check.integer(n_seeds, "n_seeds", minimum=1)
     rng = check.generator(rng)
     n_train = check.integer(n_train, "n_train", minimum=3)
-    grid_step = check.real_scalar(grid_step, "grid_step", low=GRID_STEP_RANGE[0], high=GRID_STEP_RANGE[1])
+    grid_step = check.real_scalar(grid_step, "grid_step", low=GRID_STEP_RANGE[0],
+                                  high=GRID_STEP_RANGE[1])
     n_jobs = check.process_count(n_jobs, "n_jobs")
     progress = check.boolean(progress, "progress")
     settings = (

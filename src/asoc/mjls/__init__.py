@@ -25,7 +25,8 @@ Design a dynamic controller x^+ = F x^ + K y, u = L x^
 Simulate
     :func:`simulate` (Monte Carlo) takes any design result or :class:`Controller`.
 Compare
-    :func:`average_cost` (exact), :func:`finite_horizon_cost`, :mod:`asoc.mjls.monte_carlo_comparison`
+    :func:`average_cost` (exact), :func:`finite_horizon_cost`,
+    :mod:`asoc.mjls.monte_carlo_comparison`
     (Table 3.2's Monte Carlo comparison), :func:`mode_observed_lqg` (the mode-observing
     optimum, a lower bound).
 
@@ -71,9 +72,20 @@ and what every design's result shares), ``examples`` (the thesis's examples), ``
 """
 
 from .closed_loops import closed_loop
-from .controllers import Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain, TimeVariantGain
+from .controllers import (
+                      Controller,
+                      DynamicOutputFeedback,
+                      ModeDependentGain,
+                      StaticGain,
+                      TimeVariantGain,
+)
 from .costs import average_cost
-from .dynamic import DynamicOutputFeedbackResult, augmented_closed_loop, dynamic_output_feedback, steady_state_cost
+from .dynamic import (
+                      DynamicOutputFeedbackResult,
+                      augmented_closed_loop,
+                      dynamic_output_feedback,
+                      steady_state_cost,
+)
 from .exact_cost_design import (
                       ExactDynamicOutputFeedbackResult,
                       ExactFiniteHorizonResult,
@@ -82,7 +94,11 @@ from .exact_cost_design import (
                       min_radius_dynamic_output_feedback,
 )
 from .exact_static_design import ExactStaticOutputFeedbackResult, exact_static_output_feedback
-from .finite_horizon import FiniteHorizonResult, finite_horizon_cost, finite_horizon_dynamic_output_feedback
+from .finite_horizon import (
+                      FiniteHorizonResult,
+                      finite_horizon_cost,
+                      finite_horizon_dynamic_output_feedback,
+)
 from .gradients import average_cost_and_gradient, radius_and_gradient
 from .lmi import LMIResult, static_output_lmi
 from .moment_operator import ms_operator
@@ -92,10 +108,16 @@ from .observed_mode_feedback import ObservedModeResult, observed_mode_state_feed
 from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observed_lqg
 from .random import random_mjls
 from .stability import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
-from .static import StaticOutputFeedbackResult, gain_from_moments, static_cost, static_output_feedback
+from .static import (
+                      StaticOutputFeedbackResult,
+                      gain_from_moments,
+                      static_cost,
+                      static_output_feedback,
+)
 from .system import MJLS, predecessor_sum, stationary_distribution, successor_average
 
-__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator", "ms_spectral_radius",
+__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator",
+           "ms_spectral_radius",
            "mean_square_stability", "MeanSquareStability", "Verdict",
            "closed_loop", "second_moment_step", "second_moments", "steady_state_second_moment",
            "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
@@ -106,6 +128,7 @@ __all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribut
            "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
            "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
-           "min_radius_dynamic_output_feedback", "radius_and_gradient", "ExactDynamicOutputFeedbackResult",
+           "min_radius_dynamic_output_feedback", "radius_and_gradient",
+           "ExactDynamicOutputFeedbackResult",
            "ExactFiniteHorizonResult", "random_mjls", "average_cost", "static_cost",
            "exact_static_output_feedback", "ExactStaticOutputFeedbackResult"]

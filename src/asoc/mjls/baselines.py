@@ -99,7 +99,8 @@ def do_val_h2_state_feedback(sys, eps=EPS, solver="CLARABEL"):
         return lmi_result(status)
     K = F.value @ np.linalg.inv(G.value)
     margin, equality_residual = certificate(cons)
-    return lmi_result(status, K, float(prob.value), margin=margin, equality_residual=equality_residual, eps=eps,
+    return lmi_result(status, K, float(prob.value), margin=margin,
+                      equality_residual=equality_residual, eps=eps,
                       stability=mean_square_stability(sys.A + sys.B @ K, sys.T, check=False))
 
 
@@ -148,7 +149,8 @@ def _forward_moments(sys, G, X0, mu0):
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
     for k in range(K):
         Acl = sys.A + sys.B @ G[k] @ sys.C
-        X[k + 1] = sys.predecessor_sum(Acl @ X[k] @ np.swapaxes(Acl, 1, 2) + pi[k][:, None, None] * HHt)
+        X[k + 1] = sys.predecessor_sum(Acl @ X[k] @ np.swapaxes(Acl, 1, 2) + pi[k][:, None,
+                                                                                   None] * HHt)
         pi[k + 1] = pi[k] @ sys.T
     return X, pi
 
@@ -241,7 +243,8 @@ def time_variant_feedback(sys, horizon, x0, mu0=None, x0_cov=None, G0=None, tol=
     warn = boolean(warn, "warn")
     second = np.outer(x0, x0) + (0 if x0_cov is None else x0_cov)
     X0 = mu0[:, None, None] * second
-    G = np.zeros((K, sys.nu, sys.ny)) if G0 is None else real_array(G0, "G0", shape=(K, sys.nu, sys.ny))
+    G = np.zeros((K, sys.nu, sys.ny)) if G0 is None else real_array(G0, "G0", shape=(K, sys.nu,
+                                                                                     sys.ny))
     start = time.perf_counter()
     costs, status = [], "max_iterations"
     for it in range(1, max_iter + 1):
@@ -260,5 +263,6 @@ def time_variant_feedback(sys, horizon, x0, mu0=None, x0_cov=None, G0=None, tol=
                "diverged": f"stopped at sweep {it}: the cost became non-finite"}[status]
     if warn and status != "converged":
         warnings.warn(f"variational method {message}", RuntimeWarning, stacklevel=2)
-    return TimeVariantResult(G=G, costs=np.array(costs), converged=status == "converged", status=status,
+    return TimeVariantResult(G=G, costs=np.array(costs), converged=status == "converged",
+                             status=status,
                              message=message, iterations=it, seconds=time.perf_counter() - start)

@@ -17,7 +17,13 @@ import numpy as np
 
 from ..linalg import transpose
 from ..validation import real_array
-from .controllers import Controller, DynamicOutputFeedback, ModeDependentGain, StaticGain, as_controller
+from .controllers import (
+    Controller,
+    DynamicOutputFeedback,
+    ModeDependentGain,
+    StaticGain,
+    as_controller,
+)
 from .system import check_system
 
 __all__ = ["is_controller", "closed_loop", "gain_matrix", "noise_covariances",
@@ -140,7 +146,8 @@ def _check_gains(sys, F, K, L):
     K, L = np.atleast_2d(real_array(K, "K")), np.atleast_2d(real_array(L, "L"))
     for name, g, shape in (("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
         if g.shape != shape:
-            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny = {sys.ny} "
+            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny "
+                             f"= {sys.ny} "
                              f"from sys), found shape {g.shape}")
     return F, K, L
 

@@ -107,7 +107,8 @@ def steady_state_cost(sys, F, K=None, L=None):
 
 
 def _certified_steady_state_cost(sys, F, K=None, L=None):
-    """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place of
+    """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place
+    of
     its rho, for callers that report the bracket too: one spectral radius per controller.
 
     Examples
@@ -116,7 +117,8 @@ def _certified_steady_state_cost(sys, F, K=None, L=None):
     >>> sys = sec373_system(1)
     >>> r = dynamic_output_feedback(sys)
     >>> cost, X, stability = _certified_steady_state_cost(sys, r.F, r.K, r.L)
-    >>> round(cost, 3) == round(r.cost, 3), stability.stabilizing, stability.bracket == r.rho_bracket
+    >>> round(cost, 3) == round(r.cost,
+    ...     3), stability.stabilizing, stability.bracket == r.rho_bracket
     (True, True, True)
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
@@ -198,7 +200,8 @@ class DynamicOutputFeedbackResult(CertifiedDesignResult):
 
 
 @config.accepts_settings("mjls.rank_rtol", "mjls.divergence_threshold", "mjls.alg32_max_period",
-                         "mjls.alg32_patience", "mjls.matrix_free_min_unknowns", "mjls.cg_tolerance")
+                         "mjls.alg32_patience", "mjls.matrix_free_min_unknowns",
+                         "mjls.cg_tolerance")
 def dynamic_output_feedback(sys, tol=1e-10, max_iter=10000, init=1e-4, rng=None, method="lstsq",
                             warn=True):
     """Algorithm 3.2: the time-invariant controller (3.37) for the MJLS (3.36), mode not observed.
@@ -355,11 +358,13 @@ def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
         Xbar, Xunder, Pbar, Punder = bounds
         EPbar, EPunder = (successor_average(sys.T, P, check=False) for P in (Pbar, Punder))
         try:
-            F, K, L, solve = solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method, rank_rtol)
+            F, K, L, solve = solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method,
+                                         rank_rtol)
         except np.linalg.LinAlgError as error:
             status, failure = Status.LINALG_ERROR, str(error)
             break
-        worst_residual = max(worst_residual, solve.residual) if np.isfinite(solve.residual) else np.nan
+        worst_residual = max(worst_residual,
+                             solve.residual) if np.isfinite(solve.residual) else np.nan
         new = (*bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt),
                *bound_costate_step(sys, F, K, L, EPbar, EPunder))
         if not all(np.abs(v).max() < divergence for v in new):
@@ -399,7 +404,8 @@ def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
     elif warn and not stabilizing:
         verb = "does not stabilise" if stabilizing is False else "is not certified to stabilise"
         warnings.warn(f"Algorithm 3.2 converged, but the controller {verb} the MJLS "
-                      f"in the mean-square sense ({stability.sentence()}, Cor. 3.2)", RuntimeWarning, stacklevel=3)
+                      f"in the mean-square sense ({stability.sentence()}, Cor. 3.2)",
+                      RuntimeWarning, stacklevel=3)
     names = ("Xbar", "Xunder", "Pbar", "Punder")
     history = {f"trace_{k}": run.traces[:, j] for j, k in enumerate(names)}
     return DynamicOutputFeedbackResult(
@@ -418,12 +424,14 @@ def _message(status, it, stopping, tol, rho, failure, solve, worst_residual):
     message = {
         "converged": f"converged after {it} iterations (relative change of the bounds {change:.2g} < tol = {tol:.2g})",
         "cycle": f"stopped at iteration {it} on a cycle of period {stopping.period}: the bounds repeat "
-                 f"(relative change {change:.2g} < tol = {tol:.2g}) without converging; returned the "
+                 f"(relative change {change:.2g} < tol = {tol:.2g}) without converging; returned "
+                 "the "
                  f"member of smallest bound (rho = {rho:.4f}){_EXACT}",
         "no_progress": f"stopped at iteration {it}: the relative change of the bounds "
                        f"({min(stopping.smallest):.2g} at best) "
                        + ("stopped decreasing" if not np.isfinite(stopping.predicted) else
-                          f"would need about {stopping.predicted:.0f} more iterations to reach tol = {tol:.2g}")
+                          f"would need about {stopping.predicted:.0f} more iterations to reach tol "
+                          f"= {tol:.2g}")
                        + f" (the ill-posed (3.51), rho = {rho:.4f}){_EXACT}",
         "max_iterations": f"did not converge within {it} iterations (relative change {change:.2g} "
                           f">= tol = {tol:.2g}, rho = {rho:.4f}){_EXACT}",

@@ -1,4 +1,5 @@
-"""Controllers (3.37) and (3.55) that minimise the exact cost instead of its bound (not in the thesis).
+"""Controllers (3.37) and (3.55) that minimise the exact cost instead of its bound (not in the
+thesis).
 
 Algorithms 3.2 and 3.3 minimise the costs of the bounded second moments of Prop. 3.26 and
 Thm. 3.31, which are not upper bounds of the true costs (Secs. 3.6-3.7 page). Here the exact
@@ -114,7 +115,8 @@ class ExactFiniteHorizonResult(DesignResult):
     Examples
     --------
     >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> res = exact_finite_horizon_dynamic_output_feedback(sec373_system(1), 5, SEC373_MEAN0[1], SEC373_COV0,
+    >>> res = exact_finite_horizon_dynamic_output_feedback(sec373_system(1), 5, SEC373_MEAN0[1],
+    ...     SEC373_COV0,
     ...                                                    SEC373_MU0, max_iter=3, warn=False)
     >>> res.status, res.F.shape, res.costs.size, res.controller.time_variant
     ('max_iterations', (5, 2, 2), 4, True)
@@ -188,7 +190,8 @@ def _given_gains(sys, init, nc):
     """(F, K, L) from ``init``: a result with F, K, L or a tuple; validated against sys."""
     gains = (init.F, init.K, init.L) if all(hasattr(init, g) for g in "FKL") else init
     if not (isinstance(gains, (tuple, list)) and len(gains) == 3):
-        raise TypeError(f"init: expected a result with F, K, L (e.g. of dynamic_output_feedback) or a "
+        raise TypeError("init: expected a result with F, K, L (e.g. of dynamic_output_feedback) "
+                        "or a "
                         f"tuple (F, K, L), found {type(init).__name__}"
                         f"{f' of length {len(init)}' if isinstance(init, (tuple, list)) else ''}")
     F = np.atleast_2d(np.asarray(gains[0], dtype=float))
@@ -208,7 +211,8 @@ def _starts(sys, init, nc):
     else:
         nc = sys.nx if nc is None else nc
         candidates = [g for g in (_bounded_alg32(sys, nc), averaged_lqg(sys, nc)) if g is not None]
-        candidates = candidates or [(np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu, nc)))]
+        candidates = candidates or [(np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu,
+                                                                                           nc)))]
     costs = [average_cost_and_gradient(sys, *g)[0] for g in candidates]
     order = np.argsort(costs, kind="stable")
     return [pack(*candidates[i]) for i in order], [costs[i] for i in order], tuple(g.shape for g in candidates[0])
@@ -247,7 +251,8 @@ def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False, patien
     ``patience``, once that many steps lowered rho by less than ``_RADIUS_STALL`` relative).
     """
     fun = lambda v: _flat(radius_and_gradient(sys, *unpack(v, shapes)))
-    return bfgs(fun, z, config.defaults["mjls.min_radius_tol"], max_iter, progress, "min rho", target=target, patience=patience,
+    return bfgs(fun, z, config.defaults["mjls.min_radius_tol"], max_iter, progress, "min rho",
+                target=target, patience=patience,
                 stall=_RADIUS_STALL)
 
 
@@ -289,7 +294,8 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
 @config.accepts_settings("mjls.rho_start", "mjls.min_radius_tol", "mjls.lqg_start_regularisation")
 def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False,
                                        warn=True):
-    """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the thesis.
+    """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the
+    thesis.
 
     BFGS on rho over (F, K, L) with the gradient of
     :func:`asoc.mjls.gradients.radius_and_gradient`. A rho that stays >= 1 from several
@@ -337,7 +343,8 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
     (True, True)
     """
     check_system(sys)
-    max_iter = integer(config.defaults["mjls.radius_max_iter"] if max_iter is None else max_iter, "max_iter",
+    max_iter = integer(config.defaults["mjls.radius_max_iter"] if max_iter is None else max_iter,
+                       "max_iter",
                        minimum=1)
     progress, warn = boolean(progress, "progress"), boolean(warn, "warn")
     start = time.perf_counter()
@@ -356,7 +363,8 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
                          "mjls.min_radius_tol")
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
                                   progress=False):
-    """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24); not in the thesis.
+    """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24); not in the
+    thesis.
 
     BFGS over (F, K, L) with the analytic gradient (adjoint of the augmented second-moment
     equations, Prop. 3.23), inside the mean-square stabilising set (steps that leave it,
@@ -420,20 +428,24 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
         rho = closed_loop_radius(sys, *unpack(z, shapes))
         message = f"found no mean-square stabilising start (smallest rho reached {rho:.4f})"
         if warn:
-            warnings.warn(f"exact_dynamic_output_feedback: {message}; pass a stabilising init", RuntimeWarning,
+            warnings.warn(f"exact_dynamic_output_feedback: {message}; pass a stabilising init",
+                          RuntimeWarning,
                           stacklevel=2)
-        return _controller_result(sys, z, shapes, "no_progress", 0, np.array([np.inf]), "cost", start, message)
+        return _controller_result(sys, z, shapes, "no_progress", 0, np.array([np.inf]), "cost",
+                                  start, message)
     fun = lambda v: _flat(average_cost_and_gradient(sys, *unpack(v, shapes)))
     run = bfgs(fun, z, tol, max_iter, progress, "exact (3.42)")
     result = _controller_result(sys, run.z, shapes, run.status, run.iterations, run.history, "cost",
                                 start)
     if warn and run.status != "converged":
-        warnings.warn(f"exact_dynamic_output_feedback: {result.message}", RuntimeWarning, stacklevel=2)
+        warnings.warn(f"exact_dynamic_output_feedback: {result.message}", RuntimeWarning,
+                      stacklevel=2)
     return result
 
 
 @config.accepts_settings("mjls.lbfgs_memory")
-def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None, tol=1e-12,
+def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None,
+                                                 tol=1e-12,
                                                  max_iter=5000, warn=True, progress=False):
     """The time-variant controller (3.55) minimising the exact J_0 (3.56)/(3.58); not in the thesis.
 

@@ -28,7 +28,15 @@ from .. import config
 from ..linalg import transpose
 from ..progress import progress_bar
 from ..result import Status
-from ..validation import boolean, choice, integer, probability_vector, real_array, real_scalar, semidefinite
+from ..validation import (
+    boolean,
+    choice,
+    integer,
+    probability_vector,
+    real_array,
+    real_scalar,
+    semidefinite,
+)
 from .closed_loops import noise_covariances
 from .controllers import DynamicOutputFeedback
 from .design_result import DesignResult
@@ -74,7 +82,8 @@ class FiniteHorizonResult(DesignResult):
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
+    >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0,
+    ...     SEC373_MU0)
     >>> res.status, res.Xbar.shape, res.controller.time_variant
     ('converged', (6, 2, 2, 2), True)
     """
@@ -175,10 +184,13 @@ def stages(sys, horizon):
         Q_final = sys.Q
     else:
         if not isinstance(sys, (list, tuple)):
-            raise TypeError(f"sys: expected an MJLS or a sequence of MJLS, found {type(sys).__name__}")
+            raise TypeError("sys: expected an MJLS or a sequence of MJLS, found "
+                            f"{type(sys).__name__}")
         systems = tuple(sys)
-        if len(systems) not in (horizon, horizon + 1) or not all(isinstance(s, MJLS) for s in systems):
-            raise ValueError(f"sys: expected an MJLS or a sequence of {horizon} or {horizon + 1} MJLS, "
+        if len(systems) not in (horizon,
+                                horizon + 1) or not all(isinstance(s, MJLS) for s in systems):
+            raise ValueError(f"sys: expected an MJLS or a sequence of {horizon} or {horizon + 1} "
+                             "MJLS, "
                              f"found {type(sys).__name__} of length {len(systems)}")
         ref = systems[0]
         for k, s in enumerate(systems):
@@ -252,7 +264,8 @@ def augmented_initial_moment(mean0, cov0, mu0, xhat0):
 
     Examples
     --------
-    >>> X0 = augmented_initial_moment(np.array([[1.0]]), np.zeros((1, 1, 1)), np.array([1.0]), np.array([1.0]))
+    >>> X0 = augmented_initial_moment(np.array([[1.0]]), np.zeros((1, 1, 1)), np.array([1.0]),
+    ...     np.array([1.0]))
     >>> X0.tolist()
     [[[1.0, 1.0], [1.0, 1.0]]]
     """
@@ -271,12 +284,14 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
 
     Acl, HHt_cl, Qcl: sequences of K stacks (M, n, n) (mode-dependent, e.g. the augmented
     closed loop (3.59)-(3.60)); Q_final (M, n, n); Ts: K transition matrices; X0 (M, n, n):
-    E{x~_0 x~_0^T 1(theta_0 = i)}. Returns sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K} X~_K^i].
+    E{x~_0 x~_0^T 1(theta_0 = i)}. Returns sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K}
+    X~_K^i].
 
     Examples
     --------
     >>> A = [np.array([[[0.5]]])] * 2
-    >>> cost = augmented_cost(A, [np.ones((1, 1, 1))] * 2, [np.ones((1, 1, 1))] * 2, np.ones((1, 1, 1)),
+    >>> cost = augmented_cost(A, [np.ones((1, 1, 1))] * 2, [np.ones((1, 1, 1))] * 2, np.ones((1, 1,
+    ...     1)),
     ...                       [np.ones((1, 1))] * 2, np.ones((1, 1, 1)), np.array([1.0]))
     >>> round(cost, 4)
     3.5625
@@ -291,7 +306,8 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
 
 
 def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
-    """True expected cost (3.56) of the time-variant controller (3.55), from the augmented recursion (3.58).
+    """True expected cost (3.56) of the time-variant controller (3.55), from the augmented recursion
+    (3.58).
 
     Parameters
     ----------
@@ -390,15 +406,18 @@ def initial_gains(init, st, nx, ny, nu):
     if all(hasattr(init, g) for g in "FKL"):
         init = (init.F, init.K, init.L)
     if not (isinstance(init, (tuple, list)) and len(init) == 3):
-        raise TypeError(f"init: expected None, a Generator, a result with F, K, L or a tuple (F, K, L), "
+        raise TypeError("init: expected None, a Generator, a result with F, K, L or a tuple (F, "
+                        "K, L), "
                         f"found {type(init).__name__}")
     out = []
-    for name, g, shape in (("F", init[0], (nx, nx)), ("K", init[1], (nx, ny)), ("L", init[2], (nu, nx))):
+    for name, g, shape in (("F", init[0], (nx, nx)), ("K", init[1], (nx, ny)), ("L", init[2],
+                                                                                (nu, nx))):
         g = real_array(g, f"init {name}")
         if g.shape == shape:
             g = np.broadcast_to(g, (horizon,) + shape)
         if g.shape != (horizon,) + shape:
-            raise ValueError(f"init {name}: expected shape {shape} or {(horizon,) + shape}, found {g.shape}")
+            raise ValueError(f"init {name}: expected shape {shape} or {(horizon,) + shape}, found "
+                             f"{g.shape}")
         out.append(g.copy())
     return tuple(out)
 
@@ -479,7 +498,8 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     tol = real_scalar(tol, "tol", low=0, low_open=True)
     max_iter = integer(max_iter, "max_iter", minimum=1)
     choice(method, "method", METHODS)
-    safeguard, warn, progress = (boolean(v, n) for v, n in ((safeguard, "safeguard"), (warn, "warn"),
+    safeguard, warn, progress = (boolean(v, n) for v, n in ((safeguard, "safeguard"),
+                                                            (warn, "warn"),
                                                              (progress, "progress")))
     F, K, L = initial_gains(init, st, nx, ny, nu)
     xhat0, Xbar0, Xunder0 = initial_bounds(mean0, cov0, mu0)
@@ -503,7 +523,8 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         rejected = 0
         for k in range(K_ - 1, -1, -1):                                      # Steps 4-6
             s = st.systems[k]
-            EPbar, EPunder, Eomega = successor_average(s.T, Pbar[k + 1], check=False), successor_average(s.T, Punder[k + 1], check=False), s.T @ omega
+            EPbar, EPunder, Eomega = successor_average(s.T, Pbar[k + 1],
+                                                       check=False), successor_average(s.T, Punder[k + 1], check=False), s.T @ omega
             args = (Xbar[k], Xunder[k], EPbar, EPunder, Eomega, mu[k], st.HHt[k], st.JJt[k])
             Fn, Kn, Ln = gains_from_bounds(s, Xbar[k], Xunder[k], EPbar, EPunder, mu[k],
                                            st.JJt[k], method)
@@ -537,7 +558,8 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     increases = np.diff(bounds) > 1e-8 * np.maximum(1.0, np.abs(bounds[1:]))   # beyond rounding
     if warn and np.any(increases):
         warnings.warn(f"Algorithm 3.3: Jbar_0 increased in {int(increases.sum())} iterations "
-                      f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
+                      f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning,
+                      stacklevel=2)
     cost = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
     return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds,
                                converged=status is Status.CONVERGED, status=status, message=message,

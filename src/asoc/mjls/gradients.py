@@ -1,4 +1,5 @@
-"""Gradients of the exact costs and of the mean-square spectral radius over the gains (3.37), (3.55).
+"""Gradients of the exact costs and of the mean-square spectral radius over the gains (3.37),
+(3.55).
 
 The exact designs of :mod:`asoc.mjls.exact_cost_design` minimise these functions. With the augmented
 closed loop A~_i, W_i = H~_i H~_i^T and Q~_i of (3.39)-(3.40) and Prop. 3.20,
@@ -128,7 +129,8 @@ def average_cost_and_gradient(sys, F, K, L):
     At, Wt, Qt = augmented_closed_loop(sys, F, K, L)
     M, n, _ = At.shape
     solve = coupled_lyapunov_solver(At, sys.T)
-    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")    # an unstable loop is expected here
+    # an unstable loop is expected here
+    Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")
     if not (np.all(np.isfinite(Y.X)) and Y.residual < config.defaults["mjls.solve_residual_max"]
             and positive_definite(Y.X)):
         return np.inf, None
@@ -136,7 +138,8 @@ def average_cost_and_gradient(sys, F, K, L):
     X = solve(predecessor_sum(sys.T, mu[:, None, None] * Wt, check=False)).X
     P = solve(Qt, adjoint=True).X
     cost = float(np.einsum("iab,iba->", Qt, X))
-    return cost, _gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False), noise_covariances(sys)[1], mu)
+    return cost, _gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False),
+                                noise_covariances(sys)[1], mu)
 
 def positive_definite(Y):
     """True when every matrix of the stack ``Y`` has a Cholesky factor (is positive definite).
@@ -204,7 +207,8 @@ def radius_and_gradient(sys, F, K, L):
     inner = float(np.einsum("iab,iab->", V, X))
     if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * np.linalg.norm(V) * np.linalg.norm(X):
         return rho, _closed_loop_gradient(sys, np.zeros_like(At))
-    return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V, check=False) @ At @ X / inner)
+    return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V,
+                                                                   check=False) @ At @ X / inner)
 
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.
@@ -235,10 +239,14 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     >>> from asoc.mjls.finite_horizon import (augmented_initial_moment, finite_horizon_cost,
     ...                                       mode_distributions, stages)
     >>> st = stages(sys, 3)
-    >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))]
-    >>> X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, SEC373_MU0 @ SEC373_MEAN0[1])
-    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0, mode_distributions(st, SEC373_MU0))
-    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0))), gL.shape
+    >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)),
+    ...     -np.ones((1, 2)))]
+    >>> X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+    ...     SEC373_MU0 @ SEC373_MEAN0[1])
+    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0, mode_distributions(st,
+    ...     SEC373_MU0))
+    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0,
+    ...     SEC373_MU0))), gL.shape
     (True, (3, 1, 2))
     """
     m = st.stacked

@@ -18,7 +18,14 @@ computed here, as are their curvatures (:func:`hessian_min_eigenvalue`,
 
 import numpy as np
 
-from ..validation import choice, integer, probability_vector, real_array, real_scalar, stochastic_matrix
+from ..validation import (
+    choice,
+    integer,
+    probability_vector,
+    real_array,
+    real_scalar,
+    stochastic_matrix,
+)
 
 __all__ = ["psi", "expected_cost_two_steps_before_horizon", "hessian", "hessian_min_eigenvalue",
            "min_curvature_in_u", "nonconvex_radius", "symmetric_representative",
@@ -76,8 +83,10 @@ def _psi(x_next, x, u, a, b, g, T, pi, Q, R):
     return e_qa - e_ab ** 2 / e_rb
 
 
-def expected_cost_two_steps_before_horizon(x, u, a, b, g, T, pi, Q=1.0, R=1.0, n_nodes=80, terms="full"):
-    """J_{K-2}(x, u) - Delta of (3.5) (K the horizon) on arrays x, u (broadcast), by Gauss-Hermite quadrature.
+def expected_cost_two_steps_before_horizon(x, u, a, b, g, T, pi, Q=1.0, R=1.0, n_nodes=80,
+                                           terms="full"):
+    """J_{K-2}(x, u) - Delta of (3.5) (K the horizon) on arrays x, u (broadcast), by Gauss-Hermite
+    quadrature.
 
     ``terms="last"`` gives only its last term, E{x_{K-1}^2 Psi(I_{K-1}) | I_{K-2}} of (3.6).
 
@@ -153,7 +162,8 @@ def _grid_arrays(**arrays):
     for name, value in rest:
         out.append(real_array(value, name))
         if out[-1].shape != ref.shape:
-            raise ValueError(f"{name}: expected the shape of {first}, {ref.shape}, found shape {out[-1].shape}")
+            raise ValueError(f"{name}: expected the shape of {first}, {ref.shape}, found shape "
+                             f"{out[-1].shape}")
     return out
 
 

@@ -39,7 +39,8 @@ __all__ = ["mode_stack", "second_moment_map", "costate_map", "ms_operator", "kro
 
 
 def mode_stack(A_stack, T, name="A_stack"):
-    """The validated (A, T) of an open loop: an :class:`~asoc.mjls.MJLS` (its A stack and T; ``T`` must then be
+    """The validated (A, T) of an open loop: an :class:`~asoc.mjls.MJLS` (its A stack and T; ``T``
+    must then be
     None) or an (M, n, n) stack of finite real matrices with a row-stochastic (M, M) ``T``.
 
     Examples
@@ -55,16 +56,19 @@ def mode_stack(A_stack, T, name="A_stack"):
     """
     if isinstance(A_stack, MJLS):
         if T is not None:
-            raise TypeError(f"T: expected None when {name} is an MJLS (its own T is used), found {type(T).__name__}")
+            raise TypeError(f"T: expected None when {name} is an MJLS (its own T is used), found "
+                            f"{type(T).__name__}")
         return A_stack.A, A_stack.T
     if T is None:
-        raise TypeError(f"T: expected a transition matrix when {name} is a stack of matrices, found None")
+        raise TypeError(f"T: expected a transition matrix when {name} is a stack of matrices, "
+                        "found None")
     A = real_array(A_stack, name, ndim=3)
     if A.shape[1] != A.shape[2] or A.shape[0] == 0:
         raise ValueError(f"{name}: expected shape (M, n, n) with M >= 1, found {A.shape}")
     T = stochastic_matrix(T, "T")
     if T.shape[0] != A.shape[0]:
-        raise ValueError(f"T: expected shape ({A.shape[0]}, {A.shape[0]}) for {A.shape[0]} modes (from {name}), "
+        raise ValueError(f"T: expected shape ({A.shape[0]}, {A.shape[0]}) for {A.shape[0]} modes "
+                         f"(from {name}), "
                          f"found {T.shape}")
     return A, T
 
@@ -116,9 +120,11 @@ def ms_operator(A_stack, T=None, check=True):
     Block (j, i) is p_ij A_i (x) A_i, i.e. the matrix is (T^T (x) I_{n^2}) diag[A_1 (x) A_1, ...,
     A_M (x) A_M], the product of the same two factors as the thesis's
     M = diag[A_i (x) A_i] (T^T (x) I_{n^2}) in the other order: BC and CB have the same
-    eigenvalues, and this order is the matrix of :func:`~asoc.mjls.moment_operator.second_moment_map` (its transpose
+    eigenvalues, and this order is the matrix of
+    :func:`~asoc.mjls.moment_operator.second_moment_map` (its transpose
     that
-    of :func:`~asoc.mjls.moment_operator.costate_map`). vec(A X A^T) = (A (x) A) vec X holds for row- and column-major
+    of :func:`~asoc.mjls.moment_operator.costate_map`). vec(A X A^T) = (A (x) A) vec X holds for
+    row- and column-major
     vec
     alike, so the convention only fixes the order of the blocks. Size (M n^2)^2: for small
     systems only.
@@ -178,7 +184,8 @@ def linear_operator(A, T, adjoint=False, shift=0.0, identity=0.0):
     Examples
     --------
     >>> A = np.array([[[0.5]]]); T = np.array([[1.0]])
-    >>> linear_operator(A, T, shift=1.0).matvec(np.ones(1)), linear_operator(A, T, identity=1.0).matvec(np.ones(1))
+    >>> linear_operator(A, T, shift=1.0).matvec(np.ones(1)), linear_operator(A, T,
+    ...     identity=1.0).matvec(np.ones(1))
     (array([1.25]), array([0.75]))
     """
     M, n, _ = A.shape

@@ -18,7 +18,9 @@ _NO_MOMENT = object()
 
 
 def _moment_arguments(Acl, HHt, T, mu, X=_NO_MOMENT, X_name="X", mu_name="mu"):
-    """Validated closed loop (M, n, n), noise (M, n, n), T (M, M), mu (M,) and optional X (M, n, n)."""
+    """Validated closed loop (M, n, n), noise (M, n, n), T (M, M), mu (M,) and optional X (M, n,
+    n).
+    """
     Acl = real_array(Acl, "Acl", ndim=3)
     M, n, _ = Acl.shape
     Acl = real_array(Acl, "Acl", shape=(M, n, n))
@@ -38,7 +40,8 @@ def _moment_arguments(Acl, HHt, T, mu, X=_NO_MOMENT, X_name="X", mu_name="mu"):
     if X is not _NO_MOMENT:
         X = real_array(X, X_name)
         if X.shape != (M, n, n):
-            raise ValueError(f"{X_name}: expected shape ({M}, {n}, {n}) {why}, found shape {X.shape}")
+            raise ValueError(f"{X_name}: expected shape ({M}, {n}, {n}) {why}, found shape "
+                             f"{X.shape}")
         semidefinite(X, X_name)
     return Acl, HHt, T, mu, X
 
@@ -121,9 +124,11 @@ def second_moments(Acl, HHt, T, X0, mu0, horizon):
     X[0], mu[0] = X0, mu0
     for k in range(horizon):
         mu[k + 1] = mu[k] @ T
-    noise = np.einsum("ji,kj...->ki...", T, mu[:-1, :, None, None] * HHt)   # predecessor_sum for every k
+    # predecessor_sum for every k
+    noise = np.einsum("ji,kj...->ki...", T, mu[:-1, :, None, None] * HHt)
     Aclt, Tt, M = np.swapaxes(Acl, 1, 2), T.T, len(T)
-    for k in range(horizon):         # (3.29) on the validated arguments: second_moment_map written out
+    # (3.29) on the validated arguments: second_moment_map written out
+    for k in range(horizon):
         Y = Acl @ X[k] @ Aclt
         np.matmul(Tt, Y.reshape(M, -1), out=X[k + 1].reshape(M, -1))
         X[k + 1] += noise[k]
@@ -171,7 +176,8 @@ def steady_state_second_moment(Acl, HHt, T=None, mu_inf=None):
     --------
     x+ = 0.5 x + w has stationary variance 1 / (1 - 0.25):
 
-    >>> steady_state_second_moment(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]], [1.0]).round(4)
+    >>> steady_state_second_moment(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]],
+    ...     [1.0]).round(4)
     array([[[1.3333]]])
 
     A random walk (rho = 1) has none:
@@ -179,7 +185,8 @@ def steady_state_second_moment(Acl, HHt, T=None, mu_inf=None):
     >>> steady_state_second_moment(np.array([[[1.0]]]), np.array([[[1.0]]]), [[1.0]], [1.0])
     Traceback (most recent call last):
     ...
-    numpy.linalg.LinAlgError: no stationary second moment: the closed loop is not certified mean-square stable (rho = 1 in [1, 1], undecided; Cor. 3.2)
+    numpy.linalg.LinAlgError: Acl: no stationary second moment: the closed loop is not certified
+    mean-square stable (rho = 1 in [1, 1], undecided; Cor. 3.2)
 
     The stationary moments of a design's closed loop:
 
@@ -196,17 +203,20 @@ def steady_state_second_moment(Acl, HHt, T=None, mu_inf=None):
                             "system's own are used), found arrays")
         Acl, HHt, T, mu_inf = (*controller_closed_loop(Acl, HHt, "HHt"), Acl.T, Acl.mu_inf)
     Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
-    return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False), check=False)
+    return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False),
+                                   check=False)
 
 
 def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
-    """:func:`steady_state_second_moment` with the certificate ``stability`` (:func:`asoc.mjls.mean_square_stability`
+    """:func:`steady_state_second_moment` with the certificate ``stability``
+    (:func:`asoc.mjls.mean_square_stability`
     of (Acl, T)) that the caller already has: one spectral radius per closed loop, not one per use.
 
     Raises
     ------
     TypeError
-        If ``stability`` is not a MeanSquareStability; the arrays as :func:`steady_state_second_moment`
+        If ``stability`` is not a MeanSquareStability; the arrays as
+        :func:`steady_state_second_moment`
         (``check=False``: float arrays of consistent shapes, not validated).
     numpy.linalg.LinAlgError
         As :func:`steady_state_second_moment`.
@@ -214,7 +224,8 @@ def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
     Examples
     --------
     >>> A, T = np.array([[[0.5]]]), np.array([[1.0]])
-    >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), mean_square_stability(A, T)).round(4)
+    >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), mean_square_stability(A,
+    ...     T)).round(4)
     array([[[1.3333]]])
     >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), 0.25)
     Traceback (most recent call last):
@@ -228,14 +239,17 @@ def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
                             f"{type(stability).__name__}")
     if not stability.stable:
         raise np.linalg.LinAlgError(
-            f"no stationary second moment: the closed loop is not certified mean-square stable (rho = "
-            f"{stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], "
+            "Acl: no stationary second moment: the closed loop is not certified mean-square "
+            f"stable (rho = {stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], "
             f"{stability.verdict.value}; "
             f"Cor. 3.2)")
-    solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt, check=False))
+    solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt,
+                                                              check=False))
     if not solution.accepted:
-        raise np.linalg.LinAlgError(f"the stationary second moment was not found: relative residual "
-                                    f"{solution.residual:.3g} of the coupled Lyapunov solve ({solution.method})")
+        raise np.linalg.LinAlgError("the stationary second moment was not found: relative "
+                                    "residual "
+                                    f"{solution.residual:.3g} of the coupled Lyapunov solve "
+                                    f"({solution.method})")
     return solution.X
 
 

@@ -50,7 +50,8 @@ class ObservedModeResult(CertifiedDesignResult):
         state is the output of the systems this design is for, C = I).
     converged, status, message
         Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
-        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T E_i(P) B_i
+        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T
+        E_i(P) B_i
         singular).
     iterations : int
     seconds : float
@@ -168,7 +169,9 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
     if warn and status is not Status.CONVERGED:
         warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
-        warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})", RuntimeWarning,
+        warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})",
+                      RuntimeWarning,
                       stacklevel=2)
     return ObservedModeResult(L=L, P=P, stability=stability, converged=status is Status.CONVERGED,
-                              status=status, message=message, iterations=it, seconds=time.perf_counter() - start)
+                              status=status, message=message, iterations=it,
+                              seconds=time.perf_counter() - start)

@@ -37,7 +37,13 @@ import numpy as np
 from ..linalg import transpose
 from ..validation import real_array
 from .controllers import Controller
-from .finite_horizon import augmented_cost, augmented_initial_moment, check_initial_state, mode_distributions, stages
+from .finite_horizon import (
+    augmented_cost,
+    augmented_initial_moment,
+    check_initial_state,
+    mode_distributions,
+    stages,
+)
 from .system import check_system
 
 __all__ = ["ModeObservedResult", "ModeObservedLQG", "mode_observed_lqg"]
@@ -128,7 +134,8 @@ class ModeObservedLQG(Controller):
         k = min(k, len(self.F) - 1)
         u = np.einsum("nab,nb->na", self.F[k][theta], xhat)
         innovation = y - np.einsum("nab,nb->na", self.C[theta], xhat)
-        xhat = (np.einsum("nab,nb->na", self.A[theta], xhat) + np.einsum("nab,nb->na", self.B[theta], u)
+        xhat = (np.einsum("nab,nb->na", self.A[theta], xhat) + np.einsum("nab,nb->na",
+                                                                         self.B[theta], u)
                 + np.einsum("nab,nb->na", self.Mf[k][theta], innovation))
         return u, xhat
 
@@ -173,7 +180,8 @@ def _markov_jump_filter(st, Y0, mu):
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.finite_horizon import mode_distributions, stages
     >>> st = stages(sys, 3)
-    >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)), mode_distributions(st,
+    >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)),
+    ...     mode_distributions(st,
     ...     sys.mu_inf))
     >>> Mf.shape, Y.shape
     ((3, 2, 2, 1), (4, 2, 2, 2))
@@ -187,7 +195,8 @@ def _markov_jump_filter(st, Y0, mu):
         CY = s.C @ Y[k]
         Sigma = CY @ transpose(s.C) + mu[k][:, None, None] * st.JJt[k]
         Mf[k] = s.A @ transpose(CY) @ np.linalg.pinv(Sigma, hermitian=True)
-        inner = s.A @ Y[k] @ transpose(s.A) - Mf[k] @ CY @ transpose(s.A) + mu[k][:, None, None] * st.HHt[k]
+        inner = s.A @ Y[k] @ transpose(s.A) - Mf[k] @ CY @ transpose(s.A) + mu[k][:, None,
+                                                                                  None] * st.HHt[k]
         Yn = s.predecessor_sum(inner)
         Y[k + 1] = 0.5 * (Yn + transpose(Yn))
     return Mf, Y

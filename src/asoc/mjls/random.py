@@ -14,14 +14,16 @@ __all__ = ["FAMILIES", "RADII", "random_mjls"]
 
 
 FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
-RADII = {"stable": (0.1, 0.95), "unstable": (1.0, 1.5), "sparse_T": (0.1, 1.2), "thesis_like": (0.8, 1.3)}
+RADII = {"stable": (0.1, 0.95), "unstable": (1.0, 1.5), "sparse_T": (0.1, 1.2),
+         "thesis_like": (0.8, 1.3)}
 
 
 def _matrix_with_radius(rng, n, radius):
     """A standard normal n x n matrix rescaled to spectral radius ``radius``."""
     G = rng.standard_normal((n, n))
     rho = np.max(np.abs(np.linalg.eigvals(G)))
-    while rho < 1e-8:                                   # a nilpotent draw (probability 0) has no radius to scale
+    # a nilpotent draw (probability 0) has no radius to scale
+    while rho < 1e-8:
         G = rng.standard_normal((n, n))
         rho = np.max(np.abs(np.linalg.eigvals(G)))
     return G * (radius / rho)

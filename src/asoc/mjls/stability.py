@@ -93,7 +93,8 @@ class MeanSquareStability:
     @property
     def stabilizing(self):
         """True (certified stable), False (certified unstable) or None (undecided)."""
-        return {Verdict.STABLE: True, Verdict.UNSTABLE: False, Verdict.UNDECIDED: None}[self.verdict]
+        return {Verdict.STABLE: True, Verdict.UNSTABLE: False,
+                Verdict.UNDECIDED: None}[self.verdict]
 
     @property
     def bracket(self) -> tuple[float, float]:
@@ -156,14 +157,16 @@ def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
     width = result.rho_upper - result.rho_lower
     if not width <= config.defaults["mjls.bracket_warn_rtol"] * result.rho_upper:
         warnings.warn(f"the spectral radius {result.rho:.6g} is only known to lie in "
-                      f"[{result.rho_lower:.6g}, {result.rho_upper:.6g}] (e.g. a defective or nearly "
+                      f"[{result.rho_lower:.6g}, {result.rho_upper:.6g}] (e.g. a defective or "
+                      "nearly "
                       f"reducible spectrum)", RuntimeWarning, stacklevel=2)
     return result.rho
 
 
 @config.accepts_settings("mjls.bracket_rtol", "mjls.dense_max_radius")
 def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
-    """Cor. 3.2 as a certified verdict: rho with a bracket [rho_lower, rho_upper] and stable, unstable or undecided.
+    """Cor. 3.2 as a certified verdict: rho with a bracket [rho_lower, rho_upper] and stable,
+    unstable or undecided.
 
     Parameters
     ----------
@@ -222,7 +225,8 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     1 / ||C_j^{-1}||_F^2 (for the pencil reduced by a Cholesky factor, Golub and Van Loan, Matrix
     Computations, 4th ed., Sec. 8.7.2; the spectral norm itself for the few stacks below); the
     bracket is widened by it. Where the estimate comes from dense eigenvalues, the lower end is also
-    ``|lambda| - 10 s ||E||`` (the eigenvalue's condition number ``s = 1 / |w^H v|`` and the backward
+    ``|lambda| - 10 s ||E||`` (the eigenvalue's condition number ``s = 1 / |w^H v|`` and the
+    backward
     error ||E|| <= 10 N eps ||K||_F of the QR algorithm, first order), which is tight where the
     Perron stack is singular. Where the bracket is still wider than ``mjls.bracket_warn_rtol``, the
     left Perron stack P gives a residual lower bound and an upper bound at approximate resolvent

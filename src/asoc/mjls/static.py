@@ -125,7 +125,8 @@ def gain_from_moments(sys, X, P, method="vec"):
     choice(method, "method", ("vec", "sdp"))
     EP = successor_average(sys.T, P, check=False)
     S = sys.R + transpose(sys.B) @ EP @ sys.B                     # (M, nu, nu)
-    W = sys.C @ X @ transpose(sys.C) + sys.mu_inf[:, None, None] * noise_covariances(sys)[1]   # (M, ny, ny)
+    # (M, ny, ny)
+    W = sys.C @ X @ transpose(sys.C) + sys.mu_inf[:, None, None] * noise_covariances(sys)[1]
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
     if method == "sdp":
         return gain_sdp(S, W, N)
@@ -180,7 +181,8 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
         stabilising gain once the rate of its last 10 changes predicts more than
         ``config.defaults["mjls.auto_switch_iterations"]`` further iterations (checked after
         10 iterations, then at doubling intervals). An easy system converges before the
-        switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's iteration (one step of
+        switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's
+        iteration (one step of
         each recursion (3.35) per gain
         update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
         thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with

@@ -14,7 +14,13 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from .. import config
-from ..validation import probability_vector, real_array, real_scalar, semidefinite, stochastic_matrix
+from ..validation import (
+    probability_vector,
+    real_array,
+    real_scalar,
+    semidefinite,
+    stochastic_matrix,
+)
 
 __all__ = ["check_system", "stationary_distribution", "successor_average", "predecessor_sum",
            "MJLS", "import_control"]
@@ -28,9 +34,11 @@ def _stack(value, name, M=None, shape2=None, source=""):
     says where the expected sizes come from (e.g. "nx from A").
     """
     if isinstance(value, (list, tuple)) and value and all(np.ndim(v) >= 2 for v in value):
-        mats = [np.atleast_2d(real_array(v, f"{name}[{i}]", finite=False)) for i, v in enumerate(value)]
+        mats = [np.atleast_2d(real_array(v, f"{name}[{i}]", finite=False)) for i,
+                v in enumerate(value)]
         if len({m.shape for m in mats}) > 1:
-            raise ValueError(f"{name}: expected one shape for all modes, found {[m.shape for m in mats]}")
+            raise ValueError(f"{name}: expected one shape for all modes, found "
+                             f"{[m.shape for m in mats]}")
         arr = np.stack(mats)
     else:
         arr = real_array(value, name, finite=False)
@@ -52,7 +60,8 @@ def _stack(value, name, M=None, shape2=None, source=""):
                 raise ValueError(f"{name}: expected shape ({M}, {exp[0]}, {exp[1]})"
                                  f"{f' ({source})' if source else ''}, found {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: expected finite entries, found {int(np.size(arr) - np.isfinite(arr).sum())} "
+        raise ValueError(f"{name}: expected finite entries, found "
+                         f"{int(np.size(arr) - np.isfinite(arr).sum())} "
                          f"non-finite")
     return arr
 
@@ -129,7 +138,8 @@ def stationary_distribution(T):
 def _warn_if_not_unique(T, stacklevel):
     n_closed = _closed_classes(T)
     if n_closed > 1:
-        warnings.warn(f"T: the chain has {n_closed} closed classes, so its stationary distribution is "
+        warnings.warn(f"T: the chain has {n_closed} closed classes, so its stationary distribution "
+                      "is "
                       f"not unique; pass the intended one as MJLS(..., mu_inf=...)", RuntimeWarning,
                       stacklevel=stacklevel)
 
@@ -231,7 +241,9 @@ def _transition_and_stack(T, stack, name):
 
 
 def _sampling_time(dt, name="dt"):
-    """None (unspecified), True (discrete, unspecified period, as python-control) or a period > 0."""
+    """None (unspecified), True (discrete, unspecified period, as python-control) or a period >
+    0.
+    """
     if dt is None or dt is True:
         return dt
     return real_scalar(dt, name, low=0, low_open=True)
@@ -314,7 +326,8 @@ class MJLS:
         C = _stack(C, "C", M, (None, nx), from_A)
         H = _stack(H, "H", M, (nx, None), from_A)
         Q = semidefinite(_stack(Q, "Q", M, (nx, nx), from_A), "Q")
-        R = semidefinite(_stack(R, "R", M, (B.shape[2], B.shape[2]), f"nu = {B.shape[2]} from B"), "R",
+        R = semidefinite(_stack(R, "R", M, (B.shape[2], B.shape[2]), f"nu = {B.shape[2]} from B"),
+                         "R",
                          definite=True)
         if J is not None:
             J = _stack(J, "J", M, (C.shape[1], None), f"ny = {C.shape[1]} from C")
@@ -325,10 +338,12 @@ class MJLS:
             mu_inf = probability_vector(mu_inf, "mu_inf", M)
             gap = np.abs(mu_inf @ T - mu_inf).max()
             if gap > config.defaults["mjls.stationary_atol"]:
-                raise ValueError(f"mu_inf: expected a stationary distribution of T (mu_inf T = mu_inf), "
+                raise ValueError("mu_inf: expected a stationary distribution of T (mu_inf T = "
+                                 "mu_inf), "
                                  f"found max |mu_inf T - mu_inf| = {gap:.3g}")
         dt = _sampling_time(dt)
-        for name, value in dict(A=A, B=B, C=C, H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf, dt=dt).items():
+        for name, value in dict(A=A, B=B, C=C, H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf,
+                                dt=dt).items():
             object.__setattr__(self, name, value)
 
     @property
@@ -376,16 +391,19 @@ class MJLS:
         >>> sys.replace(T=[[0.5, 0.5], [0.5, 0.5]]).mu_inf
         array([0.5, 0.5])
         """
-        fields = dict(A=self.A, B=self.B, C=self.C, H=self.H, Q=self.Q, R=self.R, T=self.T, J=self.J,
+        fields = dict(A=self.A, B=self.B, C=self.C, H=self.H, Q=self.Q, R=self.R, T=self.T,
+                      J=self.J,
                       mu_inf=None if "T" in changes else self.mu_inf, dt=self.dt)
         unknown = set(changes) - set(fields)
         if unknown:
-            raise TypeError(f"replace: expected keywords among {sorted(fields)}, found {sorted(unknown)}")
+            raise TypeError(f"replace: expected keywords among {sorted(fields)}, found "
+                            f"{sorted(unknown)}")
         fields.update(changes)
         return MJLS(**fields)
 
     @classmethod
-    def from_statespace(cls, systems, T, *, Q=None, R=None, H=None, J=None, dt=None, mu_inf=None) -> "MJLS":
+    def from_statespace(cls, systems, T, *, Q=None, R=None, H=None, J=None, dt=None,
+                        mu_inf=None) -> "MJLS":
         """The MJLS (3.7) whose mode i is the discrete-time ``control.StateSpace`` ``systems[i]``.
 
         The model (3.7) has no feedthrough (y = C x + J v), so every D must be zero: a
@@ -446,32 +464,39 @@ class MJLS:
             raise TypeError(f"systems: expected a list of {T.shape[0]} control.StateSpace, "
                             f"found {type(systems).__name__}")
         if len(systems) != T.shape[0]:
-            raise ValueError(f"systems: expected {T.shape[0]} systems (one per mode of T), found {len(systems)}")
+            raise ValueError(f"systems: expected {T.shape[0]} systems (one per mode of T), found "
+                             f"{len(systems)}")
         for i, s in enumerate(systems):
             if not isinstance(s, control.StateSpace):
-                raise TypeError(f"systems[{i}]: expected a control.StateSpace, found {type(s).__name__}")
+                raise TypeError(f"systems[{i}]: expected a control.StateSpace, found "
+                                f"{type(s).__name__}")
             if s.dt is None or (s.dt is not True and s.dt == 0):
                 raise ValueError(f"systems[{i}]: expected a discrete-time system (dt > 0 or True), "
-                                 f"found continuous-time dt = {s.dt}; discretise it, e.g. control.c2d")
+                                 f"found continuous-time dt = {s.dt}; discretise it, e.g. "
+                                 "control.c2d")
         periods = {s.dt for s in systems if s.dt is not True}
         if len(periods) > 1:
             raise ValueError(f"systems: expected one sampling time, found {sorted(periods)}")
         found = periods.pop() if periods else True
         if dt is not None:
             dt = _sampling_time(dt)
-            if found is not True and dt is not True and not np.isclose(found, dt, rtol=config.defaults["mjls.sampling_time_rtol"],
+            if found is not True and dt is not True and not np.isclose(found, dt,
+                                                                       rtol=config.defaults["mjls.sampling_time_rtol"],
                                                                       atol=0):
                 raise ValueError(f"dt: expected the systems' sampling time {found}, found {dt}")
             found = dt if found is True else found
         sizes = [(s.nstates, s.ninputs, s.noutputs) for s in systems]
         if len(set(sizes)) > 1:
-            raise ValueError(f"systems: expected equal sizes (nstates, ninputs, noutputs), found {sizes}")
+            raise ValueError("systems: expected equal sizes (nstates, ninputs, noutputs), found "
+                             f"{sizes}")
         for i, s in enumerate(systems):
             if np.any(np.asarray(s.D) != 0):
-                raise ValueError(f"systems[{i}]: expected D = 0 (the MJLS (3.7) has no feedthrough), "
+                raise ValueError(f"systems[{i}]: expected D = 0 (the MJLS (3.7) has no "
+                                 "feedthrough), "
                                  f"found max |D| = {np.abs(s.D).max():.3g}")
         nx, nu, _ = sizes[0]
-        return cls(A=[np.asarray(s.A, float) for s in systems], B=[np.asarray(s.B, float) for s in systems],
+        return cls(A=[np.asarray(s.A, float) for s in systems],
+                   B=[np.asarray(s.B, float) for s in systems],
                    C=[np.asarray(s.C, float) for s in systems], H=np.eye(nx) if H is None else H,
                    Q=np.eye(nx) if Q is None else Q, R=np.eye(nu) if R is None else R, T=T, J=J,
                    mu_inf=mu_inf, dt=found)

@@ -18,16 +18,22 @@ from .report import mutant_text
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m asoc_companion.theorems",
-                                     description="Check the thesis's numbered statements on random instances.")
-    parser.add_argument("--instances", type=int, default=1000, help="instances per statement (default 1000)")
+                                     description="Check the thesis's numbered statements on random "
+                                                 "instances.")
+    parser.add_argument("--instances", type=int, default=1000,
+                        help="instances per statement (default 1000)")
     parser.add_argument("--expensive-instances", type=int, default=None,
-                        help="instances for statements marked expensive (default: --instances / 10, at least 100)")
+                        help="instances for statements marked expensive (default: --instances / "
+                             "10, at least 100)")
     parser.add_argument("--mutants", type=int, default=100,
                         help="instances of each statement's mutant (default 100; 0: none)")
     parser.add_argument("--seed", type=int, default=2017, help="study seed (default 2017)")
-    parser.add_argument("--only", nargs="+", metavar="KEY", help="statement keys, e.g. statement_3_19")
-    parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (default: local cores)")
-    parser.add_argument("--jobs", type=int, default=-1, help="local joblib workers (default: all cores)")
+    parser.add_argument("--only", nargs="+", metavar="KEY",
+                        help="statement keys, e.g. statement_3_19")
+    parser.add_argument("--scheduler",
+                        help="Dask scheduler address, e.g. tcp://host:8786 (default: local cores)")
+    parser.add_argument("--jobs", type=int, default=-1,
+                        help="local joblib workers (default: all cores)")
     parser.add_argument("--output", help="write the recorded results as JSON to this file")
     args = parser.parse_args(argv)
     if args.instances < 1:
@@ -37,11 +43,13 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     if args.mutants < 0:
         parser.error(f"--mutants: expected an integer >= 0, found {args.mutants}")
-    results = run_study(count, seed=args.seed, only=args.only, n_jobs=args.jobs, scheduler=args.scheduler,
+    results = run_study(count, seed=args.seed, only=args.only, n_jobs=args.jobs,
+                        scheduler=args.scheduler,
                         mutants=args.mutants or None)
     recorded = {key: res.recorded_value() for key, res in results.items()}
     for key, value in recorded.items():
-        print(f"{key:24s} {verdict_text(value):42s} mutant: {mutant_text(value):22s} failing: {value['failing'][:8]}")
+        print(f"{key:24s} {verdict_text(value):42s} mutant: {mutant_text(value):22s} failing: "
+              f"{value['failing'][:8]}")
     print(f"{len(recorded)} statements in {time.perf_counter() - start:.1f} s")
     if args.output:
         atomic_write_json(args.output, recorded)

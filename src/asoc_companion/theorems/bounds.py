@@ -1,4 +1,5 @@
-"""Corrected bounds for Prop. 3.26, Thm. 3.31 and Thm. 3.32: what holds instead, computed independently.
+"""Corrected bounds for Prop. 3.26, Thm. 3.31 and Thm. 3.32: what holds instead, computed
+independently.
 
 Everything here is written from the printed equations, not from ``asoc.mjls.dynamic``: the
 checks of :mod:`asoc_companion.theorems.corrections` compare these computations with the
@@ -12,7 +13,8 @@ blocks with the cross moment E{e x^^T 1(theta = i)} dropped.
 The correction rests on (a + b)(a + b)^T <= 2 a a^T + 2 b b^T (as (a - b)(a - b)^T >= 0):
 with [x; x^] = [e; 0] + [x^; x^],
 
-    X~ <= 2 [[Xbar + Xunder, Xunder], [Xunder, Xunder]]                              (Prop. 3.26 corrected)
+    X~ <= 2 [[Xbar + Xunder, Xunder], [Xunder, Xunder]]                              (Prop. 3.26
+    corrected)
 
 and with e_{k+1} = (A - K C) e + (A - F + B L - K C) x^ + H w - K J v,
 x^_{k+1} = K C e + (F + K C) x^ + K J v, the recursions (3.66)-(3.67) with the two transported
@@ -64,7 +66,8 @@ def costate(At, Qt, T):
     M, m, _ = At.shape
     op = np.zeros((M * m * m, M * m * m))
     for i in range(M):
-        kron = np.kron(At[i].T, At[i].T)                          # vec(A^T Y A) = (A^T (x) A^T) vec(Y)
+        # vec(A^T Y A) = (A^T (x) A^T) vec(Y)
+        kron = np.kron(At[i].T, At[i].T)
         for j in range(M):
             op[i * m * m:(i + 1) * m * m, j * m * m:(j + 1) * m * m] = T[i, j] * kron
     P = np.linalg.solve(np.eye(M * m * m) - op, Qt.reshape(M * m * m)).reshape(M, m, m)
@@ -81,20 +84,25 @@ def _error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
     KC = K @ sys.C
     AKC, G, FKC = sys.A - KC, sys.A - F + sys.B @ L - KC, F + KC
     m = mu[:, None, None]
-    Xbar_next = predecessor_sum(sys.T, m * (HHt + KJJK) + factor * (AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)))
-    Xunder_next = predecessor_sum(sys.T, m * KJJK + factor * (KC @ Xbar @ _T(KC) + FKC @ Xunder @ _T(FKC)))
+    Xbar_next = predecessor_sum(sys.T,
+                                m * (HHt + KJJK) + factor * (AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)))
+    Xunder_next = predecessor_sum(sys.T,
+                                  m * KJJK + factor * (KC @ Xbar @ _T(KC) + FKC @ Xunder @ _T(FKC)))
     return Xbar_next, Xunder_next
 
 
 def _initial_error_blocks(mean0, cov0, mu0, xhat0):
-    """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a constant x^_0."""
+    """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a constant
+    x^_0.
+    """
     dev = mean0 - xhat0
     m = mu0[:, None, None]
     return m * (cov0 + np.einsum("ia,ib->iab", dev, dev)), m * np.outer(xhat0, xhat0)
 
 
 def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
-    """Sum over k of sum_i tr[Q~_i factor [[Xbar + Xu, Xu], [Xu, Xu]]] with (3.66)-(3.67) (transported
+    """Sum over k of sum_i tr[Q~_i factor [[Xbar + Xu, Xu], [Xu, Xu]]] with (3.66)-(3.67)
+    (transported
     terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56) (Thm. 3.31
     corrected); with factor 1 the cost of the printed recursions (no bound).
     """
@@ -111,7 +119,9 @@ def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
 # ------------------------------------------------------------------ Thm. 3.32: (B.4) and (3.70)
 
 def optimality_conditions(sys, Xbar, Xunder, EPbar, EPunder, mu):
-    """The matrix and vector of (3.70) from (3.50), vec column-major, unknowns [vec F; vec K; vec L]."""
+    """The matrix and vector of (3.70) from (3.50), vec column-major, unknowns [vec F; vec K; vec
+    L].
+    """
     JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
     S, C, B, A = Xbar + Xunder, sys.C, sys.B, sys.A
     ksum = lambda X, Y: sum(np.kron(x, y) for x, y in zip(X, Y))
@@ -150,13 +160,16 @@ def _noise_term(sys, K, EPbar, EPunder, mu):
 
 
 def bound_3_65(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu):
-    """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the constant E_i(omega_{k+1}))."""
+    """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the constant
+    E_i(omega_{k+1})).
+    """
     Pbar, Punder = _step_terms(sys, F, K, L, EPbar, EPunder)
     return _tr(Pbar, Xbar + Xunder) + _tr(Punder, Xbar) + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
-    """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as E_i(Pbar + Punder)).
+    """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as E_i(Pbar +
+    Punder)).
 
     ``cross`` is the factor of the term 2 E_i(Pbar + Punder) B L Xunder A^T (2 as printed; the
     mutant of the corrected Thm. 3.32 drops it to 1).
@@ -164,14 +177,17 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
     A, B, C, E, U = sys.A, sys.B, sys.C, EPbar, EPunder
     S, BL, KC = Xbar + Xunder, B @ L, K @ C
     terms = (_tr(sys.Q, S) + _tr(L.T @ sys.R @ L, Xunder) + _tr(E + U, A @ S @ _T(A))
-             - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC)) + cross * _tr(E + U, BL @ Xunder @ _T(A))
+             - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC)) + cross * _tr(E + U,
+                                                                                  BL @ Xunder @ _T(A))
              - 2 * _tr(U, BL @ Xunder @ _T(KC)) - 2 * _tr(U, F @ Xunder @ _T(A)) + 2 * _tr(U, F @ Xunder @ _T(KC))
-             - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U, BL @ Xunder @ _T(BL)) + _tr(U, F @ Xunder @ F.T))
+             - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U,
+                                                   BL @ Xunder @ _T(BL)) + _tr(U, F @ Xunder @ F.T))
     return terms + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder):
-    """sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i] with Z = Q~ + A~^T [[E(Pbar) + E(Pu), -E(Pu)], [-E(Pu), E(Pu)]] A~:
+    """sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i] with Z = Q~ + A~^T [[E(Pbar) + E(Pu), -E(Pu)], [-E(Pu),
+    E(Pu)]] A~:
     the amount by which (3.65) exceeds (B.4) (derived by expanding both).
     """
     n = sys.nx

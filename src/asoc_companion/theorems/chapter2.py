@@ -42,7 +42,8 @@ def _lib_linear_gaussian_model(A, B, H, C, J):
 
 def _lib_lemma_2_1(points, weights, u, model, w_points, v_points, beta, gamma):
     from asoc.belief import DiracMixture, next_estimate_covariance
-    return next_estimate_covariance(DiracMixture(points, weights), u, model, w_points, v_points, beta, gamma)
+    return next_estimate_covariance(DiracMixture(points, weights), u, model, w_points, v_points,
+                                    beta, gamma)
 
 
 def _lib_terminal_value(Q_K, x_target, points, weights):
@@ -54,7 +55,8 @@ def _lib_terminal_value(Q_K, x_target, points, weights):
     return value.s, value.v, value.V, value.S
 
 
-def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_ref, mean0, cov0, eps):
+def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_ref, mean0, cov0,
+                              eps):
     """Alg. 2.1 (nominal reference under the affine policy L_ref, d_ref with the UKF), then
     Theorem 2.4 and Theorem 2.5 backwards with the steps ``eps``; returns the value at k = 0
     as (s, v, V, S) and the policy (2.17) of every step.
@@ -77,7 +79,8 @@ def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_re
     value = terminal_value(cost, filt.mixture(ref.estimates[K]))
     gains, offsets = [None] * K, [None] * K
     for k in range(K - 1, -1, -1):
-        expansion = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta).expansion(ref.u_bar[k])
+        expansion = StageProblem(model, cost, filt, ref.estimates[k], value, w_points,
+                                 beta).expansion(ref.u_bar[k])
         gains[k], offsets[k] = _policy_2_17(expansion, ref.u_bar[k], eps[k])
         value = improved_policy_value(expansion, eps[k])
     return (value.s, value.v, value.V, value.S), gains, offsets
@@ -136,7 +139,8 @@ def _symmetric_points(n):
 
 def check_lemma_2_1(rng: np.random.Generator, mutant=False) -> Outcome:
     """Lemma 2.1 on a random linear-Gaussian model against the information-form Kalman update.
-    Mutant: the reference without the measurement update (the prediction P, Schur complement dropped).
+    Mutant: the reference without the measurement update (the prediction P, Schur complement
+    dropped).
 
     Examples
     --------
@@ -200,8 +204,10 @@ def check_theorem_2_4(rng: np.random.Generator, mutant=False) -> Outcome:
     mean = beta @ z
     cov = (beta[:, None] * (z - mean)).T @ (z - mean)
     half = 1.0 if mutant else 0.5
-    expansion = float(beta @ (s + z @ v + half * np.einsum("ji,ik,jk->j", z, V, z)) + 0.5 * np.trace(S @ cov))
-    scale = float(abs(s) + beta @ (np.abs(z @ v) + 0.5 * np.abs(np.einsum("ji,ik,jk->j", z, V, z))) + cost_terms.max())
+    expansion = float(beta @ (s + z @ v + half * np.einsum("ji,ik,jk->j", z, V,
+                                                           z)) + 0.5 * np.trace(S @ cov))
+    scale = float(abs(s) + beta @ (np.abs(z @ v) + 0.5 * np.abs(np.einsum("ji,ik,jk->j", z, V,
+                                                                          z))) + cost_terms.max())
     tol = 64 * EPS * (M + N) * n ** 2 * scale
     error = abs(expansion - exact)
     verdict = "holds" if error <= tol and not np.any(S) else "fails"
@@ -221,7 +227,8 @@ def _kalman_posterior(A, H, C, J, Sigma):
 
 def expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, mean, Sigma,
                                    innovation=True):
-    """Exact E{C_K(x_K) + sum_k C_k(x_k, u_k)} of u_k = L_k E{x_k} + d_k from the belief N(mean, Sigma).
+    """Exact E{C_K(x_K) + sum_k C_k(x_k, u_k)} of u_k = L_k E{x_k} + d_k from the belief N(mean,
+    Sigma).
 
     Forward propagation of the first two moments of the Kalman mean x_hat_k (deterministic
     posterior covariances Sigma_k; the innovation adds P_k - Sigma_{k+1} to the second moment;
@@ -276,7 +283,8 @@ def check_theorem_2_5(rng: np.random.Generator, mutant=False) -> Outcome:
                                                              L_ref, d_ref, mean0, cov0, eps)
     m = rng.normal(size=n_x)
     theorem = float(s + v @ m + 0.5 * (m @ V @ m + np.trace(V @ cov0)) + 0.5 * np.trace(S @ cov0))
-    exact = expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, m, cov0,
+    exact = expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, m,
+                                           cov0,
                                            innovation=not mutant)
     lqg = expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target,
                                          *lq_tracking_policy(A, B, Q, R, Q_K, x_target, K), m, cov0,
@@ -286,8 +294,10 @@ def check_theorem_2_5(rng: np.random.Generator, mutant=False) -> Outcome:
     error = abs(theorem - exact)
     error_lqg = abs(theorem - lqg)
     verdict = "holds" if error <= tol and (not optimal or error_lqg <= tol) else "fails"
-    return Outcome(verdict, {"n_x": n_x, "n_u": n_u, "n_y": n_y, "horizon": K, "eps_all_one": int(optimal),
-                             "theorem_value": theorem, "exact_cost_of_policy": exact, "lqg_optimum": lqg,
+    return Outcome(verdict, {"n_x": n_x, "n_u": n_u, "n_y": n_y, "horizon": K,
+                             "eps_all_one": int(optimal),
+                             "theorem_value": theorem, "exact_cost_of_policy": exact,
+                             "lqg_optimum": lqg,
                              "abs_difference": error, "abs_difference_lqg": error_lqg,
                              "tolerance": float(tol)})
 
@@ -341,7 +351,8 @@ def check_proposition_2_7(rng: np.random.Generator, mutant=False) -> Outcome:
     lam, U = np.linalg.eigh(joint)
     precision = (U / lam) @ U.T
     cond_cov = np.linalg.inv(precision[M:, M:])
-    m = y.mean()                                         # the library's constant prior mean (a reading)
+    # the library's constant prior mean (a reading)
+    m = y.mean()
     cond_mean = m - cond_cov @ precision[M:, :M] @ (y - m)
     if mutant:
         cond_cov = joint[M:, M:]
@@ -350,7 +361,8 @@ def check_proposition_2_7(rng: np.random.Generator, mutant=False) -> Outcome:
     error = max(np.abs(mean - cond_mean).max(), np.abs(var - np.diag(cond_cov)).max(),
                 np.abs(cov - cond_cov).max())
     verdict = "holds" if error <= tol else "fails"
-    return Outcome(verdict, {"covariance": name, "training_inputs": M, "test_inputs": N, "dimension": d,
+    return Outcome(verdict, {"covariance": name, "training_inputs": M, "test_inputs": N,
+                             "dimension": d,
                              "max_abs_difference": float(error), "tolerance": float(tol),
                              "condition_number": float(lam[-1] / lam[0])})
 
@@ -358,52 +370,79 @@ def check_proposition_2_7(rng: np.random.Generator, mutant=False) -> Outcome:
 STATEMENTS = [
     Statement(
         key="statement_2_1", label="Lemma 2.1",
-        summary=r"For jointly Gaussian state and measurement, the covariance of the next estimate is "
-                r"$\mathbf C^{xx}-\mathbf C^{xy}(\mathbf C^{yy})^{-1}(\mathbf C^{xy})^\top$ over the propagated "
+        summary=r"For jointly Gaussian state and measurement, the covariance of the next estimate "
+                r"is "
+                r"$\mathbf C^{xx}-\mathbf C^{xy}(\mathbf C^{yy})^{-1}(\mathbf C^{xy})^\top$ over "
+                r"the propagated "
                 r"particles and noise samples.",
-        checked="Random linear-Gaussian model (1-3 states, 1-2 outputs), random Dirac mixture, noise samples "
-                "with exact moments: asoc.belief's Lemma 2.1 against the information-form Kalman update of "
+        checked="Random linear-Gaussian model (1-3 states, 1-2 outputs), random Dirac mixture, "
+                "noise samples "
+                "with exact moments: asoc.belief's Lemma 2.1 against the information-form Kalman "
+                "update of "
                 "the mixture's moments, within 64 eps x samples x cond(P) cond(S) x |P|.",
         check=check_lemma_2_1,
-        mutant="the reference without the measurement update (the prediction P: the Schur complement dropped)"),
+        mutant="the reference without the measurement update (the prediction P: the Schur "
+               "complement dropped)"),
     Statement(
         key="statement_2_4", label="Theorem 2.4",
-        summary=r"The statistical second-order expansion (Def. 2.2) of the terminal value at the reference "
-                r"mixture is $\mathrm E\{s_K+\mathbf v_K^\top\mathbf x+\tfrac12\mathbf x^\top\mathbf V_K\mathbf x\}$ "
+        summary=r"The statistical second-order expansion (Def. 2.2) of the terminal value at the "
+                r"reference "
+                r"mixture is $\mathrm E\{s_K+\mathbf v_K^\top\mathbf x+\tfrac12\mathbf "
+                r"x^\top\mathbf V_K\mathbf x\}$ "
                 r"with $\mathbf S_K=\mathbf 0$.",
-        checked="Random quadratic terminal cost (PSD, possibly singular weight), random reference and evaluation "
-                "mixtures: the library's s_K, v_K, V_K, S_K give E{C_K} under the evaluation mixture exactly "
+        checked="Random quadratic terminal cost (PSD, possibly singular weight), random reference "
+                "and evaluation "
+                "mixtures: the library's s_K, v_K, V_K, S_K give E{C_K} under the evaluation "
+                "mixture exactly "
                 "(rounding tolerance).",
-        check=check_theorem_2_4, mutant="the expansion with x^T V_K x in place of 1/2 x^T V_K x (a factor changed)"),
+        check=check_theorem_2_4, mutant="the expansion with x^T V_K x in place of 1/2 x^T V_K x (a "
+                                        "factor changed)"),
     Statement(
         key="statement_2_5", label="Theorem 2.5",
         summary=r"Backwards along the reference, the value is "
-                r"$\mathrm E\{s_k+\mathbf v_k^\top\mathbf x+\tfrac12\mathbf x^\top\mathbf V_k\mathbf x"
-                r"+\tfrac12\mathrm{tr}[\mathbf S_k\mathbf C_k]\}$ with (2.11)-(2.13) for the policy (2.17).",
-        checked="Random linear-Gaussian system (1-2 states, inputs, outputs; horizon 2-3), quadratic costs, random "
-                "reference policy and steps eps_k: the library's V_0 at a random mean against the exact expected "
-                "cost of the induced policy (forward moments), and for eps_k = 1 against the Riccati/LQG optimum.",
+                r"$\mathrm E\{s_k+\mathbf v_k^\top\mathbf x+\tfrac12\mathbf x^\top\mathbf "
+                r"V_k\mathbf x"
+                r"+\tfrac12\mathrm{tr}[\mathbf S_k\mathbf C_k]\}$ with (2.11)-(2.13) for the "
+                r"policy (2.17).",
+        checked="Random linear-Gaussian system (1-2 states, inputs, outputs; horizon 2-3), "
+                "quadratic costs, random "
+                "reference policy and steps eps_k: the library's V_0 at a random mean against the "
+                "exact expected "
+                "cost of the induced policy (forward moments), and for eps_k = 1 against the "
+                "Riccati/LQG optimum.",
         check=check_theorem_2_5,
-        mutant="the exact costs without the innovation's share P_k - Sigma_{k+1} of the estimate's second moment"),
+        mutant="the exact costs without the innovation's share P_k - Sigma_{k+1} of the estimate's "
+               "second moment"),
     Statement(
         key="statement_2_7", label="Proposition 2.7",
         summary=r"The GP predictive distribution has mean "
-                r"$m(\mathbf x_*)+\mathbf k_*^\top\boldsymbol\Sigma_y^{-1}(\mathbf y-m(\mathbf X))$ and variance "
+                r"$m(\mathbf x_*)+\mathbf k_*^\top\boldsymbol\Sigma_y^{-1}(\mathbf y-m(\mathbf "
+                r"X))$ and variance "
                 r"$k(\mathbf x_*,\mathbf x_*)-\mathbf k_*^\top\boldsymbol\Sigma_y^{-1}\mathbf k_*$.",
-        checked="Random inputs in R^1-3, outputs, covariance of Table 2.1 and hyperparameters: DistributionGP's "
-                "mean, variance and joint covariance against conditioning the joint Gaussian through its "
+        checked="Random inputs in R^1-3, outputs, covariance of Table 2.1 and hyperparameters: "
+                "DistributionGP's "
+                "mean, variance and joint covariance against conditioning the joint Gaussian "
+                "through its "
                 "precision matrix (eigendecomposition), within 64 eps (M + N) cond x scale.",
         check=check_proposition_2_7,
-        mutant="the reference's posterior covariance without the data's share (the prior covariance)"),
+        mutant="the reference's posterior covariance without the data's share (the prior "
+               "covariance)"),
     Statement(
         key="statement_2_6_3_kernels", label="Sec. 2.6.3 (Table 2.1)",
-        summary=r"Any stationary covariance function of Table 2.1 over an admissible distance between "
-                r"distributions ($L_q$, Hellinger, Jensen-Shannon, Wasserstein/OMAT/OSPA, mCvMd) gives a valid GP.",
-        checked="Adversarial search with asoc.gp's distances and covariances (one distribution moved at a time, "
-                "the length scale on a grid) over 4-7 distributions, for a random distance and covariance; a "
-                "negative eigenvalue of the library's Gram matrix beyond the rounding tolerance, confirmed by a "
-                "second eigensolver and an exact Rayleigh quotient, refutes the claim for that distance and "
+        summary=r"Any stationary covariance function of Table 2.1 over an admissible distance "
+                r"between "
+                r"distributions ($L_q$, Hellinger, Jensen-Shannon, Wasserstein/OMAT/OSPA, mCvMd) "
+                r"gives a valid GP.",
+        checked="Adversarial search with asoc.gp's distances and covariances (one distribution "
+                "moved at a time, "
+                "the length scale on a grid) over 4-7 distributions, for a random distance and "
+                "covariance; a "
+                "negative eigenvalue of the library's Gram matrix beyond the rounding tolerance, "
+                "confirmed by a "
+                "second eigensolver and an exact Rayleigh quotient, refutes the claim for that "
+                "distance and "
                 "covariance. The share of failures is the search's yield, not a failure rate.",
         check=check_kernels_sec_2_6_3, expensive=True, summarise=summarise_kernels,
-        mutant="the covariance exp(-(d/l)^4), outside Table 2.1 and not positive definite even on the real line"),
+        mutant="the covariance exp(-(d/l)^4), outside Table 2.1 and not positive definite even on "
+               "the real line"),
 ]

@@ -4,7 +4,8 @@
 ("2_6_3_kernels", "3_19", "3_26", "3_27", "3_31", "3_32", "3_33"), a record
 
     {"diagnosis": str, "corrected": {"statement": str, "holds": int, "fails": int, "instances": int,
-                                     "mutant": {"description": str, "fails": int, "instances": int}}}
+                                     "mutant": {"description": str, "fails": int, "instances":
+                                     int}}}
 
 or ``{"diagnosis": str, "no_correction": str}`` (what was tried). A corrected statement is
 checked on random instances drawn from the study's families (one ``SeedSequence`` child per
@@ -49,9 +50,12 @@ __all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "SPREAD", "chec
 
 
 STATEMENT_IDS = ("2_6_3_kernels", "3_19", "3_26", "3_27", "3_31", "3_32", "3_33")
-EXPENSIVE = {"3_27": 100, "3_33": 100}     # at most this many instances (Alg. 3.2 / 3.3 runs per instance)
-EIG_TOL = 1e-9                             # smallest eigenvalue of a gap, relative to the matrix scale
-COST_RTOL = 1e-6                           # two exact costs agree (both from coupled Lyapunov solves)
+# at most this many instances (Alg. 3.2 / 3.3 runs per instance)
+EXPENSIVE = {"3_27": 100, "3_33": 100}
+# smallest eigenvalue of a gap, relative to the matrix scale
+EIG_TOL = 1e-9
+# two exact costs agree (both from coupled Lyapunov solves)
+COST_RTOL = 1e-6
 
 
 def _min_eig(S):
@@ -88,7 +92,8 @@ def _gram_verdict(D, name, relative_scale, reference=None):
 
 
 def check_kernels(rng):
-    """Corrected Sec. 2.6.3 on 3-7 random 1-D Gaussians: a Hilbert-embeddable distance (usual Hellinger,
+    """Corrected Sec. 2.6.3 on 3-7 random 1-D Gaussians: a Hilbert-embeddable distance (usual
+    Hellinger,
     L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the definition on
     sets spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a PSD Gram matrix;
     the mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule. Third entry, on
@@ -123,11 +128,14 @@ def _record_kernels(outcomes, spread):
     ex = kernel_example()
     lowest = min((e for _, e in spread), default=0.0)
     return {"diagnosis": (
-        "Table 2.1's covariances of Delta = D(d_i, d_j) are covariance functions for every length scale "
-        "exactly when D embeds isometrically in a Hilbert space (Schoenberg 1938); the text admits any "
+        "Table 2.1's covariances of Delta = D(d_i, d_j) are covariance functions for every length "
+        "scale "
+        "exactly when D embeds isometrically in a Hilbert space (Schoenberg 1938); the text admits "
+        "any "
         "'admissible distance'. The printed Hellinger expression (1 - int sqrt(p1 p2))^2 and the "
         "Jensen-Shannon divergence are not such distances: N(0,1), N(1,1), N(2,1) with the printed "
-        f"Hellinger and the SE kernel at l = {ex['length_scale']} give the Gram eigenvalue {ex['printed']:.3f} "
+        f"Hellinger and the SE kernel at l = {ex['length_scale']} give the Gram eigenvalue "
+        f"{ex['printed']:.3f} "
         f"(with the usual Hellinger sqrt(1 - BC): {ex['usual']:.3f}). Nor is the thesis's closed "
         f"form of the "
         "mCvMd with a finite b_max (gp.mcvmd, b_max = 100), a large-b_max expansion of its "
@@ -201,10 +209,14 @@ def _record_3_19(outcomes, singular_verdicts):
     starts = ", ".join(f"{c['start']:g} I" for c in ex["cycles"])
     noiseless = thm_3_19_noiseless_example()
     return {"diagnosis": (
-        "The proof (after (3.35)) shows that a solution of (3.31)-(3.33) stabilises, then argues by a "
-        "homotopy from the mode-observed problem and degree theory that the solution is unique and that "
-        "the recursion (3.34)-(3.35) reaches it; neither follows: the degree counts solutions with sign, "
-        "and the fixed-point map (3.34)-(3.35) is not a contraction. Smallest counterexample: one mode "
+        "The proof (after (3.35)) shows that a solution of (3.31)-(3.33) stabilises, then argues "
+        "by a "
+        "homotopy from the mode-observed problem and degree theory that the solution is unique and "
+        "that "
+        "the recursion (3.34)-(3.35) reaches it; neither follows: the degree counts solutions with "
+        "sign, "
+        "and the fixed-point map (3.34)-(3.35) is not a contraction. Smallest counterexample: one "
+        "mode "
         f"(plain output feedback), two states (one-decimal data): from X = P = {starts} Alg. 3.1 "
         f"ends in a period-2 cycle of the gain, {cycle['gains'][0]:.4f} <-> "
         f"{cycle['gains'][1]:.4f} (rho {cycle['rho'][0]:.2f} and {cycle['rho'][1]:.2f}), although "
@@ -231,7 +243,9 @@ def _record_3_19(outcomes, singular_verdicts):
 # ------------------------------------------------------------------ Prop. 3.26
 
 def _stabilised_loop(rng, sys):
-    """Random (F, K, L) and the system rescaled so that the augmented loop has rho uniform in [0.2, 0.85]."""
+    """Random (F, K, L) and the system rescaled so that the augmented loop has rho uniform in [0.2,
+    0.85].
+    """
     F = 0.5 * rng.standard_normal((sys.nx, sys.nx))
     K = 0.5 * rng.standard_normal((sys.nx, sys.ny))
     L = 0.5 * rng.standard_normal((sys.nu, sys.nx))
@@ -241,9 +255,11 @@ def _stabilised_loop(rng, sys):
 
 
 def check_3_26(rng, with_sign=False):
-    """Corrected Prop. 3.26: X~ <= 2 [[Xbar + X2, X2], [X2, X2]] and P~ <= 2 [[Pbar + P2, -P2], [-P2, P2]]
+    """Corrected Prop. 3.26: X~ <= 2 [[Xbar + X2, X2], [X2, X2]] and P~ <= 2 [[Pbar + P2, -P2],
+    [-P2, P2]]
     (Pbar = P1 + P12 + P12^T + P2) for the exact X~_inf, P~_inf of a random stabilising (F, K, L).
-    Mutant: factor 1 (the printed bound). ``with_sign`` adds the P-bound with the printed sign and factor 2.
+    Mutant: factor 1 (the printed bound). ``with_sign`` adds the P-bound with the printed sign and
+    factor 2.
     """
     sys, F, K, L = _stabilised_loop(rng, draw_system(rng))
     _, X, _ = steady_state_cost(sys, F, K, L)
@@ -254,26 +270,36 @@ def check_3_26(rng, with_sign=False):
                                       gap(bounds.costate_bound(P, factor, sign), P)) >= -EIG_TOL
     verdicts = ("holds" if ok(2.0) else "fails"), ("holds" if ok(1.0) else "fails")
     if with_sign:
-        return verdicts + ("holds" if gap(bounds.costate_bound(P, 2.0, -1.0), P) >= -EIG_TOL else "fails",)
+        return verdicts + ("holds" if gap(bounds.costate_bound(P, 2.0, -1.0),
+                                          P) >= -EIG_TOL else "fails",)
     return verdicts
 
 
 def _record_3_26(outcomes, sign_outcomes):
     ex = prop_3_26_example()
     return {"diagnosis": (
-        "The proof orders the Schur complements (X1 - X12 X2^{-1} X12^T <= Xbar, from X Y^{-1} X^T >= X + X^T - Y) "
-        "and then 'reverses the Schur complement'; but two matrices with equal lower-right blocks and ordered "
+        "The proof orders the Schur complements (X1 - X12 X2^{-1} X12^T <= Xbar, from X Y^{-1} X^T "
+        ">= X + X^T - Y) "
+        "and then 'reverses the Schur complement'; but two matrices with equal lower-right blocks "
+        "and ordered "
         "Schur complements are ordered only if their off-diagonal blocks agree: bound - X~ = "
-        "[[2 X2 - X12 - X12^T, X2 - X12], [., 0]] is PSD only if X12 = X2 (equality holds for the one-mode LQG "
-        "optimum). Smallest counterexample, exact: one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0): "
+        "[[2 X2 - X12 - X12^T, X2 - X12], [., 0]] is PSD only if X12 = X2 (equality holds for the "
+        "one-mode LQG "
+        "optimum). Smallest counterexample, exact: one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = "
+        "0, K = 1, L = 0): "
         f"X~_inf = I and bound - X~_inf = [[{ex['printed_gap'][0][0]}, {ex['printed_gap'][0][1]}], "
-        f"[{ex['printed_gap'][1][0]}, {ex['printed_gap'][1][1]}]], determinant {ex['printed_gap_determinant']} "
+        f"[{ex['printed_gap'][1][0]}, {ex['printed_gap'][1][1]}]], determinant "
+        f"{ex['printed_gap_determinant']} "
         "(eigenvalue 1 - sqrt 2)."),
         "corrected": {**_tally(outcomes, (
-            "X~_inf <= 2 [[Xbar + Xu, Xu], [Xu, Xu]] and P~_inf <= 2 [[Pbar + Pu, -Pu], [-Pu, Pu]] with Xbar = "
-            "X1 - X12 - X12^T + X2, Xu = X2, Pbar = P1 + P12 + P12^T + P2, Pu = P2. Proof: with e = x - x^, "
-            "[x; x^] = [e; 0] + [x^; x^] and (a + b)(a + b)^T <= 2 a a^T + 2 b b^T; for P~, z = [x; x] + [0; -e] "
-            "in z^T P~ z <= 2 (.) + 2 (.). (For P the cross terms enter Pbar with +, not - as printed.)"),
+            "X~_inf <= 2 [[Xbar + Xu, Xu], [Xu, Xu]] and P~_inf <= 2 [[Pbar + Pu, -Pu], [-Pu, Pu]] "
+            "with Xbar = "
+            "X1 - X12 - X12^T + X2, Xu = X2, Pbar = P1 + P12 + P12^T + P2, Pu = P2. Proof: with e "
+            "= x - x^, "
+            "[x; x^] = [e; 0] + [x^; x^] and (a + b)(a + b)^T <= 2 a a^T + 2 b b^T; for P~, z = "
+            "[x; x] + [0; -e] "
+            "in z^T P~ z <= 2 (.) + 2 (.). (For P the cross terms enter Pbar with +, not - as "
+            "printed.)"),
             "factor 1 instead of 2, i.e. the bound as printed"),
             "costate_sign": {"description": "the P~ bound with factor 2 but Pbar = P1 - P12 - P12^T + P2 as printed",
                              **_counts(sign_outcomes)}}}
@@ -282,7 +308,8 @@ def _record_3_26(outcomes, sign_outcomes):
 # ------------------------------------------------------------------ Thm. 3.27: M = 1
 
 def _lqg(sys, r_factor=1.0):
-    """The LQG controller (3.37) of a one-mode system: F = A + B L - K C, K the Kalman predictor gain,
+    """The LQG controller (3.37) of a one-mode system: F = A + B L - K C, K the Kalman predictor
+    gain,
     L the LQ gain (for r_factor R).
     """
     A, B, C, H, Q, R = sys.A[0], sys.B[0], sys.C[0], sys.H[0], sys.Q[0], r_factor * sys.R[0]
@@ -295,7 +322,8 @@ def _lqg(sys, r_factor=1.0):
 
 
 def check_3_27(rng):
-    """Corrected Thm. 3.27 (M = 1): the converged, stabilising solution of Alg. 3.2 has the exact cost of
+    """Corrected Thm. 3.27 (M = 1): the converged, stabilising solution of Alg. 3.2 has the exact
+    cost of
     the LQG controller. Mutant: compared with the LQG controller for 2 R.
     """
     sys = draw_system(rng, max_states=2, max_modes=1)
@@ -314,9 +342,12 @@ def _record_3_27(outcomes):
     low, high = ex["fixed_points"][0], ex["fixed_points"][-1]
     worst = lambda name: max(p[name] for p in ex["fixed_points"])
     return {"diagnosis": (
-        "App. A.1 rewrites the Hamiltonian of (3.42) 'if we use (3.43)', which replaces X12 by X2 and P12 by "
-        "-P2; (3.49) is the stationarity condition of that approximate Hamiltonian (A.7), not of (3.42). The "
-        "two agree where X12 = X2 and P12 = -P2, as at the one-mode LQG optimum; with M >= 2 the fixed point "
+        "App. A.1 rewrites the Hamiltonian of (3.42) 'if we use (3.43)', which replaces X12 by X2 "
+        "and P12 by "
+        "-P2; (3.49) is the stationarity condition of that approximate Hamiltonian (A.7), not of "
+        "(3.42). The "
+        "two agree where X12 = X2 and P12 = -P2, as at the one-mode LQG optimum; with M >= 2 the "
+        "fixed point "
         "of Alg. 3.2 is in general not a stationary point of the exact cost (3.42). Nor is it "
         "unique: the "
         f"study's instance {ex['index']} (M = {ex['M']}, nx = {ex['nx']}, nu = {ex['nu']}, ny = "
@@ -333,12 +364,17 @@ def _record_3_27(outcomes):
         "so the equations do not determine the controller."),
         "fixed_points": ex,
         "corrected": _tally(outcomes, (
-            "For M = 1: a solution of (3.45)-(3.49) with invertible Xu and E(Pu) whose controller stabilises is the "
+            "For M = 1: a solution of (3.45)-(3.49) with invertible Xu and E(Pu) whose controller "
+            "stabilises is the "
             "LQG controller, the optimum of (3.38). Proof: "
-            "the F-row of (3.49) reads E(Pu)(F + K C - B L - A) Xu = 0, so F = A + B L - K C; then the K-row "
-            "gives K = A Xbar C^T (C Xbar C^T + J J^T)^{-1} and (3.45) the filter Riccati equation, the L-row "
-            "L = -(R + B^T Pbar B)^{-1} B^T Pbar A and (3.47) the control Riccati equation; the closed loop's "
-            "eigenvalues are those of A + B L and A - K C, so Xbar and Pbar are the stabilising (unique) solutions. "
+            "the F-row of (3.49) reads E(Pu)(F + K C - B L - A) Xu = 0, so F = A + B L - K C; then "
+            "the K-row "
+            "gives K = A Xbar C^T (C Xbar C^T + J J^T)^{-1} and (3.45) the filter Riccati "
+            "equation, the L-row "
+            "L = -(R + B^T Pbar B)^{-1} B^T Pbar A and (3.47) the control Riccati equation; the "
+            "closed loop's "
+            "eigenvalues are those of A + B L and A - K C, so Xbar and Pbar are the stabilising "
+            "(unique) solutions. "
             "Checked: the exact "
             "cost of Alg. 3.2's converged, stabilising controller equals the LQG cost."),
             "the comparison with the LQG controller for 2 R instead of R")}
@@ -358,12 +394,15 @@ def _finite_instance(rng):
 
 
 def check_3_31(rng):
-    """Corrected Thm. 3.31: J_0 <= the doubled forward bound (random gains or Alg. 3.3's, horizons 2-8).
-    Mutant: factor 1 (the printed recursions (3.66)-(3.67) summed forward). Third entry: bound / J_0.
+    """Corrected Thm. 3.31: J_0 <= the doubled forward bound (random gains or Alg. 3.3's, horizons
+    2-8).
+    Mutant: factor 1 (the printed recursions (3.66)-(3.67) summed forward). Third entry: bound /
+    J_0.
     """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     if rng.random() < 0.5:
-        run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0,
+        run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0,
+                                                     mu0=mu0,
                                                      init=(F, K, L), max_iter=100, warn=False)
         F, K, L = run.F, run.K, run.L
     xhat0 = mu0 @ mean0
@@ -377,30 +416,42 @@ def check_3_31(rng):
 def _record_3_31(outcomes, ratios):
     ex = thm_3_31_example()
     return {"diagnosis": (
-        "B.1 bounds P~_k by Prop. 3.26 ((B.2)), which does not hold. Smallest counterexample, exact: one mode, "
-        "one state, no noise, a = b = c = q = r = 1, x_0 ~ N(0, 1), x^_0 = 0, F = K = 0, u = l x^, horizon 1. "
-        f"x^ stays 0, so J_0 = {ex['exact']} for every l, but Jbar_0 = 2 + 2l + 4l^2 = {ex['bound']} at "
-        f"l = {ex['gain']}: the bound depends on a gain that has no effect. There P~_0 - bound has a zero "
+        "B.1 bounds P~_k by Prop. 3.26 ((B.2)), which does not hold. Smallest counterexample, "
+        "exact: one mode, "
+        "one state, no noise, a = b = c = q = r = 1, x_0 ~ N(0, 1), x^_0 = 0, F = K = 0, u = l x^, "
+        "horizon 1. "
+        f"x^ stays 0, so J_0 = {ex['exact']} for every l, but Jbar_0 = 2 + 2l + 4l^2 = "
+        f"{ex['bound']} at "
+        f"l = {ex['gain']}: the bound depends on a gain that has no effect. There P~_0 - bound has "
+        "a zero "
         f"lower-right block and off-diagonal -l(2l + 1) = {ex['costate_gap_offdiagonal']}."),
         "corrected": {**_tally(outcomes, (
-            "J_0 <= sum_k sum_i 2 tr[Q_i (Xbar_k + Xu_k) + L_k^T R_i L_k Xu_k] (+ the final term), with "
-            "(3.66)-(3.67) whose two transported terms are doubled, started at the exact Xbar_0 = E{e_0 e_0^T}, "
-            "Xu_0 = E{x^_0 x^_0^T}. Proof: e_{k+1} = (A - K C) e + (A - F + B L - K C) x^ + H w - K J v and "
-            "x^_{k+1} = K C e + (F + K C) x^ + K J v; (a + b)(a + b)^T <= 2 a a^T + 2 b b^T and monotonicity give "
-            "the blocks' bounds by induction, and Prop. 3.26 corrected gives X~_k <= 2 [[Xbar + Xu, Xu], [Xu, Xu]]. "
+            "J_0 <= sum_k sum_i 2 tr[Q_i (Xbar_k + Xu_k) + L_k^T R_i L_k Xu_k] (+ the final term), "
+            "with "
+            "(3.66)-(3.67) whose two transported terms are doubled, started at the exact Xbar_0 = "
+            "E{e_0 e_0^T}, "
+            "Xu_0 = E{x^_0 x^_0^T}. Proof: e_{k+1} = (A - K C) e + (A - F + B L - K C) x^ + H w - "
+            "K J v and "
+            "x^_{k+1} = K C e + (F + K C) x^ + K J v; (a + b)(a + b)^T <= 2 a a^T + 2 b b^T and "
+            "monotonicity give "
+            "the blocks' bounds by induction, and Prop. 3.26 corrected gives X~_k <= 2 [[Xbar + "
+            "Xu, Xu], [Xu, Xu]]. "
             "Valid, but loose: the factor 2 compounds over the horizon."),
             "factor 1, i.e. the printed recursions (3.66)-(3.67) summed forward as a cost",
             "The mutant is the printed bound, so it is caught exactly where Thm. 3.31 as printed "
             "fails on these draws, a minority; the exact counterexample of the diagnosis fails it "
             "always."),
-            "bound_over_exact": {q: float(np.quantile(ratios, p)) for q, p in (("median", 0.5), ("max", 1.0))}}}
+            "bound_over_exact": {q: float(np.quantile(ratios, p)) for q, p in (("median", 0.5),
+                                                                               ("max", 1.0))}}}
 
 
 # ------------------------------------------------------------------ Thm. 3.32
 
 def check_3_32(rng):
-    """Corrected Thm. 3.32: the solution of (3.70) minimises (B.4) (symmetric differences vanish and random
-    perturbations do not lower it). Mutant: (B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T dropped.
+    """Corrected Thm. 3.32: the solution of (3.70) minimises (B.4) (symmetric differences vanish and
+    random
+    perturbations do not lower it). Mutant: (B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T
+    dropped.
     Third entry: relative error of (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i].
     """
     sys = draw_system(rng)
@@ -424,22 +475,31 @@ def check_3_32(rng):
     F, K, L = bounds.split(z, sys)
     printed = bounds.bound_3_65(sys, F, K, L, *data)
     expanded = bounds.functional_b4(sys, F, K, L, *data)
-    identity = abs(printed - expanded - bounds.difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder)) / abs(printed)
+    identity = abs(printed - expanded - bounds.difference_3_65_b4(sys, F, K, L, Xbar, EPbar,
+                                                                  EPunder)) / abs(printed)
     return verdict(2.0), verdict(1.0), identity
 
 
 def _record_3_32(outcomes, identity_errors):
     return {"diagnosis": (
-        "(3.70) is the stationarity condition of the quadratic (B.4)/(B.5), which B.2 presents as (3.65) with "
-        "(3.68)-(3.69) rewritten. Expanding both: (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i] with "
-        "Z = Q~ + A~^T [[E(Pbar + Pu), -E(Pu)], [-E(Pu), E(Pu)]] A~ (largest relative error of this identity "
-        f"on the instances: {max(identity_errors):.1e}). The difference depends on (F, K, L), so the solution of "
-        "(3.70) does not minimise (3.65): the theorem holds for (B.4) and fails for (3.65), which Step 5 of "
+        "(3.70) is the stationarity condition of the quadratic (B.4)/(B.5), which B.2 presents as "
+        "(3.65) with "
+        "(3.68)-(3.69) rewritten. Expanding both: (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22) "
+        "Xbar_i] with "
+        "Z = Q~ + A~^T [[E(Pbar + Pu), -E(Pu)], [-E(Pu), E(Pu)]] A~ (largest relative error of "
+        "this identity "
+        f"on the instances: {max(identity_errors):.1e}). The difference depends on (F, K, L), so "
+        "the solution of "
+        "(3.70) does not minimise (3.65): the theorem holds for (B.4) and fails for (3.65), which "
+        "Step 5 of "
         "Alg. 3.3 and (3.72) use."),
         "corrected": _tally(outcomes, (
-            "For PSD Xbar_k, Xu_k, E(Pbar_{k+1}), E(Pu_{k+1}), the solutions of (3.70) are the minimisers of "
-            "(B.4) over (F_k, K_k, L_k). Proof: the quadratic part of (B.4) is sum_i tr[E(Pu)(K C + F - B L) Xu "
-            "(.)^T + E(Pu) K C Xbar C^T K^T + E(Pbar) B L Xu L^T B^T + L^T R L Xu + mu E(Pu) K J J^T K^T] >= 0, "
+            "For PSD Xbar_k, Xu_k, E(Pbar_{k+1}), E(Pu_{k+1}), the solutions of (3.70) are the "
+            "minimisers of "
+            "(B.4) over (F_k, K_k, L_k). Proof: the quadratic part of (B.4) is sum_i tr[E(Pu)(K C "
+            "+ F - B L) Xu "
+            "(.)^T + E(Pu) K C Xbar C^T K^T + E(Pbar) B L Xu L^T B^T + L^T R L Xu + mu E(Pu) K J "
+            "J^T K^T] >= 0, "
             "so (B.4) is convex, and its gradient is twice the residual of (3.70) (B.5)."),
             "(B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T dropped")}
 
@@ -447,7 +507,8 @@ def _record_3_32(outcomes, identity_errors):
 # ------------------------------------------------------------------ Thm. 3.33
 
 def check_3_33(rng):
-    """Alg. 3.3 from random gains, with the Step 5 safeguard and with the literal Step 5 (safeguard=False):
+    """Alg. 3.3 from random gains, with the Step 5 safeguard and with the literal Step 5
+    (safeguard=False):
     whether Jbar_0 increases (beyond 1e-8 relative) anywhere, and the largest relative increase.
     """
     sys = draw_system(rng, max_states=2, max_modes=2)
@@ -458,8 +519,10 @@ def check_3_33(rng):
     out = []
     for safeguard in (True, False):
         try:
-            run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0,
-                                                         init=np.random.default_rng(seed), max_iter=300,
+            run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0,
+                                                         cov0=cov0, mu0=mu0,
+                                                         init=np.random.default_rng(seed),
+                                                         max_iter=300,
                                                          safeguard=safeguard, warn=False)
         except (ValueError, np.linalg.LinAlgError):        # the iterates blew up (literal Step 5)
             out.append(np.inf)
@@ -474,24 +537,36 @@ def _record_3_33(rises):
     rises = np.asarray(rises)
     guarded, literal = rises[:, 0] > 1e-8, rises[:, 1] > 1e-8
     return {"diagnosis": (
-        "B.3 shows that the (B.4) functional at step k does not increase when (3.70) replaces the step-k "
-        "gains, with Xbar_k, Xu_k fixed. But Step 5 and the theorem use (3.65), which differs from (B.4) "
-        "(Thm. 3.32), and Jbar_0 depends on the step-k gains through (3.68)-(3.69), which are not the adjoint "
-        "of (3.66)-(3.67): a decrease at step k need not carry to Jbar_0. On random instances Jbar_0 rises "
-        f"in {int(guarded.sum())} of {len(rises)} runs with the project's Step 5 safeguard (largest relative "
-        f"rise {rises[guarded, 0].max() if guarded.any() else 0.0:.1e}) and in {int(literal.sum())} with the "
-        f"literal Step 5 ({int(np.isinf(rises[:, 1]).sum())} of these diverging until the moments lose symmetry). The "
+        "B.3 shows that the (B.4) functional at step k does not increase when (3.70) replaces the "
+        "step-k "
+        "gains, with Xbar_k, Xu_k fixed. But Step 5 and the theorem use (3.65), which differs from "
+        "(B.4) "
+        "(Thm. 3.32), and Jbar_0 depends on the step-k gains through (3.68)-(3.69), which are not "
+        "the adjoint "
+        "of (3.66)-(3.67): a decrease at step k need not carry to Jbar_0. On random instances "
+        "Jbar_0 rises "
+        f"in {int(guarded.sum())} of {len(rises)} runs with the project's Step 5 safeguard "
+        "(largest relative "
+        f"rise {rises[guarded, 0].max() if guarded.any() else 0.0:.1e}) and in "
+        f"{int(literal.sum())} with the "
+        f"literal Step 5 ({int(np.isinf(rises[:, 1]).sum())} of these diverging until the moments "
+        "lose symmetry). The "
         "convergence of the gains has no argument in B.3: a monotone, bounded cost "
         "sequence converges, its arguments need not."),
         "no_correction": (
-            "Tried: (i) the literal Step 5 (compare with the previous iteration's Jbar_k): more increases; "
-            "(ii) the project's safeguard (compare the new and old step-k gains at the same Xbar_k, Xu_k, "
-            "P_{k+1}): fewer, not none; (iii) a sweep-level test on Jbar_0 itself would make the costs "
-            "monotone by construction, which is no theorem about Alg. 3.3, and still says nothing about the "
+            "Tried: (i) the literal Step 5 (compare with the previous iteration's Jbar_k): more "
+            "increases; "
+            "(ii) the project's safeguard (compare the new and old step-k gains at the same "
+            "Xbar_k, Xu_k, "
+            "P_{k+1}): fewer, not none; (iii) a sweep-level test on Jbar_0 itself would make the "
+            "costs "
+            "monotone by construction, which is no theorem about Alg. 3.3, and still says nothing "
+            "about the "
             "gains. A monotone scheme with a proof minimises the exact cost instead "
             "(asoc.mjls.exact_finite_horizon_dynamic_output_feedback, a descent method)."),
         "increases": {"with_safeguard": int(guarded.sum()), "literal_step_5": int(literal.sum()),
-                      "literal_step_5_diverged": int(np.isinf(rises[:, 1]).sum()), "instances": len(rises)}}
+                      "literal_step_5_diverged": int(np.isinf(rises[:, 1]).sum()),
+                      "instances": len(rises)}}
 
 
 # ------------------------------------------------------------------ tally and the records
@@ -510,7 +585,8 @@ def _tally(outcomes, statement, mutant, why_not=""):
     record = {"description": mutant, **_counts([m for _, m in outcomes if m is not None])}
     if why_not:
         record["why_not"] = why_not
-    return {"statement": statement, "holds": holds, "fails": len(corrected) - holds, "instances": len(corrected),
+    return {"statement": statement, "holds": holds, "fails": len(corrected) - holds,
+            "instances": len(corrected),
             "mutant": record}
 
 
@@ -544,14 +620,16 @@ def correction_records(seed_sequence, n_instances=200, mutant_instances=100, pro
     (0, 4)
     """
     if not isinstance(seed_sequence, np.random.SeedSequence):
-        raise TypeError(f"seed_sequence: expected a numpy.random.SeedSequence, found {type(seed_sequence).__name__}")
+        raise TypeError("seed_sequence: expected a numpy.random.SeedSequence, found "
+                        f"{type(seed_sequence).__name__}")
     for value, name in ((n_instances, "n_instances"), (mutant_instances, "mutant_instances")):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise ValueError(f"{name}: expected a positive integer, found {value!r}")
     children = dict(zip(STATEMENT_IDS, seed_sequence.spawn(len(STATEMENT_IDS))))
     count = lambda key: min(n_instances, EXPENSIVE.get(key, n_instances))
     records = {}
-    bar = progress_bar(total=len(STATEMENT_IDS), enabled=progress, desc="corrections", unit="statement")
+    bar = progress_bar(total=len(STATEMENT_IDS), enabled=progress, desc="corrections",
+                       unit="statement")
     pairs, full = _run(check_kernels, children["2_6_3_kernels"], count("2_6_3_kernels"),
                        mutant_instances)
     records["2_6_3_kernels"] = _record_kernels(pairs, [r[2] for r in full if r[2] is not None])
@@ -559,7 +637,8 @@ def correction_records(seed_sequence, n_instances=200, mutant_instances=100, pro
     pairs, full = _run(check_3_19, children["3_19"], count("3_19"), mutant_instances)
     records["3_19"] = _record_3_19(pairs, [r[2] for r in full if r[2] is not None])
     bar.update()
-    pairs, full = _run(lambda r: check_3_26(r, with_sign=True), children["3_26"], count("3_26"), mutant_instances)
+    pairs, full = _run(lambda r: check_3_26(r, with_sign=True), children["3_26"], count("3_26"),
+                       mutant_instances)
     records["3_26"] = _record_3_26(pairs, [r[2] for r in full[:mutant_instances]])
     bar.update()
     pairs, _ = _run(check_3_27, children["3_27"], count("3_27"), mutant_instances)

@@ -52,9 +52,11 @@ def _congruence(A, X):
 
 
 def prop_3_26_example():
-    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0, A = 0, C = H = 1).
+    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0, A = 0, C = H =
+    1).
 
-    The augmented loop A~ = [[0, 0], [1, 0]] is nilpotent, so X~ = A~ X~ A~^T + diag(1, 0) is reached
+    The augmented loop A~ = [[0, 0], [1, 0]] is nilpotent, so X~ = A~ X~ A~^T + diag(1, 0) is
+    reached
     exactly after two steps. Returns the stationary X~, the printed bound and the corrected bound
     (factor 2), each minus X~, with the determinant of the 2 x 2 gap (a PSD 2 x 2 matrix has
     non-negative determinant and diagonal).
@@ -70,7 +72,8 @@ def prop_3_26_example():
     At = [[Fraction(0), Fraction(0)], [Fraction(1), Fraction(0)]]
     noise = [[Fraction(1), Fraction(0)], [Fraction(0), Fraction(0)]]
     X = [[Fraction(0)] * 2 for _ in range(2)]
-    for _ in range(3):                                                # a fixed point after two steps
+    # a fixed point after two steps
+    for _ in range(3):
         X = _add(_congruence(At, X), noise)
     assert X == _add(_congruence(At, X), noise)
     (x1, x12), (_, x2) = X
@@ -111,14 +114,17 @@ def thm_3_31_example(gain=Fraction(-1, 4)):
     Punder = l * r * l + (b * l) ** 2 * Pbar_next + (f - b * l) ** 2 * Punder_next       # (3.69)
     xbar0, xunder0 = Fraction(1), Fraction(0)                         # E{(x_0 - x^_0)^2}, x^_0^2
     bound = Pbar * (xbar0 + xunder0) + Punder * xbar0                 # (3.65), no noise: omega = 0
-    P0 = _add(Qt, _mul(_mul(_transpose(At), Q_final), At))            # P~_0 = Q~_0 + A~^T P~_1 A~ (3.64)
-    costate_gap = -Punder - P0[0][1]                                  # off-diagonal of (B.2)'s bound - P~_0
+    # P~_0 = Q~_0 + A~^T P~_1 A~ (3.64)
+    P0 = _add(Qt, _mul(_mul(_transpose(At), Q_final), At))
+    # off-diagonal of (B.2)'s bound - P~_0
+    costate_gap = -Punder - P0[0][1]
     return {"exact": exact, "bound": bound, "gain": l, "costate_gap_offdiagonal": costate_gap}
 
 
 # ------------------------------------------------------------------ Thm. 3.19: a period-2 cycle
 
-THM_3_19_SYSTEM = dict(          # one mode, nx = 2: instance 79 of the study, rounded to one decimal
+# one mode, nx = 2: instance 79 of the study, rounded to one decimal
+THM_3_19_SYSTEM = dict(
     A=[[1.3, 0.3], [-0.5, -0.4]], B=[[0.2], [1.1]], C=[[0.0, 1.9]], H=[[-0.1, -0.3], [0.1, 0.0]],
     Q=[[2.8, -1.2], [-1.2, 1.9]], R=[[1.4]])
 
@@ -130,7 +136,9 @@ def _alg_3_1_one_mode(A, B, C, H, Q, R, start, iterations=400):
     gains = []
     for _ in range(iterations):
         lhs = np.kron(C @ X @ C.T, R + B.T @ P @ B)
-        L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F")).reshape(B.shape[1], C.shape[0], order="F")
+        L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F")).reshape(B.shape[1],
+                                                                                    C.shape[0],
+                                                                                    order="F")
         Acl = A + B @ L @ C
         X, P = Acl @ X @ Acl.T + H @ H.T, Acl.T @ P @ Acl + Q + C.T @ L.T @ R @ L @ C
         gains.append(L)
@@ -154,7 +162,9 @@ def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
     cycles = []
     for start in starts:
         gains = _alg_3_1_one_mode(**s, start=start)[:, 0, 0]
-        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9) and not np.isclose(gains[-1], gains[-2], rtol=1e-3))
+        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9) and not np.isclose(gains[-1],
+                                                                                       gains[-2],
+                                                                                       rtol=1e-3))
         cycles.append({"start": start, "gains": sorted([float(gains[-1]), float(gains[-2])]),
                        "rho": sorted([rho(gains[-1]), rho(gains[-2])]), "period_2": period_2})
     candidates = np.linspace(-5.0, 5.0, grid)
@@ -212,7 +222,8 @@ def kernel_example(length_scale=0.03):
     (-0.272, True)
     """
     means = [0.0, 1.0, 2.0]
-    usual = np.array([[gp.hellinger_gaussian([a], [[1.0]], [b], [[1.0]]) for b in means] for a in means])
+    usual = np.array([[gp.hellinger_gaussian([a], [[1.0]], [b],
+                                             [[1.0]]) for b in means] for a in means])
     lowest = lambda D: float(np.linalg.eigvalsh(gp.squared_exponential(D, length_scale))[0])
     return {"printed": lowest(usual ** 4), "usual": lowest(usual), "length_scale": length_scale}
 

@@ -25,11 +25,13 @@ __all__ = ["BATCH", "MUTANT_SUFFIX", "instance_seed", "statement", "run_instance
 
 
 BATCH = 25                                 # instances per task: amortises the executor's overhead
-MUTANT_SUFFIX = ":mutant"                  # a mutant's instances draw from the seeds of key + suffix
+# a mutant's instances draw from the seeds of key + suffix
+MUTANT_SUFFIX = ":mutant"
 
 
 def instance_seed(key: str, seed: int, index: int) -> np.random.SeedSequence:
-    """The seed of instance ``index``: child ``index`` of ``SeedSequence((seed, crc32(key))).spawn(n)``.
+    """The seed of instance ``index``: child ``index`` of
+    ``SeedSequence((seed, crc32(key))).spawn(n)``.
 
     Examples
     --------
@@ -47,16 +49,19 @@ def statement(key: str):
     for st in STATEMENTS:
         if st.key == key:
             return st
-    raise ValueError(f"key: expected one of the statement keys ({STATEMENTS[0].key}, ...), found {key!r}")
+    raise ValueError(f"key: expected one of the statement keys ({STATEMENTS[0].key}, ...), found "
+                     f"{key!r}")
 
 
 def run_instance(key: str, seed: int, index: int, mutant: bool = False):
-    """One instance of one statement (or of its mutant, drawn from the seeds of ``key + ":mutant"``):
+    """One instance of one statement (or of its mutant, drawn from the seeds of
+    ``key + ":mutant"``):
     the Outcome, or ("error", message) when the check raised.
 
     Examples
     --------
-    >>> run_instance("statement_3_30", 2017, 0).verdict, run_instance("statement_3_30", 2017, 0, mutant=True).verdict
+    >>> run_instance("statement_3_30", 2017, 0).verdict, run_instance("statement_3_30", 2017, 0,
+    ...     mutant=True).verdict
     ('holds', 'fails')
     """
     seed_key = key + MUTANT_SUFFIX if mutant else key
@@ -66,7 +71,8 @@ def run_instance(key: str, seed: int, index: int, mutant: bool = False):
         warnings.simplefilter("ignore")
         try:
             return check(rng, mutant=True) if mutant else check(rng)
-        except Exception as err:                                      # a checker bug: reported, not hidden
+        # a checker bug: reported, not hidden
+        except Exception as err:
             return ("error", f"{type(err).__name__}: {err}")
 
 
@@ -94,11 +100,15 @@ class StatementResult:
     diagnosis: str | None = None
 
     def recorded_value(self) -> dict:
-        """The recorded value: counts, failing indices, the statement's summary, its mutant and timing."""
-        counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable, "errors": self.errors}
+        """The recorded value: counts, failing indices, the statement's summary, its mutant and
+        timing.
+        """
+        counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable,
+                  "errors": self.errors}
         record = {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds,
                   "fails": self.fails, "not_applicable": self.not_applicable, "errors": self.errors,
-                  "failing": self.failing, "errored": sorted(self.error_messages), "summary": self.summary,
+                  "failing": self.failing, "errored": sorted(self.error_messages),
+                  "summary": self.summary,
                   "seconds": round(self.seconds, 2)}
         if self.mutant is not None:
             record["mutant"] = self.mutant
@@ -125,18 +135,21 @@ def _tally(key, n, results, seconds):
     summarise = statement(key).summarise
     if summarise is not None:
         res.summary = summarise(outcomes)
-        res.corrected = res.summary.pop("corrected", None)        # a corrected reading checked beside the claim
+        # a corrected reading checked beside the claim
+        res.corrected = res.summary.pop("corrected", None)
         res.diagnosis = res.summary.pop("diagnosis", None)        # why a failing claim fails
     return res
 
 
 def _mutant_record(key, results):
-    """What the mutant's instances gave: ``{"description", "fails", "instances"}`` (+ premise-false and
+    """What the mutant's instances gave: ``{"description", "fails", "instances"}`` (+ premise-false
+    and
     errors when there were any, and the statement's ``why_not``). The mutant is caught when ``fails
     > 0``; it has power when it is caught in at least half of its draws.
     """
     verdicts = [out if isinstance(out, tuple) else out.verdict for _, out in results]
-    record = {"description": statement(key).mutant, "fails": verdicts.count("fails"), "instances": len(verdicts)}
+    record = {"description": statement(key).mutant, "fails": verdicts.count("fails"),
+              "instances": len(verdicts)}
     if statement(key).why_not:
         record["why_not"] = statement(key).why_not
     for name, count in (("not_applicable", verdicts.count("not_applicable")),
@@ -146,8 +159,10 @@ def _mutant_record(key, results):
     return record
 
 
-def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progress=True, mutants=None):
-    """Check every statement (or those in ``only``) on its instances; returns {key: StatementResult}.
+def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progress=True,
+              mutants=None):
+    """Check every statement (or those in ``only``) on its instances; returns {key:
+    StatementResult}.
 
     Parameters
     ----------
@@ -171,15 +186,19 @@ def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progre
     if only is not None:
         unknown = set(only) - {st.key for st in STATEMENTS}
         if unknown:
-            raise ValueError(f"only: expected statement keys such as 'statement_3_19', found {sorted(unknown)}")
+            raise ValueError("only: expected statement keys such as 'statement_3_19', found "
+                             f"{sorted(unknown)}")
     count = lambda n, st: 0 if n is None else int(n(st) if callable(n) else n)
-    counts = {(st.key, mutant): count(n, st) for st in chosen for mutant, n in ((False, instances), (True, mutants))}
+    counts = {(st.key, mutant): count(n, st) for st in chosen for mutant, n in ((False, instances),
+                                                                                (True, mutants))}
     tasks = [(key, mutant, list(range(start, min(start + BATCH, n))))
              for (key, mutant), n in counts.items() for start in range(0, n, BATCH)]
-    jobs = (joblib.delayed(_run_batch)(key, seed, indices, mutant) for key, mutant, indices in tasks)
+    jobs = (joblib.delayed(_run_batch)(key, seed, indices, mutant) for key, mutant,
+            indices in tasks)
     collected = {task: [] for task in counts}
     elapsed = {st.key: 0.0 for st in chosen}
-    bar = progress_bar(total=sum(counts.values()), enabled=progress, desc="theorems", unit="instance")
+    bar = progress_bar(total=sum(counts.values()), enabled=progress, desc="theorems",
+                       unit="instance")
     with _backend(scheduler, n_jobs) as parallel:
         last = time.perf_counter()
         for (key, mutant, _), batch in zip(tasks, parallel(jobs)):
@@ -189,12 +208,14 @@ def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progre
             collected[key, mutant].extend(batch)
             bar.update(len(batch))
     bar.close()
-    results = {st.key: _tally(st.key, counts[st.key, False], collected[st.key, False], elapsed[st.key])
+    results = {st.key: _tally(st.key, counts[st.key, False], collected[st.key, False],
+                              elapsed[st.key])
                for st in chosen}
     if mutants is not None:
         for key, res in results.items():
             res.mutant = _mutant_record(key, collected[key, True])
-            if res.corrected is not None:                      # the check's mutant is the corrected reading's
+            # the check's mutant is the corrected reading's
+            if res.corrected is not None:
                 res.corrected["mutant"] = res.mutant
     return results
 
@@ -211,7 +232,8 @@ class _backend:
             return joblib.Parallel(n_jobs=self.n_jobs, return_as="generator")
         from distributed import Client
 
-        self.client = self.scheduler if isinstance(self.scheduler, Client) else Client(self.scheduler)
+        self.client = self.scheduler if isinstance(self.scheduler,
+                                                   Client) else Client(self.scheduler)
         self.config = joblib.parallel_config(backend="dask")
         self.config.__enter__()
         return joblib.Parallel(return_as="generator")

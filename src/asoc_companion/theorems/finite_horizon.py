@@ -32,7 +32,9 @@ __all__ = ["check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31",
 
 
 def _finite_instance(rng, max_states=3, max_modes=3):
-    """A random system, horizon 2-8, random time-variant gains (F_k, K_k, L_k) and a Gaussian-mixture x_0."""
+    """A random system, horizon 2-8, random time-variant gains (F_k, K_k, L_k) and a
+    Gaussian-mixture x_0.
+    """
     sys = draw_system(rng, max_states=max_states, max_modes=max_modes)
     horizon = int(rng.integers(2, 9))
     F = 0.5 * rng.standard_normal((horizon, sys.nx, sys.nx))
@@ -43,7 +45,8 @@ def _finite_instance(rng, max_states=3, max_modes=3):
 
 
 def check_3_28(rng, mutant=False):
-    """Prop. 3.28: the expected cost (3.56) by the moment recursion (3.57)-(3.58) against Monte Carlo.
+    """Prop. 3.28: the expected cost (3.56) by the moment recursion (3.57)-(3.58) against Monte
+    Carlo.
     Mutant: the moment form evaluated with the gains in reverse time order.
     """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
@@ -55,12 +58,15 @@ def check_3_28(rng, mutant=False):
     state, total = (x, np.broadcast_to(xhat0, x.shape).copy()), np.zeros(n_runs)
     step, chain = loop_step(sys), ModeChain(sys.T)
     for k in range(horizon):
-        total += quadratic_form(sys.Q, theta, state[0]) + quadratic_form(sys.R, theta, state[1] @ L[k].T)
-        state, theta = step(state, RunModes(theta, sys.M), rng, F[k], K[k], L[k]), chain.next(rng, theta)
+        total += quadratic_form(sys.Q, theta, state[0]) + quadratic_form(sys.R, theta,
+                                                                         state[1] @ L[k].T)
+        state, theta = step(state, RunModes(theta, sys.M), rng, F[k], K[k],
+                            L[k]), chain.next(rng, theta)
     total += quadratic_form(sys.Q, theta, state[0])
     mc, se = moment_estimate(total)
     z = abs(mc - exact) / max(se, 1e-12 * exact)
-    return outcome(verdict(z < Z_SCORE), sys, cost_3_57=exact, monte_carlo=float(mc), standard_error=float(se),
+    return outcome(verdict(z < Z_SCORE), sys, cost_3_57=exact, monte_carlo=float(mc),
+                   standard_error=float(se),
                    z=z, horizon=horizon)
 
 
@@ -78,11 +84,14 @@ def check_3_29(rng, mutant=False):
     for k in range(horizon - 1, -1, -1):
         At, HHt_cl, Qt = augmented_closed_loop(sys, F[k], K[k], L[k])
         EP = successor_average(sys.T, P)
-        omega = np.einsum("iab,iba->i", EP, HHt_cl) + sys.T @ omega     # tr[H~^T E(P) H~] + E_i(omega)
+        # tr[H~^T E(P) H~] + E_i(omega)
+        omega = np.einsum("iab,iba->i", EP, HHt_cl) + sys.T @ omega
         P = Qt + transpose(At) @ EP @ At
-    backward = trace_sum(P, augmented_initial_moment(mean0, cov0, mu0, xhat0)) + (0.0 if mutant else float(mu0 @ omega))
+    backward = trace_sum(P, augmented_initial_moment(mean0, cov0, mu0,
+                                                     xhat0)) + (0.0 if mutant else float(mu0 @ omega))
     rel = abs(backward - forward) / forward
-    return outcome(verdict(rel < 1e-10), sys, backward=backward, forward=forward, relative_difference=rel)
+    return outcome(verdict(rel < 1e-10), sys, backward=backward, forward=forward,
+                   relative_difference=rel)
 
 
 def check_3_30(rng, mutant=False):
@@ -100,7 +109,8 @@ def check_3_30(rng, mutant=False):
     scale = np.exp(rng.uniform(np.log(0.01), 0.0))
     X, Y = A + scale * psd(), B + scale * psd()
     small, large = np.trace(A @ B), np.trace(X @ Y)
-    return outcome(verdict(small <= large * (1 + 1e-12) + 1e-12), None, tr_AB=small, tr_XY=large, n_states=n,
+    return outcome(verdict(small <= large * (1 + 1e-12) + 1e-12), None, tr_AB=small, tr_XY=large,
+                   n_states=n,
                    n_modes=1)
 
 
@@ -118,11 +128,13 @@ def bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=True):
     Pbar, Punder, omega = sys.Q.copy(), np.zeros_like(sys.Q), np.zeros(sys.M)
     for k in range(horizon - 1, -1, -1):
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
-        omega = (np.einsum("iab,iba->i", EPbar + EPunder, HHt) + np.einsum("iab,iba->i", EPunder, K[k] @ JJt @ K[k].T)
+        omega = (np.einsum("iab,iba->i", EPbar + EPunder, HHt) + np.einsum("iab,iba->i", EPunder,
+                                                                           K[k] @ JJt @ K[k].T)
                  + sys.T @ omega)
         Pbar, Punder = bound_costate_step(sys, F[k], K[k], L[k], EPbar, EPunder)
     Xbar, Xunder = X_seq[0]
-    return trace_sum(Pbar, Xbar + Xunder) + trace_sum(Punder, Xbar) + (float(mu0 @ omega) if noise else 0.0)
+    return trace_sum(Pbar, Xbar + Xunder) + trace_sum(Punder,
+                                                      Xbar) + (float(mu0 @ omega) if noise else 0.0)
 
 
 def check_3_31(rng, mutant=False):
@@ -132,13 +144,15 @@ def check_3_31(rng, mutant=False):
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     optimised = bool(rng.random() < 0.5)
     if optimised:                                                     # the gains Alg. 3.3 returns
-        run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0,
+        run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0,
+                                                     mu0=mu0,
                                                      init=(F, K, L), max_iter=100, warn=False)
         F, K, L = run.F, run.K, run.L
     exact = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0)
     bound = bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=not mutant)
     return outcome(verdict(exact <= bound * (1 + 1e-9)), sys, exact_cost=exact, bound=bound,
-                   relative_excess=(exact - bound) / bound, horizon=horizon, gains_from_alg_3_3=optimised)
+                   relative_excess=(exact - bound) / bound, horizon=horizon,
+                   gains_from_alg_3_3=optimised)
 
 
 def summarise_3_31(outcomes):
@@ -159,8 +173,10 @@ def check_3_32(rng, mutant=False):
     """
     sys = draw_system(rng)
     M, n = sys.M, sys.nx
-    Xbar, Xunder = random_spd_stack(rng, M, n), random_spd_stack(rng, M, n)         # X_0 of a horizon >= 2
-    EPbar = successor_average(sys.T, random_spd_stack(rng, M, n))                   # E_i(P_1), P_1 > 0
+    # X_0 of a horizon >= 2
+    Xbar, Xunder = random_spd_stack(rng, M, n), random_spd_stack(rng, M, n)
+    # E_i(P_1), P_1 > 0
+    EPbar = successor_average(sys.T, random_spd_stack(rng, M, n))
     EPunder = successor_average(sys.T, random_spd_stack(rng, M, n))
     Eomega, mu = sys.T @ rng.random(M), rng.dirichlet(np.ones(M))
     HHt, JJt = noise_covariances(sys)
@@ -173,7 +189,8 @@ def check_3_32(rng, mutant=False):
     def bound(z):
         F, K, L = unpack(z)
         Pbar, Punder = bound_costate_step(sys, F, K, L, EPbar, EPunder)
-        omega = np.einsum("iab,iba->i", EPbar + EPunder, HHt) + np.einsum("iab,iba->i", EPunder, K @ JJt @ K.T) + Eomega
+        omega = np.einsum("iab,iba->i", EPbar + EPunder, HHt) + np.einsum("iab,iba->i", EPunder,
+                                                                          K @ JJt @ K.T) + Eomega
         return trace_sum(Pbar, Xbar + Xunder) + trace_sum(Punder, Xbar) + float(mu @ omega)
 
     H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
@@ -182,7 +199,8 @@ def check_3_32(rng, mutant=False):
         step = rng.standard_normal(z.size)
         z = z + 0.1 * max(np.linalg.norm(z), 1.0) * step / np.linalg.norm(step)
     best = bound(z)
-    drops = [best - bound(z + scale * rng.standard_normal(z.size)) for scale in (1e-3, 1e-1, 1.0) for _ in range(5)]
+    drops = [best - bound(z + scale * rng.standard_normal(z.size)) for scale in (1e-3, 1e-1,
+                                                                                 1.0) for _ in range(5)]
     worst = max(drops) / abs(best)
     return outcome(verdict(worst <= 1e-9), sys, bound_at_solution=best, largest_relative_drop=worst)
 
@@ -195,18 +213,23 @@ def check_3_33(rng, mutant=False):
     sys, horizon, _, _, _, mu0, mean0, cov0 = _finite_instance(rng, max_states=2, max_modes=2)
     seed = int(rng.integers(2**32))
     kwargs = dict(horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0, warn=False)
-    run = finite_horizon_dynamic_output_feedback(sys, init=np.random.default_rng(seed), max_iter=2 if mutant else 300,
+    run = finite_horizon_dynamic_output_feedback(sys, init=np.random.default_rng(seed),
+                                                 max_iter=2 if mutant else 300,
                                                  **kwargs)
     bounds = run.cost_bounds
     increases = np.diff(bounds) / np.maximum(1.0, np.abs(bounds[1:]))
     largest_increase = float(increases.max()) if increases.size else 0.0
-    numbers = dict(iterations=run.iterations, converged=run.converged, largest_relative_increase=largest_increase,
+    numbers = dict(iterations=run.iterations, converged=run.converged,
+                   largest_relative_increase=largest_increase,
                    first_bound=float(bounds[0]), last_bound=float(bounds[-1]), horizon=horizon)
     if not run.converged:
         return outcome("fails", sys, **numbers)
-    more = finite_horizon_dynamic_output_feedback(sys, init=np.random.default_rng(seed), max_iter=run.iterations + 20,
+    more = finite_horizon_dynamic_output_feedback(sys, init=np.random.default_rng(seed),
+                                                  max_iter=run.iterations + 20,
                                                   tol=1e-300, **kwargs)
     theta = lambda r: np.concatenate([r.F.ravel(), r.K.ravel(), r.L.ravel()])
-    change = float(np.linalg.norm(theta(more) - theta(run)) / max(np.linalg.norm(theta(run)), 1e-12))
-    return outcome(verdict(largest_increase <= 1e-8 and change < 1e-4), sys, parameter_change_after_20=change,
+    change = float(np.linalg.norm(theta(more) - theta(run)) / max(np.linalg.norm(theta(run)),
+                                                                  1e-12))
+    return outcome(verdict(largest_increase <= 1e-8 and change < 1e-4), sys,
+                   parameter_change_after_20=change,
                    **numbers)

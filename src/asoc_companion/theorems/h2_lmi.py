@@ -66,7 +66,8 @@ def _stationary_check(rng, mode_dependent, mutant):
     mc, se, burn = stationary_average(rng, step, cost, np.zeros((n_runs, sys.nx)),
                                       initial_modes(rng, sys.mu_inf, n_runs), sys.T, target, n_runs)
     z = abs(mc - h2) / np.hypot(se, 1e-3 * h2)
-    return outcome(verdict(z < Z_SCORE), sys, h2_formula=h2, monte_carlo=mc, standard_error=se, z=z, rho=target,
+    return outcome(verdict(z < Z_SCORE), sys, h2_formula=h2, monte_carlo=mc, standard_error=se, z=z,
+                   rho=target,
                    burn_in=burn)
 
 
@@ -79,7 +80,8 @@ def check_3_10(rng, mutant=False):
 
 
 def _random_scaled_spd(rng, count, n, scale):
-    """``count`` random SPD n x n matrices scale exp(N(0, 0.15^2)) (I + u W_i), u uniform on [0, 0.5] and W_i
+    """``count`` random SPD n x n matrices scale exp(N(0, 0.15^2)) (I + u W_i), u uniform on [0,
+    0.5] and W_i
     random SPD: spread around a multiple of I, with no relation to any equation of the system.
     """
     spread = np.eye(n) + rng.uniform(0.0, 0.5) * random_spd_stack(rng, count, n)
@@ -150,8 +152,10 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     inner = Acl @ P @ transpose(Acl) + mu[:, None, None] * HHt
     constraint_margin = min_eig(P - np.einsum("ij,iab->jab", sys.T, inner))   # (3.14) with P = D(Y)
     rho = moment_map_radius(Acl, sys.T)
-    h2 = (trace_sum(DE @ steady_state_second_moment(Acl, HHt, sys.T, mu), transpose(DE)) if rho < 1 else np.inf)
-    numbers = dict(bmi_margin=bmi_margin, constraint_3_14_margin=constraint_margin, rho=rho, objective=objective,
+    h2 = (trace_sum(DE @ steady_state_second_moment(Acl, HHt, sys.T, mu),
+                    transpose(DE)) if rho < 1 else np.inf)
+    numbers = dict(bmi_margin=bmi_margin, constraint_3_14_margin=constraint_margin, rho=rho,
+                   objective=objective,
                    h2_norm_squared=h2)
     if not bmi_margin > 0:
         return outcome("not_applicable", sys, **numbers)
@@ -171,7 +175,8 @@ def check_3_9(rng, mutant=False):
     """Thm. 3.9: LMIs feasible (verified certificate) -> L = F M^{-1} stabilises; also records SOF
     stabilisability (search). Mutant: the gain recovered with a sign error, L = -F M^{-1}.
     """
-    return decide_3_9(draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable")), mutant=mutant)
+    return decide_3_9(draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable")),
+                      mutant=mutant)
 
 
 def decide_3_9(sys, mu=None, mutant=False):
@@ -195,8 +200,10 @@ def decide_3_9(sys, mu=None, mutant=False):
 
 
 def _failure_kind(sys, lmi, gain):
-    """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the recovered gain with
-    the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not stabilise),
+    """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the
+    recovered gain with
+    the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not
+    stabilise),
     "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G).
     """
     G, Y = lmi.variables["G"], np.stack(lmi.variables["Y"])
@@ -204,22 +211,26 @@ def _failure_kind(sys, lmi, gain):
     Acl = sys.A + sys.B @ gain @ sys.C
     P = np.einsum("ji,jab->iab", sys.T, Y)
     HHt = sys.H @ transpose(sys.H)
-    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G), G + transpose(G) - P]])
+    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G),
+                                                                        G + transpose(G) - P]])
     return "counterexample" if min_eig(blocks) > 0 else "numerical failure"
 
 
 def check_3_12(rng, mutant=False):
-    """Thm. 3.12: LMIs (mode observed) feasible -> L_i = F_i M_i^{-1} stabilise the mode-observed loop.
+    """Thm. 3.12: LMIs (mode observed) feasible -> L_i = F_i M_i^{-1} stabilise the mode-observed
+    loop.
     Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}.
     """
     sys = draw_system(rng, max_states=2)
     lmi = static_output_lmi(sys, mode_observed=True)
     if not lmi.feasible:
-        return outcome("not_applicable", sys, lmi_feasible=False, lmi_status=lmi.status, lmi_margin=lmi.margin)
+        return outcome("not_applicable", sys, lmi_feasible=False, lmi_status=lmi.status,
+                       lmi_margin=lmi.margin)
     gains = -lmi.L if mutant else lmi.L
     rho = moment_map_radius(sys.A + sys.B @ gains @ sys.C, sys.T)
     kind = {} if rho < 1 else {"failure_kind": _failure_kind(sys, lmi, gains)}
-    return outcome(verdict(rho < 1), sys, lmi_feasible=True, lmi_margin=lmi.margin, rho_of_lmi_gains=rho, **kind)
+    return outcome(verdict(rho < 1), sys, lmi_feasible=True, lmi_margin=lmi.margin,
+                   rho_of_lmi_gains=rho, **kind)
 
 
 def summarise_lmi(outcomes):

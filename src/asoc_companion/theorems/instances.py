@@ -27,11 +27,15 @@ __all__ = ["FAMILIES", "Z_SCORE", "draw_system", "size", "rescaled", "BOUND_MARG
 
 
 FAMILIES = ("stable", "unstable", "sparse_T", "thesis_like")
-Z_SCORE = 6.0         # Monte Carlo tolerance in standard errors (per compared entry; false alarm ~ 2e-9)
+# Monte Carlo tolerance in standard errors (per compared entry; false alarm ~ 2e-9)
+Z_SCORE = 6.0
 
 
-def draw_system(rng, *, families=FAMILIES, max_states=3, max_modes=3, siso=False, measurement_noise=0.1):
-    """A random MJLS: family, dimensions (nx <= max_states, M <= max_modes) and matrices from ``rng``."""
+def draw_system(rng, *, families=FAMILIES, max_states=3, max_modes=3, siso=False,
+                measurement_noise=0.1):
+    """A random MJLS: family, dimensions (nx <= max_states, M <= max_modes) and matrices from
+    ``rng``.
+    """
     family = families[rng.integers(len(families))]
     if family == "thesis_like":
         nx, nu, ny = 2, 1, 1
@@ -52,7 +56,8 @@ def size(sys):
 
 def _system_data(sys):
     """The system's matrices as nested lists (a counterexample is saved as data)."""
-    data = {name: np.asarray(getattr(sys, name)).tolist() for name in ("A", "B", "C", "H", "Q", "R", "T")}
+    data = {name: np.asarray(getattr(sys, name)).tolist() for name in ("A", "B", "C", "H", "Q", "R",
+                                                                       "T")}
     data["J"] = None if sys.J is None else np.asarray(sys.J).tolist()
     return data
 
@@ -69,13 +74,17 @@ def _radius_to(sys, Acl, target):
 
 # ---------------------------------------------------------------- SOF stabilisability (premise)
 
-BOUND_MARGIN = 2.0    # grid_minimum skips a gain whose lower bound of rho exceeds this times the best rho found,
+# grid_minimum skips a gain whose lower bound of rho exceeds this times the best rho found,
+BOUND_MARGIN = 2.0
 BOUND_FLOOR = 1e-3    # with the best rho taken >= this (near rho = 0 rounding is relatively larger)
-BOUND_SEEDS = 16      # gains of smallest lower bound whose rho gives the first estimate of the minimum
+# gains of smallest lower bound whose rho gives the first estimate of the minimum
+BOUND_SEEDS = 16
 
 
 def _scalar_closed_loops(sys, gains):
-    """A_i + L B_i C_i for u = L y with scalar L (SISO), for every L in ``gains``: shape (G, M, n, n)."""
+    """A_i + L B_i C_i for u = L y with scalar L (SISO), for every L in ``gains``: shape (G, M, n,
+    n).
+    """
     bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
     return sys.A[None] + gains[:, None, None, None] * bc[None]
 
@@ -112,14 +121,19 @@ def radius_lower_bounds(sys, gains):
     """
     Acl = _scalar_closed_loops(sys, gains)
     size = sys.M * sys.nx ** 2
-    return np.max([(_power_trace(sys.T, Acl, k) / size) ** (1 / k) for k in range(1, sys.M + 1)], axis=0)
+    return np.max([(_power_trace(sys.T, Acl, k) / size) ** (1 / k) for k in range(1, sys.M + 1)],
+                  axis=0)
 
 
 def walk_lower_bounds(sys, gains):
-    """Lower bounds of :func:`scalar_gain_radii` from single closed walks of the mode chain. For a closed
-    walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ... Acl_{i_0},
-    rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive maps, the map
-    X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2. Walks of length 1
+    """Lower bounds of :func:`scalar_gain_radii` from single closed walks of the mode chain. For a
+    closed
+    walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ...
+    Acl_{i_0},
+    rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive maps, the
+    map
+    X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2. Walks of
+    length 1
     (i -> i) and 2 (i -> j -> i); exact for one mode (rho = rho(Acl)^2); the largest bound per gain.
 
     Examples
@@ -142,8 +156,10 @@ def walk_lower_bounds(sys, gains):
 
 
 def grid_minimum(sys, gains):
-    """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho computed
-    only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m >= the
+    """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho
+    computed
+    only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m
+    >= the
     minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then :func:`walk_lower_bounds`)
     exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin covers the rounding of the
     bounds and of the eigenvalues) and is skipped (a seed is not evaluated twice).
@@ -168,7 +184,8 @@ def best_scalar_gain(sys, points=2001):
     best, rho = grid_minimum(sys, np.tan(s))
     lo, hi = s[max(best - 1, 0)], s[min(best + 1, points - 1)]
     res = scipy.optimize.minimize_scalar(lambda t: scalar_gain_radii(sys, np.array([np.tan(t)]))[0],
-                                         bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
+                                         bounds=(lo, hi), method="bounded",
+                                         options={"xatol": 1e-10})
     if res.fun < rho:
         return float(np.tan(res.x)), float(res.fun)
     return float(np.tan(s[best])), float(rho)
@@ -186,7 +203,8 @@ def best_gain(sys, rng, starts=20):
     best = (np.zeros(shape), f(np.zeros(shape).ravel()))
     for k in range(starts):
         x0 = np.zeros(shape).ravel() if k == 0 else rng.standard_normal(shape).ravel()
-        res = scipy.optimize.minimize(f, x0, method="Nelder-Mead", options={"xatol": 1e-8, "fatol": 1e-10,
+        res = scipy.optimize.minimize(f, x0, method="Nelder-Mead", options={"xatol": 1e-8,
+                                                                            "fatol": 1e-10,
                                                                             "maxiter": 2000})
         if res.fun < best[1]:
             best = (res.x.reshape(shape), float(res.fun))
@@ -218,7 +236,8 @@ class ModeChain:
         T = np.asarray(T, dtype=float)
         if T.ndim != 2 or T.shape[0] != T.shape[1]:
             raise ValueError(f"T: expected a square transition matrix (M, M), found shape {T.shape}")
-        self.thresholds = np.ascontiguousarray(np.cumsum(T, axis=1)[:, :-1].T)   # row j: sum_{l <= j} p_il
+        # row j: sum_{l <= j} p_il
+        self.thresholds = np.ascontiguousarray(np.cumsum(T, axis=1)[:, :-1].T)
 
     def next(self, rng, theta):
         """theta_{k+1} for every run (one uniform draw per run, ``rng.random(len(theta))``)."""
@@ -226,7 +245,8 @@ class ModeChain:
         if len(self.thresholds) == 0:
             return np.zeros(len(theta), dtype=np.intp)
         passed = (u > self.thresholds[0].take(theta)).astype(np.intp)
-        for column in self.thresholds[1:]:    # one pass per mode: no reduction over the narrow mode axis
+        # one pass per mode: no reduction over the narrow mode axis
+        for column in self.thresholds[1:]:
             passed += u > column.take(theta)
         return passed
 
@@ -298,12 +318,15 @@ class ModeOperator:
     def __init__(self, S):
         S = np.asarray(S, dtype=float)
         if S.ndim != 3:
-            raise ValueError(f"S: expected one matrix per mode, shape (M, m, n), found shape {S.shape}")
+            raise ValueError("S: expected one matrix per mode, shape (M, m, n), found shape "
+                             f"{S.shape}")
         n_modes, self.m, n = S.shape
         self.stacked = np.ascontiguousarray(S.transpose(2, 0, 1).reshape(n, n_modes * self.m))
 
     def __call__(self, x, modes):
-        """S_{theta_r} x_r for every row of ``x`` (runs, n); ``modes``: the runs' :class:`RunModes`."""
+        """S_{theta_r} x_r for every row of ``x`` (runs, n); ``modes``: the runs'
+        :class:`RunModes`.
+        """
         return (x @ self.stacked).reshape(-1, self.m).take(modes.run_major, axis=0)
 
 
@@ -313,7 +336,8 @@ def moment_estimate(samples):
 
 
 def indicator_moment_estimate(x, theta, n_modes):
-    """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n, n).
+    """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n,
+    n).
 
     Examples
     --------
@@ -397,7 +421,9 @@ def outcome(verdict, sys=None, **numbers):
 
 
 def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
-    """Rescale A_i, B_i so that the closed loop of ``gain_fn(sys)`` has rho uniform in [low, high]."""
+    """Rescale A_i, B_i so that the closed loop of ``gain_fn(sys)`` has rho uniform in [low,
+    high].
+    """
     target = rng.uniform(low, high)
     factor = _radius_to(sys, gain_fn(sys), target)
     return rescaled(sys, factor), target
@@ -406,7 +432,9 @@ def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
 # ---------------------------------------------------------------- Gaussian-mixture initial states
 
 def gaussian_mixture(rng, sys):
-    """A random Gaussian mixture of x_0 over the modes: weights mu_0, means (M, n), covariances (M, n, n)."""
+    """A random Gaussian mixture of x_0 over the modes: weights mu_0, means (M, n), covariances (M,
+    n, n).
+    """
     mu0 = rng.dirichlet(np.ones(sys.M))
     mean0 = rng.standard_normal((sys.M, sys.nx))
     cov0 = random_spd_stack(rng, sys.M, sys.nx, 0.2)
@@ -417,12 +445,14 @@ def sample_mixture(rng, mu0, mean0, cov0, n_runs):
     """``n_runs`` draws (x_0, theta_0) of the mixture."""
     theta = initial_modes(rng, mu0, n_runs)
     chol = ModeOperator(np.linalg.cholesky(cov0))
-    x = mean0[theta] + chol(rng.standard_normal((n_runs, mean0.shape[1])), RunModes(theta, len(mu0)))
+    x = mean0[theta] + chol(rng.standard_normal((n_runs, mean0.shape[1])), RunModes(theta,
+                                                                                    len(mu0)))
     return x, theta
 
 
 def z_scores(x, theta, exact, mu, min_hits=100):
-    """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over the
+    """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over
+    the
     runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
     modes have too few samples for a normal standard error).
     """
@@ -435,8 +465,10 @@ def z_scores(x, theta, exact, mu, min_hits=100):
 
 
 def norm_scale(rng, Acl):
-    """Factor making max_i ||Acl_i||_2 uniform on [0.5, 1.5]. A Monte Carlo estimate of a moment is only
-    trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i multiplies
+    """Factor making max_i ||Acl_i||_2 uniform on [0.5, 1.5]. A Monte Carlo estimate of a moment is
+    only
+    trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i
+    multiplies
     x x^T by 9 per step, and a few samples decide the mean (the standard error then misleads).
     """
     return float(rng.uniform(0.5, 1.5) / np.max(np.linalg.norm(Acl, ord=2, axis=(1, 2))))

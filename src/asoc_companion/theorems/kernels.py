@@ -46,14 +46,18 @@ LOG_SCALES = np.linspace(-3.0, 3.0, 61)     # length scale = exp(x) median dista
 #: quadrature distances costs N - 1 integrations of about 1-3 ms).
 MOVES = {"mcvmd": 300, "omat": 300, "ospa": 300, "wasserstein_gaussian": 300, "hellinger": 300,
          "jensen_shannon": 40, "lq": 80}
-STALL = 60                    # moves without progress before the search restarts from a new configuration
+# moves without progress before the search restarts from a new configuration
+STALL = 60
 FAMILIES = tuple(MOVES)
 COVARIANCE_NAMES = ("se", "matern", "exponential", "gamma_exponential", "rational_quadratic")
-MUTANT_COVARIANCE = "quartic_exponential"     # exp(-(d/l)^4): not positive definite even on the real line
+# exp(-(d/l)^4): not positive definite even on the real line
+MUTANT_COVARIANCE = "quartic_exponential"
 
 
 def random_covariance(rng):
-    """A covariance of Table 2.1 (name as in ``asoc.gp.COVARIANCES``) and its random shape parameter."""
+    """A covariance of Table 2.1 (name as in ``asoc.gp.COVARIANCES``) and its random shape
+    parameter.
+    """
     name = COVARIANCE_NAMES[int(rng.integers(len(COVARIANCE_NAMES)))]
     shape = {"matern": {"nu": float(rng.choice([0.5, 1.5, 2.5]))},
              "gamma_exponential": {"gamma": float(rng.uniform(0.5, 2.0))},
@@ -91,7 +95,8 @@ def _random_layout(rng, family):
 def _parameter_count(family, layout, i):
     """Unconstrained parameters of distribution ``i``."""
     return {"mcvmd": 2 * layout.get("points", 0), "omat": 2 * layout.get("points", 0),
-            "ospa": 2 * layout.get("sizes", [0] * (i + 1))[i], "wasserstein_gaussian": 5, "hellinger": 2,
+            "ospa": 2 * layout.get("sizes", [0] * (i + 1))[i], "wasserstein_gaussian": 5,
+            "hellinger": 2,
             }.get(family, layout.get("bins", 0))
 
 
@@ -107,7 +112,8 @@ def _decode(family, theta):
         t = np.tanh(theta)
         return [float(BOX * t[0]), float(np.exp(2 * t[1]))]              # mean, standard deviation
     e = np.exp(theta - theta.max())
-    return (e / e.sum()).tolist()                                        # bin probabilities on [0, 1]
+    # bin probabilities on [0, 1]
+    return (e / e.sum()).tolist()
 
 
 def _step_density(weights):
@@ -118,13 +124,15 @@ def _step_density(weights):
 
 
 def _pair_distance(family, config, a, b, interval=(0.0, 1.0)):
-    """The library's distance of Sec. 2.6.3 between two distributions of a configuration (``interval``:
+    """The library's distance of Sec. 2.6.3 between two distributions of a configuration
+    (``interval``:
     the integration limits of the quadrature distances).
 
     Examples
     --------
     >>> h = _pair_distance("hellinger", {"exponent": "usual"}, [0.0, 1.0], [1.0, 1.0])
-    >>> round(h, 4), round(_pair_distance("hellinger", {"exponent": "printed"}, [0.0, 1.0], [1.0, 1.0]), 6)
+    >>> round(h, 4), round(_pair_distance("hellinger", {"exponent": "printed"}, [0.0, 1.0], [1.0,
+    ...     1.0]), 6)
     (0.3428, 0.013807)
     """
     if family == "mcvmd":
@@ -137,7 +145,8 @@ def _pair_distance(family, config, a, b, interval=(0.0, 1.0)):
         return gp.wasserstein_gaussian(a[0], a[1], b[0], b[1])
     if family == "hellinger":
         h = gp.hellinger_gaussian([a[0]], [[a[1] ** 2]], [b[0]], [[b[1] ** 2]])
-        return h ** 4 if config["exponent"] == "printed" else h          # thesis: (1 - BC)^2 = (h^2)^2
+        # thesis: (1 - BC)^2 = (h^2)^2
+        return h ** 4 if config["exponent"] == "printed" else h
     if family == "jensen_shannon":
         return gp.jensen_shannon(_step_density(a), _step_density(b), *interval)
     return gp.lq_distance(_step_density(a), _step_density(b), config["q"], *interval)
@@ -161,7 +170,8 @@ def _objective(D, name, shape):
     """(smallest lambda_min / lambda_max over the grid of length scales, its log factor)."""
     median = _median_distance(D)
     if not median > 0:
-        return 1.0, 0.0                                     # all distributions coincide: nothing to learn
+        # all distributions coincide: nothing to learn
+        return 1.0, 0.0
     scales = median * np.exp(LOG_SCALES)
     lam = np.linalg.eigvalsh(covariance(name, shape, D[None] / scales[:, None, None], 1.0))
     ratios = lam[:, 0] / lam[:, -1]
@@ -170,7 +180,9 @@ def _objective(D, name, shape):
 
 
 def _search(rng, family, layout, config, name, shape):
-    """Adversarial search, one distribution moved at a time; returns (theta, value, log factor, moves, restarts)."""
+    """Adversarial search, one distribution moved at a time; returns (theta, value, log factor,
+    moves, restarts).
+    """
     N = layout["N"]
     start = lambda: [rng.normal(size=_parameter_count(family, layout, i)) for i in range(N)]
     theta = start()
@@ -188,7 +200,8 @@ def _search(rng, family, layout, config, name, shape):
         i = int(rng.integers(N))
         trial = theta[i] + sigma * rng.standard_normal(theta[i].shape)
         moved = _decode(family, trial)
-        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family, theta[j])) for j in range(N)]
+        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family,
+                                                                                theta[j])) for j in range(N)]
         D_trial = D.copy()
         D_trial[i, :] = D_trial[:, i] = row
         trial_value, trial_factor = _objective(D_trial, name, shape)
@@ -241,12 +254,15 @@ def gram_certificate(family, config, name, shape, l):
         delta_D += float(np.abs(D - distance_matrix(family, config, (-1.0, 2.0))).max())
     off = D[np.triu_indices(N, 1)]
     h = 1e-6
-    slope = np.abs(covariance(name, shape, off * (1 + h), l) - covariance(name, shape, off * (1 - h), l)) \
+    slope = np.abs(covariance(name, shape, off * (1 + h), l) - covariance(name, shape,
+                                                                          off * (1 - h), l)) \
         / (2 * h * np.maximum(off, 1e-300))
     slope = float(np.nanmax(np.where(off > 0, slope, 0.0))) if off.size else 0.0
     tol = N * (slope * delta_D + 16 * EPS)
-    return {"lambda_min": float(lam[0]), "lambda_min_scipy_evr": lam_scipy, "lambda_max": float(lam[-1]),
-            "rayleigh_exact": rayleigh, "tolerance": float(tol), "delta_D": delta_D, "max_kernel_slope": slope}
+    return {"lambda_min": float(lam[0]), "lambda_min_scipy_evr": lam_scipy,
+            "lambda_max": float(lam[-1]),
+            "rayleigh_exact": rayleigh, "tolerance": float(tol), "delta_D": delta_D,
+            "max_kernel_slope": slope}
 
 
 def check_kernels_sec_2_6_3(rng: np.random.Generator, mutant=False) -> Outcome:
@@ -267,7 +283,8 @@ def check_kernels_sec_2_6_3(rng: np.random.Generator, mutant=False) -> Outcome:
     return search_counterexample(rng, family, name, shape)
 
 
-def search_counterexample(rng: np.random.Generator, family: str, name: str, shape: dict, **fixed) -> Outcome:
+def search_counterexample(rng: np.random.Generator, family: str, name: str, shape: dict,
+                          **fixed) -> Outcome:
     """The adversarial search of :func:`check_kernels_sec_2_6_3` for one distance and covariance.
 
     ``family`` is one of ``FAMILIES``; ``name``/``shape`` a covariance of Table 2.1 (names as
@@ -283,15 +300,18 @@ def search_counterexample(rng: np.random.Generator, family: str, name: str, shap
     theta, value, log_factor, moves, restarts = _search(rng, family, layout, config, name, shape)
     config["items"] = [_decode(family, t) for t in theta]
     D = distance_matrix(family, config)
-    refined = minimize_scalar(lambda x: _objective_at(D, name, shape, x), bounds=(log_factor - 0.1, log_factor + 0.1),
+    refined = minimize_scalar(lambda x: _objective_at(D, name, shape, x), bounds=(log_factor - 0.1,
+                                                                                  log_factor + 0.1),
                               method="bounded")
     l = float(np.exp(refined.x if refined.fun < value else log_factor) * _median_distance(D))
     cert = gram_certificate(family, config, name, shape, l) if l > 0 else \
         {"lambda_min": 1.0, "lambda_min_scipy_evr": 1.0, "rayleigh_exact": 1.0, "tolerance": 0.0}
     negative = (cert["lambda_min"] < -cert["tolerance"] and cert["lambda_min_scipy_evr"] < -cert["tolerance"]
                 and cert["rayleigh_exact"] < -cert["tolerance"])
-    numbers = {"distance": family, "covariance": name, "shape": json.dumps(shape), "distributions": layout["N"],
-               "length_scale": l, "search_lambda_ratio": value, "moves": moves, "restarts": restarts, **cert,
+    numbers = {"distance": family, "covariance": name, "shape": json.dumps(shape),
+               "distributions": layout["N"],
+               "length_scale": l, "search_lambda_ratio": value, "moves": moves,
+               "restarts": restarts, **cert,
                "configuration": json.dumps(config)}
     for key in ("exponent", "q", "points", "bins"):
         if key in layout:
@@ -300,7 +320,8 @@ def search_counterexample(rng: np.random.Generator, family: str, name: str, shap
 
 
 def _objective_at(D, name, shape, log_factor):
-    lam = np.linalg.eigvalsh(covariance(name, shape, D, float(np.exp(log_factor) * _median_distance(D))))
+    lam = np.linalg.eigvalsh(covariance(name, shape, D,
+                                        float(np.exp(log_factor) * _median_distance(D))))
     return float(lam[0] / lam[-1])
 
 
@@ -315,7 +336,8 @@ def replay_kernel_counterexample(numbers: dict) -> dict:
     >>> round(replay_kernel_counterexample(numbers)["lambda_min"], 3)
     -0.272
     """
-    return gram_certificate(numbers["distance"], json.loads(numbers["configuration"]), numbers["covariance"],
+    return gram_certificate(numbers["distance"], json.loads(numbers["configuration"]),
+                            numbers["covariance"],
                             json.loads(numbers["shape"]), numbers["length_scale"])
 
 
@@ -329,7 +351,8 @@ def distance_label(numbers: dict) -> str:
     return label
 
 
-DISTANCE_LABELS = ("mcvmd", "omat", "ospa", "wasserstein_gaussian", "hellinger_printed", "hellinger_usual",
+DISTANCE_LABELS = ("mcvmd", "omat", "ospa", "wasserstein_gaussian", "hellinger_printed",
+                   "hellinger_usual",
                    "jensen_shannon", "lq_1", "lq_2", "lq_3")
 
 

@@ -168,19 +168,24 @@ def check_3_5(rng, mutant=False):
     W = random_spd(rng, sys.nx, 0.1)                               # covariance of w_k (3.2)
     belief = rng.dirichlet(np.ones(M))                             # p(theta_{K-1} | I_{K-1})
     x = rng.standard_normal(sys.nx) * 2
-    EQ = successor_average(T, Q)                                   # E{Q_{theta_K} | theta_{K-1} = i}
+    # E{Q_{theta_K} | theta_{K-1} = i}
+    EQ = successor_average(T, Q)
 
     def expected_cost(u):
         nxt = A @ x + B @ u
         return float(belief @ (np.einsum("a,iab,b->i", x, Q, x) + np.einsum("a,iab,b->i", u, R, u)
-                               + np.einsum("ia,iab,ib->i", nxt, EQ, nxt) + np.einsum("iab,ba->i", EQ, W)))
+                               + np.einsum("ia,iab,ib->i", nxt, EQ, nxt) + np.einsum("iab,ba->i",
+                                                                                     EQ, W)))
 
-    res = scipy.optimize.minimize(expected_cost, np.zeros(sys.nu), method="BFGS", options={"gtol": 1e-12})
+    res = scipy.optimize.minimize(expected_cost, np.zeros(sys.nu), method="BFGS",
+                                  options={"gtol": 1e-12})
     Ew = lambda S: np.einsum("i,i...->...", belief, S)
     At, Bt = transpose(A), transpose(B)
-    psi = Ew(Q + At @ EQ @ A) - Ew(At @ EQ @ B) @ np.linalg.solve(Ew(R + Bt @ EQ @ B), Ew(Bt @ EQ @ A))
+    psi = Ew(Q + At @ EQ @ A) - Ew(At @ EQ @ B) @ np.linalg.solve(Ew(R + Bt @ EQ @ B),
+                                                                  Ew(Bt @ EQ @ A))
     delta = 0.0 if mutant else float(belief @ np.einsum("iab,ba->i", EQ, W))
     closed = float(x @ psi @ x + delta)
     rel = abs(closed - res.fun) / max(abs(res.fun), 1e-12)
-    return outcome(verdict(rel < 1e-7), sys, closed_form=closed, minimised=res.fun, relative_difference=rel,
+    return outcome(verdict(rel < 1e-7), sys, closed_form=closed, minimised=res.fun,
+                   relative_difference=rel,
                    delta=delta)

@@ -17,14 +17,18 @@ __all__ = ["COUNTEREXAMPLES", "SYSTEMS_KEPT", "save_counterexamples", "load_coun
 
 
 COUNTEREXAMPLES = "theorems_counterexamples.json"
-SYSTEMS_KEPT = 20             # system matrices saved for the 20 smallest counterexamples per statement
+# system matrices saved for the 20 smallest counterexamples per statement
+SYSTEMS_KEPT = 20
 
 
 def save_counterexamples(results, seed, folder) -> Path:
-    """Every failing instance (statement, index, its deciding numbers and system) as JSON, atomically."""
+    """Every failing instance (statement, index, its deciding numbers and system) as JSON,
+    atomically.
+    """
     statements = {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
                   for key, res in results.items() if res.failures}
-    data = {"seed": int(seed), "statements": {key: _trim_systems(key, entries) for key, entries in statements.items()}}
+    data = {"seed": int(seed), "statements": {key: _trim_systems(key, entries) for key,
+                                              entries in statements.items()}}
     # shaped like a notebook's values file, which every reader of figures/values expects
     return atomic_write_json(values_folder(folder) / COUNTEREXAMPLES,
                              {"notebook": COUNTEREXAMPLES.removesuffix(".json"), "values": data})
@@ -37,7 +41,8 @@ def _trim_systems(key, entries, keep=SYSTEMS_KEPT):
     order = sorted(entries, key=lambda e: _order(key, e))
     kept = {e["index"] for e in order[:keep]}
     return [e if e["index"] in kept else {"index": e["index"],
-                                          "numbers": {k: v for k, v in e["numbers"].items() if k != "system"}}
+                                          "numbers": {k: v for k,
+                                                      v in e["numbers"].items() if k != "system"}}
             for e in entries]
 
 
@@ -53,7 +58,8 @@ def margin(key, numbers) -> float:
 
 
 def shown_counterexample(key, entries):
-    """Among the failing instances with the fewest states, then modes, the one that fails most clearly
+    """Among the failing instances with the fewest states, then modes, the one that fails most
+    clearly
     (largest margin: its verdict survives rounding and other BLAS kernels); ties by index.
     """
     if not entries:
@@ -67,7 +73,9 @@ def _order(key, entry):
 
 
 def describe(key, outcome: Outcome) -> str:
-    """One line per deciding number, rounded to what is meant (identical text under other BLAS kernels)."""
+    """One line per deciding number, rounded to what is meant (identical text under other BLAS
+    kernels).
+    """
     n = outcome.numbers
     lines = [f"{key}: {outcome.verdict}; {n.get('n_states')} states, {n.get('n_modes')} modes, "
              f"{n.get('n_inputs')} input(s), {n.get('n_outputs')} output(s)"]
@@ -139,7 +147,8 @@ def statements_markdown(statements, records, findings) -> str:
     """The theorems page's statements as MyST Markdown: one compact table (statement, verdict,
     whether the check caught its mutant, a link to the statement's section), then per statement a
     section with the claim, what one instance checks, the verdict, the mutant, and (when the record
-    has them) the diagnosis and the corrected statement with its verdict. ``records`` maps a key to its recorded value
+    has them) the diagnosis and the corrected statement with its verdict. ``records`` maps a key to
+    its recorded value
     (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of the findings page.
 
     Examples

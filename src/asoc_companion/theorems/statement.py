@@ -64,4 +64,5 @@ class Statement:
         if (self.check is None) == (not self.not_checkable):
             raise ValueError(f"{self.key}: give either a check or the reason it is not checkable")
         if (self.check is None) != (not self.mutant):
-            raise ValueError(f"{self.key}: a check needs the description of its mutant (and only a check has one)")
+            raise ValueError(f"{self.key}: a check needs the description of its mutant (and only a "
+                             "check has one)")

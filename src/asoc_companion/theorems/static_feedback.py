@@ -75,10 +75,12 @@ def check_3_14(rng, mutant=False):
 
 
 def check_3_15(rng, mutant=False):
-    """Prop. 3.15 as printed: the average cost (3.11) from a random x_0 and theta_0 ~ mu_inf (the mean stage
+    """Prop. 3.15 as printed: the average cost (3.11) from a random x_0 and theta_0 ~ mu_inf (the
+    mean stage
     cost of the moment recursion over steps h..2h-1, rho^h <= 1e-13) equals (3.30)'s objective
     sum_i tr[(Q_i + L^T R_i L) X_inf^i] (defined when n_y = n_x); the corrected reading with
-    C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected reading with
+    C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected reading
+    with
     X_inf solved without the noise term (the instance's verdict is then the corrected reading's).
     """
     sys = draw_system(rng)
@@ -89,26 +91,33 @@ def check_3_15(rng, mutant=False):
     X_inf = steady_state_second_moment(Acl, 0 * HHt if mutant else HHt, sys.T, sys.mu_inf)
     corrected = h2_cost(sys, L, X_inf)
     x0 = 3 * rng.standard_normal(sys.nx)
-    mu0 = sys.mu_inf                             # theta_0 stationary: the moments approach X_inf as rho^k
+    # theta_0 stationary: the moments approach X_inf as rho^k
+    mu0 = sys.mu_inf
     half = int(np.ceil(max(100.0, np.log(1e-13) / np.log(target))))
     X, _ = second_moments(Acl, HHt, sys.T, mu0[:, None, None] * np.outer(x0, x0), mu0, 2 * half)
     LC = L @ sys.C
-    per_step = np.einsum("iab,kiba->k", sys.Q + transpose(LC) @ sys.R @ LC, X)    # E{x^T Q x + u^T R u}, u = L C x
-    tail = per_step[half:2 * half].mean()        # the average cost (3.11), the transient below 1e-13 |x_0|^2
+    # E{x^T Q x + u^T R u}, u = L C x
+    per_step = np.einsum("iab,kiba->k", sys.Q + transpose(LC) @ sys.R @ LC, X)
+    # the average cost (3.11), the transient below 1e-13 |x_0|^2
+    tail = per_step[half:2 * half].mean()
     agrees = lambda objective: abs(tail - objective) <= 1e-8 * abs(objective)
     c_is_identity = sys.ny == sys.nx and bool(np.allclose(sys.C, np.eye(sys.nx)))
-    numbers = dict(objective_corrected=corrected, corrected_holds=agrees(corrected), average_cost=tail, rho=target,
+    numbers = dict(objective_corrected=corrected, corrected_holds=agrees(corrected),
+                   average_cost=tail, rho=target,
                    averaging_window=half, c_is_identity=c_is_identity)
     if mutant:
         return outcome(verdict(agrees(corrected)), sys, **numbers)
     if sys.ny != sys.nx:
-        return outcome("not_applicable", sys, reason="L^T R_i L is n_y x n_y, Q_i is n_x x n_x", **numbers)
+        return outcome("not_applicable", sys, reason="L^T R_i L is n_y x n_y, Q_i is n_x x n_x",
+                       **numbers)
     printed = trace_sum(sys.Q + transpose(L) @ sys.R @ L, X_inf)
     return outcome(verdict(agrees(printed)), sys, objective_printed=printed, **numbers)
 
 
 def summarise_3_15(outcomes):
-    """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i), on every instance drawn."""
+    """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i), on every instance
+    drawn.
+    """
     holds = sum(bool(o.numbers["corrected_holds"]) for o in outcomes)
     return {"diagnosis": ("A typo that starts in (3.11), not in (3.30): with u_k = L y_k = L C_i "
                           "x_k (3.7) the stage cost x_k^T Q_i x_k + u_k^T R_i u_k is x_k^T (Q_i + "
@@ -117,19 +126,24 @@ def summarise_3_15(outcomes):
                           "(3.30) copies it; the substitution of u_k holds only for C_i = I. Prop. "
                           "3.16 and Thm. 3.17 use the weight with C_i."),
             "corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
-                                       "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf R_i\\mathbf L\\mathbf "
+                                       "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf "
+                                       "R_i\\mathbf L\\mathbf "
                                        "C_i$",
-                          "holds": holds, "fails": len(outcomes) - holds, "instances": len(outcomes)}}
+                          "holds": holds, "fails": len(outcomes) - holds,
+                          "instances": len(outcomes)}}
 
 
 def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
-    """The Lagrangian of (3.30): sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + <P, map(X) + noise - X>,
-    with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per mode).
+    """The Lagrangian of (3.30): sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + <P, map(X) + noise -
+    X>,
+    with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per
+    mode).
 
     Examples
     --------
     >>> one = np.ones((1, 1, 1))
-    >>> _lagrangian_dense(0.5 * one, one, one, np.zeros((1, 1)), one, one, one, np.eye(1), np.ones(1), 2 * one, one)
+    >>> _lagrangian_dense(0.5 * one, one, one, np.zeros((1, 1)), one, one, one, np.eye(1),
+    ...     np.ones(1), 2 * one, one)
     1.5
     """
     Acl = A + B @ L @ C
@@ -141,7 +155,8 @@ def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
 
 
 def check_3_16(rng, mutant=False):
-    """Prop. 3.16: the stated Hamiltonian (with E_i(P)) against the Lagrangian of (3.30) built densely.
+    """Prop. 3.16: the stated Hamiltonian (with E_i(P)) against the Lagrangian of (3.30) built
+    densely.
     Mutant: the stated form without the noise term mu_i H_i H_i^T.
     """
     sys = draw_system(rng)
@@ -149,18 +164,22 @@ def check_3_16(rng, mutant=False):
     X, P = random_spd_stack(rng, sys.M, sys.nx), random_spd_stack(rng, sys.M, sys.nx)
     mu = sys.mu_inf
     Acl = closed_loop(sys, L)
-    inner = Acl @ X @ transpose(Acl) + (0 if mutant else mu[:, None, None] * (sys.H @ transpose(sys.H)))
+    inner = Acl @ X @ transpose(Acl) + (0 if mutant else mu[:, None,
+                                                            None] * (sys.H @ transpose(sys.H)))
     LC = L @ sys.C
     weight = sys.Q + transpose(LC) @ sys.R @ LC
     stated = trace_sum(weight, X) - trace_sum(P, X) + trace_sum(successor_average(sys.T, P), inner)
     dense = _lagrangian_dense(sys.A, sys.B, sys.C, L, sys.Q, sys.R, sys.H, sys.T, mu, X, P)
-    scale = trace_sum(weight, X) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P), inner))
+    scale = trace_sum(weight, X) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P),
+                                                                   inner))
     rel = abs(stated - dense) / scale
-    return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense, relative_difference=rel)
+    return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense,
+                   relative_difference=rel)
 
 
 def _gain_residual(sys, L, X, P, weight_R=True):
-    """(3.31): sum_i (R_i + B_i^T E_i(P) B_i) L C_i X_i C_i^T + B_i^T E_i(P) A_i X_i C_i^T, and its scale
+    """(3.31): sum_i (R_i + B_i^T E_i(P) B_i) L C_i X_i C_i^T + B_i^T E_i(P) A_i X_i C_i^T, and its
+    scale
     (``weight_R=False``: the residual without R_i, a mutant).
     """
     EP = successor_average(sys.T, P)
@@ -174,12 +193,14 @@ def _costate(sys, L):
     Acl = closed_loop(sys, L)
     LC = L @ sys.C
     rhs = (sys.Q + transpose(LC) @ sys.R @ LC).ravel()
-    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T, rhs).reshape(sys.Q.shape)
+    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T,
+                        rhs).reshape(sys.Q.shape)
     return sym(P)
 
 
 def check_3_17(rng, mutant=False):
-    """Thm. 3.17: the minimiser of the cost (found by a grid and a scalar search over L) satisfies (3.31).
+    """Thm. 3.17: the minimiser of the cost (found by a grid and a scalar search over L) satisfies
+    (3.31).
     Mutant: the residual of (3.31) without R_i.
     """
     sys = draw_system(rng, siso=True)
@@ -192,39 +213,46 @@ def check_3_17(rng, mutant=False):
 
     def cost(t):
         """The H2 cost of L = tan(t) (inf when not stabilising), on the system validated once: the
-        library's check=False paths of ms_spectral_radius with steady_state_second_moment, and of h2_cost.
+        library's check=False paths of ms_spectral_radius with steady_state_second_moment, and of
+        h2_cost.
         """
         L = np.array([[np.tan(t)]])
         _, X = radius_and_moments(closed_loop(sys, L, check=False), sys.T, noise, check=False)
         return np.inf if X is None else h2_cost(sys, L, X, check=False)
 
-    costs = np.full(len(s), np.inf)                         # cost(t) at the grid points with rho < 1, at once
+    # cost(t) at the grid points with rho < 1, at once
+    costs = np.full(len(s), np.inf)
     grid = np.flatnonzero(radii < 1)
     gains = np.tan(s[grid])
-    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C                # closed_loop of each
+    # closed_loop of each
+    loops = sys.A + (sys.B @ gains[:, None, None, None]) @ sys.C
     for index, gain, X in zip(grid, gains, radii_and_moments(loops, sys.T, noise, check=False)[1]):
         if X is not None:
             costs[index] = h2_cost(sys, np.array([[gain]]), X, check=False)
     best = int(np.argmin(costs))
-    res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)]),
+    res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1,
+                                                                                  len(s) - 1)]),
                                          method="bounded", options={"xatol": 1e-12})
     t = res.x if res.fun <= costs[best] else s[best]
     L = np.array([[np.tan(t)]])
     X = steady_state_second_moment(closed_loop(sys, L), HHt, sys.T, sys.mu_inf)
     residual, scale = _gain_residual(sys, L, X, _costate(sys, L), weight_R=not mutant)
     rel = float(np.linalg.norm(residual) / scale)
-    return outcome(verdict(rel < 1e-5), sys, optimal_L=float(L[0, 0]), cost=cost(t), relative_residual_3_31=rel)
+    return outcome(verdict(rel < 1e-5), sys, optimal_L=float(L[0, 0]), cost=cost(t),
+                   relative_residual_3_31=rel)
 
 
 def check_3_18(rng, mutant=False):
-    """Prop. 3.18: the printed vec formula (column-major vec, C X C^T (x) (R + B^T E(P) B)) solves (3.31).
+    """Prop. 3.18: the printed vec formula (column-major vec, C X C^T (x) (R + B^T E(P) B)) solves
+    (3.31).
     Mutant: the formula with 2 R_i in place of R_i (a factor changed).
     """
     sys = draw_system(rng)
     X, P = random_spd_stack(rng, sys.M, sys.nx), random_spd_stack(rng, sys.M, sys.nx)
     EP = successor_average(sys.T, P)
     R = 2 * sys.R if mutant else sys.R
-    lhs = sum(np.kron(sys.C[i] @ X[i] @ sys.C[i].T, R[i] + sys.B[i].T @ EP[i] @ sys.B[i]) for i in range(sys.M))
+    lhs = sum(np.kron(sys.C[i] @ X[i] @ sys.C[i].T,
+                      R[i] + sys.B[i].T @ EP[i] @ sys.B[i]) for i in range(sys.M))
     rhs = sum(sys.B[i].T @ EP[i] @ sys.A[i] @ X[i] @ sys.C[i].T for i in range(sys.M))
     L = -np.linalg.solve(lhs, rhs.ravel(order="F")).reshape((sys.nu, sys.ny), order="F")
     residual, scale = _gain_residual(sys, L, X, P)
@@ -232,26 +260,32 @@ def check_3_18(rng, mutant=False):
     library = gain_from_moments(sys, X, P)
     tol = 1e-13 * np.linalg.cond(lhs)
     return outcome(verdict(rel < max(tol, 1e-10)), sys, relative_residual=rel,
-                   library_difference=float(np.abs(library - L).max()), condition=float(np.linalg.cond(lhs)))
+                   library_difference=float(np.abs(library - L).max()),
+                   condition=float(np.linalg.cond(lhs)))
 
 
 def check_3_19(rng, mutant=False):
     """Thm. 3.19: SOF-stabilisable (grid over scalar L) -> Alg. 3.1 converges to a stabilising,
-    unique solution (same limit from X = P = 1e-4 I and from X = P = I), on the thesis's model (3.7),
+    unique solution (same limit from X = P = 1e-4 I and from X = P = I), on the thesis's model
+    (3.7),
     which has no measurement noise (J = None; Alg. 3.1 with J is the library's generalisation).
     Mutant: Alg. 3.1 stopped after 3 iterations.
     """
-    sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable", "sparse_T")).replace(J=None)
+    sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable",
+                                                "sparse_T")).replace(J=None)
     return decide_3_19(sys, max_iter=3 if mutant else 20000)
 
 
 def decide_3_19(sys, max_iter=20000):
-    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (two starts)."""
+    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (two
+    starts).
+    """
     L_best, rho_best = best_scalar_gain(sys)
     if not rho_best < 1:
         return outcome("not_applicable", sys, min_rho_over_L=rho_best, best_L=L_best)
     run = static_output_feedback(sys, max_iter=max_iter, warn=False, moments="step")
-    numbers = dict(min_rho_over_L=rho_best, best_L=L_best, margin=1 - rho_best, alg_L=float(run.L[0, 0]),
+    numbers = dict(min_rho_over_L=rho_best, best_L=L_best, margin=1 - rho_best,
+                   alg_L=float(run.L[0, 0]),
                    alg_rho=run.rho, alg_converged=run.converged, alg_iterations=run.iterations)
     if not (run.converged and run.stabilizing):
         return outcome("fails", sys, **numbers)
@@ -261,7 +295,8 @@ def decide_3_19(sys, max_iter=20000):
 
 
 def summarise_3_19(outcomes):
-    """Thm. 3.19: how the failures fail (no convergence; a non-stabilising limit; another limit from I),
+    """Thm. 3.19: how the failures fail (no convergence; a non-stabilising limit; another limit from
+    I),
     and how many have one mode (plain linear systems).
     """
     fails = [o.numbers for o in outcomes if o.verdict == "fails"]

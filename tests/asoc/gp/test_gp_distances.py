@@ -37,7 +37,8 @@ def test_mcvmd_symmetric_and_order_invariant(x, data):
 
 
 def mcvmd_term_magnitude(x, y, b_max=gp.cramer_von_mises.DEFAULT_B_MAX):
-    """pi^(d/2) / 8 (|D1| + 2 |D12| + |D2| + 2 c_b Dm) with absolute values inside the sums (equal weights)."""
+    """pi^(d/2) / 8 (|D1| + 2 |D12| + |D2| + 2 c_b Dm) with absolute values inside the sums (equal
+    weights)."""
     def term(a, b):                               # |a - b|^2 log |a - b|^2, with 0 log 0 = 0
         sq = np.sum((a[:, None] - b[None]) ** 2, axis=-1)
         return np.abs(xlogy(sq, sq)).mean()
@@ -55,7 +56,8 @@ def test_mcvmd_closed_form_matches_quadrature_of_definition(b_max):
                                lambda m, b: gp.lcd_dirac(y, None, m, b),
                                b_max=b_max, spread=4, points=np.r_[x, y])
     # the closed form drops O(1 / b_max^2) terms
-    assert gp.mcvmd(x, wx, y, None, b_max=b_max) == pytest.approx(quad, rel=5e-4 * (50 / b_max) ** 2)
+    assert gp.mcvmd(x, wx, y, None,
+                    b_max=b_max) == pytest.approx(quad, rel=5e-4 * (50 / b_max) ** 2)
 
 
 def test_mcvmd_matrix_matches_pairwise_calls():
@@ -67,10 +69,12 @@ def test_mcvmd_matrix_matches_pairwise_calls():
     S = gp.mcvmd_matrix(X)
     np.testing.assert_allclose(S, S.T)
     assert np.all(np.diag(S) == 0)
-    several = gp.mcvmd_matrix(X, Y, b_max=[10.0, 1000.0])     # one computation of the sums, one matrix per b_max
+    # one computation of the sums, one matrix per b_max
+    several = gp.mcvmd_matrix(X, Y, b_max=[10.0, 1000.0])
     assert several.shape == (2, 4, 5)
     for D_b, b_max in zip(several, (10.0, 1000.0)):
-        np.testing.assert_allclose(D_b, [[gp.mcvmd(a, None, b, None, b_max) for b in Y] for a in X], rtol=1e-10)
+        np.testing.assert_allclose(D_b, [[gp.mcvmd(a, None, b, None, b_max) for b in Y] for a in X],
+                                   rtol=1e-10)
     with pytest.raises(ValueError, match="^b_max: expected"):
         gp.mcvmd_matrix(X, b_max=[10.0, -1.0])
 
@@ -133,7 +137,8 @@ def test_density_distances_against_closed_forms():
 
 def test_lcd_dirac_approximation_of_standard_normal():
     a = gp.standard_normal_dirac_approximation(10)
-    # converged by the gradient norm against sqrt(eps S), never BFGS's status (which flips with the BLAS kernel)
+    # converged by the gradient norm against sqrt(eps S), never BFGS's status (which flips with the
+    # BLAS kernel)
     assert a.converged and a.status == "converged"
     assert a.gradient_norm <= gp.sampling.gradient_tolerance(a.b_max)
     np.testing.assert_allclose(a.x, -a.x[::-1], atol=1e-6)           # symmetric
@@ -173,12 +178,14 @@ def test_bad_input_raises_value_error_naming_the_argument(call, name):
     (lambda: gp.mcvmd_matrix(np.zeros((2, 2, 1)), WX=[[0.5, 0.5], [float("nan"), 1.0]]), "WX"),
     (lambda: gp.lcd_dirac([0.0], [float("nan")], [[0.0]], 1.0), "wx"),
     (lambda: gp.lcd_dirac([0.0], None, [[0.0]], 0.0), "b"),
-    (lambda: gp.mean_kernel_dirac(np.zeros((2, 2, 1)), WX=[[1.0, 0.0], [0.5, float("nan")]], alpha=1.0, Lambda=1.0), "WX"),
+    (lambda: gp.mean_kernel_dirac(np.zeros((2, 2, 1)), WX=[[1.0, 0.0], [0.5, float("nan")]],
+                                  alpha=1.0, Lambda=1.0), "WX"),
     (lambda: gp.mcvmd([complex(0, 1)], None, [0.0], None), "x"),
     (lambda: gp.standard_normal_dirac_approximation(float("nan")), "L"),
     (lambda: gp.standard_normal_dirac_approximation(2.5), "L"),
     (lambda: gp.standard_normal_dirac_approximation("10"), "L"),
-    (lambda: gp.gaussian_dirac_mixtures([0.0], [1.0], L=10**6), "L"),       # (nodes x L x L) arrays: named, no MemoryError
+    # (nodes x L x L) arrays: named, no MemoryError
+    (lambda: gp.gaussian_dirac_mixtures([0.0], [1.0], L=10**6), "L"),
     (lambda: gp.DistributionGP(n_restarts=float("inf")), "n_restarts"),
     (lambda: gp.DistributionGP(n_restarts=True), "n_restarts"),
     (lambda: gp.training_gaussians(2.5, np.random.default_rng(0)), "n"),
@@ -201,7 +208,8 @@ def test_omat_matrix_rows_equal_the_pairwise_assignment_means():
 
 @pytest.mark.parametrize("q", [1.5, 2, 3])
 def test_omat_matrix_of_scalar_locations_sorts_as_the_assignments_do(q):
-    """d = 1, q > 1: the monotone matching gives the linear assignments' means (distinct, unsorted locations)."""
+    """d = 1, q > 1: the monotone matching gives the linear assignments' means (distinct, unsorted
+    locations)."""
     rng = np.random.default_rng(int(10 * q))
     X, Y = rng.normal(size=(9, 7, 1)), rng.normal(size=(11, 7, 1)) * 2
     pairwise = np.array([[gp.omat(x, y, q=q) for y in Y] for x in X])
@@ -219,12 +227,16 @@ def test_gaussian_distance_matrices_equal_the_pairwise_distances():
         expected = np.array([[pairwise(m1, C1, m2, C2) for m2, C2 in zip(means[:3], covs[:3])]
                              for m1, C1 in zip(means, covs)])
         # atol: a distance 0 comes out as the square root of rounding, ~3e-8
-        np.testing.assert_allclose(matrix(means, covs, means[:3], covs[:3]), expected, rtol=1e-10, atol=1e-7)
+        np.testing.assert_allclose(matrix(means, covs, means[:3], covs[:3]), expected, rtol=1e-10,
+                                   atol=1e-7)
         D = matrix(means, covs)
         assert np.all(np.diag(D) == 0) and np.array_equal(D, D.T)
-        np.testing.assert_allclose(D[:, :3], expected, rtol=1e-10, atol=1e-7)     # sqrt of rounding at d = 0
-    one_d = gp.hellinger_gaussian_matrix([0.0, 1.0], [1.0, 4.0])                   # 1-D: (N,) means and variances
-    assert one_d[0, 1] == pytest.approx(gp.hellinger_gaussian([0.0], [[1.0]], [1.0], [[4.0]]), rel=1e-12)
+        # sqrt of rounding at d = 0
+        np.testing.assert_allclose(D[:, :3], expected, rtol=1e-10, atol=1e-7)
+    # 1-D: (N,) means and variances
+    one_d = gp.hellinger_gaussian_matrix([0.0, 1.0], [1.0, 4.0])
+    assert one_d[0, 1] == pytest.approx(gp.hellinger_gaussian([0.0], [[1.0]], [1.0], [[4.0]]),
+                                        rel=1e-12)
     with pytest.raises(ValueError, match="^covs_i: expected"):
         gp.hellinger_gaussian_matrix(means, -covs)
 
@@ -236,8 +248,10 @@ def test_ospa_matrix_equals_the_pairwise_ospa():
     expected = np.array([[0.0 if i == j else gp.ospa(x, y, c=1.5) for j, y in enumerate(sets)]
                          for i, x in enumerate(sets)])
     np.testing.assert_allclose(D, expected, rtol=1e-12)
-    np.testing.assert_allclose(gp.ospa_matrix(sets, sets[:2], c=1.5), expected[:, :2], rtol=1e-12, atol=1e-15)
-    with pytest.raises(ValueError, match="X\\[0\\], X\\[1\\]: expected mixtures of the same dimension"):
+    np.testing.assert_allclose(gp.ospa_matrix(sets, sets[:2], c=1.5), expected[:, :2], rtol=1e-12,
+                               atol=1e-15)
+    with pytest.raises(ValueError, match="X\\[0\\], X\\[1\\]: expected mixtures of the same "
+                                         "dimension"):
         gp.ospa_matrix([np.zeros((1, 2)), np.zeros((2, 3))])
 
 
@@ -249,17 +263,21 @@ def test_piecewise_constant_matrices_equal_the_quadrature_of_their_densities():
     heights[0] /= heights[0] @ np.diff(edges)
 
     def density(h):
-        return lambda x: float(h[min(np.searchsorted(edges, x, side="right") - 1, 3)]) if 0 <= x <= 1 else 0.0
+        return lambda x: float(h[min(np.searchsorted(edges, x, side="right") - 1,
+                                     3)]) if 0 <= x <= 1 else 0.0
 
     for q in (1, 2, 3):
         D = gp.lq_distance_matrix(heights, edges, q=q)
-        assert D[0, 1] == pytest.approx(gp.lq_distance(density(heights[0]), density(heights[1]), q, 0.0, 1.0),
+        assert D[0, 1] == pytest.approx(gp.lq_distance(density(heights[0]), density(heights[1]), q,
+                                                       0.0, 1.0),
                                         rel=1e-8)
-    for matrix, quadrature in ((gp.hellinger_matrix, gp.hellinger), (gp.jensen_shannon_matrix, gp.jensen_shannon)):
+    for matrix, quadrature in ((gp.hellinger_matrix, gp.hellinger), (gp.jensen_shannon_matrix,
+                                                                     gp.jensen_shannon)):
         D = matrix(heights, edges)
         assert np.all(np.diag(D) == 0) and D[0, 2] == pytest.approx(
             quadrature(density(heights[0]), density(heights[2]), 0.0, 1.0), rel=1e-8)
-        np.testing.assert_allclose(matrix(heights, edges, heights[:1]), D[:, :1], rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(matrix(heights, edges, heights[:1]), D[:, :1], rtol=1e-12,
+                                   atol=1e-15)
     with pytest.raises(ValueError, match="^edges: expected at least two increasing"):
         gp.lq_distance_matrix(heights, edges[::-1])
     with pytest.raises(ValueError, match="^heights: expected non-empty non-negative"):

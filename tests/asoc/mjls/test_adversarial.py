@@ -1,4 +1,5 @@
-"""Valid but hard inputs (issue 24): each class of silently wrong answer, with an independent computation
+"""Valid but hard inputs (issue 24): each class of silently wrong answer, with an independent
+computation
 (exact fractions, closed forms, dense Kronecker eigenvalues or solves, finite differences)."""
 
 import warnings
@@ -33,14 +34,17 @@ RHO_ONE = {
     "identity modes": (np.stack([np.eye(2), np.eye(2)]), np.array([[0.5, 0.5], [0.25, 0.75]])),
     "a mode with eigenvalue 1": (np.array([[[1.0, 0.0], [0.0, 0.5]]]), np.array([[1.0]])),
     "a Jordan block at 1": (np.array([[[1.0, 1.0], [0.0, 1.0]]]), np.array([[1.0]])),
-    "scalar modes 1/2 and 3/2 (exact)": (np.array([[[0.5]], [[1.5]]]), np.array([[0.5, 0.5], [0.5, 0.5]])),
+    "scalar modes 1/2 and 3/2 (exact)": (np.array([[[0.5]], [[1.5]]]), np.array([[0.5, 0.5],
+                                                                                 [0.5, 0.5]])),
 }
 
 
 @pytest.mark.parametrize("name", RHO_ONE)
 def test_rho_exactly_one_is_never_stabilising(name):
-    """rho = 1 in exact arithmetic (scalar modes: rho(L) = (a_1^2 + a_2^2) / 2, set to 1/2 and 3/2 up to the
-    rounding of the square roots): undecided (a Jordan block at 1: at least not stable), no stationary
+    """rho = 1 in exact arithmetic (scalar modes: rho(L) = (a_1^2 + a_2^2) / 2, set to 1/2 and 3/2
+    up to the
+    rounding of the square roots): undecided (a Jordan block at 1: at least not stable), no
+    stationary
     moment and no cost."""
     A, T = RHO_ONE[name]
     if name.startswith("scalar"):
@@ -54,7 +58,8 @@ def test_rho_exactly_one_is_never_stabilising(name):
     mu = np.full(len(T), 1 / len(T)) if name != "identity modes" else np.array([1 / 3, 2 / 3])
     with pytest.raises(np.linalg.LinAlgError, match="not certified mean-square stable"):
         steady_state_second_moment(A, noise, T, mu)
-    assert radius_and_moments(A, T, noise)[1] is None                  # no finite cost is built on it
+    # no finite cost is built on it
+    assert radius_and_moments(A, T, noise)[1] is None
 
 
 def test_rho_one_up_to_rounding_is_undecided_where_the_estimate_rounds_below_one():
@@ -78,7 +83,8 @@ def test_rho_one_up_to_rounding_is_undecided_where_the_estimate_rounds_below_one
     assert below                                                          # the hard case occurred
 
 
-# ------------------------------------------------------------------ iterative solves check their residual
+# ------------------------------------------------------------------ iterative solves check their
+# residual
 
 def near_one_system(M=2, n=12, rho=0.9999):
     rng = np.random.default_rng(24)
@@ -89,7 +95,8 @@ def near_one_system(M=2, n=12, rho=0.9999):
 
 
 def test_iterative_solve_near_one_is_a_solution():
-    """M n^2 = 288 > 256 at rho = 0.9999: the auto (iterative) solve against a dense solve of the Kronecker system."""
+    """M n^2 = 288 > 256 at rho = 0.9999: the auto (iterative) solve against a dense solve of the
+    Kronecker system."""
     A, T, W = near_one_system()
     sol = solve_coupled_lyapunov(A, T, W)
     exact = np.linalg.solve(np.eye(288) - ms_operator(A, T), W.ravel()).reshape(W.shape)
@@ -98,7 +105,8 @@ def test_iterative_solve_near_one_is_a_solution():
 
 
 def test_a_missed_residual_falls_back_to_dense():
-    """The fixed point needs ~ 1e5 steps at rho = 0.9999 and stops at 5000: the dense solve replaces it."""
+    """The fixed point needs ~ 1e5 steps at rho = 0.9999 and stops at 5000: the dense solve replaces
+    it."""
     A, T, W = near_one_system()
     sol = solve_coupled_lyapunov(A, T, W, method="fixed_point")
     exact = np.linalg.solve(np.eye(288) - ms_operator(A, T), W.ravel()).reshape(W.shape)
@@ -113,15 +121,18 @@ def test_a_missed_residual_above_the_dense_size_warns_and_the_moment_raises():
             sol = solve_coupled_lyapunov(A, T, W, method="fixed_point")
         assert not sol.accepted and sol.residual > 1e-8
         planted = config.defaults["mjls.solve_residual_max"]
-        assert not sol.residual <= planted                                   # the check would catch it
+        # the check would catch it
+        assert not sol.residual <= planted
     exact = np.linalg.solve(np.eye(288) - ms_operator(A, T), W.ravel()).reshape(W.shape)
-    assert np.abs(sol.X - exact).max() > 1e-3 * np.abs(exact).max()       # it was indeed no solution
+    # it was indeed no solution
+    assert np.abs(sol.X - exact).max() > 1e-3 * np.abs(exact).max()
 
 
 # ------------------------------------------------------------------ Perron pair on periodic chains
 
 def static_gradient(A, B, C, T, L):
-    """d rho / d L of A_i + B_i L C_i by eigenvalue perturbation: sum_i 2 B_i^T E_i(P) Acl_i X_i C_i^T / <P, X>."""
+    """d rho / d L of A_i + B_i L C_i by eigenvalue perturbation: sum_i 2 B_i^T E_i(P) Acl_i X_i
+    C_i^T / <P, X>."""
     Acl = A + B @ L @ C
     rho, X, P = perron_pair(Acl, T)
     EP = np.einsum("ij,jab->iab", T, P)
@@ -148,13 +159,15 @@ def test_perron_pair_and_gradient_on_a_periodic_chain(M, dense):
     h = 1e-6
     fd = (dense_rho(A + B @ (L + h) @ C, T) - dense_rho(A + B @ (L - h) @ C, T)) / (2 * h)
     assert gradient[0, 0] == pytest.approx(fd, rel=1e-5, abs=1e-9)
-    assert abs(fd) > 1e-3                                                    # a zero gradient would fail
+    # a zero gradient would fail
+    assert abs(fd) > 1e-3
 
 
 @pytest.mark.parametrize("M, fallback", [(40, "arnoldi+dense"), (6, "power")])
 def test_perron_pair_where_arpack_fails(M, fallback):
     """A cyclic chain with a Krylov space too small for ARPACK (3 vectors): dense eigenvectors up to
-    mjls.dense_fallback_radius, the shifted cone power method above (forced here by a fallback size of 0)."""
+    mjls.dense_fallback_radius, the shifted cone power method above (forced here by a fallback size
+    of 0)."""
     A = np.stack([np.random.default_rng(i).standard_normal((3, 3)) / 2 for i in range(M)])
     T = np.roll(np.eye(M), 1, axis=1)
     rho_dense = dense_rho(A, T)
@@ -182,7 +195,8 @@ def well_scaled_pair(rho=0.9):
 @pytest.mark.parametrize("method", ["dense", "arnoldi", "power"])
 @pytest.mark.parametrize("exponent", [24, 150])
 def test_badly_scaled_similar_modes_keep_rho(method, exponent):
-    """A_i -> D A_i D^-1 with one D for all modes leaves rho unchanged: entries 1e+-24 (and 1e+-150, where
+    """A_i -> D A_i D^-1 with one D for all modes leaves rho unchanged: entries 1e+-24 (and 1e+-150,
+    where
     A_i (x) A_i overflows without balancing) still give rho = 0.9."""
     A, T = well_scaled_pair()
     D = np.array([10.0 ** exponent, 1.0, 10.0 ** -exponent])
@@ -196,7 +210,8 @@ def test_badly_scaled_similar_modes_keep_rho(method, exponent):
 
 
 def test_a_huge_scale_is_exact():
-    """rho(L(c A)) = c^2 rho(L(A)): 1e150 A has rho 0.9e300 (representable), 1e200 A has rho > 1e308."""
+    """rho(L(c A)) = c^2 rho(L(A)): 1e150 A has rho 0.9e300 (representable), 1e200 A has rho >
+    1e308."""
     A, T = well_scaled_pair()
     big = mean_square_stability(1e150 * A, T)
     assert big.rho == pytest.approx(0.9e300, rel=1e-9) and big.verdict is Verdict.UNSTABLE
@@ -215,7 +230,8 @@ def jordan(value, size, seed=3):
 
 
 def test_single_mode_jordan_is_rho_of_a_squared():
-    """M = 1: rho = rho(A)^2 = 0.25; A (x) A has a Jordan block of size 7, whose eigenvalues come with
+    """M = 1: rho = rho(A)^2 = 0.25; A (x) A has a Jordan block of size 7, whose eigenvalues come
+    with
     errors of (eps ||K||)^(1/7); from A's own eigenvalues the error is (eps ||A||)^(1/4)."""
     A = jordan(0.5, 4)[None]
     result = mean_square_stability(A, [[1.0]])
@@ -224,9 +240,11 @@ def test_single_mode_jordan_is_rho_of_a_squared():
     assert result.rho_lower <= 0.25 <= result.rho_upper and result.stabilizing is True
 
 
-@pytest.mark.parametrize("value, truth", [(0.5, True), (0.9995, None), (1.0005, None), (1.1, False)])
+@pytest.mark.parametrize("value, truth", [(0.5, True), (0.9995, None), (1.0005, None),
+                                          (1.1, False)])
 def test_defective_modes_never_get_a_wrong_verdict(value, truth):
-    """Two identical Jordan modes: L = T^T (x) (J (x) J), rho = value^2 exactly; near 1 the bracket may be
+    """Two identical Jordan modes: L = T^T (x) (J (x) J), rho = value^2 exactly; near 1 the bracket
+    may be
     undecided, never on the wrong side."""
     J = jordan(value, 3)
     T = np.array([[0.2, 0.8], [0.7, 0.3]])
@@ -246,7 +264,8 @@ def test_a_wide_bracket_is_said():
         ms_spectral_radius(np.stack([J, J]), [[0.5, 0.5], [0.5, 0.5]])
 
 
-# ------------------------------------------------------------------ the spectral radius of the library's callers
+# ------------------------------------------------------------------ the spectral radius of the
+# library's callers
 
 def test_spectral_radius_is_inside_its_bracket_everywhere():
     rng = np.random.default_rng(11)
@@ -261,7 +280,8 @@ def test_spectral_radius_is_inside_its_bracket_everywhere():
 
 
 def test_a_stability_probe_can_take_the_miss_as_reported():
-    """on_miss="report": the non-solution comes back with accepted False, no fallback, no warning."""
+    """on_miss="report": the non-solution comes back with accepted False, no fallback, no
+    warning."""
     from asoc.mjls.lyapunov import coupled_lyapunov_solver
 
     A, T, W = near_one_system()

@@ -1,4 +1,5 @@
-"""The certified bracket of rho (asoc.mjls.stability) on hard spectra, against dense Kronecker eigenvalues
+"""The certified bracket of rho (asoc.mjls.stability) on hard spectra, against dense Kronecker
+eigenvalues
 (the independent computation at these sizes) and closed forms."""
 
 import numpy as np
@@ -12,7 +13,8 @@ from asoc.mjls.stability import Verdict, mean_square_stability
 
 
 def dense_rho(A, T):
-    """rho from numpy's eigenvalues of the Kronecker matrix of Cor. 3.2 (independent of the library's paths)."""
+    """rho from numpy's eigenvalues of the Kronecker matrix of Cor. 3.2 (independent of the
+    library's paths)."""
     return float(np.max(np.abs(np.linalg.eigvals(ms_operator(A, T)))))
 
 
@@ -21,17 +23,21 @@ def rotation(angle):
 
 
 def assert_contains(result, rho, rtol=1e-12):
-    """rho in the bracket (widened by rtol for the rounding of the reference itself), the estimate inside."""
-    assert result.rho_lower <= rho * (1 + rtol) and rho * (1 - rtol) <= result.rho_upper, (result, rho)
+    """rho in the bracket (widened by rtol for the rounding of the reference itself), the estimate
+    inside."""
+    assert result.rho_lower <= rho * (1 + rtol) and rho * (1 - rtol) <= result.rho_upper, (result,
+                                                                                           rho)
     assert result.rho_lower <= result.rho <= result.rho_upper
 
 
 def forced(method):
-    """The eigen-solver path ``method`` at small sizes: Arnoldi by moving the dense switch point to 0."""
+    """The eigen-solver path ``method`` at small sizes: Arnoldi by moving the dense switch point to
+    0."""
     return config.option_context(**{"mjls.dense_max_radius": 0}) if method == "arnoldi" else config.option_context()
 
 
-# ------------------------------------------------------------------ the thesis's examples, unchanged
+# ------------------------------------------------------------------ the thesis's examples,
+# unchanged
 
 def test_thesis_examples_keep_their_radii_and_get_narrow_brackets():
     cases = [(SEC32_A, SEC32_T)] + [(SEC354_A, SEC354_T[t]) for t in (1, 2)]
@@ -76,17 +82,20 @@ def test_bracket_contains_the_dense_radius_and_is_narrow(method, seed):
 
 
 def test_a_planted_wrong_radius_lies_outside_the_bracket():
-    """The bracket is narrow enough to catch an estimate that is off by 1e-6 (e.g. a subdominant eigenvalue)."""
+    """The bracket is narrow enough to catch an estimate that is off by 1e-6 (e.g. a subdominant
+    eigenvalue)."""
     result = mean_square_stability(SEC32_A, SEC32_T)
     wrong = result.rho * (1 - 1e-6)
     assert not result.rho_lower <= wrong <= result.rho_upper
 
 
 def test_upper_bound_at_a_lyapunov_solution_is_the_lyapunov_test():
-    """Y = L(Y) + I is positive definite with a Collatz-Wielandt bound below 1 iff stable (Thm. 3.1)."""
+    """Y = L(Y) + I is positive definite with a Collatz-Wielandt bound below 1 iff stable (Thm.
+    3.1)."""
     A, T = SEC32_A * np.sqrt(0.9 / 1.4197762513475558), SEC32_T
     n2 = 8
-    Y = np.linalg.solve(np.eye(n2) - ms_operator(A, T), np.broadcast_to(np.eye(2), (2, 2, 2)).ravel())
+    Y = np.linalg.solve(np.eye(n2) - ms_operator(A, T), np.broadcast_to(np.eye(2),
+                                                                        (2, 2, 2)).ravel())
     assert certified_upper_bound(A, T, Y.reshape(2, 2, 2)) < 1
     assert certified_upper_bound(A, T, -Y.reshape(2, 2, 2)) == np.inf
 
@@ -95,7 +104,8 @@ def test_upper_bound_at_a_lyapunov_solution_is_the_lyapunov_test():
 
 @pytest.mark.parametrize("method", ["dense", "arnoldi"])
 def test_repeated_dominant_eigenvalue(method):
-    """Identical diagonal modes: rho = 0.81 of multiplicity 3 (the three entries of X in the e1 block... and more)."""
+    """Identical diagonal modes: rho = 0.81 of multiplicity 3 (the three entries of X in the e1
+    block... and more)."""
     A = np.stack([np.diag([0.9, 0.9, 0.3])] * 3)
     T = np.full((3, 3), 1 / 3)
     with forced(method):
@@ -106,7 +116,8 @@ def test_repeated_dominant_eigenvalue(method):
 
 @pytest.mark.parametrize("method", ["dense", "arnoldi"])
 def test_complex_dominant_eigenvalues(method):
-    """Scaled rotations: A (x) A has eigenvalues 0.81 e^{i(+-a+-a)}, all of modulus 0.81; the Perron one is real."""
+    """Scaled rotations: A (x) A has eigenvalues 0.81 e^{i(+-a+-a)}, all of modulus 0.81; the Perron
+    one is real."""
     A = np.stack([0.9 * rotation(0.7), 0.9 * rotation(2.1)])
     T = np.array([[0.3, 0.7], [0.6, 0.4]])
     with forced(method):
@@ -118,7 +129,8 @@ def test_complex_dominant_eigenvalues(method):
 @pytest.mark.parametrize("method", ["dense", "arnoldi", "power"])
 @pytest.mark.parametrize("M", [2, 5])
 def test_periodic_chains(method, M):
-    """A cyclic T: the eigenvalues of rho times the M-th roots of unity share the modulus rho. Scalar modes
+    """A cyclic T: the eigenvalues of rho times the M-th roots of unity share the modulus rho.
+    Scalar modes
     a_i give rho = (prod a_i^2)^(1/M) exactly."""
     a = np.linspace(0.5, 1.3, M)
     A = np.stack([np.diag([ai, 0.3 * ai]) for ai in a])
@@ -133,7 +145,8 @@ def test_periodic_chains(method, M):
 
 
 def test_nearly_reducible_chain():
-    """Two modes that almost never switch: rho is near max(a_i^2), and the bracket still holds it."""
+    """Two modes that almost never switch: rho is near max(a_i^2), and the bracket still holds
+    it."""
     eps = 1e-9
     T = np.array([[1 - eps, eps], [eps, 1 - eps]])
     A = np.stack([np.array([[0.95, 0.2], [0.0, 0.4]]), np.array([[0.3, 0.0], [0.5, 0.99]])])
@@ -154,7 +167,8 @@ def test_non_normal_modes():
 
 
 def test_augmented_closed_loop_of_a_dynamic_controller():
-    """The augmented closed loop (3.39) is just an (A~, T) pair: its bracket holds the dense radius, and the
+    """The augmented closed loop (3.39) is just an (A~, T) pair: its bracket holds the dense radius,
+    and the
     verdict follows it, for a stabilising and a destabilising controller."""
     from asoc.mjls import augmented_closed_loop
     from asoc.mjls.examples import sec373_system
@@ -173,7 +187,8 @@ def test_augmented_closed_loop_of_a_dynamic_controller():
 
 
 def _alg32_closed_loop_n32_m8():
-    """Alg. 3.2's final closed loop on the scaling family at n = 32, M = 8 (64 augmented states): its Perron
+    """Alg. 3.2's final closed loop on the scaling family at n = 32, M = 8 (64 augmented states):
+    its Perron
     stack is singular, so the Collatz-Wielandt bounds at it (or at it shifted by I) stay wide."""
     from asoc.mjls import augmented_closed_loop, dynamic_output_feedback
     from asoc_companion.scaling import scaling_system
@@ -184,8 +199,10 @@ def _alg32_closed_loop_n32_m8():
 
 
 def test_singular_perron_stack_gets_a_narrow_bracket_from_the_deflated_resolvent(monkeypatch):
-    """The bracket is narrower than the warning width (1e-4 relative) and holds ARPACK's own estimate; with the
-    deflated resolvent candidates removed (the planted regression) it is wider than that (8.8e-4 measured)."""
+    """The bracket is narrower than the warning width (1e-4 relative) and holds ARPACK's own
+    estimate; with the
+    deflated resolvent candidates removed (the planted regression) it is wider than that (8.8e-4
+    measured)."""
     import scipy.sparse.linalg
 
     from asoc.mjls import certificate
@@ -195,7 +212,8 @@ def test_singular_perron_stack_gets_a_narrow_bracket_from_the_deflated_resolvent
     result = mean_square_stability(A, T)
     width = config.defaults["mjls.bracket_warn_rtol"]
     assert result.rho_upper - result.rho_lower <= width * result.rho_upper, result.bracket
-    arpack = abs(scipy.sparse.linalg.eigs(linear_operator(A, T, False), k=1, which="LM", ncv=60, tol=1e-14)[0][0])
+    arpack = abs(scipy.sparse.linalg.eigs(linear_operator(A, T, False), k=1, which="LM", ncv=60,
+                                          tol=1e-14)[0][0])
     assert_contains(result, arpack, rtol=1e-10)
     monkeypatch.setattr(certificate, "deflated_resolvent_bounds", lambda *args: None)
     without = mean_square_stability(A, T)

@@ -1,4 +1,5 @@
-"""Sec. 3.4 (Prop. 3.5, eq. (3.6), Fig. 3.3): both readings of the plotted cost and their curvature."""
+"""Sec. 3.4 (Prop. 3.5, eq. (3.6), Fig. 3.3): both readings of the plotted cost and their
+curvature."""
 
 import numpy as np
 import pytest
@@ -14,7 +15,8 @@ from asoc.mjls.intractability import (
 
 
 def J(x, u, terms="full", g=SEC34_G):
-    return expected_cost_two_steps_before_horizon(x, u, SEC34_A, SEC34_B, g, SEC34_T, SEC34_PI, n_nodes=60, terms=terms)
+    return expected_cost_two_steps_before_horizon(x, u, SEC34_A, SEC34_B, g, SEC34_T, SEC34_PI,
+                                                  n_nodes=60, terms=terms)
 
 
 def test_full_cost_is_stage_cost_plus_last_term():
@@ -30,7 +32,8 @@ def test_hessian_of_a_quadratic_is_exact():
     fxx, fuu, fxu = hessian(f, X, U)
     # central differences are exact for quadratics up to rounding eps |f| / h^2
     tol = 10 * np.finfo(float).eps * 20 / 1e-3 ** 2
-    assert np.allclose(fxx, 4, atol=tol) and np.allclose(fuu, 1, atol=tol) and np.allclose(fxu, -3, atol=tol)
+    assert np.allclose(fxx, 4, atol=tol) and np.allclose(fuu, 1, atol=tol) and np.allclose(fxu, -3,
+                                                                                           atol=tol)
     lam = 0.5 * (5 - np.sqrt(9 + 36))
     assert hessian_min_eigenvalue(f, X, U)[0] == pytest.approx(lam, abs=tol)
     assert min_curvature_in_u(f, X, U)[0] == pytest.approx(1.0, abs=tol)
@@ -42,11 +45,13 @@ def test_hessian_of_a_quadratic_is_exact():
 def test_the_readings_of_fig_3_3():
     xs = np.linspace(-5, 5, 41)
     X, U = np.meshgrid(xs, xs, indexing="ij")
-    # text reading, only (3.6): non-convex on the printed square; caption reading, full J: convex there
+    # text reading, only (3.6): non-convex on the printed square; caption reading, full J: convex
+    # there
     assert hessian_min_eigenvalue(lambda x, u: J(x, u, "last"), X, U)[0] < 0
     assert hessian_min_eigenvalue(J, X, U)[0] > 0
     # both convex in u for every fixed x
-    assert min_curvature_in_u(J, X, U)[0] > 0 and min_curvature_in_u(lambda x, u: J(x, u, "last"), X, U)[0] > 0
+    assert min_curvature_in_u(J, X, U)[0] > 0 and min_curvature_in_u(lambda x, u: J(x, u, "last"),
+                                                                     X, U)[0] > 0
     # the full cost turns non-convex outside the printed square
     big = np.linspace(-10, 10, 41)
     Xb, Ub = np.meshgrid(big, big, indexing="ij")

@@ -11,7 +11,11 @@ from asoc.linalg import pack, unpack
 from asoc.mjls import MJLS, optimality, second_moments, simulate
 from asoc.mjls.closed_loops import augmented_closed_loop, noise_covariances
 from asoc.mjls.dynamic import dynamic_output_feedback, steady_state_cost
-from asoc.mjls.finite_horizon import finite_horizon_cost, finite_horizon_dynamic_output_feedback, initial_bounds
+from asoc.mjls.finite_horizon import (
+    finite_horizon_cost,
+    finite_horizon_dynamic_output_feedback,
+    initial_bounds,
+)
 from asoc.mjls.observed_mode_lqg import mode_observed_lqg
 from asoc.mjls.optimality import gains_from_bounds
 from asoc.mjls.system import successor_average
@@ -65,7 +69,8 @@ def test_gains_satisfy_the_optimality_conditions(sys3, alg32):
     """At the fixed point, (F, K, L) solve (3.49) for the final bounds (Thm. 3.27)."""
     r = alg32
     _, JJt = noise_covariances(sys3)
-    F, K, L = gains_from_bounds(sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar), successor_average(sys3.T, r.Punder),
+    F, K, L = gains_from_bounds(sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar),
+                                successor_average(sys3.T, r.Punder),
                                 sys3.mu_inf, JJt)
     for a, b in ((F, r.F), (K, r.K), (L, r.L)):
         np.testing.assert_allclose(a, b, atol=1e-7 * max(1, np.abs(b).max()))
@@ -74,7 +79,9 @@ def test_gains_satisfy_the_optimality_conditions(sys3, alg32):
 def test_sdp_solve_agrees_with_least_squares(sys3, alg32):
     r = alg32
     _, JJt = noise_covariances(sys3)
-    args = (sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar), successor_average(sys3.T, r.Punder), sys3.mu_inf, JJt)
+    args = (sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar), successor_average(sys3.T,
+                                                                                         r.Punder),
+                                                                                         sys3.mu_inf, JJt)
     for a, b in zip(gains_from_bounds(*args, method="sdp"), gains_from_bounds(*args)):
         np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-4)
 
@@ -136,7 +143,8 @@ def test_finite_horizon_from_random_gains_also_decreases(sys3):
 
 
 def lqg(sys):
-    """Classical LQG compensator x^+ = F x^ + K y, u = L x^ (one-step predictor) from scipy DAREs."""
+    """Classical LQG compensator x^+ = F x^ + K y, u = L x^ (one-step predictor) from scipy
+    DAREs."""
     A, B, C, H, J, Q, R = (m[0] for m in (sys.A, sys.B, sys.C, sys.H, sys.J, sys.Q, sys.R))
     P = solve_discrete_are(A, B, Q, R)
     L = -np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
@@ -190,7 +198,8 @@ def test_optimal_observed_controller_beats_mode_independent_ones(sys3, alg32):
     mean0, cov0, mu0 = initial_state(sys3, 3)
     horizon = 30
     o = mode_observed_lqg(sys3, horizon, mean0, cov0, mu0)
-    f = finite_horizon_dynamic_output_feedback(sys3, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0)
+    f = finite_horizon_dynamic_output_feedback(sys3, horizon=horizon, mean0=mean0, cov0=cov0,
+                                               mu0=mu0)
     ti = finite_horizon_cost(sys3, *[np.broadcast_to(g, (horizon,) + g.shape)
                                      for g in (alg32.F, alg32.K, alg32.L)], mean0, cov0, mu0)
     assert o.cost < f.cost and o.cost < ti
@@ -294,7 +303,8 @@ def test_unstabilisable_system_is_flagged():
 # --- (3.51) matrix-free: operator, conjugate gradients, switch ---------------------------------
 
 def random_bounds(sys, seed, spread=1.0):
-    """Symmetric positive definite Xbar, Xunder, E(Pbar), E(Punder) (G G^T / n + I, G scaled by spread)."""
+    """Symmetric positive definite Xbar, Xunder, E(Pbar), E(Punder) (G G^T / n + I, G scaled by
+    spread)."""
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(4):
@@ -339,20 +349,24 @@ def test_switch_point_selects_the_solver(monkeypatch):
     assert optimality.solve_gains(*args)[3].method == "dense"
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 24)
     assert optimality.solve_gains(*args)[3].method == "cg"
-    assert optimality.solve_gains(*args, method="sdp")[3].method == "sdp"        # the SDP stays dense
+    # the SDP stays dense
+    assert optimality.solve_gains(*args, method="sdp")[3].method == "sdp"
 
 
 def test_conjugate_gradients_that_stop_short_raise_with_the_residual():
     args = optimality_args(random_system(8, M=3, nx=6, nu=2, ny=2), 8, spread=3.0)
     op, P = optimality.OptimalityOperator(*args), optimality.KroneckerPreconditioner(*args)
-    with pytest.raises(np.linalg.LinAlgError, match=r"relative residual .* > 1e-15 in 2 iterations"):
-        optimality.solve_optimality_cg(op, optimality.optimality_vector(*args[:5]), P, tol=1e-15, max_iter=2)
+    with pytest.raises(np.linalg.LinAlgError,
+                       match=r"relative residual .* > 1e-15 in 2 iterations"):
+        optimality.solve_optimality_cg(op, optimality.optimality_vector(*args[:5]), P, tol=1e-15,
+                                       max_iter=2)
 
 
 def test_matrix_free_failure_stops_alg32_with_a_message(monkeypatch):
     from asoc.mjls.examples import sec373_system
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
-    monkeypatch.setitem(config.defaults, "mjls.cg_max_iter_factor", 1 / 8)            # one iteration for 8 unknowns
+    # one iteration for 8 unknowns
+    monkeypatch.setitem(config.defaults, "mjls.cg_max_iter_factor", 1 / 8)
     with pytest.raises(FloatingPointError, match="first iteration: conjugate gradients"):
         dynamic_output_feedback(sec373_system(1))
 
@@ -386,7 +400,8 @@ def test_matrix_free_alg33_matches_dense(monkeypatch, sys3, alg32):
     assert free.cost == pytest.approx(dense.cost, rel=1e-9)
 
 
-@pytest.mark.parametrize("kwargs, match", [(dict(method="cg"), "method"), (dict(tol=np.nan), "tol")])
+@pytest.mark.parametrize("kwargs, match", [(dict(method="cg"), "method"), (dict(tol=np.nan),
+                                                                           "tol")])
 def test_bad_input_is_named_on_the_matrix_free_path(monkeypatch, sys3, kwargs, match):
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
     with pytest.raises((ValueError, TypeError), match=match):
@@ -425,7 +440,8 @@ def test_stopping_rule_stops_wandering_and_diverging_sequences_within_a_few_wind
     growing = 9.0 ** np.arange(200)[:, None] * np.ones(4)
     verdict, it, _ = _verdicts(growing)
     assert verdict == "diverged" and it <= 2 * w + 5
-    slow = 1.0 + 0.995 ** np.arange(8000)[:, None] * np.ones(4)    # converges, slowly: not stopped early
+    # converges, slowly: not stopped early
+    slow = 1.0 + 0.995 ** np.arange(8000)[:, None] * np.ones(4)
     assert _verdicts(slow)[0] == "converged"
     assert _verdicts(slow, max_iter=1000)[0] == "no_progress"      # ... unless tol is out of reach
 
@@ -447,7 +463,8 @@ def test_alg32_stops_on_the_cycle_of_the_networked_loop_and_names_the_exact_desi
 
 def test_alg32_on_an_unstabilisable_plant_stops_as_diverged_within_a_few_windows():
     A = 3.0 * np.eye(2)
-    sys = MJLS([A, A], np.zeros((2, 1)), [[1.0, 0.0]], np.eye(2), np.eye(2), np.eye(1), [[0.5, 0.5], [0.5, 0.5]],
+    sys = MJLS([A, A], np.zeros((2, 1)), [[1.0, 0.0]], np.eye(2), np.eye(2), np.eye(1), [[0.5, 0.5],
+                                                                                         [0.5, 0.5]],
                J=0.1 * np.ones((1, 1)))
     r = dynamic_output_feedback(sys, warn=False)
     assert r.status == "diverged" and r.iterations <= 2 * config.defaults["mjls.alg32_patience"] + 5

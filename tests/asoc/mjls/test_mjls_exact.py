@@ -1,4 +1,5 @@
-"""Exact-cost controller design (asoc.mjls.exact_cost_design) and Alg. 3.1 with exact moment solves."""
+"""Exact-cost controller design (asoc.mjls.exact_cost_design) and Alg. 3.1 with exact moment
+solves."""
 
 import warnings
 
@@ -25,7 +26,11 @@ from asoc.mjls.dynamic import steady_state_cost
 from asoc.mjls.exact_cost_design import averaged_lqg
 from asoc.mjls.examples import SEC373_COV0, SEC373_MEAN0, SEC373_MU0, sec354_system, sec373_system
 from asoc.mjls.finite_horizon import augmented_initial_moment, mode_distributions, stages
-from asoc.mjls.gradients import average_cost_and_gradient, closed_loop_radius, finite_horizon_cost_and_gradient
+from asoc.mjls.gradients import (
+    average_cost_and_gradient,
+    closed_loop_radius,
+    finite_horizon_cost_and_gradient,
+)
 
 EPS = np.finfo(float).eps
 COST_RTOL = 1e-12   # two solvers of the same Lyapunov system (LU here, np.linalg.solve in
@@ -68,7 +73,8 @@ def test_average_cost_gradient_matches_finite_differences(system):
     z = pack(r.F, r.K, r.L)
     cost, grads = average_cost_and_gradient(sys, r.F, r.K, r.L)
     g = pack(*grads)
-    err, allowed = fd_check(lambda v: average_cost_and_gradient(sys, *unpack(v, shapes))[0], z, g, cost)
+    err, allowed = fd_check(lambda v: average_cost_and_gradient(sys, *unpack(v, shapes))[0], z, g,
+                            cost)
     assert err <= allowed < 1e-4 * np.abs(g).max()
     assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
 
@@ -83,7 +89,8 @@ def test_radius_gradient_matches_finite_differences(system, scale):
     rho, grads = radius_and_gradient(sys, r.F, r.K, r.L)
     assert rho == pytest.approx(closed_loop_radius(sys, r.F, r.K, r.L), rel=1e-12)
     g = pack(*grads)
-    err, allowed = fd_check(lambda v: radius_and_gradient(sys, *unpack(v, shapes))[0], pack(r.F, r.K, r.L),
+    err, allowed = fd_check(lambda v: radius_and_gradient(sys, *unpack(v, shapes))[0],
+                            pack(r.F, r.K, r.L),
                             g, rho)
     assert err <= allowed < 1e-4 * np.abs(g).max()
     assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
@@ -110,7 +117,8 @@ def test_average_cost_and_stability_test_agree_with_prop_324_and_cor_32(alg32_37
     cost = average_cost_and_gradient(sys373, r.F, r.K, r.L)[0]
     assert cost == pytest.approx(steady_state_cost(sys373, r.F, r.K, r.L)[0], rel=1e-12)
     At = augmented_closed_loop(sys373, r.F, r.K, r.L)[0]
-    assert closed_loop_radius(sys373, r.F, r.K, r.L) == pytest.approx(ms_spectral_radius(At, sys373.T),
+    assert closed_loop_radius(sys373, r.F, r.K,
+                              r.L) == pytest.approx(ms_spectral_radius(At, sys373.T),
                                                                      rel=1e-12)
     bad = (np.zeros((2, 2)), np.full((2, 1), 0.5), np.full((1, 2), 0.5))
     assert closed_loop_radius(sys373, *bad) >= 1
@@ -121,15 +129,18 @@ def test_finite_horizon_gradient_matches_finite_differences(sys373):
     horizon = 6
     st = stages(sys373, horizon)
     rng = np.random.default_rng(5)
-    F, K, L = (0.3 * rng.standard_normal(s) for s in ((horizon, 2, 2), (horizon, 2, 1), (horizon, 1, 2)))
-    X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, SEC373_MU0 @ SEC373_MEAN0[1])
+    F, K, L = (0.3 * rng.standard_normal(s) for s in ((horizon, 2, 2), (horizon, 2, 1), (horizon, 1,
+                                                                                         2)))
+    X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+                                  SEC373_MU0 @ SEC373_MEAN0[1])
     mu = mode_distributions(st, SEC373_MU0)
     cost, grads = finite_horizon_cost_and_gradient(st, F, K, L, X0, mu)
     assert cost == pytest.approx(finite_horizon_cost(sys373, F, K, L, SEC373_MEAN0[1], SEC373_COV0,
                                                      SEC373_MU0), rel=1e-12)
     shapes = (F.shape, K.shape, L.shape)
     g = pack(*grads)
-    err, allowed = fd_check(lambda v: finite_horizon_cost_and_gradient(st, *unpack(v, shapes), X0, mu)[0],
+    err, allowed = fd_check(lambda v: finite_horizon_cost_and_gradient(st, *unpack(v, shapes), X0,
+                                                                       mu)[0],
                             pack(F, K, L), g, cost)
     assert err <= allowed < 1e-4 * np.abs(g).max()
 
@@ -139,11 +150,13 @@ def test_exact_optimum_improves_alg32_on_sec373(alg32_373, sys373):
     assert e.converged and e.stabilizing
     assert e.cost < alg32_373.cost * (1 - 1e-3)        # the bound's optimum is not the exact one
     assert e.cost == pytest.approx(steady_state_cost(sys373, e.F, e.K, e.L)[0], rel=1e-12)
-    bounded = dynamic_output_feedback(sys373, max_iter=config.defaults["mjls.exact_warm_start_iterations"],
+    bounded = dynamic_output_feedback(sys373,
+                                      max_iter=config.defaults["mjls.exact_warm_start_iterations"],
                                       warn=False)
     starts = [average_cost_and_gradient(sys373, *gains)[0]
               for gains in ((bounded.F, bounded.K, bounded.L), averaged_lqg(sys373, 2))]
-    assert e.history["cost"][0] == pytest.approx(min(starts), rel=1e-12)   # the better default start
+    # the better default start
+    assert e.history["cost"][0] == pytest.approx(min(starts), rel=1e-12)
     assert np.all(np.diff(e.history["cost"]) <= 4 * EPS * e.history["cost"][1:])
 
 
@@ -222,7 +235,8 @@ def test_exact_bad_input(sys373, kwargs, match):
 def test_exact_finite_horizon_never_worse_than_alg33(t):
     sys = sec373_system(t)
     horizon = 20
-    f = finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+    f = finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0,
+                                               SEC373_MU0,
                                                init=dynamic_output_feedback(sys), warn=False)
     assert f.converged                                 # (Jbar_0 may rise once at K = 20, T[2])
     e = exact_finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0,
@@ -238,7 +252,8 @@ def test_exact_finite_horizon_equals_lqg_for_one_mode():
     optimiser cannot improve it beyond its stopping tolerance."""
     sys = random_system(4, M=1)
     mean0, cov0, mu0 = initial_state(sys)
-    f = finite_horizon_dynamic_output_feedback(sys, 15, mean0, cov0, mu0, warn=False)   # Jbar_0 may rise
+    # Jbar_0 may rise
+    f = finite_horizon_dynamic_output_feedback(sys, 15, mean0, cov0, mu0, warn=False)
     assert f.converged
     e = exact_finite_horizon_dynamic_output_feedback(sys, 15, mean0, cov0, mu0, init=f)
     assert e.converged
@@ -247,10 +262,12 @@ def test_exact_finite_horizon_equals_lqg_for_one_mode():
 
 def test_exact_finite_horizon_bad_input(sys373):
     with pytest.raises(ValueError, match="tol"):
-        exact_finite_horizon_dynamic_output_feedback(sys373, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+        exact_finite_horizon_dynamic_output_feedback(sys373, 5, SEC373_MEAN0[1], SEC373_COV0,
+                                                     SEC373_MU0,
                                                      tol=-1)
     with pytest.raises(ValueError, match="init"):
-        exact_finite_horizon_dynamic_output_feedback(sys373, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
+        exact_finite_horizon_dynamic_output_feedback(sys373, 5, SEC373_MEAN0[1], SEC373_COV0,
+                                                     SEC373_MU0,
                                                      init=(np.zeros((4, 2, 2)), np.zeros((5, 2, 1)),
                                                            np.zeros((5, 1, 2))))
 
@@ -260,7 +277,8 @@ def random_static_system(seed):
     rng = np.random.default_rng(seed)
     base = sec354_system(1)
     T = base.T + 0.2 * rng.random((2, 2))
-    return MJLS(A=base.A + 0.1 * rng.standard_normal((2, 2, 2)), B=base.B + 0.1 * rng.standard_normal((2, 2, 1)),
+    return MJLS(A=base.A + 0.1 * rng.standard_normal((2, 2, 2)),
+                B=base.B + 0.1 * rng.standard_normal((2, 2, 1)),
                 C=base.C + 0.2 * rng.standard_normal((2, 1, 2)), H=base.H, Q=base.Q, R=base.R,
                 T=T / T.sum(axis=1, keepdims=True))
 
@@ -283,7 +301,8 @@ def test_alg31_exact_moments_reach_the_same_fixed_point(system):
         assert b.iterations < a.iterations / 10      # the thesis's iteration contracts slowly here
         assert c.iterations < a.iterations / 10      # ... and "auto" switches to the exact moments
     if system == "T1":
-        assert c.iterations == a.iterations          # an easy system: "auto" is the thesis's iteration
+        # an easy system: "auto" is the thesis's iteration
+        assert c.iterations == a.iterations
         np.testing.assert_array_equal(c.history["trace_X"], a.history["trace_X"])
 
 

@@ -1,4 +1,5 @@
-"""Matrix-free second-moment operators (asoc.mjls.moment_operator, stability, lyapunov) against the dense
+"""Matrix-free second-moment operators (asoc.mjls.moment_operator, stability, lyapunov) against the
+dense
 Kronecker path."""
 
 import numpy as np
@@ -6,7 +7,12 @@ import pytest
 
 from asoc import config
 from asoc.mjls import ms_operator, ms_spectral_radius
-from asoc.mjls.lyapunov import coupled_lyapunov_solver, radii_and_moments, radius_and_moments, solve_coupled_lyapunov
+from asoc.mjls.lyapunov import (
+    coupled_lyapunov_solver,
+    radii_and_moments,
+    radius_and_moments,
+    solve_coupled_lyapunov,
+)
 from asoc.mjls.moment_operator import costate_map, second_moment_map
 from asoc.mjls.stability import Verdict, mean_square_stability
 from asoc_companion.scaling import scaling_system
@@ -15,7 +21,8 @@ from asoc_companion.timing import fitted_exponent
 
 def switch_points(radius=None, solve=None):
     """The dense/iterative switch points set for a block (None: unchanged)."""
-    values = {key: value for key, value in (("mjls.dense_max_radius", radius), ("mjls.dense_max_solve", solve))
+    values = {key: value for key, value in (("mjls.dense_max_radius", radius),
+                                            ("mjls.dense_max_solve", solve))
               if value is not None}
     return config.option_context(**values)
 
@@ -31,8 +38,10 @@ def test_maps_match_kronecker_matrix_and_are_adjoint(n, M):
     rng = np.random.default_rng(1)
     X, P = stack(rng, M, n), stack(rng, M, n)
     K = ms_operator(s.A, s.T)
-    np.testing.assert_allclose(second_moment_map(s.A, s.T, X).ravel(), K @ X.ravel(), rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(costate_map(s.A, s.T, P).ravel(), K.T @ P.ravel(), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(second_moment_map(s.A, s.T, X).ravel(), K @ X.ravel(), rtol=1e-12,
+                               atol=1e-12)
+    np.testing.assert_allclose(costate_map(s.A, s.T, P).ravel(), K.T @ P.ravel(), rtol=1e-12,
+                               atol=1e-12)
     lhs = np.vdot(second_moment_map(s.A, s.T, X), P)
     assert lhs == pytest.approx(np.vdot(X, costate_map(s.A, s.T, P)), rel=1e-12)
 
@@ -42,9 +51,12 @@ def test_spectral_radius_methods_agree_with_cor_3_2(n, M, scale):
     s = scaling_system(np.random.default_rng(7 * n + M), n, M)
     A = np.sqrt(scale) * s.A
     dense = float(np.max(np.abs(np.linalg.eigvals(ms_operator(A, s.T)))))
-    assert mean_square_stability(A, s.T, method="dense", check=False).rho == pytest.approx(dense, rel=1e-12)
-    assert mean_square_stability(A, s.T, method="arnoldi", check=False).rho == pytest.approx(dense, rel=1e-10)
-    assert mean_square_stability(A, s.T, method="power", check=False).rho == pytest.approx(dense, rel=1e-8)
+    assert mean_square_stability(A, s.T, method="dense", check=False).rho == pytest.approx(dense,
+                                                                                           rel=1e-12)
+    assert mean_square_stability(A, s.T, method="arnoldi", check=False).rho == pytest.approx(dense,
+                                                                                             rel=1e-10)
+    assert mean_square_stability(A, s.T, method="power", check=False).rho == pytest.approx(dense,
+                                                                                           rel=1e-8)
     assert ms_spectral_radius(A, s.T) == pytest.approx(dense, rel=1e-10)
 
 
@@ -74,13 +86,15 @@ def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
 
 @pytest.mark.parametrize("adjoint", [False, True])
 def test_dense_solve_is_the_kronecker_solve(adjoint):
-    """The dense path (LAPACK getrf/getrs) against numpy's solve of the Kronecker system, to rounding."""
+    """The dense path (LAPACK getrf/getrs) against numpy's solve of the Kronecker system, to
+    rounding."""
     s = scaling_system(np.random.default_rng(8), 3, 3)
     W = stack(np.random.default_rng(9), 3, 3)
     K = ms_operator(s.A, s.T)
     X = np.linalg.solve(np.eye(27) - (K.T if adjoint else K), W.ravel()).reshape(W.shape)
     sol = solve_coupled_lyapunov(s.A, s.T, W, adjoint=adjoint, method="dense")
-    np.testing.assert_allclose(sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)), rtol=1e-10, atol=1e-12 * np.abs(X).max())
+    np.testing.assert_allclose(sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)), rtol=1e-10,
+                               atol=1e-12 * np.abs(X).max())
     with pytest.raises(ValueError, match="infs or NaNs"):
         solve_coupled_lyapunov(s.A, s.T, np.full_like(W, np.nan), method="dense")
 
@@ -88,7 +102,8 @@ def test_dense_solve_is_the_kronecker_solve(adjoint):
 @pytest.mark.parametrize("scale", [0.5, 0.99, 1.5])
 @pytest.mark.parametrize("switch", [None, 0])
 def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
-    """One Kronecker matrix for rho and X: the same numbers as spectral_radius and solve_coupled_lyapunov
+    """One Kronecker matrix for rho and X: the same numbers as spectral_radius and
+    solve_coupled_lyapunov
     (dense sizes; with the switch points at 0, through those functions' matrix-free paths)."""
     s = scaling_system(np.random.default_rng(10), 3, 2)
     A = s.A * np.sqrt(scale / mean_square_stability(s.A, s.T, check=False).rho)
@@ -97,7 +112,8 @@ def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
         rho, X = radius_and_moments(A, s.T, W)
         assert rho == pytest.approx(mean_square_stability(A, s.T, check=False).rho, rel=1e-12)
         if scale < 1:
-            np.testing.assert_allclose(X, solve_coupled_lyapunov(A, s.T, W).X, rtol=1e-9, atol=1e-12)
+            np.testing.assert_allclose(X, solve_coupled_lyapunov(A, s.T, W).X, rtol=1e-9,
+                                       atol=1e-12)
         else:
             assert X is None
 
@@ -106,7 +122,8 @@ def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
 def test_radii_and_moments_is_each_loop_alone(switch):
     """The stacked fast path: each closed loop's rho and X as from the checked functions."""
     s = scaling_system(np.random.default_rng(12), 3, 3)
-    loops = np.stack([s.A * np.sqrt(scale / mean_square_stability(s.A, s.T, check=False).rho) for scale in (0.3, 1.2, 0.9, 2.0)])
+    loops = np.stack([s.A * np.sqrt(scale / mean_square_stability(s.A, s.T,
+                                                                  check=False).rho) for scale in (0.3, 1.2, 0.9, 2.0)])
     W = stack(np.random.default_rng(13), 3, 3)
     with switch_points(radius=switch, solve=switch):
         rho, X = radii_and_moments(loops, s.T, W)
@@ -115,7 +132,8 @@ def test_radii_and_moments_is_each_loop_alone(switch):
             if r >= 1:
                 assert x is None
             else:
-                np.testing.assert_allclose(x, solve_coupled_lyapunov(loop, s.T, W).X, rtol=1e-9, atol=1e-12)
+                np.testing.assert_allclose(x, solve_coupled_lyapunov(loop, s.T, W).X, rtol=1e-9,
+                                           atol=1e-12)
 
 
 def test_verdict_is_undecided_within_rounding_of_one():
@@ -132,7 +150,8 @@ def test_verdict_is_undecided_within_rounding_of_one():
 
 
 def test_fitted_exponent_recovers_a_power_law():
-    assert fitted_exponent([4, 8, 16, 32], [2.0 * n ** 2.5 for n in (4, 8, 16, 32)]) == pytest.approx(2.5)
+    assert fitted_exponent([4, 8, 16, 32], [2.0 * n ** 2.5 for n in (4, 8, 16,
+                                                                     32)]) == pytest.approx(2.5)
 
 
 @pytest.mark.parametrize("case", ["stall", "subdominant"])
@@ -140,14 +159,16 @@ def test_arnoldi_radius_on_the_larger_plants_hard_closed_loops(case):
     """Two closed loops of the larger-plant page (tests/reference/arnoldi_hard_cases.json). With 20
     Krylov vectors ARPACK stalled on the first (a fourfold dominant eigenvalue; the cone power
     method then took 70 s) and returned a subdominant eigenvalue for the second; the spaces of
-    mjls.arnoldi_subspaces must give rho itself, without any fallback, inside a narrow certified bracket."""
+    mjls.arnoldi_subspaces must give rho itself, without any fallback, inside a narrow certified
+    bracket."""
     import json
     from pathlib import Path
 
     cases = json.loads((Path(__file__).parents[2] / "reference" / "arnoldi_hard_cases.json").read_text())
     A, T = np.array(cases[case]["A"]), np.array(cases[case]["T"])
     result = mean_square_stability(A, T, method="arnoldi")
-    # rho_dense: the largest modulus of np.linalg.eigvals(ms_operator(A, T)), stored (2048^2 is slow)
+    # rho_dense: the largest modulus of np.linalg.eigvals(ms_operator(A, T)), stored (2048^2 is
+    # slow)
     rho_dense = cases[case]["rho_dense"]
     assert result.method == "arnoldi" and result.rho == pytest.approx(rho_dense, rel=1e-10)
     assert result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper

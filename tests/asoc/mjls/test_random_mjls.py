@@ -23,10 +23,12 @@ def test_mode_radii_lie_in_the_documented_interval(family):
 
 
 def test_unstable_family_radii_cover_one_to_one_and_a_half():
-    radii = np.concatenate([_radii(random_mjls(np.random.default_rng(s), 2, 1, 1, 4, family="unstable"))
+    radii = np.concatenate([_radii(random_mjls(np.random.default_rng(s), 2, 1, 1, 4,
+                                               family="unstable"))
                             for s in range(200)])
     assert radii.min() >= 1.0 and radii.max() <= 1.5
-    assert radii.min() < 1.05 and radii.max() > 1.45          # uniform on [1, 1.5]: both ends are reached
+    # uniform on [1, 1.5]: both ends are reached
+    assert radii.min() < 1.05 and radii.max() > 1.45
 
 
 def test_same_generator_state_gives_the_same_system_and_the_draw_advances_it():
@@ -58,7 +60,8 @@ def test_sparse_T_keeps_the_cycle_and_has_zeros():
         sys = random_mjls(np.random.default_rng(seed), 2, 1, 1, 4, family="sparse_T")
         assert np.all(sys.T[np.arange(4), (np.arange(4) + 1) % 4] > 0)
         zeros += int((sys.T == 0).sum())
-        assert np.all(sys.mu_inf > 0)                         # irreducible: unique, positive stationary law
+        # irreducible: unique, positive stationary law
+        assert np.all(sys.mu_inf > 0)
     assert zeros > 0
 
 
@@ -81,5 +84,6 @@ def test_bad_arguments_are_named(kwargs, error, text):
     args = dict(rng=np.random.default_rng(0), n_states=2, n_inputs=1, n_outputs=1, n_modes=2)
     args.update(kwargs)
     with pytest.raises(error, match=text.replace("(", r"\(").replace(")", r"\)")):
-        random_mjls(args.pop("rng"), args.pop("n_states"), args.pop("n_inputs"), args.pop("n_outputs"),
+        random_mjls(args.pop("rng"), args.pop("n_states"), args.pop("n_inputs"),
+                    args.pop("n_outputs"),
                     args.pop("n_modes"), **args)
