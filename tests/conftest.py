@@ -26,12 +26,14 @@ HERE = Path(__file__).resolve().parent
 
 
 def pytest_ignore_collect(collection_path, config):
-    if Path(collection_path).resolve() == HERE / "benchmarks" and not config.getoption("benchmark_only", False):
+    if Path(collection_path).resolve() == HERE / "benchmarks" and not config.getoption(
+        "benchmark_only", False
+    ):
         return True
     return None
 
 
-SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")     # module-scoped clone / wheel
+SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")  # module-scoped clone / wheel
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -51,6 +53,7 @@ def pytest_collection_modifyitems(config, items):
         else:
             continue
         item.add_marker(pytest.mark.xdist_group(group))
+
 
 # Property tests draw the same examples on every run and machine (no example database), so a
 # test run is reproducible like everything else (book/architecture.md, "Portability and
@@ -82,13 +85,29 @@ def ci_execution():
             copy = out / f"{name}.ipynb"
             nbformat.write(nb, copy)
             proc = subprocess.run(
-                [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
-                 "-o", "addopts=", "--nbval-lax", "--nbval-sanitize-with",
-                 str(HERE / "notebooks" / "nbval_sanitize.cfg"),
-                 str(copy)],
-                cwd=out, capture_output=True, text=True, timeout=1800,
+                [
+                    sys.executable,
+                    "-m",
+                    "pytest",
+                    "-q",
+                    "-p",
+                    "no:cacheprovider",
+                    "-p",
+                    "no:xdist",
+                    "-o",
+                    "addopts=",
+                    "--nbval-lax",
+                    "--nbval-sanitize-with",
+                    str(HERE / "notebooks" / "nbval_sanitize.cfg"),
+                    str(copy),
+                ],
+                cwd=out,
+                capture_output=True,
+                text=True,
+                timeout=1800,
                 # the kernel runs next to the copy, outside book/: name the project explicitly
-                env={**os.environ, paths.ENV_VAR: str(paths.project().root)})
+                env={**os.environ, paths.ENV_VAR: str(paths.project().root)},
+            )
             done[name] = out, proc
         return done[name]
 
@@ -107,8 +126,12 @@ def html(tmp_path_factory):
     out = tmp_path_factory.mktemp("book")
     subprocess.run([sys.executable, "-m", "asoc_companion.book"], check=True)
     jb = Path(sys.executable).parent / "jupyter-book"
-    proc = subprocess.run([str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
-                          capture_output=True, text=True, timeout=900)
+    proc = subprocess.run(
+        [str(jb), "build", str(BOOK), "--path-output", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
     (out / "build.log").write_text(proc.stdout + proc.stderr)
     return out / "_build" / "html"
@@ -125,9 +148,17 @@ def browser():
         pytest.fail("chromium and chromedriver are required (make test installs them)")
     opts = webdriver.ChromeOptions()
     opts.binary_location = shutil.which("chromium")
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--no-first-run", "--allow-file-access-from-files"):
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-dev-shm-usage",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--allow-file-access-from-files",
+    ):
         opts.add_argument(flag)
     opts.add_argument("--window-size=1280,900")
     opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})

@@ -23,9 +23,12 @@ def thesis_iteration(sys, tol=1e-10, max_iter=20000, init=1e-4):
         L_new = gain_from_moments(sys, X, P)
         Acl = closed_loop(sys, L_new)
         LC = L_new @ sys.C
-        X, P = (predecessor_sum(sys.T, Acl @ X @ np.swapaxes(Acl, 1, 2) + muHHt),
-                sys.Q + np.swapaxes(LC, 1, 2) @ sys.R @ LC
-                + np.swapaxes(Acl, 1, 2) @ successor_average(sys.T, P) @ Acl)
+        X, P = (
+            predecessor_sum(sys.T, Acl @ X @ np.swapaxes(Acl, 1, 2) + muHHt),
+            sys.Q
+            + np.swapaxes(LC, 1, 2) @ sys.R @ LC
+            + np.swapaxes(Acl, 1, 2) @ successor_average(sys.T, P) @ Acl,
+        )
         done = np.linalg.norm(L_new - L) <= tol * np.linalg.norm(L_new)
         L = L_new
         if done:

@@ -38,14 +38,18 @@ def targets_table(results) -> list:
         if "target_s" in info and median is not None:
             ok = median <= info["target_s"]
             missed += not ok
-            lines.append(f"{name:{width}}  {median:10.4f} s   target <= {info['target_s']:g} s   "
-                         f"{'ok' if ok else 'SLOWER THAN TARGET'}")
+            lines.append(
+                f"{name:{width}}  {median:10.4f} s   target <= {info['target_s']:g} s   "
+                f"{'ok' if ok else 'SLOWER THAN TARGET'}"
+            )
         if "ratio" in info and "target_ratio" in info:
             ok = info["ratio"] >= info["target_ratio"]
             missed += not ok
-            lines.append(f"{name:{width}}  {info['ratio']:10.1f} x   target >= "
-                         f"{info['target_ratio']:g} x   "
-                         f"{'ok' if ok else 'BELOW TARGET'}")
+            lines.append(
+                f"{name:{width}}  {info['ratio']:10.1f} x   target >= "
+                f"{info['target_ratio']:g} x   "
+                f"{'ok' if ok else 'BELOW TARGET'}"
+            )
     lines.append(f"{missed} target(s) missed" if missed else "all targets met")
     return lines
 
@@ -55,10 +59,13 @@ def pytest_terminal_summary(terminalreporter):
         return
     import numpy as np
 
-    terminalreporter.section("targets (median of the rounds; ratios measured alternately in this "
-                             "process)")
-    terminalreporter.write_line(f"machine: {os.cpu_count()} cores, "
-                                f"{platform.processor() or platform.machine()}, "
-                                f"Python {platform.python_version()}, NumPy {np.__version__}")
+    terminalreporter.section(
+        "targets (median of the rounds; ratios measured alternately in this process)"
+    )
+    terminalreporter.write_line(
+        f"machine: {os.cpu_count()} cores, "
+        f"{platform.processor() or platform.machine()}, "
+        f"Python {platform.python_version()}, NumPy {np.__version__}"
+    )
     for line in targets_table(RESULTS):
         terminalreporter.write_line(line)

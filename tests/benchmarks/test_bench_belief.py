@@ -15,6 +15,7 @@ def _quiet(fn):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             return fn(*args, **kwargs)
+
     return run
 
 
@@ -23,9 +24,14 @@ def test_alg22_full_run(benchmark):
     ex = landmark_example()
     benchmark.extra_info["target_s"] = 60.0
     # a fresh generator per round (set-up, not timed): every round runs the same computation
-    benchmark.pedantic(_quiet(optimize_belief_trajectory), rounds=3,
-                       setup=lambda: ((ex.model, ex.cost, ex.mean0, ex.cov0),
-                                      {"rng": np.random.default_rng(2017)}))
+    benchmark.pedantic(
+        _quiet(optimize_belief_trajectory),
+        rounds=3,
+        setup=lambda: (
+            (ex.model, ex.cost, ex.mean0, ex.cov0),
+            {"rng": np.random.default_rng(2017)},
+        ),
+    )
 
 
 def test_belief_ilqg_full_run(benchmark):

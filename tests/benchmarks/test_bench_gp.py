@@ -22,8 +22,12 @@ def inputs():
     mu, var = training_gaussians(200, np.random.default_rng(2017))
     mu_axis, var_axis = evaluation_grid(0.1)
     MU, VAR = np.meshgrid(mu_axis, var_axis)
-    return mu, var, gaussian_dirac_mixtures(mu, var, 10), gaussian_dirac_mixtures(MU.ravel(),
-                                                                                  VAR.ravel(), 10)
+    return (
+        mu,
+        var,
+        gaussian_dirac_mixtures(mu, var, 10),
+        gaussian_dirac_mixtures(MU.ravel(), VAR.ravel(), 10),
+    )
 
 
 def test_mcvmd_distance_matrix(benchmark, inputs):
@@ -45,6 +49,9 @@ def test_gp_fit(benchmark, inputs):
     mu, var, train, _ = inputs
     distances, targets = mcvmd_matrix(train), modified_rosenbrock(mu, var)
     benchmark.extra_info["target_s"] = 10.0
-    benchmark.pedantic(lambda: DistributionGP("se", n_restarts=4).fit(distances, targets,
-                                                                      np.random.default_rng(7)),
-                       rounds=3)
+    benchmark.pedantic(
+        lambda: DistributionGP("se", n_restarts=4).fit(
+            distances, targets, np.random.default_rng(7)
+        ),
+        rounds=3,
+    )

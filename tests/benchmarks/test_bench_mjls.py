@@ -36,16 +36,18 @@ def test_alg31_per_gain(benchmark, t, moments):
     benchmark.pedantic(static_output_feedback, args=(sys,), kwargs={"moments": moments}, rounds=21)
 
 
-@pytest.mark.parametrize("t, moments, target", [(1, "step", 0.5), (1, "exact", 0.5), (2, "step",
-                                                                                      0.5),
-                                                (2, "exact", 5.0)])
+@pytest.mark.parametrize(
+    "t, moments, target", [(1, "step", 0.5), (1, "exact", 0.5), (2, "step", 0.5), (2, "exact", 5.0)]
+)
 def test_alg31_against_the_plain_thesis_iteration(benchmark, t, moments, target):
     """Speed-up of static_output_feedback over Alg. 3.1 transcribed in plain NumPy (same
     process)."""
     sys = sec354_system(t)
-    reference, ours = alternating_medians(lambda: thesis_iteration(sys),
-                                          lambda: static_output_feedback(sys, moments=moments),
-                                          repeat=21)
+    reference, ours = alternating_medians(
+        lambda: thesis_iteration(sys),
+        lambda: static_output_feedback(sys, moments=moments),
+        repeat=21,
+    )
     benchmark.extra_info.update(ratio=reference / ours, target_ratio=target, reference_s=reference)
     benchmark.pedantic(static_output_feedback, args=(sys,), kwargs={"moments": moments}, rounds=5)
 
@@ -55,9 +57,11 @@ def test_monte_carlo_static(benchmark):
     sys = sec354_system(1)
     controller = StaticGain(static_output_feedback(sys).L)
     benchmark.extra_info["target_s"] = 1.0
-    benchmark.pedantic(simulate, args=(sys, controller, SEC354_X0[2], 100, 100_000,
-                                       np.random.default_rng(0)),
-                       rounds=3)
+    benchmark.pedantic(
+        simulate,
+        args=(sys, controller, SEC354_X0[2], 100, 100_000, np.random.default_rng(0)),
+        rounds=3,
+    )
 
 
 @pytest.mark.parametrize("t", [1, 2])
@@ -70,6 +74,7 @@ def test_variational_method_163(benchmark, t):
 
 def test_table_3_2_full_fidelity(benchmark):
     """All 24 cells of Table 3.2 at full fidelity: designs (incl. baselines) and 1e5 runs each."""
+
     def table():
         for t in (1, 2):
             for xi in (1, 2):
@@ -89,8 +94,9 @@ def test_alg32(benchmark):
 def test_alg32_networked_loop(benchmark):
     """Alg. 3.2 on the networked loop of issue 26: it stops on its 2-cycle (before: 10,000
     iterations)."""
-    r = benchmark.pedantic(dynamic_output_feedback, args=(networked_loop(),),
-                           kwargs={"warn": False}, rounds=5)
+    r = benchmark.pedantic(
+        dynamic_output_feedback, args=(networked_loop(),), kwargs={"warn": False}, rounds=5
+    )
     assert r.status == "cycle"
     benchmark.extra_info.update(target_s=0.2, iterations=r.iterations)
 
@@ -105,8 +111,9 @@ def test_exact_design_networked_loop(benchmark):
 
 def test_alg31_networked_loop_lossy(benchmark):
     """Alg. 3.1 on the lossy networked loop: it stops on its 2-cycle (before: 20,000 iterations)."""
-    r = benchmark.pedantic(static_output_feedback, args=(networked_loop_lossy(),),
-                           kwargs={"warn": False}, rounds=5)
+    r = benchmark.pedantic(
+        static_output_feedback, args=(networked_loop_lossy(),), kwargs={"warn": False}, rounds=5
+    )
     assert r.status == "cycle"
     benchmark.extra_info.update(target_s=0.5, iterations=r.iterations)
 
@@ -124,9 +131,12 @@ def test_alg33_horizon_100(benchmark):
     sys = sec373_system(1)
     init = dynamic_output_feedback(sys)
     benchmark.extra_info["target_s"] = 2.0
-    benchmark.pedantic(finite_horizon_dynamic_output_feedback,
-                       args=(sys, 100, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0),
-                       kwargs={"init": init}, rounds=3)
+    benchmark.pedantic(
+        finite_horizon_dynamic_output_feedback,
+        args=(sys, 100, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0),
+        kwargs={"init": init},
+        rounds=3,
+    )
 
 
 def test_monte_carlo_dynamic(benchmark):
@@ -135,6 +145,9 @@ def test_monte_carlo_dynamic(benchmark):
     r = dynamic_output_feedback(sys)
     controller = DynamicOutputFeedback(r.F, r.K, r.L, xhat0=SEC373_MEAN0[1][0])
     benchmark.extra_info["target_s"] = 2.0
-    benchmark.pedantic(simulate, args=(sys, controller, SEC373_MEAN0[1], 100, 100_000,
-                                       np.random.default_rng(0)),
-                       kwargs={"mu0": SEC373_MU0, "x0_cov": SEC373_COV0}, rounds=3)
+    benchmark.pedantic(
+        simulate,
+        args=(sys, controller, SEC373_MEAN0[1], 100, 100_000, np.random.default_rng(0)),
+        kwargs={"mu0": SEC373_MU0, "x0_cov": SEC373_COV0},
+        rounds=3,
+    )

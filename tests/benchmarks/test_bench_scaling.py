@@ -39,7 +39,9 @@ def system(n, M):
 def test_ms_spectral_radius_ratio_n16_m4(benchmark):
     """n = 16, M = 4: matrix-free rho at least 20x faster than the dense operator (one process)."""
     s = system(16, 4)
-    dense_s, rho_dense = time_call(lambda: float(np.max(np.abs(np.linalg.eigvals(ms_operator(s.A, s.T))))), 3)
+    dense_s, rho_dense = time_call(
+        lambda: float(np.max(np.abs(np.linalg.eigvals(ms_operator(s.A, s.T))))), 3
+    )
     rho = benchmark.pedantic(lambda: ms_spectral_radius(s.A, s.T), rounds=10, iterations=1)
     free_s = benchmark.stats.stats.min
     assert rho == pytest.approx(rho_dense, rel=1e-10)
@@ -50,17 +52,19 @@ def test_ms_spectral_radius_n64_m8(benchmark):
     """n = 64, M = 8: rho under 1 s (the dense matrix would need 8.6 GB)."""
     s = system(64, 8)
     rho = benchmark.pedantic(lambda: ms_spectral_radius(s.A, s.T), rounds=3, iterations=1)
-    assert 0 < rho < 0.95 ** 2
-    assert rho == pytest.approx(mean_square_stability(s.A, s.T, method="power", check=False).rho,
-                                rel=1e-8)
+    assert 0 < rho < 0.95**2
+    assert rho == pytest.approx(
+        mean_square_stability(s.A, s.T, method="power", check=False).rho, rel=1e-8
+    )
     benchmark.extra_info.update(target_s=1.0, rho=rho)
 
 
 def test_alg31_exact_n64_m8(benchmark):
     """n = 64, M = 8: Alg. 3.1 with moments="exact" under 10 s."""
     s = system(64, 8)
-    r = benchmark.pedantic(lambda: static_output_feedback(s, moments="exact"), rounds=1,
-                           iterations=1)
+    r = benchmark.pedantic(
+        lambda: static_output_feedback(s, moments="exact"), rounds=1, iterations=1
+    )
     assert r.converged and r.stabilizing
     benchmark.extra_info.update(target_s=10.0, iterations=r.iterations)
 
@@ -96,8 +100,9 @@ def published():
 
 def test_alg31_n100_m100(benchmark, published):
     """n = 100, M = 100: Alg. 3.1 (moments="auto") to its stopping rule under 4 s (issue 33)."""
-    r = benchmark.pedantic(lambda: static_output_feedback(published, warn=False), rounds=1,
-                           iterations=1)
+    r = benchmark.pedantic(
+        lambda: static_output_feedback(published, warn=False), rounds=1, iterations=1
+    )
     benchmark.extra_info.update(target_s=4.0, iterations=r.iterations, status=r.status)
 
 
@@ -105,15 +110,19 @@ def test_exact_static_design_n100_m100(benchmark, published):
     """n = 100, M = 100: exact_static_output_feedback from Alg. 3.1's converged gain (given, not
     timed) and the averaged LQ gain, to a stationary point."""
     alg31 = static_output_feedback(published, warn=False)
-    r = benchmark.pedantic(lambda: exact_static_output_feedback(published, alg31=alg31, warn=False),
-                           rounds=1, iterations=1)
+    r = benchmark.pedantic(
+        lambda: exact_static_output_feedback(published, alg31=alg31, warn=False),
+        rounds=1,
+        iterations=1,
+    )
     benchmark.extra_info.update(target_s=30.0, iterations=r.iterations, status=r.status)
 
 
 def test_ms_spectral_radius_n100_m100(benchmark, published):
     """n = 100, M = 100: rho of the open loop under 10 s (M n^2 = 1e6)."""
-    rho = benchmark.pedantic(lambda: ms_spectral_radius(published.A, published.T), rounds=1,
-                             iterations=1)
+    rho = benchmark.pedantic(
+        lambda: ms_spectral_radius(published.A, published.T), rounds=1, iterations=1
+    )
     assert rho == pytest.approx(0.99, rel=1e-8)
     benchmark.extra_info.update(target_s=10.0)
 
@@ -129,6 +138,7 @@ def _monte_carlo_within_30_s_and_4_gb(benchmark, s, runs):
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
         return out, peak
+
     r, peak = benchmark.pedantic(run, rounds=1, iterations=1)
     assert r.cost.shape == (runs,) and np.all(np.isfinite(r.cost))
     assert peak < 4e9
@@ -151,12 +161,22 @@ def test_exponent_ms_spectral_radius_m8(benchmark):
     systems = {n: system(n, 8) for n in sizes}
 
     def run():
-        return [time_call(lambda s=systems[n]: mean_square_stability(s.A, s.T, method="arnoldi",
-                                                                     check=False).rho,
-                                                                     3)[0] for n in sizes]
+        return [
+            time_call(
+                lambda s=systems[n]: (
+                    mean_square_stability(s.A, s.T, method="arnoldi", check=False).rho
+                ),
+                3,
+            )[0]
+            for n in sizes
+        ]
+
     seconds = benchmark.pedantic(run, rounds=1, iterations=1)
-    benchmark.extra_info.update(exponent=fitted_exponent(sizes, seconds), target_exponent=3.0,
-                                seconds=dict(zip(map(str, sizes), seconds)))
+    benchmark.extra_info.update(
+        exponent=fitted_exponent(sizes, seconds),
+        target_exponent=3.0,
+        seconds=dict(zip(map(str, sizes), seconds)),
+    )
 
 
 def test_exponent_alg31_exact_per_iteration_m4(benchmark):
@@ -175,6 +195,10 @@ def test_exponent_alg31_exact_per_iteration_m4(benchmark):
             r = static_output_feedback(systems[n], moments="exact")
             out.append((time.perf_counter() - start) / r.iterations)
         return out
+
     seconds = benchmark.pedantic(run, rounds=1, iterations=1)
-    benchmark.extra_info.update(exponent=fitted_exponent(sizes, seconds), target_exponent=3.0,
-                                seconds=dict(zip(map(str, sizes), seconds)))
+    benchmark.extra_info.update(
+        exponent=fitted_exponent(sizes, seconds),
+        target_exponent=3.0,
+        seconds=dict(zip(map(str, sizes), seconds)),
+    )

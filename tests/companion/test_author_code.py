@@ -22,8 +22,9 @@ def _cases(kind):
 
 
 def _gain_difference(case, spawn=None):
-    s = author_code.reference_system(RECORD, {**case,
-                                              "spawn": case["spawn"] if spawn is None else spawn})
+    s = author_code.reference_system(
+        RECORD, {**case, "spawn": case["spawn"] if spawn is None else spawn}
+    )
     L = static_output_feedback(s, moments="exact", warn=False).L
     author = np.asarray(case["author_gain"])
     return np.linalg.norm(L - author) / np.linalg.norm(author)

@@ -19,13 +19,25 @@ from asoc_companion.paths import ROOT
 from asoc_companion.plan import make_plan, output_folder
 
 
-def _notebook(folder, name, source="x = 1", depends=None,
-              params='fidelity = "full"\noutput_dir = "."\nseed = 3'):
+def _notebook(
+    folder,
+    name,
+    source="x = 1",
+    depends=None,
+    params='fidelity = "full"\noutput_dir = "."\nseed = 3',
+):
     nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [],
-                           **({"depends": depends} if depends else {})}
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                 "language": "python"}
+    nb.metadata["asoc"] = {
+        "title": name,
+        "figures": [],
+        "tables": [],
+        **({"depends": depends} if depends else {}),
+    }
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
     cell = nbformat.v4.new_code_cell(params)
     cell.metadata["tags"] = ["parameters"]
     nb.cells = [cell, nbformat.v4.new_code_cell(source)]
@@ -35,8 +47,15 @@ def _notebook(folder, name, source="x = 1", depends=None,
 
 
 def test_values_are_typed_like_papermill():
-    assert [nbs.parse_value(v) for v in ("7", "0.5", "1e3", "True", "False", "None", "ci")] == \
-        [7, 0.5, 1000.0, True, False, None, "ci"]
+    assert [nbs.parse_value(v) for v in ("7", "0.5", "1e3", "True", "False", "None", "ci")] == [
+        7,
+        0.5,
+        1000.0,
+        True,
+        False,
+        None,
+        "ci",
+    ]
     assert isinstance(nbs.parse_value("7"), int)
 
 
@@ -74,8 +93,11 @@ def test_parameter_run_goes_to_build_runs_and_leaves_tracked_files_alone(capfd):
     assert all(key in printed for key in values)
     executed = nbformat.read(out / "notebooks" / "sec3_2.ipynb", as_version=4)
     assert executed.metadata.papermill["parameters"]["seed"] == 7
-    assert output_folder(paths.project(), "ci", info.name, {"seed": 8}) != out \
+    assert (
+        output_folder(paths.project(), "ci", info.name, {"seed": 8})
+        != out
         != output_folder(paths.project(), "full", info.name, {"seed": 7})
+    )
 
 
 def test_source_hash_ignores_outputs_and_injected_parameters(tmp_path):
@@ -111,8 +133,9 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
 
     def fake_run(plan, **kwargs):
         ran.append(plan.name)
-        atomic_write_json(out / "values" / f"{plan.name}.json", {"notebook": plan.name,
-                                                                 "values": {"a": 1}})
+        atomic_write_json(
+            out / "values" / f"{plan.name}.json", {"notebook": plan.name, "values": {"a": 1}}
+        )
         executed = nbformat.read(plan.notebook.path, as_version=4)
         for count, cell in enumerate(executed.cells, 1):
             cell.execution_count = count
@@ -138,7 +161,7 @@ def test_reproduce_runs_only_what_changed(tmp_path, monkeypatch, capsys):
     assert ran == ["secX_1"] * 3
     entry = manifest.load_manifest(out)["secX_1"]
     assert set(entry) == {"source", "parameters", "modules", "environment", "depends", "seconds"}
-    assert entry["seconds"] >= 0                 # the run's wall time, for the longest-first order
+    assert entry["seconds"] >= 0  # the run's wall time, for the longest-first order
 
 
 def test_dependencies_run_first_and_enter_the_hash(tmp_path):
@@ -165,13 +188,17 @@ def test_notebooks_are_discovered_by_their_asoc_metadata(tmp_path):
     _notebook(tmp_path, "sec9_9")
     plain = nbformat.v4.new_notebook()
     nbformat.write(plain, tmp_path / "scratch.ipynb")
-    assert list(nbs.notebooks(tmp_path)) == ["sec9_9", "findings"]     # sections first
+    assert list(nbs.notebooks(tmp_path)) == ["sec9_9", "findings"]  # sections first
 
 
 @pytest.mark.notebook
 def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
-    source = "import time, warnings\nprint(seed * 2, flush=True)\ntime.sleep(0.3)\nprint('x')\nwarnings.warn('w')"
+    source = (
+        "import time, warnings\nprint(seed * 2, flush=True)\ntime.sleep(0.3)\n"
+        "print('x')\nwarnings.warn('w')"
+    )
     info = _notebook(tmp_path, "secX_2", source=source)
+
     def plan(overrides):
         return make_plan(paths.project(), info, "ci", overrides, output_dir=tmp_path / "out")
 
@@ -179,62 +206,93 @@ def test_executed_notebook_is_byte_identical_on_rerun(tmp_path):
     data = first.read_bytes()
     nb = nbformat.read(first, as_version=4)
     assert "start_time" not in nb.metadata.papermill and "duration" not in nb.metadata.papermill
-    assert all("execution" not in c.metadata and "duration" not in c.metadata.get("papermill", {})
-               for c in nb.cells)
-    stdout, stderr = nb.cells[-1].outputs          # one chunk per stream, whatever the timing
+    assert all(
+        "execution" not in c.metadata and "duration" not in c.metadata.get("papermill", {})
+        for c in nb.cells
+    )
+    stdout, stderr = nb.cells[-1].outputs  # one chunk per stream, whatever the timing
     assert stdout["text"] == "10\nx\n" and stderr["text"].startswith("<cell>:5: UserWarning: w")
     assert nbs.run(plan({"seed": 5})).read_bytes() == data
     with pytest.raises(ValueError, match="valid names: seed"):
         nbs.run(plan({"n": 5}))
 
 
-@pytest.mark.parametrize("args, message", [
-    (["-p", "seed", "notanumber"],
-     "parameter seed of sec3_2.ipynb (default 3) takes an integer, found 'notanumber'"),
-    (["-p", "seed", "-1"], "is a seed: it takes an integer >= 0, found -1"),
-    (["-p", "seed", "2.5"], "takes an integer, found 2.5"),
-    (["-p", "seed", "True"], "takes an integer, found True"),
-    (["-p", "steps", "0"],
-     "parameter steps of sec3_2.ipynb (default 30) is a count: it takes an integer >= 1, found 0"),
-    (["-p", "steps", "-5"], "is a count: it takes an integer >= 1, found -5"),
-    (["-p", "seed", "7", "-p", "seed", "8"], "-p seed given twice (7 and '8'); give it once"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (
+            ["-p", "seed", "notanumber"],
+            "parameter seed of sec3_2.ipynb (default 3) takes an integer, found 'notanumber'",
+        ),
+        (["-p", "seed", "-1"], "is a seed: it takes an integer >= 0, found -1"),
+        (["-p", "seed", "2.5"], "takes an integer, found 2.5"),
+        (["-p", "seed", "True"], "takes an integer, found True"),
+        (
+            ["-p", "steps", "0"],
+            "parameter steps of sec3_2.ipynb (default 30) is a count: "
+            "it takes an integer >= 1, found 0",
+        ),
+        (["-p", "steps", "-5"], "is a count: it takes an integer >= 1, found -5"),
+        (["-p", "seed", "7", "-p", "seed", "8"], "-p seed given twice (7 and '8'); give it once"),
+    ],
+)
 def test_bad_parameter_values_fail_before_anything_runs(args, message, capsys, monkeypatch):
-    monkeypatch.setattr(nbs, "run", lambda *a,
-                        **k: pytest.fail("a notebook ran despite a bad -p value"))
+    monkeypatch.setattr(
+        nbs, "run", lambda *a, **k: pytest.fail("a notebook ran despite a bad -p value")
+    )
     assert cli.main(["figure", "3.2", "--fidelity", "ci", *args]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
 def test_parameter_values_are_checked_against_the_defaults_type(tmp_path):
-    info = _notebook(tmp_path, "secX_3",
-                     params='fidelity = "full"\noutput_dir = "."\nseed = 3\nn_runs_ci = 2_000\n'
-                                                 'rate = 0.5\nflag = True\nlabel = "a"\nshift = 0')
-    assert nbs.parse_overrides(info, [("n_runs_ci", "500"), ("rate", "2"), ("flag", "False"),
-                                      ("label", "b"),
-                                      ("shift", "-3"), ("seed", "0")]) == \
-        {"n_runs_ci": 500, "rate": 2.0, "flag": False, "label": "b", "shift": -3, "seed": 0}
-    for name, value, message in [("n_runs_ci", "-5", "count"), ("rate", "nan", "finite number"),
-                                 ("rate", "x", "finite number"), ("flag", "1", "True or False")]:
+    info = _notebook(
+        tmp_path,
+        "secX_3",
+        params='fidelity = "full"\noutput_dir = "."\nseed = 3\nn_runs_ci = 2_000\n'
+        'rate = 0.5\nflag = True\nlabel = "a"\nshift = 0',
+    )
+    assert nbs.parse_overrides(
+        info,
+        [
+            ("n_runs_ci", "500"),
+            ("rate", "2"),
+            ("flag", "False"),
+            ("label", "b"),
+            ("shift", "-3"),
+            ("seed", "0"),
+        ],
+    ) == {"n_runs_ci": 500, "rate": 2.0, "flag": False, "label": "b", "shift": -3, "seed": 0}
+    for name, value, message in [
+        ("n_runs_ci", "-5", "count"),
+        ("rate", "nan", "finite number"),
+        ("rate", "x", "finite number"),
+        ("flag", "1", "True or False"),
+    ]:
         with pytest.raises(ValueError, match=message):
             nbs.parse_overrides(info, [(name, value)])
 
 
-def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(tmp_path, capsys,
-                                                                           monkeypatch):
+def test_corrupt_values_file_is_named_with_the_command_that_regenerates_it(
+    tmp_path, capsys, monkeypatch
+):
     from asoc_companion.values import CorruptValuesError, load_all_values, load_values
 
     (tmp_path / "values").mkdir()
     (tmp_path / "values" / "sec3_5.json").write_text('{"notebook": "sec3_5", "values": {"rho": 1.2')
     for load in (lambda: load_values("sec3_5", tmp_path), lambda: load_all_values(tmp_path)):
-        with pytest.raises(CorruptValuesError, match=r"sec3_5\.json: corrupt values file .*"
-                                                     r"`python -m asoc_companion run sec3_5`"):
+        with pytest.raises(
+            CorruptValuesError,
+            match=r"sec3_5\.json: corrupt values file .*"
+            r"`python -m asoc_companion run sec3_5`",
+        ):
             load()
     monkeypatch.setattr("asoc_companion.values.load_all_values", lambda: load_all_values(tmp_path))
     assert cli.main(["ledger"]) == 2
     err = capsys.readouterr().err
-    assert "sec3_5.json: corrupt values file" in err and "python -m asoc_companion run sec3_5" in err
+    assert (
+        "sec3_5.json: corrupt values file" in err and "python -m asoc_companion run sec3_5" in err
+    )
     assert len(err.strip().splitlines()) == 1
 
 
@@ -265,12 +323,15 @@ def test_every_argument_has_help_text():
 def test_the_cli_says_when_a_parameter_cannot_change_the_figure():
     """Fig. 3.4 is computed without the seed (Sec. 3.5's Monte Carlo runs make Table 3.2), Fig. 3.2
     with it."""
-    note = cli.unused_parameters(nbs.find("figure", "3.4"), "figure", "3.4", {"seed": 7,
-                                                                              "horizon": 20})
+    note = cli.unused_parameters(
+        nbs.find("figure", "3.4"), "figure", "3.4", {"seed": 7, "horizon": 20}
+    )
     assert note.startswith("note: seed does not reach") and "horizon" not in note
     assert cli.unused_parameters(nbs.find("figure", "3.2"), "figure", "3.2", {"seed": 7}) == ""
-    assert nbs.parameters_reaching(nbs.find("table", "3.2"), "table", "3.2") >= {"seed",
-                                                                                 "n_runs_full"}
+    assert nbs.parameters_reaching(nbs.find("table", "3.2"), "table", "3.2") >= {
+        "seed",
+        "n_runs_full",
+    }
 
 
 def test_committed_column_names_its_fidelity():
@@ -280,21 +341,31 @@ def test_committed_column_names_its_fidelity():
 
 def test_without_the_companion_extra_the_command_prints_one_line():
     """A library-only install (`pip install asoc`) has no yaml: one line says what to install."""
-    code = ("import sys; sys.modules['yaml'] = None\n"
-            "from asoc_companion.__main__ import main\n"
-            "sys.exit(main(['list']))")
+    code = (
+        "import sys; sys.modules['yaml'] = None\n"
+        "from asoc_companion.__main__ import main\n"
+        "sys.exit(main(['list']))"
+    )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 1 and proc.stdout == ""
     assert proc.stderr.strip().splitlines() == [
         "asoc-companion needs yaml: install the companion's dependencies: pip install "
-        "'asoc[companion]'"]
-    use = subprocess.run([sys.executable, "-c", "import sys; sys.modules['yaml'] = None\n"
-                          "import asoc_companion; asoc_companion.record"], capture_output=True,
-                          text=True)
+        "'asoc[companion]'"
+    ]
+    use = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys; sys.modules['yaml'] = None\nimport asoc_companion; asoc_companion.record",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert "pip install 'asoc[companion]'" in use.stderr.splitlines()[-1]
 
 
 # ---- plain help, aligned list, natural order, where outputs went (issue 31, item 5) ----------
+
 
 def _all_help_texts():
     parser = cli._parser()
@@ -316,8 +387,10 @@ def test_list_aligns_every_row_to_the_longest_name(capsys):
     column = max(map(len, names)) + 2
     assert len(lines) == 3 * len(names)
     for k, name in enumerate(names):
-        title, items, params = lines[3 * k: 3 * k + 3]
-        assert title.startswith(name) and title[column - 2:column] == "  " and title[column] != " "
+        title, items, params = lines[3 * k : 3 * k + 3]
+        assert (
+            title.startswith(name) and title[column - 2 : column] == "  " and title[column] != " "
+        )
         assert items[:column].strip() == "" and items[column] != " "
         assert params[:column].strip() == "" and params[column:].startswith("parameters (-p):")
 

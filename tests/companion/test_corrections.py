@@ -21,12 +21,22 @@ from asoc_companion.theorems.counterexamples import (
 
 
 def _verdicts(check, n, seed=3):
-    return [check(np.random.default_rng(child))[:2] for child in np.random.SeedSequence(seed).spawn(n)]
+    return [
+        check(np.random.default_rng(child))[:2] for child in np.random.SeedSequence(seed).spawn(n)
+    ]
 
 
-@pytest.mark.parametrize("check, n", [(corrections.check_kernels, 40), (corrections.check_3_19, 15),
-                                      (corrections.check_3_26, 30), (corrections.check_3_27, 8),
-                                      (corrections.check_3_31, 40), (corrections.check_3_32, 15)])
+@pytest.mark.parametrize(
+    "check, n",
+    [
+        (corrections.check_kernels, 40),
+        (corrections.check_3_19, 15),
+        (corrections.check_3_26, 30),
+        (corrections.check_3_27, 8),
+        (corrections.check_3_31, 40),
+        (corrections.check_3_32, 15),
+    ],
+)
 def test_corrected_statement_holds_and_its_mutant_is_caught(check, n):
     verdicts = [v for v in _verdicts(check, n) if v[0] != "not_applicable"]
     assert verdicts, "no applicable instance"
@@ -46,7 +56,7 @@ def test_prop_3_26_counterexample_is_exact():
 def test_thm_3_31_counterexample_bound_depends_on_a_gain_without_effect(gain):
     ex = thm_3_31_example(gain)
     assert ex["exact"] == 2
-    assert ex["bound"] == 2 + 2 * gain + 4 * gain ** 2
+    assert ex["bound"] == 2 + 2 * gain + 4 * gain**2
     assert (ex["bound"] < ex["exact"]) == (-Fraction(1, 2) < gain < 0)
     assert ex["costate_gap_offdiagonal"] == -gain * (2 * gain + 1)
 
@@ -56,7 +66,7 @@ def test_thm_3_19_counterexample_cycles_although_a_stabilising_gain_exists():
     assert all(c["period_2"] and min(c["rho"]) > 1 for c in ex["cycles"])
     assert ex["best_rho"] < 1
     sys = MJLS(T=np.eye(1), J=None, **{k: np.array(v)[None] for k, v in THM_3_19_SYSTEM.items()})
-    run = static_output_feedback(sys, warn=False)                   # the library's Alg. 3.1 agrees
+    run = static_output_feedback(sys, warn=False)  # the library's Alg. 3.1 agrees
     assert not (run.converged and run.stabilizing)
 
 
@@ -67,7 +77,10 @@ def test_kernel_counterexample():
 
 
 def test_difference_of_3_65_and_b4_is_the_stated_trace():
-    errors = [corrections.check_3_32(np.random.default_rng(c))[2] for c in np.random.SeedSequence(8).spawn(10)]
+    errors = [
+        corrections.check_3_32(np.random.default_rng(c))[2]
+        for c in np.random.SeedSequence(8).spawn(10)
+    ]
     assert max(errors) < 1e-10
 
 
@@ -90,8 +103,9 @@ def test_a_planted_false_bound_is_caught(monkeypatch):
 
 
 def test_records_have_the_interface_the_study_merges():
-    records = corrections.correction_records(np.random.SeedSequence(5), n_instances=3,
-                                             mutant_instances=2)
+    records = corrections.correction_records(
+        np.random.SeedSequence(5), n_instances=3, mutant_instances=2
+    )
     assert sorted(records) == sorted(corrections.STATEMENT_IDS)
     for key, record in records.items():
         assert isinstance(record["diagnosis"], str) and record["diagnosis"]
@@ -103,21 +117,29 @@ def test_records_have_the_interface_the_study_merges():
             assert c["mutant"]["instances"] <= 2
 
 
-@pytest.mark.parametrize("kwargs, error", [(dict(seed_sequence=2017), TypeError),
-                                           (dict(seed_sequence=np.random.SeedSequence(1),
-                                                 n_instances=0), ValueError),
-                                           (dict(seed_sequence=np.random.SeedSequence(1),
-                                                 mutant_instances=1.5),
-                                            ValueError)])
+@pytest.mark.parametrize(
+    "kwargs, error",
+    [
+        (dict(seed_sequence=2017), TypeError),
+        (dict(seed_sequence=np.random.SeedSequence(1), n_instances=0), ValueError),
+        (dict(seed_sequence=np.random.SeedSequence(1), mutant_instances=1.5), ValueError),
+    ],
+)
 def test_bad_arguments_are_named(kwargs, error):
-    with pytest.raises(error, match=next(k for k in ("mutant_instances", "n_instances",
-                                                     "seed_sequence")
-                                         if k in kwargs and (k != "seed_sequence" or error is TypeError))):
+    with pytest.raises(
+        error,
+        match=next(
+            k
+            for k in ("mutant_instances", "n_instances", "seed_sequence")
+            if k in kwargs and (k != "seed_sequence" or error is TypeError)
+        ),
+    ):
         corrections.correction_records(**kwargs)
 
 
 def test_thm_3_27_instance_13_has_two_verified_fixed_points():
     from asoc_companion.theorems.counterexamples import thm_3_27_fixed_points
+
     ex = thm_3_27_fixed_points(random_starts=3)
     assert (ex["M"], ex["nx"], ex["nu"], ex["ny"]) == (2, 1, 2, 1)
     low, high = ex["fixed_points"]
@@ -130,9 +152,13 @@ def test_thm_3_27_instance_13_has_two_verified_fixed_points():
 
 def test_thm_3_19_needs_nonsingular_noise():
     from asoc_companion.theorems.counterexamples import thm_3_19_noiseless_example
+
     ex = thm_3_19_noiseless_example()
     assert not ex["reaches_lq_gain"] and ex["reaches_lq_gain_with_noise"]
-    outcomes = [corrections.check_3_19(np.random.default_rng(c)) for c in np.random.SeedSequence(3).spawn(40)]
+    outcomes = [
+        corrections.check_3_19(np.random.default_rng(c))
+        for c in np.random.SeedSequence(3).spawn(40)
+    ]
     singular = [o for o in outcomes if o[2] is not None]
     assert singular and all(o[:2] == ("not_applicable", "not_applicable") for o in singular)
     # the hypothesis excludes real failures
@@ -143,13 +169,21 @@ def test_thm_3_19_needs_nonsingular_noise():
 def test_mcvmd_integral_matches_quadrature_and_the_closed_form_fails_when_spread():
     from asoc import gp
     from asoc_companion.theorems.counterexamples import mcvmd_integral
+
     x, y = [0.0, 1.0, 2.5], [0.3, 4.0]
-    quadrature = gp.mcvmd_quadrature(lambda m, b: gp.lcd_dirac(x, None, m, b),
-                                     lambda m, b: gp.lcd_dirac(y, None, m, b), b_max=10.0,
-                                     center=2.0,
-                                     spread=6.0, points=x + y)
+    quadrature = gp.mcvmd_quadrature(
+        lambda m, b: gp.lcd_dirac(x, None, m, b),
+        lambda m, b: gp.lcd_dirac(y, None, m, b),
+        b_max=10.0,
+        center=2.0,
+        spread=6.0,
+        points=x + y,
+    )
     assert mcvmd_integral(x, y, 10.0) == pytest.approx(quadrature, rel=1e-8)
-    outcomes = [corrections.check_kernels(np.random.default_rng(c)) for c in np.random.SeedSequence(3).spawn(60)]
+    outcomes = [
+        corrections.check_kernels(np.random.default_rng(c))
+        for c in np.random.SeedSequence(3).spawn(60)
+    ]
     spread = [o[2] for o in outcomes if o[2] is not None]
     assert all(o[0] == "holds" for o in outcomes)
     assert spread and any(verdict == "fails" and lowest < -0.1 for verdict, lowest in spread)
@@ -158,6 +192,7 @@ def test_mcvmd_integral_matches_quadrature_and_the_closed_form_fails_when_spread
 def test_thm_3_9_c12_infeasibility_is_certified_by_two_solvers():
     from asoc.mjls.examples import sec354_system
     from asoc_companion.theorems.h2_lmi import certified_margins, lmi_C12_margin
+
     margins = lmi_C12_margin()
     assert all(m["verdict"] == "infeasible" for m in margins.values())
     assert all(v < 0 for m in margins.values() for v in m["margins"].values())
@@ -168,4 +203,5 @@ def test_thm_3_9_c12_infeasibility_is_certified_by_two_solvers():
 
 def test_prop_3_15_diagnosis_points_at_3_11():
     from asoc_companion.theorems.static_feedback import summarise_3_15
+
     assert "starts in (3.11)" in summarise_3_15([])["diagnosis"]

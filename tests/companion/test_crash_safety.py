@@ -31,8 +31,9 @@ SRC = Path(__file__).resolve().parents[2] / "src"
 
 
 def _git(*args, cwd):
-    return subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True,
-                          check=True).stdout
+    return subprocess.run(
+        ["git", *args], cwd=cwd, capture_output=True, text=True, check=True
+    ).stdout
 
 
 @pytest.fixture(scope="module")
@@ -56,17 +57,23 @@ def _as_foreground_command():
 
 def _start(clone):
     env = {**os.environ, "PYTHONPATH": str(SRC), paths.ENV_VAR: str(clone)}
-    return subprocess.Popen([sys.executable, "-m", "asoc_companion", "figure", "3.2"], cwd=clone,
-                            env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True,
-                            preexec_fn=_as_foreground_command)
+    return subprocess.Popen(
+        [sys.executable, "-m", "asoc_companion", "figure", "3.2"],
+        cwd=clone,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+        preexec_fn=_as_foreground_command,
+    )
 
 
 def _wait_for(proc, condition, timeout=60.0):
     start = time.monotonic()
     while not condition():
-        assert proc.poll() is None, "the run ended before the kill point: " + proc.stdout.read().decode()[-2000:]
+        assert proc.poll() is None, (
+            "the run ended before the kill point: " + proc.stdout.read().decode()[-2000:]
+        )
         assert time.monotonic() - start < timeout, "kill point not reached"
         time.sleep(0.02)
 
@@ -78,15 +85,16 @@ def _values_written(clone, since):
 
 
 POINTS = {
-    "after 1 s (kernel starting)": lambda clone, t0, wall: (lambda: time.monotonic() - t0 >= 1.0),
-    "after 2 s": lambda clone, t0, wall: (lambda: time.monotonic() - t0 >= 2.0),
+    "after 1 s (kernel starting)": lambda clone, t0, wall: lambda: time.monotonic() - t0 >= 1.0,
+    "after 2 s": lambda clone, t0, wall: lambda: time.monotonic() - t0 >= 2.0,
     "mid-run (values being recorded)": lambda clone, t0, wall: _values_written(clone, wall),
 }
 
 
 @pytest.mark.notebook
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL],
-                         ids=lambda s: s.name)
+@pytest.mark.parametrize(
+    "sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL], ids=lambda s: s.name
+)
 @pytest.mark.parametrize("point", list(POINTS))
 def test_killed_run_leaves_tracked_files_identical(clone, sig, point):
     shutil.rmtree(clone / "book" / "_build" / "staging", ignore_errors=True)
@@ -95,9 +103,9 @@ def test_killed_run_leaves_tracked_files_identical(clone, sig, point):
     try:
         _wait_for(proc, POINTS[point](clone, time.monotonic(), wall))
         if sig == signal.SIGTERM:
-            proc.send_signal(sig)               # the command alone; it shuts its kernel down
+            proc.send_signal(sig)  # the command alone; it shuts its kernel down
         else:
-            os.killpg(proc.pid, sig)            # Ctrl-C / OOM kill: the whole process group
+            os.killpg(proc.pid, sig)  # Ctrl-C / OOM kill: the whole process group
         output = proc.communicate(timeout=60)[0].decode(errors="replace")
     finally:
         try:
@@ -105,12 +113,18 @@ def test_killed_run_leaves_tracked_files_identical(clone, sig, point):
         except ProcessLookupError:
             pass
     assert proc.returncode != 0
-    assert _git("status", "--porcelain",
-                cwd=clone) == "", f"{sig.name} {point}: tracked files changed"
+    assert _git("status", "--porcelain", cwd=clone) == "", (
+        f"{sig.name} {point}: tracked files changed"
+    )
     # a handled interrupt also removes its staging folder
     if sig != signal.SIGKILL:
-        left = sorted(str(p.relative_to(clone)) for p in (clone / "book" / "_build" / "staging").rglob("*"))
-        assert not left, f"{sig.name} {point}: exit code {proc.returncode}, staging left {left}; output:\n{output[-3000:]}"
+        left = sorted(
+            str(p.relative_to(clone)) for p in (clone / "book" / "_build" / "staging").rglob("*")
+        )
+        assert not left, (
+            f"{sig.name} {point}: exit code {proc.returncode}, staging left {left}; "
+            f"output:\n{output[-3000:]}"
+        )
 
 
 def _project(tmp_path, monkeypatch):
@@ -127,8 +141,11 @@ def _project(tmp_path, monkeypatch):
 def _notebook(book, name, cells):
     nb = nbformat.v4.new_notebook()
     nb.metadata["asoc"] = {"title": name, "figures": [], "tables": []}
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                 "language": "python"}
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
     params = nbformat.v4.new_code_cell('fidelity = "full"\noutput_dir = "../figures"')
     params.metadata["tags"] = ["parameters"]
     nb.cells = [params] + [nbformat.v4.new_code_cell(c) for c in cells]
@@ -140,10 +157,16 @@ def _notebook(book, name, cells):
 def test_failed_run_moves_nothing(tmp_path, monkeypatch):
     project = _project(tmp_path, monkeypatch)
     monkeypatch.setenv("PYTHONPATH", str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    info = _notebook(project.book, "secX_9", [
-        "import asoc_companion as repro\nrepro.setup('secX_9', fidelity=fidelity, "
-        "output_dir=output_dir)",
-        "repro.record('a', 2.0)", "raise RuntimeError('the computation failed')"])
+    info = _notebook(
+        project.book,
+        "secX_9",
+        [
+            "import asoc_companion as repro\nrepro.setup('secX_9', fidelity=fidelity, "
+            "output_dir=output_dir)",
+            "repro.record('a', 2.0)",
+            "raise RuntimeError('the computation failed')",
+        ],
+    )
     committed = {"notebook": "secX_9", "fidelity": "full", "values": {"a": 1.0}}
     atomic_write_json(project.figures / "values" / "secX_9.json", committed)
     before = {p: p.read_bytes() for p in [info.path, project.figures / "values" / "secX_9.json"]}
@@ -157,14 +180,17 @@ def test_failed_run_moves_nothing(tmp_path, monkeypatch):
 def test_reproduce_reruns_incomplete_outputs_although_hashes_agree(tmp_path, monkeypatch, capsys):
     project = _project(tmp_path, monkeypatch)
     (project.reference / "secX_8.yaml").write_text(
-        "secX_8.a: {where: 'Sec. X', kind: measured}\nsecX_8.b: {where: 'Sec. X', kind: measured}\n")
+        "secX_8.a: {where: 'Sec. X', kind: measured}\nsecX_8.b: {where: 'Sec. X', kind: measured}\n"
+    )
     info = _notebook(project.book, "secX_8", ["x = 1"])
     ran = []
 
     def fake_run(plan, **kwargs):
         ran.append(plan.name)
-        atomic_write_json(project.figures / "values" / "secX_8.json",
-                          {"notebook": "secX_8", "fidelity": "full", "values": {"a": 1, "b": 2}})
+        atomic_write_json(
+            project.figures / "values" / "secX_8.json",
+            {"notebook": "secX_8", "fidelity": "full", "values": {"a": 1, "b": 2}},
+        )
         nb = nbformat.read(info.path, as_version=4)
         for count, cell in enumerate(nb.cells, 1):
             cell.execution_count = count
@@ -177,8 +203,10 @@ def test_reproduce_reruns_incomplete_outputs_although_hashes_agree(tmp_path, mon
     assert cli.main(["reproduce", "--jobs", "1"]) == 0 and ran == ["secX_8"]
     assert "up to date, skipped" in capsys.readouterr().out
     # a value the reference expects goes missing (hashes unchanged): re-run
-    atomic_write_json(project.figures / "values" / "secX_8.json",
-                      {"notebook": "secX_8", "fidelity": "full", "values": {"a": 1}})
+    atomic_write_json(
+        project.figures / "values" / "secX_8.json",
+        {"notebook": "secX_8", "fidelity": "full", "values": {"a": 1}},
+    )
     assert cli.main(["reproduce", "--jobs", "1"]) == 0 and ran == ["secX_8"] * 2
     assert "values missing: b" in capsys.readouterr().out
     # a code cell lost its outputs and execution count: re-run
@@ -190,7 +218,10 @@ def test_reproduce_reruns_incomplete_outputs_although_hashes_agree(tmp_path, mon
     # a truncated values file: re-run, not a JSONDecodeError
     (project.figures / "values" / "secX_8.json").write_text('{"notebook": "secX_8", "val')
     assert cli.main(["reproduce", "--jobs", "1"]) == 0 and ran == ["secX_8"] * 4
-    assert json.loads((project.figures / "values" / "secX_8.json").read_text())["values"] == {"a": 1, "b": 2}
+    assert json.loads((project.figures / "values" / "secX_8.json").read_text())["values"] == {
+        "a": 1,
+        "b": 2,
+    }
 
 
 @pytest.mark.notebook
@@ -201,11 +232,16 @@ def test_every_kernel_computes_with_one_blas_thread(tmp_path, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
     monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
-    info = _notebook(project.book, "secX_7", [
-        "import os\nimport asoc_companion as repro\nrepro.setup('secX_7', fidelity=fidelity, "
-        "output_dir=output_dir)",
-        "repro.record('threads', [os.environ.get(name) for name in ('OPENBLAS_NUM_THREADS', "
-        "'OMP_NUM_THREADS')])"])
+    info = _notebook(
+        project.book,
+        "secX_7",
+        [
+            "import os\nimport asoc_companion as repro\nrepro.setup('secX_7', fidelity=fidelity, "
+            "output_dir=output_dir)",
+            "repro.record('threads', [os.environ.get(name) for name in ('OPENBLAS_NUM_THREADS', "
+            "'OMP_NUM_THREADS')])",
+        ],
+    )
     nbs.run(make_plan(project, info, "full"), progress_bar=False)
     recorded = json.loads((project.figures / "values" / "secX_7.json").read_text())["values"]
     assert recorded["threads"] == ["1", "1"]
@@ -223,7 +259,7 @@ def test_staging_folder_refilled_by_a_late_write_is_removed(tmp_path, monkeypatc
     def rmtree_then_late_write(path, ignore_errors=False):
         real_rmtree(path, ignore_errors=ignore_errors)
         calls.append(path)
-        if len(calls) == 1:                                  # the kernel's last write lands now
+        if len(calls) == 1:  # the kernel's last write lands now
             (Path(path) / "values").mkdir(parents=True)
             (Path(path) / "values" / "sec3_2.json").write_text("{}")
 

@@ -14,12 +14,29 @@ from asoc_companion import figures
 from asoc_companion.notebooks import notebooks
 from asoc_companion.paths import FIGURES
 
-COLOUR_WORDS = re.compile(r"\((?P<colour>[a-z ]+?)(?:,[^)]*)?\)"
-                          r"|\b(?P<plain>red|green|blue|orange|yellow|purple|vermillion|grey|gray|magenta"
-                          r"|cyan) (?:crosses|line|curve|dots|markers)\b")
+COLOUR_WORDS = re.compile(
+    r"\((?P<colour>[a-z ]+?)(?:,[^)]*)?\)"
+    r"|\b(?P<plain>red|green|blue|orange|yellow|purple|vermillion|grey|gray|magenta"
+    r"|cyan) (?:crosses|line|curve|dots|markers)\b"
+)
 """A colour named in a caption: "(red)", "(red, covariances ...)" or "red crosses"."""
-COLOURS = {"red", "green", "blue", "orange", "yellow", "purple", "black", "grey", "gray", "magenta",
-           "cyan", "violet", "brown", "pink", *figures.PALETTE}
+COLOURS = {
+    "red",
+    "green",
+    "blue",
+    "orange",
+    "yellow",
+    "purple",
+    "black",
+    "grey",
+    "gray",
+    "magenta",
+    "cyan",
+    "violet",
+    "brown",
+    "pink",
+    *figures.PALETTE,
+}
 
 
 def test_a_wide_figure_is_shrunk_to_the_printed_width_with_legible_text(tmp_path):
@@ -83,8 +100,11 @@ def _caption_texts():
         cells = json.loads(info.path.read_text())["cells"]
         for k, cell in enumerate(cells):
             texts = ["".join(cell["source"])] if cell["cell_type"] == "markdown" else []
-            texts += ["".join(o["data"]["text/markdown"]) for o in cell.get("outputs", [])
-                      if "text/markdown" in o.get("data", {})]
+            texts += [
+                "".join(o["data"]["text/markdown"])
+                for o in cell.get("outputs", [])
+                if "text/markdown" in o.get("data", {})
+            ]
             for text in texts:
                 if re.search(r"\*\*(Figure|Fig\.) ", text):
                     yield f"{info.name} cell {k}", text

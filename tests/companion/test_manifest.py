@@ -49,10 +49,17 @@ def _project(tmp_path, monkeypatch):
 
 def _notebook(book, name, source, depends=None):
     nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": [],
-                           **({"depends": depends} if depends else {})}
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
-                                 "language": "python"}
+    nb.metadata["asoc"] = {
+        "title": name,
+        "figures": [],
+        "tables": [],
+        **({"depends": depends} if depends else {}),
+    }
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
     params = nbformat.v4.new_code_cell('fidelity = "full"\noutput_dir = "../figures"')
     params.metadata["tags"] = ["parameters"]
     nb.cells = [params, nbformat.v4.new_code_cell(source)]
@@ -60,9 +67,21 @@ def _notebook(book, name, source, depends=None):
 
 
 def test_imports_are_read_statically_with_relative_and_lazy_ones():
-    code = "import a.b\nfrom c import d, e\nfrom . import f\nfrom ..g import h\ndef k():\n    import lazy\n"
-    assert imported_names(code, package="p.q") == {"a.b", "c", "c.d", "c.e", "p.q", "p.q.f", "p.g",
-                                                   "p.g.h", "lazy"}
+    code = (
+        "import a.b\nfrom c import d, e\nfrom . import f\nfrom ..g import h\n"
+        "def k():\n    import lazy\n"
+    )
+    assert imported_names(code, package="p.q") == {
+        "a.b",
+        "c",
+        "c.d",
+        "c.e",
+        "p.q",
+        "p.q.f",
+        "p.g",
+        "p.g.h",
+        "lazy",
+    }
 
 
 def test_closure_follows_packages_and_relative_imports(tmp_path, monkeypatch):
@@ -72,16 +91,19 @@ def test_closure_follows_packages_and_relative_imports(tmp_path, monkeypatch):
 
 
 def _entries(project):
-    return {name: manifest.changed_inputs(make_plan(project, info, "full"))
-            for name, info in nbs.notebooks().items()}
+    return {
+        name: manifest.changed_inputs(make_plan(project, info, "full"))
+        for name, info in nbs.notebooks().items()
+    }
 
 
 def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path, monkeypatch):
     project = _project(tmp_path, monkeypatch)
     _notebook(project.book, "sec2_6", "import asoc_companion as repro\nfrom asoc import gp")
     _notebook(project.book, "sec3_2", "import asoc_companion as repro\nfrom asoc.mjls import MJLS")
-    _notebook(project.book, "findings", "import asoc_companion as repro", depends=["sec2_6",
-                                                                                   "sec3_2"])
+    _notebook(
+        project.book, "findings", "import asoc_companion as repro", depends=["sec2_6", "sec3_2"]
+    )
     out = project.figures
     for name, info in nbs.notebooks().items():
         atomic_write_json(out / "values" / f"{name}.json", {"notebook": name, "values": {"x": 1}})
@@ -94,11 +116,19 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": []}
     entry = manifest.load_manifest(out)["sec3_2"]["modules"]
     assert "asoc/mjls/system.py" in entry and "asoc_companion/recorder.py" in entry
-    assert not [p for p in entry if p.startswith("asoc/gp")] and "asoc_companion/manifest.py" not in entry
+    assert (
+        not [p for p in entry if p.startswith("asoc/gp")]
+        and "asoc_companion/manifest.py" not in entry
+    )
 
-    (project.src / "asoc" / "gp" / "kernels.py").write_text(MODULES["asoc/gp/kernels.py"] + "# edited\n")
-    assert _entries(project) == {"sec2_6": ["modules (asoc/gp/kernels.py)"], "sec3_2": [],
-                                 "findings": []}
+    (project.src / "asoc" / "gp" / "kernels.py").write_text(
+        MODULES["asoc/gp/kernels.py"] + "# edited\n"
+    )
+    assert _entries(project) == {
+        "sec2_6": ["modules (asoc/gp/kernels.py)"],
+        "sec3_2": [],
+        "findings": [],
+    }
     # Sec. 2.6 re-runs and records a new value: the findings page, which quotes it, follows
     atomic_write_json(out / "values" / "sec2_6.json", {"notebook": "sec2_6", "values": {"x": 2}})
     manifest.update_manifest(make_plan(project, nbs.notebooks()["sec2_6"], "full"))
@@ -106,8 +136,13 @@ def test_editing_gp_reruns_sec2_6_and_the_pages_quoting_it_nothing_else(tmp_path
     # an edit to the harness's own machinery re-runs nothing; one to recording re-runs all
     (project.src / "asoc_companion" / "manifest.py").write_text("def entry():\n    return 1\n")
     assert _entries(project) == {"sec2_6": [], "sec3_2": [], "findings": ["depends"]}
-    (project.src / "asoc_companion" / "recorder.py").write_text("def record(key, value):\n    return 2 * value\n")
-    assert all(any("asoc_companion/recorder.py" in c for c in changed) for changed in _entries(project).values())
+    (project.src / "asoc_companion" / "recorder.py").write_text(
+        "def record(key, value):\n    return 2 * value\n"
+    )
+    assert all(
+        any("asoc_companion/recorder.py" in c for c in changed)
+        for changed in _entries(project).values()
+    )
 
 
 def test_every_notebook_of_the_book_hashes_its_own_import_closure():
@@ -116,38 +151,57 @@ def test_every_notebook_of_the_book_hashes_its_own_import_closure():
         modules = manifest.module_hashes(info.path)
         assert modules, f"{name}: no project module found among its imports"
         assert all((src / p).is_file() for p in modules)
-        assert not [p for p in modules if p.startswith(("asoc_companion/__main__",
-                                                        "asoc_companion/notebooks"))]
+        assert not [
+            p
+            for p in modules
+            if p.startswith(("asoc_companion/__main__", "asoc_companion/notebooks"))
+        ]
     # the section on MJLS stability never runs the Gaussian-process code
-    assert not [p for p in manifest.module_hashes(nbs.notebooks()["sec3_2"].path) if p.startswith("asoc/gp/")]
+    assert not [
+        p
+        for p in manifest.module_hashes(nbs.notebooks()["sec3_2"].path)
+        if p.startswith("asoc/gp/")
+    ]
 
 
 @pytest.mark.notebook
-def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependencies(tmp_path,
-                                                                                   monkeypatch,
-                                                                                   capsys):
+def test_reproduce_runs_independent_notebooks_in_parallel_after_their_dependencies(
+    tmp_path, monkeypatch, capsys
+):
     project = _project(tmp_path, monkeypatch)
     monkeypatch.setenv("PYTHONPATH", str(SRC))
-    record = ("import os, time, asoc_companion as repro\n"
-              "repro.setup('{name}', fidelity=fidelity, output_dir=output_dir)\n"
-              "repro.record('start', time.time()); time.sleep(2.0)\n"
-              "repro.record('threads', os.environ.get('OPENBLAS_NUM_THREADS'))\n"
-              "_ = repro.record('end', time.time())")
+    record = (
+        "import os, time, asoc_companion as repro\n"
+        "repro.setup('{name}', fidelity=fidelity, output_dir=output_dir)\n"
+        "repro.record('start', time.time()); time.sleep(2.0)\n"
+        "repro.record('threads', os.environ.get('OPENBLAS_NUM_THREADS'))\n"
+        "_ = repro.record('end', time.time())"
+    )
     for name in ("secA_1", "secB_1"):
         _notebook(project.book, name, record.format(name=name))
     _notebook(project.book, "findings", record.format(name="findings"), depends=["secA_1"])
     start = time.monotonic()
     # the real entry point: spawned workers must find their functions under `python -m`
-    proc = subprocess.run([sys.executable, "-m", "asoc_companion", "reproduce", "--jobs", "2"],
-                          cwd=project.book,
-                          capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [sys.executable, "-m", "asoc_companion", "reproduce", "--jobs", "2"],
+        cwd=project.book,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert "2 at a time" in proc.stdout
-    values = {n: json.loads((project.figures / "values" / f"{n}.json").read_text())["values"]
-              for n in ("secA_1", "secB_1", "findings")}
-    assert values["secA_1"]["start"] < values["secB_1"]["end"] and values["secB_1"]["start"] < values["secA_1"]["end"], \
-        "the two independent notebooks did not overlap"
-    assert values["findings"]["start"] >= values["secA_1"]["end"], "findings started before the notebook it quotes"
+    values = {
+        n: json.loads((project.figures / "values" / f"{n}.json").read_text())["values"]
+        for n in ("secA_1", "secB_1", "findings")
+    }
+    assert (
+        values["secA_1"]["start"] < values["secB_1"]["end"]
+        and values["secB_1"]["start"] < values["secA_1"]["end"]
+    ), "the two independent notebooks did not overlap"
+    assert values["findings"]["start"] >= values["secA_1"]["end"], (
+        "findings started before the notebook it quotes"
+    )
     assert {v["threads"] for v in values.values()} == {"1"}
     assert set(manifest.load_manifest(project.figures)) == {"secA_1", "secB_1", "findings"}
     # each entry keeps the run's wall time (the next build starts the longest first), and the

@@ -23,10 +23,25 @@ def test_full_run_writes_figures_and_executes_in_place():
     plan = make_plan(PROJECT, INFO, "full")
     assert (plan.name, plan.fidelity, plan.parameters) == ("sec3_2", "full", {})
     assert plan.executed == INFO.path
-    shown = [_rel(p) for p in (plan.output_dir, plan.values, plan.figures, plan.tables,
-                               plan.manifest, plan.staging)]
-    assert shown == ["figures", "figures/values/sec3_2.json", "figures", "figures",
-                     "figures/values/manifest.json", "book/_build/staging"]
+    shown = [
+        _rel(p)
+        for p in (
+            plan.output_dir,
+            plan.values,
+            plan.figures,
+            plan.tables,
+            plan.manifest,
+            plan.staging,
+        )
+    ]
+    assert shown == [
+        "figures",
+        "figures/values/sec3_2.json",
+        "figures",
+        "figures",
+        "figures/values/manifest.json",
+        "book/_build/staging",
+    ]
     assert plan.injected == {"fidelity": "full", "output_dir": "../figures"}
     assert _rel(plan.values_of("sec3_5")) == "figures/values/sec3_5.json"
 
@@ -34,8 +49,11 @@ def test_full_run_writes_figures_and_executes_in_place():
 def test_ci_run_writes_build_ci():
     plan = make_plan(PROJECT, INFO, "ci")
     assert [_rel(p) for p in (plan.output_dir, plan.executed, plan.values, plan.manifest)] == [
-        "book/_build/ci", "book/_build/ci/notebooks/sec3_2.ipynb",
-        "book/_build/ci/values/sec3_2.json", "book/_build/ci/values/manifest.json"]
+        "book/_build/ci",
+        "book/_build/ci/notebooks/sec3_2.ipynb",
+        "book/_build/ci/values/sec3_2.json",
+        "book/_build/ci/values/manifest.json",
+    ]
     assert plan.injected == {"fidelity": "ci", "output_dir": "_build/ci"}
 
 
@@ -77,8 +95,11 @@ def _run_path_joins(tree) -> list:
             for side in (node.left, node.right):
                 if isinstance(side, ast.Constant) and side.value in RUN_PATH_NAMES:
                     found.append((node.lineno, side.value))
-                elif isinstance(side, ast.JoinedStr) and isinstance(side.values[-1], ast.Constant) \
-                        and str(side.values[-1].value).endswith(".json"):
+                elif (
+                    isinstance(side, ast.JoinedStr)
+                    and isinstance(side.values[-1], ast.Constant)
+                    and str(side.values[-1].value).endswith(".json")
+                ):
                     found.append((node.lineno, "<name>.json"))
         elif isinstance(node, ast.Constant) and node.value == "manifest.json":
             found.append((node.lineno, node.value))
@@ -86,10 +107,15 @@ def _run_path_joins(tree) -> list:
 
 
 def test_the_scan_finds_a_path_built_by_hand():
-    code = ('out / "values" / f"{name}.json"\n'
-            'Path(out) / "book" / "_build" / "ci"\nx = "manifest.json"')
+    code = (
+        'out / "values" / f"{name}.json"\nPath(out) / "book" / "_build" / "ci"\nx = "manifest.json"'
+    )
     assert sorted(v for _, v in _run_path_joins(ast.parse(code))) == [
-        "<name>.json", "ci", "manifest.json", "values"]
+        "<name>.json",
+        "ci",
+        "manifest.json",
+        "values",
+    ]
 
 
 def test_only_plan_and_paths_build_the_paths_of_a_run():

@@ -20,8 +20,11 @@ def test_record_writes_json_immediately_and_converts_numpy(tmp_path):
     repro.record("a", np.float64(1.5))
     repro.record("b", {"value": np.arange(3), "ok": np.bool_(True)})
     data = json.loads((tmp_path / "values" / "secX_1.json").read_text())
-    assert data == {"notebook": "secX_1", "fidelity": "ci",
-                    "values": {"a": 1.5, "b": {"value": [0, 1, 2], "ok": True}}}
+    assert data == {
+        "notebook": "secX_1",
+        "fidelity": "ci",
+        "values": {"a": 1.5, "b": {"value": [0, 1, 2], "ok": True}},
+    }
     assert repro.load_values("secX_1", tmp_path)["a"] == 1.5
 
 
@@ -95,8 +98,8 @@ def test_cli_lists_notebooks_and_rejects_unknown_figures(capsys):
 
 
 def test_settling_iteration_is_scale_free_and_validates():
-    s = np.array([0.0, 5.0, 9.0, 9.9, 10.3, 10.0])      # deviations 10, 5, 1, 0.1, 0.3, 0
-    assert repro.settling_iteration(s) == 5               # 0.3 > 2% of 10
+    s = np.array([0.0, 5.0, 9.0, 9.9, 10.3, 10.0])  # deviations 10, 5, 1, 0.1, 0.3, 0
+    assert repro.settling_iteration(s) == 5  # 0.3 > 2% of 10
     assert repro.settling_iteration(1000 * s + 7) == 5
     assert repro.settling_iteration(np.vstack([s, [1, 1, 1, 1, 1, 1.0]])) == 5
     assert repro.settling_iteration(s, band=0.1) == 2
@@ -121,8 +124,9 @@ def test_figures_the_thesis_lacks_get_ids_of_their_own(tmp_path):
     from asoc_companion import notebooks as nbs
     from asoc_companion.figures import file_stem
 
-    assert file_stem("fig", "own.1") == "fig_own_1" and file_stem("table",
-                                                                  "own.12") == "table_own_12"
+    assert (
+        file_stem("fig", "own.1") == "fig_own_1" and file_stem("table", "own.12") == "table_own_12"
+    )
     assert file_stem("fig", "2.10") == "fig2_10"
     for bad in ("10", "own", "own.x", "own.1.2", "3.4a"):
         with pytest.raises(ValueError, match="own.1"):
@@ -131,7 +135,13 @@ def test_figures_the_thesis_lacks_get_ids_of_their_own(tmp_path):
     fig, ax = plt.subplots()
     assert repro.save_figure(fig, "own.2").name == "fig_own_2.png"
     plt.close(fig)
-    assert nbs.find("figure", "own.1").name == "your_system" and nbs.find("table",
-                                                                          "own.1").name == "your_system"
-    assert not [n for info in nbs.notebooks().values() for n in info.figures + info.tables
-                if n.split(".")[0].isdigit() and int(n.split(".")[0]) > 3], "a chapter number the thesis lacks"
+    assert (
+        nbs.find("figure", "own.1").name == "your_system"
+        and nbs.find("table", "own.1").name == "your_system"
+    )
+    assert not [
+        n
+        for info in nbs.notebooks().values()
+        for n in info.figures + info.tables
+        if n.split(".")[0].isdigit() and int(n.split(".")[0]) > 3
+    ], "a chapter number the thesis lacks"

@@ -41,15 +41,21 @@ def test_every_mutant_and_correction_with_math_is_typeset():
             if ASCII_MATH.search(text) and text not in MUTANTS_TEX:
                 untyped.append(f"{key} mutant: {mutant['description']}")
         statement = corrected.get("statement", "")
-        if "$" not in statement and ASCII_MATH.search(statement) \
-                and statement not in CORRECTIONS_TEX:
+        if (
+            "$" not in statement
+            and ASCII_MATH.search(statement)
+            and statement not in CORRECTIONS_TEX
+        ):
             untyped.append(f"{key} corrected: {statement[:80]}")
-    untyped += [f"{st.key} check: {st.checked[:80]}" for st in STATEMENTS
-                if ASCII_MATH.search(st.checked) and st.checked not in CHECKS_TEX]
+    untyped += [
+        f"{st.key} check: {st.checked[:80]}"
+        for st in STATEMENTS
+        if ASCII_MATH.search(st.checked) and st.checked not in CHECKS_TEX
+    ]
     assert not untyped, untyped
 
 
 def test_typeset_texts_keep_no_ascii_math_outside_dollars():
     for text in [*MUTANTS_TEX.values(), *CORRECTIONS_TEX.values(), *CHECKS_TEX.values()]:
-        prose = re.sub(r"`[^`]*`", "", text).split("$")[::2]          # outside math and code
+        prose = re.sub(r"`[^`]*`", "", text).split("$")[::2]  # outside math and code
         assert not [p for p in prose if re.search(r"\^|_\w|<=|>=", p)], text

@@ -34,8 +34,10 @@ def test_a_transposed_t_changes_the_radius_on_a_three_cycle_but_not_on_one_state
 
 
 def test_boundary_draws_put_the_radius_just_below_one():
-    radii = [moment_map_radius(*boundary_system(np.random.default_rng(s),
-                                                moment_map_radius)) for s in range(20)]
+    radii = [
+        moment_map_radius(*boundary_system(np.random.default_rng(s), moment_map_radius))
+        for s in range(20)
+    ]
     assert all(0.97 - 1e-12 <= r < 1 for r in radii)
 
 

@@ -14,14 +14,20 @@ import asoc.mjls
 import asoc_companion
 from asoc_companion.book import api_markdown, public_names
 
-PAGES = {asoc.mjls: "api_mjls.html", asoc.belief: "api_belief.html", asoc.gp: "api_gp.html",
-         asoc.config: "api_core.html", asoc_companion: "api_companion.html"}
+PAGES = {
+    asoc.mjls: "api_mjls.html",
+    asoc.belief: "api_belief.html",
+    asoc.gp: "api_gp.html",
+    asoc.config: "api_core.html",
+    asoc_companion: "api_companion.html",
+}
 REQUIRED = ("static_output_feedback", "exact_dynamic_output_feedback")
 
 
 def _signature_text(browser, obj_id):
     return browser.execute_script(
-        "const e = document.getElementById(arguments[0]); return e ? e.textContent : null;", obj_id)
+        "const e = document.getElementById(arguments[0]); return e ? e.textContent : null;", obj_id
+    )
 
 
 @pytest.mark.book
@@ -34,8 +40,14 @@ def test_api_page_lists_function_with_signature(html, browser, name):
     text = " ".join(text.replace("\u00b6", "").split())
     assert f"{name}(" in text, text
     for param in inspect.signature(func).parameters.values():
-        shown = param.name if param.default is inspect.Parameter.empty else f"{param.name}={param.default!r}"
-        assert shown.replace(" ", "") in text.replace(" ", ""), f"{name}: {shown} missing from {text!r}"
+        shown = (
+            param.name
+            if param.default is inspect.Parameter.empty
+            else f"{param.name}={param.default!r}"
+        )
+        assert shown.replace(" ", "") in text.replace(" ", ""), (
+            f"{name}: {shown} missing from {text!r}"
+        )
 
 
 @pytest.mark.book
@@ -48,13 +60,20 @@ def test_each_page_tables_and_lists_every_public_name(html, browser, package):
         "const t = document.querySelector('article table'); const d = "
         "document.querySelector('article dl.py');"
         "return t && t.classList.contains('autosummary') && (!d ||"
-        " (t.compareDocumentPosition(d) & Node.DOCUMENT_POSITION_FOLLOWING) > 0);")
+        " (t.compareDocumentPosition(d) & Node.DOCUMENT_POSITION_FOLLOWING) > 0);"
+    )
     assert first_table, f"{PAGES[package]}: no autosummary table before the first entry"
-    toc = set(browser.execute_script(
-        "return Array.from(document.querySelectorAll('#pst-page-toc-nav a')).map(a => "
-        "a.hash.slice(1))"))
-    public = [n for n in public_names(package)
-              if inspect.isfunction(getattr(package, n)) or inspect.isclass(getattr(package, n))]
+    toc = set(
+        browser.execute_script(
+            "return Array.from(document.querySelectorAll('#pst-page-toc-nav a')).map(a => "
+            "a.hash.slice(1))"
+        )
+    )
+    public = [
+        n
+        for n in public_names(package)
+        if inspect.isfunction(getattr(package, n)) or inspect.isclass(getattr(package, n))
+    ]
     missing = [n for n in public if f"{package.__name__}.{n}" not in toc]
     assert public and not missing, f"{PAGES[package]}: not in the page's contents: {missing}"
 
@@ -67,7 +86,8 @@ def test_every_docstring_is_rendered_once(html, browser):
     for page in sorted(html.glob("api*.html")):
         browser.get(page.as_uri())
         ids = browser.execute_script(
-            "return Array.from(document.querySelectorAll('article dt.sig[id]')).map(e => e.id)")
+            "return Array.from(document.querySelectorAll('article dt.sig[id]')).map(e => e.id)"
+        )
         twice += [i for i in ids if i in seen]
         seen.update(ids)
         doubled += browser.execute_script("""

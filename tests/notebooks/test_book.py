@@ -20,10 +20,14 @@ PAGES = NOTEBOOK_PAGES + ["intro.html", "ledger.html"]
 def _wait_for_math(driver, timeout=30):
     from selenium.webdriver.support.ui import WebDriverWait
 
-    WebDriverWait(driver, timeout).until(lambda d: d.execute_script(
-        "return window.MathJax && MathJax.startup && MathJax.startup.promise"
-        " ? (MathJax.startup.promise.then(() => window.__mjdone = true), window.__mjdone === true)"
-        " : false"))
+    WebDriverWait(driver, timeout).until(
+        lambda d: d.execute_script(
+            "return window.MathJax && MathJax.startup && MathJax.startup.promise"
+            " ? (MathJax.startup.promise.then(() => window.__mjdone = true),"
+            " window.__mjdone === true)"
+            " : false"
+        )
+    )
 
 
 @pytest.mark.book
@@ -32,23 +36,29 @@ def test_page_renders_math_and_images(html, browser, page):
     path = html / page
     assert path.exists(), f"{page} was not built"
     browser.get(path.as_uri())
-    n_math_src = browser.execute_script("return document.querySelectorAll('.math, "
-                                        "mjx-container').length")
+    n_math_src = browser.execute_script(
+        "return document.querySelectorAll('.math, mjx-container').length"
+    )
     if page in NOTEBOOK_PAGES:
         assert n_math_src > 0, f"{page}: no math on the page"
         _wait_for_math(browser)
-        rendered = browser.execute_script("return document.querySelectorAll('mjx-container').length")
+        rendered = browser.execute_script(
+            "return document.querySelectorAll('mjx-container').length"
+        )
         raw = browser.execute_script(
             "return Array.from(document.querySelectorAll('.math')).filter("
-            "e => !e.querySelector('mjx-container') && e.textContent.includes('\\\\')).length")
+            "e => !e.querySelector('mjx-container') && e.textContent.includes('\\\\')).length"
+        )
         assert rendered > 0 and raw == 0, f"{page}: {rendered} typeset, {raw} left as raw TeX"
     browser.execute_script("window.scrollTo(0, document.body.scrollHeight)")
     images = browser.execute_script(
-        "return Array.from(document.images).map(i => [i.src, i.complete, i.naturalWidth])")
+        "return Array.from(document.images).map(i => [i.src, i.complete, i.naturalWidth])"
+    )
     info = notebooks().get(page.removesuffix(".html"))
     if info is not None:
-        assert len(images) >= len(info.figures), \
+        assert len(images) >= len(info.figures), (
             f"{page}: expected its {len(info.figures)} figures, found {len(images)} images"
+        )
     broken = [src for src, complete, width in images if not (complete and width > 0)]
     assert not broken, f"{page}: images that did not load: {broken}"
 
@@ -63,7 +73,10 @@ def test_no_table_wider_than_its_container_at_1280px(html, browser, page):
             const box = t.closest('.pst-scrollable-table-container') || t.parentElement;
             return [t.id || t.className, t.scrollWidth, box.clientWidth, box.scrollWidth];
         }).filter(([_, tw, cw, sw]) => tw > cw || sw > cw);""")
-    assert not wide, f"{page}: tables wider than their container [table, scrollWidth, clientWidth, box scrollWidth]: {wide}"
+    assert not wide, (
+        f"{page}: tables wider than their container "
+        f"[table, scrollWidth, clientWidth, box scrollWidth]: {wide}"
+    )
 
 
 def _ids(path: Path) -> set:
@@ -75,7 +88,8 @@ def _ids(path: Path) -> set:
 def test_internal_links_resolve(html, browser, page):
     browser.get((html / page).as_uri())
     hrefs = browser.execute_script(
-        "return Array.from(document.querySelectorAll('article a[href]')).map(a => a.href)")
+        "return Array.from(document.querySelectorAll('article a[href]')).map(a => a.href)"
+    )
     broken, checked = [], 0
     for href in hrefs:
         url = urlparse(href)
@@ -94,11 +108,18 @@ def test_internal_links_resolve(html, browser, page):
 @pytest.mark.book
 def test_intro_summarises_and_reaches_every_finding(html, browser):
     browser.get((html / "intro.html").as_uri())
-    n_badges = browser.execute_script("return document.querySelectorAll('article .sd-badge').length")
-    assert n_badges >= 3 * len([n for n in notebooks() if n.startswith("sec")]), "status badges missing"
-    links = set(browser.execute_script(
-        "return Array.from(document.querySelectorAll(`article a[href*='findings.html#']`))"
-        ".map(a => a.href.split('#')[1])"))
+    n_badges = browser.execute_script(
+        "return document.querySelectorAll('article .sd-badge').length"
+    )
+    assert n_badges >= 3 * len([n for n in notebooks() if n.startswith("sec")]), (
+        "status badges missing"
+    )
+    links = set(
+        browser.execute_script(
+            "return Array.from(document.querySelectorAll(`article a[href*='findings.html#']`))"
+            ".map(a => a.href.split('#')[1])"
+        )
+    )
     anchors = _ids(html / "findings.html")
     labels = re.findall(r"\((finding-[\w-]+)\)=", (BOOK / "findings.ipynb").read_text())
     assert len(labels) >= 11 and set(labels) <= anchors, "findings sections lack their anchors"
@@ -109,17 +130,22 @@ def test_intro_summarises_and_reaches_every_finding(html, browser):
 @pytest.mark.parametrize("name", [n for n, i in notebooks().items() if i.figures])
 def test_every_rendered_figure_caption_states_the_claim(html, browser, name):
     cells = json.loads(notebooks()[name].path.read_text())["cells"]
-    rendered = sum(1 for c in cells if "figure_caption(" in "".join(c["source"]) and c.get("outputs"))
+    rendered = sum(
+        1 for c in cells if "figure_caption(" in "".join(c["source"]) and c.get("outputs")
+    )
     browser.get((html / f"{name}.html").as_uri())
     captions = browser.execute_script(
-        "return Array.from(document.querySelectorAll('.asoc-caption')).map(e => e.textContent)")
-    assert len(captions) == rendered, f"{name}: {len(captions)} captions shown, {rendered} caption cells executed"
+        "return Array.from(document.querySelectorAll('.asoc-caption')).map(e => e.textContent)"
+    )
+    assert len(captions) == rendered, (
+        f"{name}: {len(captions)} captions shown, {rendered} caption cells executed"
+    )
     assert all("the thesis" in c and "Ours:" in c for c in captions)
 
 
 # ---- a light site with a clean console (issue 25, item 1) -------------------------------------
 
-JS_BUDGET = 3_000_000          # bytes of JavaScript a page may load (3 MB)
+JS_BUDGET = 3_000_000  # bytes of JavaScript a page may load (3 MB)
 
 
 def _all_pages(html):
@@ -130,11 +156,12 @@ def _load_and_log(browser, path):
     """Open ``path``; return (requests [(url, type)], console errors) of this page load alone."""
     import time
 
-    browser.get_log("performance"), browser.get_log("browser")      # drop what earlier pages left
+    browser.get_log("performance"), browser.get_log("browser")  # drop what earlier pages left
     browser.get(path.as_uri())
-    time.sleep(0.5)                                                # async and deferred scripts
-    if browser.execute_script("return !!(window.MathJax && MathJax.startup && "
-                              "MathJax.startup.promise)"):
+    time.sleep(0.5)  # async and deferred scripts
+    if browser.execute_script(
+        "return !!(window.MathJax && MathJax.startup && MathJax.startup.promise)"
+    ):
         _wait_for_math(browser)
     requests = []
     for entry in browser.get_log("performance"):
@@ -170,7 +197,8 @@ def test_every_page_is_light_offline_and_has_a_clean_console(html, browser):
             faults.append(f"{name}: requests outside the book {remote[:3]}")
         browser.set_window_size(400, 900)
         width, client = browser.execute_script(
-            "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+            "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]"
+        )
         if width > client:
             faults.append(f"{name}: scrolls sideways at 400 px ({width} > {client} px)")
     browser.set_window_size(1280, 900)
@@ -186,8 +214,10 @@ def test_mathjax_is_one_script_loaded_once(html, browser):
 
 # ---- pages that show the computation (item 2) ----------------------------------------------------
 
-WARNING_TEXT = re.compile(r"\b\w*(Warning|Error):|warnings\.warn\(|Traceback \(most recent call "
-                          r"last\)")
+WARNING_TEXT = re.compile(
+    r"\b\w*(Warning|Error):|warnings\.warn\(|Traceback \(most recent call "
+    r"last\)"
+)
 
 
 def warning_blocks(page_html: str) -> list:
@@ -210,13 +240,17 @@ def test_no_warning_text_or_stray_output(html, page):
     assert not warning_blocks(text), f"{page}: {warning_blocks(text)[:5]}"
     # a cell's displayed value is a bare repr (Scaling's `256`, `PosixPath('../figures')`): the book
     # prints numbers rounded, in sentences or tables, and hides the bookkeeping
-    stray = re.findall(r'<div class="output text_plain[^"]*"><div '
-                       r'class="highlight"><pre><span></span>'
-                       r"([^<]{0,60})", text)
+    stray = re.findall(
+        r'<div class="output text_plain[^"]*"><div '
+        r'class="highlight"><pre><span></span>'
+        r"([^<]{0,60})",
+        text,
+    )
     assert not stray, f"{page}: stray outputs {stray}"
 
 
 # ---- one set of totals (item 4) ------------------------------------------------------------------
+
 
 def test_landing_page_and_ledger_give_the_same_totals():
     """Both pages carry the same paragraph saying what is counted, and the landing page opens
@@ -227,8 +261,11 @@ def test_landing_page_and_ledger_give_the_same_totals():
     totals = totals_markdown()
     assert totals in intro and totals in ledger
     assert intro.index(verdict_markdown()) < intro.index("## What reproduces")
-    cited = [(p.name, m) for p in [*BOOK.glob("*.md"), *BOOK.glob("*.ipynb")]
-             for m in re.findall(r"\bissues? \d+\b", p.read_text())]
+    cited = [
+        (p.name, m)
+        for p in [*BOOK.glob("*.md"), *BOOK.glob("*.ipynb")]
+        for m in re.findall(r"\bissues? \d+\b", p.read_text())
+    ]
     assert not cited, f"references to issue numbers a reader cannot follow: {cited}"
 
 
@@ -257,13 +294,15 @@ def test_theorems_page_reads_on_a_phone_and_shows_whole_formulas(html, browser):
     _wait_for_math(browser)
     header = browser.execute_script(
         "return Array.from(document.querySelectorAll('article table')[0].querySelectorAll('th'))"
-        ".map(th => th.textContent.trim())")
+        ".map(th => th.textContent.trim())"
+    )
     assert header == ["Statement", "Verdict", "Mutant"], header
     sections = browser.execute_script("return document.querySelectorAll('[id^=check-]').length")
     assert sections >= 30, f"{sections} statement sections"
     assert not browser.execute_script(FORMULAS_CUT), "formulas cut at 1280 px"
     browser.set_window_size(400, 900)
     width, client = browser.execute_script(
-        "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+        "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]"
+    )
     browser.set_window_size(1280, 900)
     assert width <= client, f"the Theorems page scrolls sideways at 400 px ({width} > {client} px)"

@@ -23,7 +23,9 @@ HIDDEN_TAGS = {"remove-cell", "remove-input"}
 
 
 def _parse(source: str) -> list:
-    code = "\n".join("pass" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines())
+    code = "\n".join(
+        "pass" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines()
+    )
     return ast.parse(code).body
 
 
@@ -34,8 +36,9 @@ def _is_record_call(node) -> bool:
 
 
 def _calls_record(source: str) -> bool:
-    return any(_is_record_call(node) for node in ast.walk(ast.Module(body=_parse(source),
-                                                                     type_ignores=[])))
+    return any(
+        _is_record_call(node) for node in ast.walk(ast.Module(body=_parse(source), type_ignores=[]))
+    )
 
 
 def _only_records(statements) -> bool:
@@ -43,8 +46,11 @@ def _only_records(statements) -> bool:
     for stmt in statements:
         if isinstance(stmt, ast.Expr) and _is_record_call(stmt.value):
             continue
-        if (isinstance(stmt, ast.Assign) and _is_record_call(stmt.value)
-                and all(isinstance(t, ast.Name) and t.id == "_" for t in stmt.targets)):
+        if (
+            isinstance(stmt, ast.Assign)
+            and _is_record_call(stmt.value)
+            and all(isinstance(t, ast.Name) and t.id == "_" for t in stmt.targets)
+        ):
             continue
         if isinstance(stmt, ast.For) and not stmt.orelse and _only_records(stmt.body):
             continue
@@ -66,8 +72,9 @@ def record_cell_problems(nb) -> list:
         if not HIDDEN_TAGS & set(cell.metadata.get("tags", [])):
             problems.append(f"{name} calls record but is not tagged remove-cell or remove-input")
         if not _only_records(_parse(cell.source)):
-            problems.append(f"{name} does more than record: move the computation into the visible "
-                            "cell above")
+            problems.append(
+                f"{name} does more than record: move the computation into the visible cell above"
+            )
         if any(o.output_type != "execute_result" for o in cell.get("outputs", [])):
             problems.append(f"{name} prints or displays: a record cell shows nothing")
     return problems
@@ -80,15 +87,26 @@ def test_record_calls_are_in_hidden_record_cells(name):
     assert not problems, f"{name}:\n" + "\n".join(problems)
 
 
-@pytest.mark.parametrize("source, tags, outputs, fault", [
-    ("x = solve(sys)\nrepro.record('x', x)", ["remove-cell"], [], "does more than record"),
-    ("repro.record('x', x)", [], [], "not tagged"),
-    ("repro.record('x', x)", ["remove-cell"], [nbformat.v4.new_output("stream", text="1\n")],
-     "prints or displays"),
-    ("for t, r in res.items():\n    print(t)\n    repro.record(f'x{t}', r)", ["remove-cell"], [],
-     "does more"),
-    ("y = repro.record('x', x)", ["remove-cell"], [], "does more than record"),
-])
+@pytest.mark.parametrize(
+    "source, tags, outputs, fault",
+    [
+        ("x = solve(sys)\nrepro.record('x', x)", ["remove-cell"], [], "does more than record"),
+        ("repro.record('x', x)", [], [], "not tagged"),
+        (
+            "repro.record('x', x)",
+            ["remove-cell"],
+            [nbformat.v4.new_output("stream", text="1\n")],
+            "prints or displays",
+        ),
+        (
+            "for t, r in res.items():\n    print(t)\n    repro.record(f'x{t}', r)",
+            ["remove-cell"],
+            [],
+            "does more",
+        ),
+        ("y = repro.record('x', x)", ["remove-cell"], [], "does more than record"),
+    ],
+)
 def test_planted_bookkeeping_faults_are_caught(source, tags, outputs, fault):
     cell = nbformat.v4.new_code_cell(source, metadata={"tags": tags})
     cell.outputs = outputs
@@ -97,8 +115,10 @@ def test_planted_bookkeeping_faults_are_caught(source, tags, outputs, fault):
 
 
 def test_a_proper_record_cell_passes():
-    source = ("# the iterations of Alg. 3.2\nfor t, r in alg32.items():\n"
-              "    repro.record(f'alg32_T{t}', [r.rho, r.cost])\n    if r.converged:\n"
-              "        _ = repro.record(f'alg32_T{t}_ok', True)")
+    source = (
+        "# the iterations of Alg. 3.2\nfor t, r in alg32.items():\n"
+        "    repro.record(f'alg32_T{t}', [r.rho, r.cost])\n    if r.converged:\n"
+        "        _ = repro.record(f'alg32_T{t}_ok', True)"
+    )
     cell = nbformat.v4.new_code_cell(source, metadata={"tags": ["remove-cell"]})
     assert record_cell_problems(nbformat.v4.new_notebook(cells=[cell])) == []

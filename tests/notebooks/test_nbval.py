@@ -24,8 +24,9 @@ CHECK_TAG = "nbval-check-output"
 def _checked_cells(nb):
     """The cells nbval compares in lax mode: tagged ``nbval-check-output`` (the tag replaces the
     ``# NBVAL_CHECK_OUTPUT`` comment, which readers of the book saw in the code)."""
-    return [c for c in nb.cells if c.cell_type == "code" and CHECK_TAG in c.metadata.get("tags",
-                                                                                         [])]
+    return [
+        c for c in nb.cells if c.cell_type == "code" and CHECK_TAG in c.metadata.get("tags", [])
+    ]
 
 
 @pytest.mark.notebook
@@ -48,7 +49,9 @@ def _ends_in_displayed_expression(source: str) -> bool:
     A trailing ';' does not help: IPython decides on it from the input history, which
     nbval's execution does not record, so nbval sees the full repr anyway.
     """
-    code = "\n".join(line for line in source.splitlines() if not line.lstrip().startswith(("%", "!")))
+    code = "\n".join(
+        line for line in source.splitlines() if not line.lstrip().startswith(("%", "!"))
+    )
     body = ast.parse(code).body
     last = body[-1] if body else None
     if not isinstance(last, ast.Expr):
@@ -62,7 +65,13 @@ def test_checked_cells_show_no_bare_repr(name):
     """A checked cell's last expression must not be displayed: its repr has every digit."""
     nb = nbformat.read(NOTEBOOKS[name].path, as_version=4)
     checked = _checked_cells(nb)
-    shown = [c.id for c in checked if _ends_in_displayed_expression(c.source)
-             or any(o.output_type == "execute_result" for o in c.get("outputs", []))]
-    assert not shown, (f"{name}: checked cells {shown} end in a displayed expression; assign it "
-                       f"(`_ = repro.record(...)`) or print rounded numbers")
+    shown = [
+        c.id
+        for c in checked
+        if _ends_in_displayed_expression(c.source)
+        or any(o.output_type == "execute_result" for o in c.get("outputs", []))
+    ]
+    assert not shown, (
+        f"{name}: checked cells {shown} end in a displayed expression; assign it "
+        f"(`_ = repro.record(...)`) or print rounded numbers"
+    )

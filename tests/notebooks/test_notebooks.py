@@ -39,18 +39,24 @@ def test_notebook_at_ci_fidelity(name, ci_run):
         if entry.name not in ours_full:
             problems.append(f"{entry.key}: no full-fidelity value committed (run `make figures`)")
             continue
-        if entry.kind == "deterministic" and entry.expect == "reproduced" \
-                and status(entry, ours_ci[entry.name]) != "reproduced":
-            problems.append(f"{entry.key}: {ours_ci[entry.name]} vs thesis {entry.thesis} (tol "
-                            f"{entry.tol})")
+        if (
+            entry.kind == "deterministic"
+            and entry.expect == "reproduced"
+            and status(entry, ours_ci[entry.name]) != "reproduced"
+        ):
+            problems.append(
+                f"{entry.key}: {ours_ci[entry.name]} vs thesis {entry.thesis} (tol {entry.tol})"
+            )
         ok, how = agrees_with_full(entry, ours_ci[entry.name], ours_full[entry.name])
         if not ok:
             problems.append(f"{entry.key}: ci run disagrees with committed full run: {how}")
         mc_error = monte_carlo_rtol(ours_ci[entry.name], ours_full[entry.name])
         if entry.ci_rtol is not None and mc_error is not None and entry.ci_rtol < mc_error:
-            problems.append(f"{entry.key}: ci_rtol {entry.ci_rtol} is tighter than the Monte Carlo "
-                            "error "
-                            f"of the comparison, {mc_error:.3g} (4 combined standard errors)")
+            problems.append(
+                f"{entry.key}: ci_rtol {entry.ci_rtol} is tighter than the Monte Carlo "
+                "error "
+                f"of the comparison, {mc_error:.3g} (4 combined standard errors)"
+            )
     assert not problems, "\n".join(problems)
 
 

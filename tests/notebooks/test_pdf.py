@@ -29,8 +29,9 @@ def pdf(tmp_path_factory):
     """The PDF built once per session; its path (the LaTeX log lies beside it)."""
     missing = [t for t in TOOLS if shutil.which(t) is None]
     if missing:
-        pytest.fail(f"{', '.join(missing)} missing: `make tex` installs Debian's TeX Live and "
-                    "poppler-utils")
+        pytest.fail(
+            f"{', '.join(missing)} missing: `make tex` installs Debian's TeX Live and poppler-utils"
+        )
     out = tmp_path_factory.mktemp("pdf")
     subprocess.run([sys.executable, "-m", "asoc_companion.book"], check=True, capture_output=True)
     summary = io.StringIO()
@@ -43,17 +44,27 @@ def pdf(tmp_path_factory):
 
 def _text(pdf_path, *pages) -> str:
     first_last = ["-f", str(pages[0]), "-l", str(pages[-1])] if pages else []
-    return subprocess.run(["pdftotext", "-layout", *first_last, str(pdf_path), "-"],
-                          capture_output=True, text=True, check=True).stdout
+    return subprocess.run(
+        ["pdftotext", "-layout", *first_last, str(pdf_path), "-"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
 
 
 def bookmarks(pdf_path) -> list:
     """The titles of the PDF's outline (bookmarks), read by pdftohtml's XML output."""
-    xml = subprocess.run(["pdftohtml", "-xml", "-i", "-stdout", "-q", str(pdf_path)],
-                         capture_output=True, text=True, check=True).stdout
-    outline = xml[xml.find("<outline>"):]
-    return [re.sub(r"<[^>]+>", "", t).strip() for t in re.findall(r"<item[^>]*>(.*?)</item>",
-                                                                  outline, re.S)]
+    xml = subprocess.run(
+        ["pdftohtml", "-xml", "-i", "-stdout", "-q", str(pdf_path)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    outline = xml[xml.find("<outline>") :]
+    return [
+        re.sub(r"<[^>]+>", "", t).strip()
+        for t in re.findall(r"<item[^>]*>(.*?)</item>", outline, re.S)
+    ]
 
 
 def _words(text: str) -> str:
@@ -63,8 +74,13 @@ def _words(text: str) -> str:
 
 def _headings(path: Path, level: str) -> list:
     cells = json.loads(path.read_text())["cells"]
-    return [line[len(level) + 1:] for c in cells if c["cell_type"] == "markdown"
-            for line in "".join(c["source"]).splitlines() if line.startswith(level + " ")]
+    return [
+        line[len(level) + 1 :]
+        for c in cells
+        if c["cell_type"] == "markdown"
+        for line in "".join(c["source"]).splitlines()
+        if line.startswith(level + " ")
+    ]
 
 
 @pytest.mark.book
@@ -72,7 +88,11 @@ def test_title_page_names_the_thesis_licences_and_version(pdf):
     first = " ".join(_text(pdf, 1).split())
     title = re.search(r'^title: "(.+)"', (BOOK / "_config.yml").read_text(), re.M)[1]
     assert title in first, f"the title page lacks the book's title {title!r}: {first[:200]!r}"
-    assert "Approximate Stochastic Optimal Control of Smooth Nonlinear Systems and Piecewise Linear Systems" in first
+    thesis = (
+        "Approximate Stochastic Optimal Control of Smooth Nonlinear Systems and "
+        "Piecewise Linear Systems"
+    )
+    assert thesis in first
     assert "Maxim Dolgov" in first and "CC BY-NC 4.0" in first and "MIT" in first
     assert f"asoc version {version('asoc')}" in first
 
@@ -81,10 +101,15 @@ def test_title_page_names_the_thesis_licences_and_version(pdf):
 def test_bookmarks_for_every_page_and_finding(pdf):
     marks = {_words(b) for b in bookmarks(pdf)}
     titles = [_headings(info.path, "#")[0] for info in notebooks().values()]
-    titles += [re.search(r"^# (.+)$", (BOOK / f"{page}.md").read_text(), re.M)[1]
-               for page in ("ledger", "architecture", "api", "api_mjls")]
-    markdown = "\n".join("".join(c["source"]) for c in json.loads((BOOK / "findings.ipynb").read_text())["cells"]
-                         if c["cell_type"] == "markdown")
+    titles += [
+        re.search(r"^# (.+)$", (BOOK / f"{page}.md").read_text(), re.M)[1]
+        for page in ("ledger", "architecture", "api", "api_mjls")
+    ]
+    markdown = "\n".join(
+        "".join(c["source"])
+        for c in json.loads((BOOK / "findings.ipynb").read_text())["cells"]
+        if c["cell_type"] == "markdown"
+    )
     findings = re.findall(r"\(finding-[\w-]+\)=\s*\n##\s+(.+)", markdown)
     assert len(findings) >= 11
     # a bookmark drops TeX and formatting: compare the first words of each heading
@@ -95,17 +120,23 @@ def test_bookmarks_for_every_page_and_finding(pdf):
 @pytest.mark.book
 def test_every_figure_and_table_is_in_the_pdf(pdf):
     n_figures = sum(len(info.figures) for info in notebooks().values())
-    images = subprocess.run(["pdfimages", "-list", str(pdf)], capture_output=True, text=True,
-                            check=True).stdout
-    n_images = len(images.splitlines()) - 2                         # two header lines
+    images = subprocess.run(
+        ["pdfimages", "-list", str(pdf)], capture_output=True, text=True, check=True
+    ).stdout
+    n_images = len(images.splitlines()) - 2  # two header lines
     assert n_images >= n_figures, f"{n_images} images for {n_figures} figures"
     text = _text(pdf)
     tables = [t for info in notebooks().values() for t in info.tables]
     missing = [t for t in tables if f"Table {t}" not in text]
     assert tables and not missing, f"tables not in the PDF: {missing}"
-    pages = int(re.search(r"Pages:\s+(\d+)", subprocess.run(["pdfinfo", str(pdf)],
-                                                            capture_output=True,
-                                                             text=True, check=True).stdout)[1])
+    pages = int(
+        re.search(
+            r"Pages:\s+(\d+)",
+            subprocess.run(
+                ["pdfinfo", str(pdf)], capture_output=True, text=True, check=True
+            ).stdout,
+        )[1]
+    )
     assert pages > 100, f"only {pages} pages"
 
 
@@ -137,15 +168,22 @@ def test_no_injected_parameters_and_no_setup_code(pdf):
     assert "# Parameters" not in text, "papermill's injected-parameters cell is printed"
     for info in notebooks().values():
         cells = json.loads(info.path.read_text())["cells"]
-        setup = [c for c in cells if c["cell_type"] == "code" and is_setup_cell("".join(c["source"]))
-                 and not {"remove-cell", "remove-input"} & set(c["metadata"].get("tags", []))]
+        setup = [
+            c
+            for c in cells
+            if c["cell_type"] == "code"
+            and is_setup_cell("".join(c["source"]))
+            and not {"remove-cell", "remove-input"} & set(c["metadata"].get("tags", []))
+        ]
         if setup:
             assert f"open book/{info.path.name}" in text, f"no line names {info.path.name}"
     tex = pdf.with_suffix(".tex").read_text()
     # repro.setup(...) and import asoc_companion as repro, as Pygments marks them up
-    setup_code = (r"\PYG{n}{repro}\PYG{o}{.}\PYG{n}{setup}",
-                  r"\PYG{n+nn}{asoc\PYGZus{}companion}\PYG{+w}{ }\PYG{k}{as}"
-                  r"\PYG{+w}{ }\PYG{n+nn}{repro}")
+    setup_code = (
+        r"\PYG{n}{repro}\PYG{o}{.}\PYG{n}{setup}",
+        r"\PYG{n+nn}{asoc\PYGZus{}companion}\PYG{+w}{ }\PYG{k}{as}"
+        r"\PYG{+w}{ }\PYG{n+nn}{repro}",
+    )
     assert not any(code in tex for code in setup_code), "setup code is printed"
     # the method's code stays: a cell the text discusses, after the setup cell
     assert "sigma_point_linearizations()" in text

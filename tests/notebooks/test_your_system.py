@@ -57,8 +57,10 @@ def test_what_goes_wrong_is_reported(full):
     assert not v["alg32_bad_converged"] and v["alg32_bad_rho"] >= 1
     assert not v["exact_bad_stabilizing"] and 1 <= v["exact_bad_rho"] < v["alg32_bad_rho"]
     assert len(v["min_rho_bad_restarts"]) == 10 and min(v["min_rho_bad_restarts"]) >= 1
-    assert v["min_rho_bad_restarts_range"] == [min(v["min_rho_bad_restarts"]),
-                                               max(v["min_rho_bad_restarts"])]
+    assert v["min_rho_bad_restarts_range"] == [
+        min(v["min_rho_bad_restarts"]),
+        max(v["min_rho_bad_restarts"]),
+    ]
     assert v["sf38_bad_rho"] < 1
 
 
@@ -66,16 +68,21 @@ def test_what_goes_wrong_is_reported(full):
 def test_mode_observing_benchmark_and_monte_carlo(full):
     v, out = full
     assert v["expected_opt38"] < v["expected_exact"] < v["expected_alg32"]
-    assert np.isclose(v["cost_ratio_alg32_to_38"], v["expected_alg32"] / v["expected_opt38"],
-                      rtol=1e-12)
-    assert np.isclose(v["cost_ratio_exact_to_38"], v["expected_exact"] / v["expected_opt38"],
-                      rtol=1e-12)
+    assert np.isclose(
+        v["cost_ratio_alg32_to_38"], v["expected_alg32"] / v["expected_opt38"], rtol=1e-12
+    )
+    assert np.isclose(
+        v["cost_ratio_exact_to_38"], v["expected_exact"] / v["expected_opt38"], rtol=1e-12
+    )
     for name in ("alg32", "exact", "opt38"):
         mc = v[f"mc_{name}"]
         assert mc["n"] == 100_000 and mc["ci"][0] <= mc["value"] <= mc["ci"][1]
         # the per-run cost is right-skewed: the median lies below the exact mean (the text says so)
         assert mc["ci"][1] < v[f"expected_{name}"]
-    assert v["mc_opt38"]["ci"][1] < v["mc_exact"]["ci"][0] and v["mc_exact"]["ci"][1] < v["mc_alg32"]["ci"][0]
+    assert (
+        v["mc_opt38"]["ci"][1] < v["mc_exact"]["ci"][0]
+        and v["mc_exact"]["ci"][1] < v["mc_alg32"]["ci"][0]
+    )
     for stem in ("fig_own_1", "fig_own_2", "fig_own_3"):
         assert (out / f"{stem}.png").stat().st_size > 1000
     table = (out / "table_own_1.md").read_text()

@@ -38,8 +38,9 @@ PARSE_ERRORS = {
 
 def api_modules() -> list:
     """The modules of the API pages' ``<!-- api MODULE -->`` blocks."""
-    return sorted({m["module"] for page in BOOK.glob("api*.md")
-                   for m in API_BLOCK.finditer(page.read_text())})
+    return sorted(
+        {m["module"] for page in BOOK.glob("api*.md") for m in API_BLOCK.finditer(page.read_text())}
+    )
 
 
 def api_objects():
@@ -78,20 +79,29 @@ def sentence_types(doc: str) -> list:
     from numpydoc.docscrape import NumpyDocString
 
     parsed = NumpyDocString(doc)
-    return [f"{entry.name or section}: {entry.type!r}"
-            for section in ("Parameters", "Returns", "Attributes") for entry in parsed[section]
-            if re.search(r": |;|\.$|^the ", entry.type)
-            or entry.type.count("(") != entry.type.count(")")]
+    return [
+        f"{entry.name or section}: {entry.type!r}"
+        for section in ("Parameters", "Returns", "Attributes")
+        for entry in parsed[section]
+        if re.search(r": |;|\.$|^the ", entry.type)
+        or entry.type.count("(") != entry.type.count(")")
+    ]
 
 
 @pytest.mark.parametrize("qualified", [q for q, _, _ in OBJECTS])
 def test_parameters_and_returns_parse(qualified):
     errors = numpydoc_validate.validate(qualified)["errors"]
     obj = next(o for q, o, _ in OBJECTS if q == qualified)
-    bad = [f"{code} {msg}" for code, msg in errors if code in PARSE_ERRORS
-           or (code == "PR01" and _has_section(inspect.getdoc(obj), "Parameters"))]
-    bad += [f"a sentence where the type belongs, {entry}"
-            for entry in sentence_types(inspect.getdoc(obj) or "")]
+    bad = [
+        f"{code} {msg}"
+        for code, msg in errors
+        if code in PARSE_ERRORS
+        or (code == "PR01" and _has_section(inspect.getdoc(obj), "Parameters"))
+    ]
+    bad += [
+        f"a sentence where the type belongs, {entry}"
+        for entry in sentence_types(inspect.getdoc(obj) or "")
+    ]
     assert not bad, f"{qualified}: " + "; ".join(bad)
 
 
@@ -131,8 +141,9 @@ def documented_targets() -> set:
             targets.add(f"{module_name}.{name}")
             obj = getattr(module, name)
             if inspect.isclass(obj):
-                targets.update(f"{module_name}.{name}.{a}" for a in dir(obj)
-                               if not a.startswith("_"))
+                targets.update(
+                    f"{module_name}.{name}.{a}" for a in dir(obj) if not a.startswith("_")
+                )
     return targets
 
 
@@ -157,7 +168,7 @@ def test_cross_references_resolve():
         names = [m["name"] for m in REFERENCE.finditer(doc)]
         try:
             names += [name for entries, _ in NumpyDocString(doc)["See Also"] for name, _ in entries]
-        except Exception as error:          # a docstring numpydoc cannot read at all
+        except Exception as error:  # a docstring numpydoc cannot read at all
             broken.append(f"{qualified}: {error}")
             continue
         broken += [f"{qualified}: {name}" for name in names if not _resolves(name, obj, module)]

@@ -51,8 +51,13 @@ def internals(folder):
         for line, _, module, names in _imports(path):
             if module and module.split(".")[0] in THIRD_PARTY:
                 parts = module.split(".") + [n for n in names]
-                found += [f"{path.name}:{line}: {module}.{p}" if p in names else f"{path.name}:{line}: {module}"
-                          for p in parts if p.startswith("_")][:1]
+                found += [
+                    f"{path.name}:{line}: {module}.{p}"
+                    if p in names
+                    else f"{path.name}:{line}: {module}"
+                    for p in parts
+                    if p.startswith("_")
+                ][:1]
     return found
 
 
@@ -78,7 +83,7 @@ def circles(graph):
     def visit(stem, path):
         for target in sorted(graph[stem]):
             if target in path:
-                found.append(path[path.index(target):] + [target])
+                found.append(path[path.index(target) :] + [target])
             else:
                 visit(target, path + [target])
 
@@ -89,7 +94,11 @@ def circles(graph):
 
 def global_assignments(source):
     """Lines of notebook code that assign to an attribute of a module (``module.NAME = ...``)."""
-    return [line for line in source.splitlines() if re.match(r"^\s*[a-z_][a-z_0-9]*\.[A-Z_][A-Z_0-9]*\s*=[^=]", line)]
+    return [
+        line
+        for line in source.splitlines()
+        if re.match(r"^\s*[a-z_][a-z_0-9]*\.[A-Z_][A-Z_0-9]*\s*=[^=]", line)
+    ]
 
 
 def _name(folder):
@@ -98,7 +107,10 @@ def _name(folder):
 
 @pytest.mark.parametrize("folder", PACKAGES, ids=_name)
 def test_no_module_over_500_non_blank_lines(folder):
-    sizes = {path.name: sum(1 for line in path.read_text().splitlines() if line.strip()) for path in _modules(folder)}
+    sizes = {
+        path.name: sum(1 for line in path.read_text().splitlines() if line.strip())
+        for path in _modules(folder)
+    }
     assert {name: n for name, n in sizes.items() if n > MAX_NON_BLANK_LINES} == {}
 
 
@@ -121,7 +133,12 @@ def test_no_notebook_patches_a_module_global():
     found = {}
     for path in sorted((ROOT / "book").glob("*.ipynb")):
         cells = json.loads(path.read_text())["cells"]
-        lines = [line for c in cells if c["cell_type"] == "code" for line in global_assignments("".join(c["source"]))]
+        lines = [
+            line
+            for c in cells
+            if c["cell_type"] == "code"
+            for line in global_assignments("".join(c["source"]))
+        ]
         if lines:
             found[path.name] = lines
     assert found == {}
@@ -131,11 +148,22 @@ def test_the_checks_catch_planted_violations(tmp_path):
     """The circle trajectory <-> simulate that this layout removed, the private imports it replaced,
     numpy's private linalg module, and a notebook line that patched Alg. 3.2's rank threshold."""
     (tmp_path / "trajectory.py").write_text("from .simulate import _simulate, draw_noise\n")
-    (tmp_path / "simulate.py").write_text("from .trajectory import AffinePolicy\nfrom . import _validate as v\n")
-    (tmp_path / "models.py").write_text("from numpy.linalg import _umath_linalg\nfrom asoc.mjls.static import _Cycle\n")
-    assert private_imports(tmp_path) == ["models.py:2: _Cycle", "simulate.py:2: _validate",
-                                         "trajectory.py:1: _simulate"]
+    (tmp_path / "simulate.py").write_text(
+        "from .trajectory import AffinePolicy\nfrom . import _validate as v\n"
+    )
+    (tmp_path / "models.py").write_text(
+        "from numpy.linalg import _umath_linalg\nfrom asoc.mjls.static import _Cycle\n"
+    )
+    assert private_imports(tmp_path) == [
+        "models.py:2: _Cycle",
+        "simulate.py:2: _validate",
+        "trajectory.py:1: _simulate",
+    ]
     assert internals(tmp_path) == ["models.py:1: numpy.linalg._umath_linalg"]
-    assert circles(import_graph(tmp_path)) == [["simulate", "trajectory", "simulate"],
-                                               ["trajectory", "simulate", "trajectory"]]
-    assert global_assignments("dynamic.RANK_RTOL = 1e-8\nx = dynamic.RANK_RTOL == 2\n") == ["dynamic.RANK_RTOL = 1e-8"]
+    assert circles(import_graph(tmp_path)) == [
+        ["simulate", "trajectory", "simulate"],
+        ["trajectory", "simulate", "trajectory"],
+    ]
+    assert global_assignments("dynamic.RANK_RTOL = 1e-8\nx = dynamic.RANK_RTOL == 2\n") == [
+        "dynamic.RANK_RTOL = 1e-8"
+    ]

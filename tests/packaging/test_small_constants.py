@@ -37,12 +37,10 @@ ALLOWED = {
         "rise by more than rounding between iterations)"
     ),
     ("mjls/baselines.py", "_gain"): (
-        "rcond of a least-squares solve: singular values below 1e-12 of the largest are "
-        "rounding"
+        "rcond of a least-squares solve: singular values below 1e-12 of the largest are rounding"
     ),
     ("mjls/monte_carlo.py", "_psd_sqrt"): (
-        "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD "
-        "matrix"
+        "eigenvalues of a covariance above -1e-10 of its largest are rounding of a PSD matrix"
     ),
     ("mjls/random.py", "_matrix_with_radius"): (
         "a draw with spectral radius below 1e-8 is nilpotent up to rounding and cannot be "
@@ -62,19 +60,16 @@ ALLOWED = {
         "1e-9 past the end point so that numpy.arange includes it (grid of step 0.1)"
     ),
     ("gp/regression.py", "_cholesky"): (
-        "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to "
-        "rounding"
+        "jitter ladder 1e-12 ... 1e-6 tried in turn on a kernel matrix that is singular to rounding"
     ),
     ("gp/regression.py", "_projected_gradient"): (
         "1e-9 in log-parameters: a parameter this close to its bound counts as at the bound"
     ),
     ("gp/regression.py", "DistributionGP"): (
-        "central-difference step 1e-6 in log l for the covariances without an analytic "
-        "derivative"
+        "central-difference step 1e-6 in log l for the covariances without an analytic derivative"
     ),
     ("gp/sampling.py", "_lcd_standard_normal"): (
-        "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges "
-        "in tens)"
+        "gradient tolerance 1e-9 of BFGS for the Dirac approximation of N(0, 1) (converges in tens)"
     ),
     ("mjls/exact_cost_design.py", "<module>"): (
         "_RADIUS_STALL = 1e-5: the min-radius search stops when BFGS steps lower rho by less "
@@ -164,8 +159,10 @@ def small_literals(root=SRC):
             for value in in_defaults:
                 rest.remove(value)
             package = f"{path.parent.relative_to(root).as_posix()}/*".lstrip("./")
-            for key, values in (((package or "*", "<keyword defaults>"), in_defaults),
-                                ((file, name), rest)):
+            for key, values in (
+                ((package or "*", "<keyword defaults>"), in_defaults),
+                ((file, name), rest),
+            ):
                 if values:
                     found.setdefault(key, []).extend(values)
     return found
@@ -195,5 +192,5 @@ def test_the_scan_finds_a_planted_literal(tmp_path):
     assert small_literals(tmp_path) == {
         ("*", "<keyword defaults>"): [1e-9],
         ("planted.py", "f"): [2e-4],
-        ("sub/*", "<keyword defaults>"): [5e-7],   # the literal of -5e-7
+        ("sub/*", "<keyword defaults>"): [5e-7],  # the literal of -5e-7
     }

@@ -36,9 +36,18 @@ def test_clearly_positive_difference_holds_and_its_reversal_fails():
 
 def test_record_has_the_ledger_fields():
     d = decide_claim(np.arange(1.0, 31.0), above=9.5, below=30.5, what="iterations")
-    assert set(d) == {"verdict", "n", "estimate", "ci_low", "ci_high", "test", "above", "below",
-                      "level",
-                      "samples"}
+    assert set(d) == {
+        "verdict",
+        "n",
+        "estimate",
+        "ci_low",
+        "ci_high",
+        "test",
+        "above",
+        "below",
+        "level",
+        "samples",
+    }
     assert d["n"] == 30 and d["ci_low"] <= d["estimate"] <= d["ci_high"]
     assert d["verdict"] == "holds" and "iterations" in d["test"] and "are equal" not in d["test"]
     # the record repeats its own decision

@@ -39,7 +39,9 @@ def test_mean_kernel_and_mcvmd_kernels_are_psd_on_dirac_mixtures():
 def test_mean_kernel_gaussian_closed_form_matches_dirac_average():
     u = np.random.default_rng(2).standard_normal(200_000)
     mi, vi, mj, vj = 0.3, 0.5, -0.8, 1.7
-    k_mc = np.mean(np.exp(-0.5 * ((mi + np.sqrt(vi) * u) - (mj + np.sqrt(vj) * u[::-1])) ** 2 / 0.9))
+    k_mc = np.mean(
+        np.exp(-0.5 * ((mi + np.sqrt(vi) * u) - (mj + np.sqrt(vj) * u[::-1])) ** 2 / 0.9)
+    )
     k = gp.mean_kernel_gaussian([[mi]], [[[vi]]], [[mj]], [[[vj]]], alpha=1.0, Lambda=0.9)
     assert k[0, 0] == pytest.approx(k_mc, rel=5e-3)
 
@@ -69,9 +71,11 @@ def test_distribution_gp_fit_recovers_a_smooth_function():
     # the likelihood gradient is the derivative of the likelihood
     t = np.log([1.0, 0.7, 0.05])
     f, g = model.neg_log_ml(t)
-    fd = [(model.neg_log_ml(t + 1e-6 * e, grad=False) - model.neg_log_ml(t - 1e-6 * e,
-                                                                         grad=False)) / 2e-6
-          for e in np.eye(3)]
+    fd = [
+        (model.neg_log_ml(t + 1e-6 * e, grad=False) - model.neg_log_ml(t - 1e-6 * e, grad=False))
+        / 2e-6
+        for e in np.eye(3)
+    ]
     np.testing.assert_allclose(g, fd, rtol=1e-5)
 
 
@@ -79,8 +83,9 @@ def test_mean_kernel_gp_fits_and_predicts():
     rng = np.random.default_rng(5)
     mu, var = gp.training_gaussians(30, rng)
     X = gp.gaussian_dirac_mixtures(mu, var, 5)
-    model = gp.MeanKernelGP(n_restarts=1).fit(X, gp.quadratic_function(mu, var),
-                                              np.random.default_rng(1))
+    model = gp.MeanKernelGP(n_restarts=1).fit(
+        X, gp.quadratic_function(mu, var), np.random.default_rng(1)
+    )
     mean, v = model.predict(X[:5], return_var=True)
     assert np.max(np.abs(mean - gp.quadratic_function(mu, var)[:5])) < 0.5
     assert np.all(v >= 0)
@@ -119,8 +124,9 @@ def test_bad_input():
         gp.DistributionGP().condition(np.array([[0, 1.0], [1.0, 0]]), [0, 1], 1.0, 1.0, 0.0)
 
 
-@pytest.mark.parametrize("M, L, d, equal", [(23, 3, 2, True), (21, 4, 1, False), (2, 9, 1, True),
-                                            (12, 10, 3, False)])
+@pytest.mark.parametrize(
+    "M, L, d, equal", [(23, 3, 2, True), (21, 4, 1, False), (2, 9, 1, True), (12, 10, 3, False)]
+)
 def test_mean_kernel_blocks_equal_the_full_einsum(M, L, d, equal):
     """Block rows from the diagonal on (M = 21: a last block of one mixture) against eq. (2.22)
     summed
@@ -135,11 +141,12 @@ def test_mean_kernel_blocks_equal_the_full_einsum(M, L, d, equal):
     for l in (0.05, 1.0, 30.0):
         E = np.exp(-0.5 * sq / l**2)
         K, dK = model._unit_kernel(l, grad=True)
-        np.testing.assert_allclose(K, np.einsum("ia,iajb,jb->ij", model.W, E, model.W), rtol=1e-11,
-                                   atol=0)
-        np.testing.assert_allclose(dK, np.einsum("ia,iajb,jb->ij", model.W, E * sq / l**2, model.W),
-                                   rtol=1e-11,
-                                   atol=0)
+        np.testing.assert_allclose(
+            K, np.einsum("ia,iajb,jb->ij", model.W, E, model.W), rtol=1e-11, atol=0
+        )
+        np.testing.assert_allclose(
+            dK, np.einsum("ia,iajb,jb->ij", model.W, E * sq / l**2, model.W), rtol=1e-11, atol=0
+        )
 
 
 def test_likelihood_reuses_the_kernel_of_a_length_scale():
@@ -154,18 +161,26 @@ def test_likelihood_reuses_the_kernel_of_a_length_scale():
     again = [model.log_marginal_likelihood(1.0, 0.7, s) for s in (0.1, 0.2)]
     # one kernel per length scale and training set
     assert first == again and len(calls) == 2
-    K, dK = model._kernel(0.7, grad=True)                        # the derivative is added on demand
+    K, dK = model._kernel(0.7, grad=True)  # the derivative is added on demand
     assert dK is not None and not K.flags.writeable and len(calls) == 3
 
 
-@pytest.mark.parametrize("name, shape", [("se", {}), ("matern", {"nu": 1.5}), ("exponential", {}),
-                                         ("gamma_exponential", {"gamma": 1.3}),
-                                         ("rational_quadratic", {"alpha": 2.2})])
+@pytest.mark.parametrize(
+    "name, shape",
+    [
+        ("se", {}),
+        ("matern", {"nu": 1.5}),
+        ("exponential", {}),
+        ("gamma_exponential", {"gamma": 1.3}),
+        ("rational_quadratic", {"alpha": 2.2}),
+    ],
+)
 def test_covariances_check_their_arguments_unless_told_not_to(name, shape):
     D = np.array([[0.0, 1.5], [1.5, 0.0]])
     expected = gp.COVARIANCES[name](D, 0.7, **shape)
-    np.testing.assert_allclose(gp.COVARIANCES[name](D, 0.7, check=False, **shape), expected,
-                               rtol=1e-15)
+    np.testing.assert_allclose(
+        gp.COVARIANCES[name](D, 0.7, check=False, **shape), expected, rtol=1e-15
+    )
     with pytest.raises(ValueError, match="^delta: expected non-negative distances"):
         gp.COVARIANCES[name](-D, 0.7, **shape)
     with pytest.raises(ValueError, match="^l: expected"):
@@ -174,6 +189,7 @@ def test_covariances_check_their_arguments_unless_told_not_to(name, shape):
 
 def test_exp_in_place_skips_only_exponents_whose_exponential_is_zero():
     from asoc.gp.regression import EXP_ZERO_BELOW, _exp_in_place
+
     E = np.concatenate([np.linspace(-800, -700, 1001), np.linspace(-5, 0, 11)])
     expected = np.exp(E)
     assert np.all(expected[E < EXP_ZERO_BELOW] == 0)
@@ -185,8 +201,11 @@ def test_exp_in_place_skips_only_exponents_whose_exponential_is_zero():
 def test_distribution_gp_training_kernel_equals_the_checked_covariance():
     x = np.random.default_rng(8).uniform(-3, 3, 9)
     D = np.abs(x[:, None] - x[None])
-    for name, shape in (("matern", {"nu": 1.5}), ("rational_quadratic", {"alpha_rq": 2.0}),
-                        ("se", {})):
+    for name, shape in (
+        ("matern", {"nu": 1.5}),
+        ("rational_quadratic", {"alpha_rq": 2.0}),
+        ("se", {}),
+    ):
         model = gp.DistributionGP(name, **shape).condition(D, np.sin(x), 1.0, 0.8, 0.1)
         K, _ = model._unit_kernel(np.float64(0.7), grad=True)
         np.testing.assert_allclose(K, model._kappa(D, 0.7), rtol=1e-14)

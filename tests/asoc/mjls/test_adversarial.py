@@ -34,8 +34,10 @@ RHO_ONE = {
     "identity modes": (np.stack([np.eye(2), np.eye(2)]), np.array([[0.5, 0.5], [0.25, 0.75]])),
     "a mode with eigenvalue 1": (np.array([[[1.0, 0.0], [0.0, 0.5]]]), np.array([[1.0]])),
     "a Jordan block at 1": (np.array([[[1.0, 1.0], [0.0, 1.0]]]), np.array([[1.0]])),
-    "scalar modes 1/2 and 3/2 (exact)": (np.array([[[0.5]], [[1.5]]]), np.array([[0.5, 0.5],
-                                                                                 [0.5, 0.5]])),
+    "scalar modes 1/2 and 3/2 (exact)": (
+        np.array([[[0.5]], [[1.5]]]),
+        np.array([[0.5, 0.5], [0.5, 0.5]]),
+    ),
 }
 
 
@@ -48,7 +50,7 @@ def test_rho_exactly_one_is_never_stabilising(name):
     moment and no cost."""
     A, T = RHO_ONE[name]
     if name.startswith("scalar"):
-        A = np.sqrt(np.array([0.5, 1.5]))[:, None, None]                 # a_i^2 = 1/2, 3/2: rho = 1
+        A = np.sqrt(np.array([0.5, 1.5]))[:, None, None]  # a_i^2 = 1/2, 3/2: rho = 1
     result = mean_square_stability(A, T)
     assert result.verdict is not Verdict.STABLE and result.stabilizing is not True
     if not name.startswith("a Jordan"):
@@ -80,11 +82,12 @@ def test_rho_one_up_to_rounding_is_undecided_where_the_estimate_rounds_below_one
             assert result.stabilizing is exactly_stable(A, T)
         if result.rho < 1:
             below.append(result.rho)
-    assert below                                                          # the hard case occurred
+    assert below  # the hard case occurred
 
 
 # ------------------------------------------------------------------ iterative solves check their
 # residual
+
 
 def near_one_system(M=2, n=12, rho=0.9999):
     rng = np.random.default_rng(24)
@@ -130,6 +133,7 @@ def test_a_missed_residual_above_the_dense_size_warns_and_the_moment_raises():
 
 # ------------------------------------------------------------------ Perron pair on periodic chains
 
+
 def static_gradient(A, B, C, T, L):
     """d rho / d L of A_i + B_i L C_i by eigenvalue perturbation: sum_i 2 B_i^T E_i(P) Acl_i X_i
     C_i^T / <P, X>."""
@@ -144,11 +148,11 @@ def static_gradient(A, B, C, T, L):
 def test_perron_pair_and_gradient_on_a_periodic_chain(M, dense):
     rng = np.random.default_rng(M)
     n = 3
-    T = np.roll(np.eye(M), 1, axis=1)                                       # cyclic: period M
+    T = np.roll(np.eye(M), 1, axis=1)  # cyclic: period M
     A = rng.standard_normal((M, n, n)) / np.sqrt(n)
     B, C = rng.standard_normal((M, n, 1)), rng.standard_normal((M, 1, n))
     L = np.array([[0.1]])
-    with config.option_context(**{"mjls.dense_max_radius": 10 ** 6 if dense else 0}):
+    with config.option_context(**{"mjls.dense_max_radius": 10**6 if dense else 0}):
         rho, X, P = perron_pair(A + B @ L @ C, T)
         Acl = A + B @ L @ C
         assert rho == pytest.approx(dense_rho(Acl, T), rel=1e-10)
@@ -178,13 +182,16 @@ def test_perron_pair_where_arpack_fails(M, fallback):
         result = mean_square_stability(A, T)
         rho, X, P = perron_pair(A, T)
     assert result.method == fallback
-    assert result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
+    assert (
+        result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
+    )
     assert rho == pytest.approx(rho_dense, rel=1e-8 if fallback == "power" else 1e-12)
     np.testing.assert_allclose(second_moment_map(A, T, X), rho * X, atol=1e-6 * rho)
     np.testing.assert_allclose(costate_map(A, T, P), rho * P, atol=1e-6 * rho)
 
 
 # ------------------------------------------------------------------ balancing and overflow
+
 
 def well_scaled_pair(rho=0.9):
     rng = np.random.default_rng(7)
@@ -199,7 +206,7 @@ def test_badly_scaled_similar_modes_keep_rho(method, exponent):
     where
     A_i (x) A_i overflows without balancing) still give rho = 0.9."""
     A, T = well_scaled_pair()
-    D = np.array([10.0 ** exponent, 1.0, 10.0 ** -exponent])
+    D = np.array([10.0**exponent, 1.0, 10.0**-exponent])
     scaled = A * D[:, None] / D[None, :]
     assert np.abs(scaled).max() > 10.0 ** (exponent - 2)
     with config.option_context(**{"mjls.dense_max_radius": 0 if method == "arnoldi" else 64}):
@@ -223,6 +230,7 @@ def test_a_huge_scale_is_exact():
 
 # ------------------------------------------------------------------ defective spectra
 
+
 def jordan(value, size, seed=3):
     """A Jordan block written in a random basis (so that no eigen-solver sees it triangular)."""
     S = np.random.default_rng(seed).standard_normal((size, size))
@@ -240,8 +248,9 @@ def test_single_mode_jordan_is_rho_of_a_squared():
     assert result.rho_lower <= 0.25 <= result.rho_upper and result.stabilizing is True
 
 
-@pytest.mark.parametrize("value, truth", [(0.5, True), (0.9995, None), (1.0005, None),
-                                          (1.1, False)])
+@pytest.mark.parametrize(
+    "value, truth", [(0.5, True), (0.9995, None), (1.0005, None), (1.1, False)]
+)
 def test_defective_modes_never_get_a_wrong_verdict(value, truth):
     """Two identical Jordan modes: L = T^T (x) (J (x) J), rho = value^2 exactly; near 1 the bracket
     may be
@@ -249,7 +258,7 @@ def test_defective_modes_never_get_a_wrong_verdict(value, truth):
     J = jordan(value, 3)
     T = np.array([[0.2, 0.8], [0.7, 0.3]])
     result = mean_square_stability(np.stack([J, J]), T)
-    rho = value ** 2
+    rho = value**2
     assert result.rho_lower <= rho * (1 + 1e-9) and rho * (1 - 1e-9) <= result.rho_upper
     if truth is None:
         assert result.stabilizing is not (rho > 1) or result.stabilizing is None
@@ -267,6 +276,7 @@ def test_a_wide_bracket_is_said():
 # ------------------------------------------------------------------ the spectral radius of the
 # library's callers
 
+
 def test_spectral_radius_is_inside_its_bracket_everywhere():
     rng = np.random.default_rng(11)
     for _ in range(20):
@@ -276,7 +286,10 @@ def test_spectral_radius_is_inside_its_bracket_everywhere():
         result = mean_square_stability(A, T)
         assert result.rho_lower <= result.rho <= result.rho_upper
         assert mean_square_stability(A, T, check=False).rho == result.rho
-        assert result.rho_lower <= dense_rho(A, T) * (1 + 1e-12) and dense_rho(A, T) * (1 - 1e-12) <= result.rho_upper
+        assert (
+            result.rho_lower <= dense_rho(A, T) * (1 + 1e-12)
+            and dense_rho(A, T) * (1 - 1e-12) <= result.rho_upper
+        )
 
 
 def test_a_stability_probe_can_take_the_miss_as_reported():

@@ -193,8 +193,9 @@ def test_nilpotent_modes_through_static_output_feedback():
 EXTENDED = np.finfo(np.longdouble).eps < np.finfo(float).eps
 
 
-@pytest.mark.skipif(not EXTENDED, reason="numpy.longdouble is double here: the residual is as "
-                                         "coarse")
+@pytest.mark.skipif(
+    not EXTENDED, reason="numpy.longdouble is double here: the residual is as coarse"
+)
 def test_a_defective_mode_with_margin_is_certified_by_the_lyapunov_certificate():
     """A Jordan block at 0.5 (rho = 0.25) with off-diagonal 1e3 in a dense basis by an exact
     similarity (S has determinant 1, S^-1 is an integer matrix: the product is exact in floating
@@ -208,8 +209,9 @@ def test_a_defective_mode_with_margin_is_certified_by_the_lyapunov_certificate()
     assert result.stabilizing is True and exactly_stable(A[None], np.eye(1))
 
 
-@pytest.mark.skipif(not EXTENDED, reason="numpy.longdouble is double here: the residual is as "
-                                         "coarse")
+@pytest.mark.skipif(
+    not EXTENDED, reason="numpy.longdouble is double here: the residual is as coarse"
+)
 def test_two_defective_modes_with_margin():
     S = np.array([[2.0, 1.0], [1.0, 1.0]])
     S_inv = np.array([[1.0, -1.0], [-1.0, 2.0]])

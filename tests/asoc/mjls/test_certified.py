@@ -25,26 +25,33 @@ def rotation(angle):
 def assert_contains(result, rho, rtol=1e-12):
     """rho in the bracket (widened by rtol for the rounding of the reference itself), the estimate
     inside."""
-    assert result.rho_lower <= rho * (1 + rtol) and rho * (1 - rtol) <= result.rho_upper, (result,
-                                                                                           rho)
+    assert result.rho_lower <= rho * (1 + rtol) and rho * (1 - rtol) <= result.rho_upper, (
+        result,
+        rho,
+    )
     assert result.rho_lower <= result.rho <= result.rho_upper
 
 
 def forced(method):
     """The eigen-solver path ``method`` at small sizes: Arnoldi by moving the dense switch point to
     0."""
-    return config.option_context(**{"mjls.dense_max_radius": 0}) if method == "arnoldi" else config.option_context()
+    return (
+        config.option_context(**{"mjls.dense_max_radius": 0})
+        if method == "arnoldi"
+        else config.option_context()
+    )
 
 
 # ------------------------------------------------------------------ the thesis's examples,
 # unchanged
+
 
 def test_thesis_examples_keep_their_radii_and_get_narrow_brackets():
     cases = [(SEC32_A, SEC32_T)] + [(SEC354_A, SEC354_T[t]) for t in (1, 2)]
     for (A, T), printed in zip(cases, (1.4198, 1.2970, 1.3295)):
         result = mean_square_stability(A, T)
         assert result.rho == pytest.approx(dense_rho(A, T), rel=1e-12, abs=0)
-        assert round(result.rho, 4) == printed                          # Sec. 3.2 and Sec. 3.5.4
+        assert round(result.rho, 4) == printed  # Sec. 3.2 and Sec. 3.5.4
         assert_contains(result, dense_rho(A, T))
         assert result.verdict is Verdict.UNSTABLE and result.stabilizing is False
         assert result.rho_upper - result.rho_lower <= 1e-4 * result.rho
@@ -62,6 +69,7 @@ def test_an_mjls_is_accepted_as_the_open_loop():
 
 
 # ------------------------------------------------------------------ random systems, both paths
+
 
 @pytest.mark.parametrize("method", ["dense", "arnoldi", "power"])
 @pytest.mark.parametrize("seed", range(6))
@@ -94,13 +102,15 @@ def test_upper_bound_at_a_lyapunov_solution_is_the_lyapunov_test():
     3.1)."""
     A, T = SEC32_A * np.sqrt(0.9 / 1.4197762513475558), SEC32_T
     n2 = 8
-    Y = np.linalg.solve(np.eye(n2) - ms_operator(A, T), np.broadcast_to(np.eye(2),
-                                                                        (2, 2, 2)).ravel())
+    Y = np.linalg.solve(
+        np.eye(n2) - ms_operator(A, T), np.broadcast_to(np.eye(2), (2, 2, 2)).ravel()
+    )
     assert certified_upper_bound(A, T, Y.reshape(2, 2, 2)) < 1
     assert certified_upper_bound(A, T, -Y.reshape(2, 2, 2)) == np.inf
 
 
 # ------------------------------------------------------------------ adversarial spectra
+
 
 @pytest.mark.parametrize("method", ["dense", "arnoldi"])
 def test_repeated_dominant_eigenvalue(method):
@@ -135,7 +145,7 @@ def test_periodic_chains(method, M):
     a = np.linspace(0.5, 1.3, M)
     A = np.stack([np.diag([ai, 0.3 * ai]) for ai in a])
     T = np.roll(np.eye(M), 1, axis=1)
-    rho = float(np.prod(a ** 2) ** (1 / M))
+    rho = float(np.prod(a**2) ** (1 / M))
     assert dense_rho(A, T) == pytest.approx(rho, rel=1e-12)
     with forced(method):
         result = mean_square_stability(A, T, method="auto" if method == "arnoldi" else method)
@@ -212,8 +222,11 @@ def test_singular_perron_stack_gets_a_narrow_bracket_from_the_deflated_resolvent
     result = mean_square_stability(A, T)
     width = config.defaults["mjls.bracket_warn_rtol"]
     assert result.rho_upper - result.rho_lower <= width * result.rho_upper, result.bracket
-    arpack = abs(scipy.sparse.linalg.eigs(linear_operator(A, T, False), k=1, which="LM", ncv=60,
-                                          tol=1e-14)[0][0])
+    arpack = abs(
+        scipy.sparse.linalg.eigs(linear_operator(A, T, False), k=1, which="LM", ncv=60, tol=1e-14)[
+            0
+        ][0]
+    )
     assert_contains(result, arpack, rtol=1e-10)
     monkeypatch.setattr(certificate, "deflated_resolvent_bounds", lambda *args: None)
     without = mean_square_stability(A, T)

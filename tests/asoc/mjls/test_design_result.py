@@ -41,15 +41,19 @@ def designs():
         }
 
 
-@pytest.mark.parametrize("name", ["static", "lmi", "lmi_mode", "observed", "dynamic", "exact",
-                                  "min_radius"])
+@pytest.mark.parametrize(
+    "name", ["static", "lmi", "lmi_mode", "observed", "dynamic", "exact", "min_radius"]
+)
 def test_every_design_holds_its_certificate_and_controller(designs, name):
     sys, res = designs[name]
     assert isinstance(res, CertifiedDesignResult)
     assert isinstance(res.stability, mjls.MeanSquareStability)
     assert (res.rho, res.rho_bracket, res.stabilizing) == (
-        res.stability.rho, res.stability.bracket, res.stability.stabilizing)
-    again = mjls.mean_square_stability(sys, res)           # recomputed from the system
+        res.stability.rho,
+        res.stability.bracket,
+        res.stability.stabilizing,
+    )
+    again = mjls.mean_square_stability(sys, res)  # recomputed from the system
     assert again.verdict is res.stability.verdict
     assert again.rho == pytest.approx(res.rho, rel=1e-10)
     assert mjls.mean_square_stability(res) is res.stability
@@ -77,12 +81,15 @@ def test_the_closed_loop_tools_take_a_result_or_its_controller(designs):
 
 
 def test_a_static_gain_closed_loop_carries_its_measurement_noise():
-    sys = sec373_system(1)                                  # J != 0
+    sys = sec373_system(1)  # J != 0
     L = np.array([[-0.2]])
     Acl, HHt_cl = controller_closed_loop(sys, mjls.StaticGain(L))
     BL = sys.B @ L
-    np.testing.assert_allclose(HHt_cl, sys.H @ np.swapaxes(sys.H, 1, 2)
-                               + BL @ sys.J @ np.swapaxes(sys.J, 1, 2) @ np.swapaxes(BL, 1, 2))
+    np.testing.assert_allclose(
+        HHt_cl,
+        sys.H @ np.swapaxes(sys.H, 1, 2)
+        + BL @ sys.J @ np.swapaxes(sys.J, 1, 2) @ np.swapaxes(BL, 1, 2),
+    )
     np.testing.assert_allclose(Acl, sys.A + BL @ sys.C)
 
 
@@ -94,8 +101,9 @@ def test_simulate_takes_every_result(designs):
     np.testing.assert_array_equal(a, b)
     sys = sec373_system(1)
     observed = mjls.mode_observed_lqg(sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0)
-    runs = mjls.simulate(sys, observed, SEC373_MEAN0[1], 5, 3, np.random.default_rng(0),
-                         x0_cov=SEC373_COV0)
+    runs = mjls.simulate(
+        sys, observed, SEC373_MEAN0[1], 5, 3, np.random.default_rng(0), x0_cov=SEC373_COV0
+    )
     assert runs.cost.shape == (3,)
 
 
@@ -110,8 +118,9 @@ def test_errors_name_the_callers_argument(designs):
     with pytest.raises(TypeError, match=static):
         mjls.augmented_closed_loop(sys, mjls.StaticGain([[0.1]]))
     with pytest.raises(TypeError, match=r"^F: .* found a time-variant DynamicOutputFeedback"):
-        varying = mjls.DynamicOutputFeedback(np.zeros((3, 2, 2)), np.zeros((3, 2, 1)),
-                                             np.zeros((3, 1, 2)))
+        varying = mjls.DynamicOutputFeedback(
+            np.zeros((3, 2, 2)), np.zeros((3, 2, 1)), np.zeros((3, 1, 2))
+        )
         mjls.steady_state_cost(sys, varying)
     with pytest.raises(TypeError, match=r"^K, L: expected to be omitted"):
         mjls.augmented_closed_loop(sys, res, res.K, res.L)
@@ -119,8 +128,9 @@ def test_errors_name_the_callers_argument(designs):
         mjls.augmented_closed_loop(sys, res.F)
     with pytest.raises(ValueError, match=r"^L: expected shape \(1, 1\) for the system"):
         mjls.mean_square_stability(sys, mjls.StaticGain([[0.1, 0.2]]))
-    horizon = mjls.finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0,
-                                                          SEC373_MU0)
+    horizon = mjls.finite_horizon_dynamic_output_feedback(
+        sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0
+    )
     finite = r"^A_stack: a finite-horizon design \(FiniteHorizonResult\)"
     with pytest.raises(TypeError, match=finite):
         mjls.mean_square_stability(horizon)
@@ -129,7 +139,7 @@ def test_errors_name_the_callers_argument(designs):
 
 
 def test_a_design_without_a_gain_has_no_certificate_and_no_controller():
-    res = mjls.static_output_lmi(sec354_system(1, "C=[1 0]"))   # Thm. 3.9 infeasible (Sec. 3.5.4)
+    res = mjls.static_output_lmi(sec354_system(1, "C=[1 0]"))  # Thm. 3.9 infeasible (Sec. 3.5.4)
     assert not res.feasible
     assert res.stability is None and res.stabilizing is False and np.isnan(res.rho)
     with pytest.raises(ValueError, match=r"^A_stack: the design returned no gain to certify"):
@@ -140,8 +150,9 @@ def test_a_design_without_a_gain_has_no_certificate_and_no_controller():
 
 def test_finite_horizon_designs_share_the_controller_without_a_certificate():
     sys = sec373_system(1)
-    res = mjls.finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0,
-                                                      SEC373_MU0)
+    res = mjls.finite_horizon_dynamic_output_feedback(
+        sys, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0
+    )
     assert isinstance(res, DesignResult) and not isinstance(res, CertifiedDesignResult)
     c = res.controller
     assert c.time_variant and c.stability is None and c.xhat0.tolist() == [5.0, 0.0]
@@ -168,8 +179,11 @@ def test_to_statespace_round_trips_through_python_control(designs, design):
     sys = networked_loop()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        res = (mjls.static_output_feedback(sys, max_iter=200) if design == "static"
-               else mjls.exact_dynamic_output_feedback(sys))
+        res = (
+            mjls.static_output_feedback(sys, max_iter=200)
+            if design == "static"
+            else mjls.exact_dynamic_output_feedback(sys)
+        )
     controller = res.controller.to_statespace(0.1)
     assert isinstance(controller, control.StateSpace) and controller.dt == 0.1
     ours = controller_closed_loop(sys, res)[0]
@@ -177,7 +191,7 @@ def test_to_statespace_round_trips_through_python_control(designs, design):
         loop = control.feedback(plant, controller, sign=1)
         np.testing.assert_allclose(loop.A, ours[i], rtol=0, atol=1e-14)
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)      # no external inputs or outputs
+            warnings.simplefilter("ignore", UserWarning)  # no external inputs or outputs
             wired = control.interconnect([plant, controller], inplist=[], outlist=[])
         np.testing.assert_allclose(wired.A, ours[i], rtol=0, atol=1e-14)
 

@@ -34,8 +34,16 @@ def random_system(seed, M=3, nx=3, nu=2, ny=2, radius=0.95, iid=False):
     if iid:
         T[:] = T[0]
     T /= T.sum(axis=1, keepdims=True)
-    return MJLS(A, B, C, H, np.broadcast_to(np.eye(nx), (M, nx, nx)),
-                np.broadcast_to(np.eye(nu), (M, nu, nu)), T, J=J)
+    return MJLS(
+        A,
+        B,
+        C,
+        H,
+        np.broadcast_to(np.eye(nx), (M, nx, nx)),
+        np.broadcast_to(np.eye(nu), (M, nu, nu)),
+        T,
+        J=J,
+    )
 
 
 def initial_state(sys, seed=0):
@@ -69,9 +77,15 @@ def test_gains_satisfy_the_optimality_conditions(sys3, alg32):
     """At the fixed point, (F, K, L) solve (3.49) for the final bounds (Thm. 3.27)."""
     r = alg32
     _, JJt = noise_covariances(sys3)
-    F, K, L = gains_from_bounds(sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar),
-                                successor_average(sys3.T, r.Punder),
-                                sys3.mu_inf, JJt)
+    F, K, L = gains_from_bounds(
+        sys3,
+        r.Xbar,
+        r.Xunder,
+        successor_average(sys3.T, r.Pbar),
+        successor_average(sys3.T, r.Punder),
+        sys3.mu_inf,
+        JJt,
+    )
     for a, b in ((F, r.F), (K, r.K), (L, r.L)):
         np.testing.assert_allclose(a, b, atol=1e-7 * max(1, np.abs(b).max()))
 
@@ -79,9 +93,15 @@ def test_gains_satisfy_the_optimality_conditions(sys3, alg32):
 def test_sdp_solve_agrees_with_least_squares(sys3, alg32):
     r = alg32
     _, JJt = noise_covariances(sys3)
-    args = (sys3, r.Xbar, r.Xunder, successor_average(sys3.T, r.Pbar), successor_average(sys3.T,
-                                                                                         r.Punder),
-                                                                                         sys3.mu_inf, JJt)
+    args = (
+        sys3,
+        r.Xbar,
+        r.Xunder,
+        successor_average(sys3.T, r.Pbar),
+        successor_average(sys3.T, r.Punder),
+        sys3.mu_inf,
+        JJt,
+    )
     for a, b in zip(gains_from_bounds(*args, method="sdp"), gains_from_bounds(*args)):
         np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-4)
 
@@ -95,8 +115,17 @@ def test_augmented_moments_agree_with_monte_carlo(sys3, alg32):
     xhat0 = mu0 @ mean0
     exact = finite_horizon_cost(sys3, *gains, mean0, cov0, mu0)
     from asoc.mjls import DynamicOutputFeedback
-    sim = simulate(sys3, DynamicOutputFeedback(r.F, r.K, r.L, xhat0=xhat0), mean0, horizon, 40000,
-                   np.random.default_rng(5), mu0=mu0, x0_cov=cov0)
+
+    sim = simulate(
+        sys3,
+        DynamicOutputFeedback(r.F, r.K, r.L, xhat0=xhat0),
+        mean0,
+        horizon,
+        40000,
+        np.random.default_rng(5),
+        mu0=mu0,
+        x0_cov=cov0,
+    )
     se = sim.cost.std() / np.sqrt(sim.cost.size)
     assert abs(sim.cost.mean() - exact) < 4 * se
 
@@ -120,7 +149,7 @@ def test_steady_state_cost_is_the_limit_of_the_moment_recursion(sys3, alg32):
     X, _ = second_moments(At, HHt, sys3.T, np.zeros_like(At), sys3.mu_inf, horizon)
     stage_costs = np.einsum("kiab,iba->k", X, Qt)
     assert stage_costs[-1] == pytest.approx(r.cost, rel=1e-8)
-    assert np.all(np.diff(stage_costs) >= -1e-9 * r.cost)     # from X~_0 = 0 the moments grow
+    assert np.all(np.diff(stage_costs) >= -1e-9 * r.cost)  # from X~_0 = 0 the moments grow
 
 
 def test_finite_horizon_bounds_decrease_monotonically(sys3):
@@ -136,8 +165,15 @@ def test_finite_horizon_bounds_decrease_monotonically(sys3):
 
 def test_finite_horizon_from_random_gains_also_decreases(sys3):
     mean0, cov0, mu0 = initial_state(sys3, 2)
-    f = finite_horizon_dynamic_output_feedback(sys3, horizon=20, mean0=mean0, cov0=cov0, mu0=mu0,
-                                               init=np.random.default_rng(0), max_iter=200)
+    f = finite_horizon_dynamic_output_feedback(
+        sys3,
+        horizon=20,
+        mean0=mean0,
+        cov0=cov0,
+        mu0=mu0,
+        init=np.random.default_rng(0),
+        max_iter=200,
+    )
     b = f.cost_bounds
     assert np.all(np.diff(b) <= 1e-8 * np.abs(b[1:]))
 
@@ -175,8 +211,9 @@ def test_one_mode_finite_horizon_is_the_optimal_lqg():
         # Jbar_0 (3.72) also weighs gain directions at k = 0 that do not affect the cost
         # (Xunder_0 has rank 1; (3.73) picks their minimum norm), so it may rise slightly.
         warnings.simplefilter("ignore", RuntimeWarning)
-        f = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0,
-                                                   mu0=mu0)
+        f = finite_horizon_dynamic_output_feedback(
+            sys, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0
+        )
     o = mode_observed_lqg(sys, horizon, mean0, cov0, mu0)
     assert f.cost == pytest.approx(o.cost, rel=1e-9)
     # Gains agree wherever they influence the cost (min-norm elsewhere, Alg. 3.3 (3.73)).
@@ -198,10 +235,16 @@ def test_optimal_observed_controller_beats_mode_independent_ones(sys3, alg32):
     mean0, cov0, mu0 = initial_state(sys3, 3)
     horizon = 30
     o = mode_observed_lqg(sys3, horizon, mean0, cov0, mu0)
-    f = finite_horizon_dynamic_output_feedback(sys3, horizon=horizon, mean0=mean0, cov0=cov0,
-                                               mu0=mu0)
-    ti = finite_horizon_cost(sys3, *[np.broadcast_to(g, (horizon,) + g.shape)
-                                     for g in (alg32.F, alg32.K, alg32.L)], mean0, cov0, mu0)
+    f = finite_horizon_dynamic_output_feedback(
+        sys3, horizon=horizon, mean0=mean0, cov0=cov0, mu0=mu0
+    )
+    ti = finite_horizon_cost(
+        sys3,
+        *[np.broadcast_to(g, (horizon,) + g.shape) for g in (alg32.F, alg32.K, alg32.L)],
+        mean0,
+        cov0,
+        mu0,
+    )
     assert o.cost < f.cost and o.cost < ti
 
 
@@ -214,7 +257,7 @@ def test_time_variant_system_matrices(sys3, alg32):
     np.testing.assert_allclose(a.cost_bounds, b.cost_bounds)
     other = sys3.replace(A=0.5 * sys3.A)
     c = finite_horizon_dynamic_output_feedback([sys3] * 4 + [other] * 4, **args)
-    assert c.converged and c.cost < a.cost       # damped dynamics in the second half cost less
+    assert c.converged and c.cost < a.cost  # damped dynamics in the second half cost less
     assert np.all(np.diff(c.cost_bounds) <= 1e-8 * np.abs(c.cost_bounds[1:]))
 
 
@@ -239,17 +282,21 @@ def test_initial_bounds_follow_theorem_331():
 
 # --- bad input and failure -------------------------------------------------------------------
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(horizon=0), "horizon"),
-    (dict(horizon=2.5), "horizon"),
-    (dict(mean0=np.zeros((2, 3))), "mean0"),
-    (dict(cov0=np.zeros((3, 3))), "cov0"),
-    (dict(cov0=-np.broadcast_to(np.eye(3), (3, 3, 3))), "cov0"),
-    (dict(mu0=[0.5, 0.5, 0.5]), "mu0"),
-    (dict(mu0=[0.5, 0.5]), "mu0"),
-    (dict(method="newton"), "method"),
-    (dict(tol=0), "tol"),
-])
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(horizon=0), "horizon"),
+        (dict(horizon=2.5), "horizon"),
+        (dict(mean0=np.zeros((2, 3))), "mean0"),
+        (dict(cov0=np.zeros((3, 3))), "cov0"),
+        (dict(cov0=-np.broadcast_to(np.eye(3), (3, 3, 3))), "cov0"),
+        (dict(mu0=[0.5, 0.5, 0.5]), "mu0"),
+        (dict(mu0=[0.5, 0.5]), "mu0"),
+        (dict(method="newton"), "method"),
+        (dict(tol=0), "tol"),
+    ],
+)
 def test_finite_horizon_bad_input(sys3, kwargs, match):
     mean0, cov0, mu0 = initial_state(sys3)
     args = dict(horizon=5, mean0=mean0, cov0=cov0, mu0=mu0)
@@ -258,9 +305,16 @@ def test_finite_horizon_bad_input(sys3, kwargs, match):
         finite_horizon_dynamic_output_feedback(sys3, **args)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(tol=-1), "tol"), (dict(max_iter=0), "max_iter"), (dict(init=0), "init"),
-    (dict(method="qp"), "method"), (dict(rng=1), "rng")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(tol=-1), "tol"),
+        (dict(max_iter=0), "max_iter"),
+        (dict(init=0), "init"),
+        (dict(method="qp"), "method"),
+        (dict(rng=1), "rng"),
+    ],
+)
 def test_infinite_horizon_bad_input(sys3, kwargs, match):
     with pytest.raises((ValueError, TypeError), match=match):
         dynamic_output_feedback(sys3, **kwargs)
@@ -274,8 +328,14 @@ def test_bad_gain_shapes(sys3):
 def test_bad_initial_gains(sys3):
     mean0, cov0, mu0 = initial_state(sys3)
     with pytest.raises(ValueError, match="init"):
-        finite_horizon_dynamic_output_feedback(sys3, horizon=5, mean0=mean0, cov0=cov0, mu0=mu0,
-                                               init=(np.eye(2), np.zeros((3, 2)), np.zeros((2, 3))))
+        finite_horizon_dynamic_output_feedback(
+            sys3,
+            horizon=5,
+            mean0=mean0,
+            cov0=cov0,
+            mu0=mu0,
+            init=(np.eye(2), np.zeros((3, 2)), np.zeros((2, 3))),
+        )
 
 
 def test_non_convergence_is_flagged(sys3):
@@ -284,8 +344,9 @@ def test_non_convergence_is_flagged(sys3):
     assert not r.converged and r.iterations == 3
     mean0, cov0, mu0 = initial_state(sys3)
     with pytest.warns(RuntimeWarning, match="did not converge"):
-        f = finite_horizon_dynamic_output_feedback(sys3, horizon=5, mean0=mean0, cov0=cov0, mu0=mu0,
-                                                   max_iter=1)
+        f = finite_horizon_dynamic_output_feedback(
+            sys3, horizon=5, mean0=mean0, cov0=cov0, mu0=mu0, max_iter=1
+        )
     assert not f.converged
 
 
@@ -301,6 +362,7 @@ def test_unstabilisable_system_is_flagged():
 
 
 # --- (3.51) matrix-free: operator, conjugate gradients, switch ---------------------------------
+
 
 def random_bounds(sys, seed, spread=1.0):
     """Symmetric positive definite Xbar, Xunder, E(Pbar), E(Punder) (G G^T / n + I, G scaled by
@@ -345,7 +407,7 @@ def test_matrix_free_solve_agrees_with_lstsq(monkeypatch, seed, nx):
 
 
 def test_switch_point_selects_the_solver(monkeypatch):
-    args = optimality_args(random_system(7, M=2, nx=4, nu=1, ny=1), 7)         # 24 unknowns
+    args = optimality_args(random_system(7, M=2, nx=4, nu=1, ny=1), 7)  # 24 unknowns
     assert optimality.solve_gains(*args)[3].method == "dense"
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 24)
     assert optimality.solve_gains(*args)[3].method == "cg"
@@ -356,14 +418,17 @@ def test_switch_point_selects_the_solver(monkeypatch):
 def test_conjugate_gradients_that_stop_short_raise_with_the_residual():
     args = optimality_args(random_system(8, M=3, nx=6, nu=2, ny=2), 8, spread=3.0)
     op, P = optimality.OptimalityOperator(*args), optimality.KroneckerPreconditioner(*args)
-    with pytest.raises(np.linalg.LinAlgError,
-                       match=r"relative residual .* > 1e-15 in 2 iterations"):
-        optimality.solve_optimality_cg(op, optimality.optimality_vector(*args[:5]), P, tol=1e-15,
-                                       max_iter=2)
+    with pytest.raises(
+        np.linalg.LinAlgError, match=r"relative residual .* > 1e-15 in 2 iterations"
+    ):
+        optimality.solve_optimality_cg(
+            op, optimality.optimality_vector(*args[:5]), P, tol=1e-15, max_iter=2
+        )
 
 
 def test_matrix_free_failure_stops_alg32_with_a_message(monkeypatch):
     from asoc.mjls.examples import sec373_system
+
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
     # one iteration for 8 unknowns
     monkeypatch.setitem(config.defaults, "mjls.cg_max_iter_factor", 1 / 8)
@@ -374,6 +439,7 @@ def test_matrix_free_failure_stops_alg32_with_a_message(monkeypatch):
 def test_matrix_free_alg32_matches_dense_on_the_thesis_example(monkeypatch):
     """Sec. 3.7.3 with T[1]: the forced matrix-free path gives the dense gains, cost and bound."""
     from asoc.mjls.examples import sec373_system
+
     sys = sec373_system(1)
     dense = dynamic_output_feedback(sys)
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
@@ -385,7 +451,7 @@ def test_matrix_free_alg32_matches_dense_on_the_thesis_example(monkeypatch):
     assert free.cost == pytest.approx(dense.cost, rel=1e-10)
     assert free.bound == pytest.approx(dense.bound, rel=1e-10)
     assert free.worst_residual < 1e-9 and "conjugate gradients" in free.message
-    again = dynamic_output_feedback(sys)                                  # deterministic
+    again = dynamic_output_feedback(sys)  # deterministic
     for a, b in zip((free.F, free.K, free.L), (again.F, again.K, again.L)):
         np.testing.assert_array_equal(a, b)
 
@@ -400,8 +466,9 @@ def test_matrix_free_alg33_matches_dense(monkeypatch, sys3, alg32):
     assert free.cost == pytest.approx(dense.cost, rel=1e-9)
 
 
-@pytest.mark.parametrize("kwargs, match", [(dict(method="cg"), "method"), (dict(tol=np.nan),
-                                                                           "tol")])
+@pytest.mark.parametrize(
+    "kwargs, match", [(dict(method="cg"), "method"), (dict(tol=np.nan), "tol")]
+)
 def test_bad_input_is_named_on_the_matrix_free_path(monkeypatch, sys3, kwargs, match):
     monkeypatch.setitem(config.defaults, "mjls.matrix_free_min_unknowns", 0)
     with pytest.raises((ValueError, TypeError), match=match):
@@ -425,7 +492,7 @@ def _verdicts(sequence, tol=1e-10, max_iter=10_000):
 def test_stopping_rule_tells_a_cycle_from_an_oscillating_convergence():
     """A 2-cycle is a cycle; a sequence converging like (-0.99)^k (small lag-2 change) is not."""
     k = np.arange(5000)[:, None]
-    cycle = 1.0 + 0.1 * (-1.0) ** k + 1e-3 * 0.5 ** k * np.ones(4)
+    cycle = 1.0 + 0.1 * (-1.0) ** k + 1e-3 * 0.5**k * np.ones(4)
     verdict, it, rule = _verdicts(cycle)
     assert (verdict, rule.period) == ("cycle", 2) and it < 60
     oscillating = 1.0 + 0.1 * (-0.99) ** k * np.ones(4)
@@ -443,7 +510,7 @@ def test_stopping_rule_stops_wandering_and_diverging_sequences_within_a_few_wind
     # converges, slowly: not stopped early
     slow = 1.0 + 0.995 ** np.arange(8000)[:, None] * np.ones(4)
     assert _verdicts(slow)[0] == "converged"
-    assert _verdicts(slow, max_iter=1000)[0] == "no_progress"      # ... unless tol is out of reach
+    assert _verdicts(slow, max_iter=1000)[0] == "no_progress"  # ... unless tol is out of reach
 
 
 def test_alg32_stops_on_the_cycle_of_the_networked_loop_and_names_the_exact_design():
@@ -454,7 +521,7 @@ def test_alg32_stops_on_the_cycle_of_the_networked_loop_and_names_the_exact_desi
     with pytest.warns(RuntimeWarning, match="cycle of period 2.*exact_dynamic_output_feedback"):
         r = dynamic_output_feedback(sys)
     assert (r.status, r.period, r.converged) == ("cycle", 2, False) and r.iterations < 200
-    other = dynamic_output_feedback(sys, max_iter=r.iterations - 1, warn=False)   # the other member
+    other = dynamic_output_feedback(sys, max_iter=r.iterations - 1, warn=False)  # the other member
     assert r.bound <= other.bound
     assert r.cost == pytest.approx(steady_state_cost(sys, r.F, r.K, r.L)[0], rel=1e-12)
     exact = exact_dynamic_output_feedback(sys)
@@ -463,9 +530,16 @@ def test_alg32_stops_on_the_cycle_of_the_networked_loop_and_names_the_exact_desi
 
 def test_alg32_on_an_unstabilisable_plant_stops_as_diverged_within_a_few_windows():
     A = 3.0 * np.eye(2)
-    sys = MJLS([A, A], np.zeros((2, 1)), [[1.0, 0.0]], np.eye(2), np.eye(2), np.eye(1), [[0.5, 0.5],
-                                                                                         [0.5, 0.5]],
-               J=0.1 * np.ones((1, 1)))
+    sys = MJLS(
+        [A, A],
+        np.zeros((2, 1)),
+        [[1.0, 0.0]],
+        np.eye(2),
+        np.eye(2),
+        np.eye(1),
+        [[0.5, 0.5], [0.5, 0.5]],
+        J=0.1 * np.ones((1, 1)),
+    )
     r = dynamic_output_feedback(sys, warn=False)
     assert r.status == "diverged" and r.iterations <= 2 * config.defaults["mjls.alg32_patience"] + 5
     assert "exact_dynamic_output_feedback" in r.message

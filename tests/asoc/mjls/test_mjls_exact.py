@@ -33,8 +33,8 @@ from asoc.mjls.gradients import (
 )
 
 EPS = np.finfo(float).eps
-COST_RTOL = 1e-12   # two solvers of the same Lyapunov system (LU here, np.linalg.solve in
-                    # steady_state_cost) agree to ~1e-14 on these well-conditioned examples
+COST_RTOL = 1e-12  # two solvers of the same Lyapunov system (LU here, np.linalg.solve in
+# steady_state_cost) agree to ~1e-14 on these well-conditioned examples
 
 
 def central_difference(f, z, h):
@@ -73,10 +73,11 @@ def test_average_cost_gradient_matches_finite_differences(system):
     z = pack(r.F, r.K, r.L)
     cost, grads = average_cost_and_gradient(sys, r.F, r.K, r.L)
     g = pack(*grads)
-    err, allowed = fd_check(lambda v: average_cost_and_gradient(sys, *unpack(v, shapes))[0], z, g,
-                            cost)
+    err, allowed = fd_check(
+        lambda v: average_cost_and_gradient(sys, *unpack(v, shapes))[0], z, g, cost
+    )
     assert err <= allowed < 1e-4 * np.abs(g).max()
-    assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
+    assert np.abs(g).max() > 1e-3  # not a stationary point: the test can fail
 
 
 @pytest.mark.parametrize("system, scale", [("sec373", 1.0), ("sec373", 1.2), ("random", 1.0)])
@@ -89,11 +90,11 @@ def test_radius_gradient_matches_finite_differences(system, scale):
     rho, grads = radius_and_gradient(sys, r.F, r.K, r.L)
     assert rho == pytest.approx(closed_loop_radius(sys, r.F, r.K, r.L), rel=1e-12)
     g = pack(*grads)
-    err, allowed = fd_check(lambda v: radius_and_gradient(sys, *unpack(v, shapes))[0],
-                            pack(r.F, r.K, r.L),
-                            g, rho)
+    err, allowed = fd_check(
+        lambda v: radius_and_gradient(sys, *unpack(v, shapes))[0], pack(r.F, r.K, r.L), g, rho
+    )
     assert err <= allowed < 1e-4 * np.abs(g).max()
-    assert np.abs(g).max() > 1e-3                      # not a stationary point: the test can fail
+    assert np.abs(g).max() > 1e-3  # not a stationary point: the test can fail
 
 
 def test_min_radius_lowers_rho_and_ends_stationary(alg32_373, sys373):
@@ -105,8 +106,10 @@ def test_min_radius_lowers_rho_and_ends_stationary(alg32_373, sys373):
     assert np.abs(pack(*radius_and_gradient(sys373, m.F, m.K, m.L)[1])).max() < 1e-4
 
 
-@pytest.mark.parametrize("kwargs, match", [(dict(max_iter=0), "max_iter"), (dict(nc=0), "nc"),
-                                           (dict(init="Alg. 3.2"), "init")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [(dict(max_iter=0), "max_iter"), (dict(nc=0), "nc"), (dict(init="Alg. 3.2"), "init")],
+)
 def test_min_radius_bad_input(sys373, kwargs, match):
     with pytest.raises((ValueError, TypeError), match=match):
         min_radius_dynamic_output_feedback(sys373, **kwargs)
@@ -117,9 +120,9 @@ def test_average_cost_and_stability_test_agree_with_prop_324_and_cor_32(alg32_37
     cost = average_cost_and_gradient(sys373, r.F, r.K, r.L)[0]
     assert cost == pytest.approx(steady_state_cost(sys373, r.F, r.K, r.L)[0], rel=1e-12)
     At = augmented_closed_loop(sys373, r.F, r.K, r.L)[0]
-    assert closed_loop_radius(sys373, r.F, r.K,
-                              r.L) == pytest.approx(ms_spectral_radius(At, sys373.T),
-                                                                     rel=1e-12)
+    assert closed_loop_radius(sys373, r.F, r.K, r.L) == pytest.approx(
+        ms_spectral_radius(At, sys373.T), rel=1e-12
+    )
     bad = (np.zeros((2, 2)), np.full((2, 1), 0.5), np.full((1, 2), 0.5))
     assert closed_loop_radius(sys373, *bad) >= 1
     assert average_cost_and_gradient(sys373, *bad) == (np.inf, None)
@@ -129,32 +132,40 @@ def test_finite_horizon_gradient_matches_finite_differences(sys373):
     horizon = 6
     st = stages(sys373, horizon)
     rng = np.random.default_rng(5)
-    F, K, L = (0.3 * rng.standard_normal(s) for s in ((horizon, 2, 2), (horizon, 2, 1), (horizon, 1,
-                                                                                         2)))
-    X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
-                                  SEC373_MU0 @ SEC373_MEAN0[1])
+    F, K, L = (
+        0.3 * rng.standard_normal(s) for s in ((horizon, 2, 2), (horizon, 2, 1), (horizon, 1, 2))
+    )
+    X0 = augmented_initial_moment(
+        SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, SEC373_MU0 @ SEC373_MEAN0[1]
+    )
     mu = mode_distributions(st, SEC373_MU0)
     cost, grads = finite_horizon_cost_and_gradient(st, F, K, L, X0, mu)
-    assert cost == pytest.approx(finite_horizon_cost(sys373, F, K, L, SEC373_MEAN0[1], SEC373_COV0,
-                                                     SEC373_MU0), rel=1e-12)
+    assert cost == pytest.approx(
+        finite_horizon_cost(sys373, F, K, L, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0), rel=1e-12
+    )
     shapes = (F.shape, K.shape, L.shape)
     g = pack(*grads)
-    err, allowed = fd_check(lambda v: finite_horizon_cost_and_gradient(st, *unpack(v, shapes), X0,
-                                                                       mu)[0],
-                            pack(F, K, L), g, cost)
+    err, allowed = fd_check(
+        lambda v: finite_horizon_cost_and_gradient(st, *unpack(v, shapes), X0, mu)[0],
+        pack(F, K, L),
+        g,
+        cost,
+    )
     assert err <= allowed < 1e-4 * np.abs(g).max()
 
 
 def test_exact_optimum_improves_alg32_on_sec373(alg32_373, sys373):
     e = exact_dynamic_output_feedback(sys373)
     assert e.converged and e.stabilizing
-    assert e.cost < alg32_373.cost * (1 - 1e-3)        # the bound's optimum is not the exact one
+    assert e.cost < alg32_373.cost * (1 - 1e-3)  # the bound's optimum is not the exact one
     assert e.cost == pytest.approx(steady_state_cost(sys373, e.F, e.K, e.L)[0], rel=1e-12)
-    bounded = dynamic_output_feedback(sys373,
-                                      max_iter=config.defaults["mjls.exact_warm_start_iterations"],
-                                      warn=False)
-    starts = [average_cost_and_gradient(sys373, *gains)[0]
-              for gains in ((bounded.F, bounded.K, bounded.L), averaged_lqg(sys373, 2))]
+    bounded = dynamic_output_feedback(
+        sys373, max_iter=config.defaults["mjls.exact_warm_start_iterations"], warn=False
+    )
+    starts = [
+        average_cost_and_gradient(sys373, *gains)[0]
+        for gains in ((bounded.F, bounded.K, bounded.L), averaged_lqg(sys373, 2))
+    ]
     # the better default start
     assert e.history["cost"][0] == pytest.approx(min(starts), rel=1e-12)
     assert np.all(np.diff(e.history["cost"]) <= 4 * EPS * e.history["cost"][1:])
@@ -221,11 +232,18 @@ def test_controller_order(sys373, alg32_373):
     assert e.stabilizing and e.cost <= alg32_373.cost
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(tol=0), "tol"), (dict(max_iter=0), "max_iter"), (dict(nc=0), "nc"),
-    (dict(init="Alg. 3.2"), "init"), (dict(init=(np.zeros((2, 2)), np.zeros((2, 1)))), "init"),
-    (dict(init=(np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((1, 2)))), "K"),
-    (dict(init=(np.zeros((2, 2)), np.zeros((2, 1)), np.zeros((1, 2))), nc=3), "nc")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(tol=0), "tol"),
+        (dict(max_iter=0), "max_iter"),
+        (dict(nc=0), "nc"),
+        (dict(init="Alg. 3.2"), "init"),
+        (dict(init=(np.zeros((2, 2)), np.zeros((2, 1)))), "init"),
+        (dict(init=(np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((1, 2)))), "K"),
+        (dict(init=(np.zeros((2, 2)), np.zeros((2, 1)), np.zeros((1, 2))), nc=3), "nc"),
+    ],
+)
 def test_exact_bad_input(sys373, kwargs, match):
     with pytest.raises((ValueError, TypeError), match=match):
         exact_dynamic_output_feedback(sys373, **kwargs)
@@ -235,12 +253,19 @@ def test_exact_bad_input(sys373, kwargs, match):
 def test_exact_finite_horizon_never_worse_than_alg33(t):
     sys = sec373_system(t)
     horizon = 20
-    f = finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0,
-                                               SEC373_MU0,
-                                               init=dynamic_output_feedback(sys), warn=False)
-    assert f.converged                                 # (Jbar_0 may rise once at K = 20, T[2])
-    e = exact_finite_horizon_dynamic_output_feedback(sys, horizon, SEC373_MEAN0[1], SEC373_COV0,
-                                                     SEC373_MU0, init=f)
+    f = finite_horizon_dynamic_output_feedback(
+        sys,
+        horizon,
+        SEC373_MEAN0[1],
+        SEC373_COV0,
+        SEC373_MU0,
+        init=dynamic_output_feedback(sys),
+        warn=False,
+    )
+    assert f.converged  # (Jbar_0 may rise once at K = 20, T[2])
+    e = exact_finite_horizon_dynamic_output_feedback(
+        sys, horizon, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, init=f
+    )
     assert e.converged
     assert e.costs[0] == pytest.approx(f.cost, rel=1e-12)
     assert e.cost <= f.cost * (1 + 4 * EPS)
@@ -262,14 +287,18 @@ def test_exact_finite_horizon_equals_lqg_for_one_mode():
 
 def test_exact_finite_horizon_bad_input(sys373):
     with pytest.raises(ValueError, match="tol"):
-        exact_finite_horizon_dynamic_output_feedback(sys373, 5, SEC373_MEAN0[1], SEC373_COV0,
-                                                     SEC373_MU0,
-                                                     tol=-1)
+        exact_finite_horizon_dynamic_output_feedback(
+            sys373, 5, SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0, tol=-1
+        )
     with pytest.raises(ValueError, match="init"):
-        exact_finite_horizon_dynamic_output_feedback(sys373, 5, SEC373_MEAN0[1], SEC373_COV0,
-                                                     SEC373_MU0,
-                                                     init=(np.zeros((4, 2, 2)), np.zeros((5, 2, 1)),
-                                                           np.zeros((5, 1, 2))))
+        exact_finite_horizon_dynamic_output_feedback(
+            sys373,
+            5,
+            SEC373_MEAN0[1],
+            SEC373_COV0,
+            SEC373_MU0,
+            init=(np.zeros((4, 2, 2)), np.zeros((5, 2, 1)), np.zeros((5, 1, 2))),
+        )
 
 
 def random_static_system(seed):
@@ -277,10 +306,15 @@ def random_static_system(seed):
     rng = np.random.default_rng(seed)
     base = sec354_system(1)
     T = base.T + 0.2 * rng.random((2, 2))
-    return MJLS(A=base.A + 0.1 * rng.standard_normal((2, 2, 2)),
-                B=base.B + 0.1 * rng.standard_normal((2, 2, 1)),
-                C=base.C + 0.2 * rng.standard_normal((2, 1, 2)), H=base.H, Q=base.Q, R=base.R,
-                T=T / T.sum(axis=1, keepdims=True))
+    return MJLS(
+        A=base.A + 0.1 * rng.standard_normal((2, 2, 2)),
+        B=base.B + 0.1 * rng.standard_normal((2, 2, 1)),
+        C=base.C + 0.2 * rng.standard_normal((2, 1, 2)),
+        H=base.H,
+        Q=base.Q,
+        R=base.R,
+        T=T / T.sum(axis=1, keepdims=True),
+    )
 
 
 @pytest.mark.parametrize("system", ["T1", "T2", "C=state", "random0", "random2", "random4"])
@@ -293,13 +327,13 @@ def test_alg31_exact_moments_reach_the_same_fixed_point(system):
         sys = sec354_system(int(system[-1]))
     a = static_output_feedback(sys, moments="step")
     b = static_output_feedback(sys, moments="exact")
-    c = static_output_feedback(sys)                  # moments="auto"
+    c = static_output_feedback(sys)  # moments="auto"
     assert a.converged and b.converged and c.converged and a.stabilizing and b.stabilizing
     assert np.abs(a.L - b.L).max() <= 1e-8 and np.abs(a.L - c.L).max() <= 1e-8
     assert b.cost == pytest.approx(a.cost, rel=1e-8)
     if system == "T2":
-        assert b.iterations < a.iterations / 10      # the thesis's iteration contracts slowly here
-        assert c.iterations < a.iterations / 10      # ... and "auto" switches to the exact moments
+        assert b.iterations < a.iterations / 10  # the thesis's iteration contracts slowly here
+        assert c.iterations < a.iterations / 10  # ... and "auto" switches to the exact moments
     if system == "T1":
         # an easy system: "auto" is the thesis's iteration
         assert c.iterations == a.iterations
@@ -338,5 +372,6 @@ def test_the_lyapunov_certificate_of_the_exact_iteration_rejects_an_unstable_loo
     T, W = np.array([[1.0]]), np.ones((1, 1, 1))
     assert certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), W)
     assert not certified(coupled_lyapunov_solver(np.array([[[1.2]]]), T)(W, adjoint=True), W)
-    assert not certified(coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True),
-                         np.zeros((1, 1, 1)))
+    assert not certified(
+        coupled_lyapunov_solver(np.array([[[0.9]]]), T)(W, adjoint=True), np.zeros((1, 1, 1))
+    )

@@ -21,9 +21,11 @@ from asoc_companion.timing import fitted_exponent
 
 def switch_points(radius=None, solve=None):
     """The dense/iterative switch points set for a block (None: unchanged)."""
-    values = {key: value for key, value in (("mjls.dense_max_radius", radius),
-                                            ("mjls.dense_max_solve", solve))
-              if value is not None}
+    values = {
+        key: value
+        for key, value in (("mjls.dense_max_radius", radius), ("mjls.dense_max_solve", solve))
+        if value is not None
+    }
     return config.option_context(**values)
 
 
@@ -38,10 +40,12 @@ def test_maps_match_kronecker_matrix_and_are_adjoint(n, M):
     rng = np.random.default_rng(1)
     X, P = stack(rng, M, n), stack(rng, M, n)
     K = ms_operator(s.A, s.T)
-    np.testing.assert_allclose(second_moment_map(s.A, s.T, X).ravel(), K @ X.ravel(), rtol=1e-12,
-                               atol=1e-12)
-    np.testing.assert_allclose(costate_map(s.A, s.T, P).ravel(), K.T @ P.ravel(), rtol=1e-12,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        second_moment_map(s.A, s.T, X).ravel(), K @ X.ravel(), rtol=1e-12, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        costate_map(s.A, s.T, P).ravel(), K.T @ P.ravel(), rtol=1e-12, atol=1e-12
+    )
     lhs = np.vdot(second_moment_map(s.A, s.T, X), P)
     assert lhs == pytest.approx(np.vdot(X, costate_map(s.A, s.T, P)), rel=1e-12)
 
@@ -51,18 +55,21 @@ def test_spectral_radius_methods_agree_with_cor_3_2(n, M, scale):
     s = scaling_system(np.random.default_rng(7 * n + M), n, M)
     A = np.sqrt(scale) * s.A
     dense = float(np.max(np.abs(np.linalg.eigvals(ms_operator(A, s.T)))))
-    assert mean_square_stability(A, s.T, method="dense", check=False).rho == pytest.approx(dense,
-                                                                                           rel=1e-12)
-    assert mean_square_stability(A, s.T, method="arnoldi", check=False).rho == pytest.approx(dense,
-                                                                                             rel=1e-10)
-    assert mean_square_stability(A, s.T, method="power", check=False).rho == pytest.approx(dense,
-                                                                                           rel=1e-8)
+    assert mean_square_stability(A, s.T, method="dense", check=False).rho == pytest.approx(
+        dense, rel=1e-12
+    )
+    assert mean_square_stability(A, s.T, method="arnoldi", check=False).rho == pytest.approx(
+        dense, rel=1e-10
+    )
+    assert mean_square_stability(A, s.T, method="power", check=False).rho == pytest.approx(
+        dense, rel=1e-8
+    )
     assert ms_spectral_radius(A, s.T) == pytest.approx(dense, rel=1e-10)
 
 
 def test_auto_switches_at_the_measured_sizes():
     assert config.defaults["mjls.dense_max_radius"] < config.defaults["mjls.dense_max_solve"]
-    s = scaling_system(np.random.default_rng(3), 12, 4)               # M n^2 = 576: matrix-free
+    s = scaling_system(np.random.default_rng(3), 12, 4)  # M n^2 = 576: matrix-free
     W = stack(np.random.default_rng(4), 4, 12)
     sol = coupled_lyapunov_solver(s.A, s.T)(W)
     assert sol.method.startswith("bicgstab") and sol.residual < 1e-11
@@ -81,7 +88,7 @@ def test_coupled_lyapunov_solvers_reach_their_residual(method, adjoint):
     assert sol.residual < 1e-11
     apply = costate_map if adjoint else second_moment_map
     np.testing.assert_allclose(sol.X - apply(A, s.T, sol.X), W, atol=1e-9 * np.abs(W).max())
-    assert np.all(np.linalg.eigvalsh(sol.X) > 0)                      # stable: the solution is > 0
+    assert np.all(np.linalg.eigvalsh(sol.X) > 0)  # stable: the solution is > 0
 
 
 @pytest.mark.parametrize("adjoint", [False, True])
@@ -93,8 +100,9 @@ def test_dense_solve_is_the_kronecker_solve(adjoint):
     K = ms_operator(s.A, s.T)
     X = np.linalg.solve(np.eye(27) - (K.T if adjoint else K), W.ravel()).reshape(W.shape)
     sol = solve_coupled_lyapunov(s.A, s.T, W, adjoint=adjoint, method="dense")
-    np.testing.assert_allclose(sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)), rtol=1e-10,
-                               atol=1e-12 * np.abs(X).max())
+    np.testing.assert_allclose(
+        sol.X, 0.5 * (X + np.swapaxes(X, 1, 2)), rtol=1e-10, atol=1e-12 * np.abs(X).max()
+    )
     with pytest.raises(ValueError, match="infs or NaNs"):
         solve_coupled_lyapunov(s.A, s.T, np.full_like(W, np.nan), method="dense")
 
@@ -112,8 +120,9 @@ def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
         rho, X = radius_and_moments(A, s.T, W)
         assert rho == pytest.approx(mean_square_stability(A, s.T, check=False).rho, rel=1e-12)
         if scale < 1:
-            np.testing.assert_allclose(X, solve_coupled_lyapunov(A, s.T, W).X, rtol=1e-9,
-                                       atol=1e-12)
+            np.testing.assert_allclose(
+                X, solve_coupled_lyapunov(A, s.T, W).X, rtol=1e-9, atol=1e-12
+            )
         else:
             assert X is None
 
@@ -122,8 +131,12 @@ def test_radius_and_moments_is_the_pair_of_radius_and_solve(scale, switch):
 def test_radii_and_moments_is_each_loop_alone(switch):
     """The stacked fast path: each closed loop's rho and X as from the checked functions."""
     s = scaling_system(np.random.default_rng(12), 3, 3)
-    loops = np.stack([s.A * np.sqrt(scale / mean_square_stability(s.A, s.T,
-                                                                  check=False).rho) for scale in (0.3, 1.2, 0.9, 2.0)])
+    loops = np.stack(
+        [
+            s.A * np.sqrt(scale / mean_square_stability(s.A, s.T, check=False).rho)
+            for scale in (0.3, 1.2, 0.9, 2.0)
+        ]
+    )
     W = stack(np.random.default_rng(13), 3, 3)
     with switch_points(radius=switch, solve=switch):
         rho, X = radii_and_moments(loops, s.T, W)
@@ -132,15 +145,16 @@ def test_radii_and_moments_is_each_loop_alone(switch):
             if r >= 1:
                 assert x is None
             else:
-                np.testing.assert_allclose(x, solve_coupled_lyapunov(loop, s.T, W).X, rtol=1e-9,
-                                           atol=1e-12)
+                np.testing.assert_allclose(
+                    x, solve_coupled_lyapunov(loop, s.T, W).X, rtol=1e-9, atol=1e-12
+                )
 
 
 def test_verdict_is_undecided_within_rounding_of_one():
     T = np.array([[0.3, 0.7], [0.6, 0.4]])
     A = np.stack([np.diag([0.9, 0.2]), np.diag([0.5, 1.1])])
     rho = mean_square_stability(A, T, check=False).rho
-    on_boundary = A / np.sqrt(rho)                                    # rho = 1 up to rounding
+    on_boundary = A / np.sqrt(rho)  # rho = 1 up to rounding
     assert mean_square_stability(on_boundary, T).verdict is Verdict.UNDECIDED
     assert mean_square_stability(A * np.sqrt(0.99 / rho), T).verdict is Verdict.STABLE
     assert mean_square_stability(A * np.sqrt(1.01 / rho), T).verdict is Verdict.UNSTABLE
@@ -150,8 +164,9 @@ def test_verdict_is_undecided_within_rounding_of_one():
 
 
 def test_fitted_exponent_recovers_a_power_law():
-    assert fitted_exponent([4, 8, 16, 32], [2.0 * n ** 2.5 for n in (4, 8, 16,
-                                                                     32)]) == pytest.approx(2.5)
+    assert fitted_exponent([4, 8, 16, 32], [2.0 * n**2.5 for n in (4, 8, 16, 32)]) == pytest.approx(
+        2.5
+    )
 
 
 @pytest.mark.parametrize("case", ["stall", "subdominant"])
@@ -164,12 +179,16 @@ def test_arnoldi_radius_on_the_larger_plants_hard_closed_loops(case):
     import json
     from pathlib import Path
 
-    cases = json.loads((Path(__file__).parents[2] / "reference" / "arnoldi_hard_cases.json").read_text())
+    cases = json.loads(
+        (Path(__file__).parents[2] / "reference" / "arnoldi_hard_cases.json").read_text()
+    )
     A, T = np.array(cases[case]["A"]), np.array(cases[case]["T"])
     result = mean_square_stability(A, T, method="arnoldi")
     # rho_dense: the largest modulus of np.linalg.eigvals(ms_operator(A, T)), stored (2048^2 is
     # slow)
     rho_dense = cases[case]["rho_dense"]
     assert result.method == "arnoldi" and result.rho == pytest.approx(rho_dense, rel=1e-10)
-    assert result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
+    assert (
+        result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
+    )
     assert result.verdict is Verdict.STABLE and result.rho_upper - rho_dense <= 1e-5 * rho_dense

@@ -23,9 +23,12 @@ def test_mode_radii_lie_in_the_documented_interval(family):
 
 
 def test_unstable_family_radii_cover_one_to_one_and_a_half():
-    radii = np.concatenate([_radii(random_mjls(np.random.default_rng(s), 2, 1, 1, 4,
-                                               family="unstable"))
-                            for s in range(200)])
+    radii = np.concatenate(
+        [
+            _radii(random_mjls(np.random.default_rng(s), 2, 1, 1, 4, family="unstable"))
+            for s in range(200)
+        ]
+    )
     assert radii.min() >= 1.0 and radii.max() <= 1.5
     # uniform on [1, 1.5]: both ends are reached
     assert radii.min() < 1.05 and radii.max() > 1.45
@@ -70,20 +73,28 @@ def test_noise_free_outputs_when_measurement_noise_is_zero():
     assert np.all(random_mjls(np.random.default_rng(0), 2, 1, 1, 2, noise=0).H == 0)
 
 
-@pytest.mark.parametrize("kwargs, error, text", [
-    (dict(rng=0), TypeError, "rng: expected a numpy.random.Generator"),
-    (dict(n_states=2.0), TypeError, "n_states: expected an integer, found 2.0"),
-    (dict(n_outputs=3), ValueError, "n_outputs: expected an integer <= 2, found 3"),
-    (dict(n_modes=0), ValueError, "n_modes: expected an integer >= 1, found 0"),
-    (dict(family="chaotic"), ValueError, "family: expected one of"),
-    (dict(concentration=0.0), ValueError, "concentration: expected a finite real number > 0"),
-    (dict(noise=-1.0), ValueError, "noise: expected a finite real number >= 0"),
-    (dict(n_states=3, family="thesis_like"), ValueError, "for 'thesis_like', found 3, 1, 1"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, text",
+    [
+        (dict(rng=0), TypeError, "rng: expected a numpy.random.Generator"),
+        (dict(n_states=2.0), TypeError, "n_states: expected an integer, found 2.0"),
+        (dict(n_outputs=3), ValueError, "n_outputs: expected an integer <= 2, found 3"),
+        (dict(n_modes=0), ValueError, "n_modes: expected an integer >= 1, found 0"),
+        (dict(family="chaotic"), ValueError, "family: expected one of"),
+        (dict(concentration=0.0), ValueError, "concentration: expected a finite real number > 0"),
+        (dict(noise=-1.0), ValueError, "noise: expected a finite real number >= 0"),
+        (dict(n_states=3, family="thesis_like"), ValueError, "for 'thesis_like', found 3, 1, 1"),
+    ],
+)
 def test_bad_arguments_are_named(kwargs, error, text):
     args = dict(rng=np.random.default_rng(0), n_states=2, n_inputs=1, n_outputs=1, n_modes=2)
     args.update(kwargs)
     with pytest.raises(error, match=text.replace("(", r"\(").replace(")", r"\)")):
-        random_mjls(args.pop("rng"), args.pop("n_states"), args.pop("n_inputs"),
-                    args.pop("n_outputs"),
-                    args.pop("n_modes"), **args)
+        random_mjls(
+            args.pop("rng"),
+            args.pop("n_states"),
+            args.pop("n_inputs"),
+            args.pop("n_outputs"),
+            args.pop("n_modes"),
+            **args,
+        )

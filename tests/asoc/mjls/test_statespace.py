@@ -50,8 +50,12 @@ def test_unspecified_sampling_time_is_discrete():
 
 def test_c2d_plant_matches_the_zero_order_hold_exponential():
     from scipy.linalg import expm
-    Ac, Bc, C = np.array([[0.0, 1.0], [2.0, -1.0]]), np.array([[0.0],
-                                                               [1.0]]), np.array([[1.0, 0.0]])
+
+    Ac, Bc, C = (
+        np.array([[0.0, 1.0], [2.0, -1.0]]),
+        np.array([[0.0], [1.0]]),
+        np.array([[1.0, 0.0]]),
+    )
     plant = control.c2d(control.ss(Ac, Bc, C, 0), 0.2, method="zoh")
     zoh = expm(np.block([[Ac, Bc], [np.zeros((1, 3))]]) * 0.2)
     sys = MJLS.from_statespace([plant, plant], T, **KEYWORDS)
@@ -59,26 +63,61 @@ def test_c2d_plant_matches_the_zero_order_hold_exponential():
     np.testing.assert_allclose(sys.B[1], zoh[:2, 2:], rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("modes, kwargs, error, match", [
-    (lambda: [control.ss([[1.0]], [[1.0]], [[1.0]], 0), control.ss([[1.0]], [[1.0]], [[1.0]], 0)],
-     {},
-     ValueError, r"systems\[0\]: expected a discrete-time system .*continuous-time dt = 0"),
-    (lambda: [_modes(0.1)[0], _modes(0.2)[1]], {}, ValueError, r"systems: expected one sampling "
-                                                               r"time"),
-    (lambda: _modes(0.1), {"dt": 0.2}, ValueError,
-     r"dt: expected the systems' sampling time 0.1, found 0.2"),
-    (lambda: _modes(0.1), {"dt": -1.0}, ValueError, r"dt: expected a finite real number > 0"),
-    (lambda: [_modes()[0], control.ss(np.eye(3), np.ones((3, 1)), np.ones((1, 3)), 0, 0.1)], {},
-     ValueError, r"systems: expected equal sizes"),
-    (lambda: _modes()[:1], {}, ValueError, r"systems: expected 2 systems"),
-    (lambda: [control.ss(np.eye(2), np.ones((2, 1)), np.ones((1, 2)), [[0.5]], 0.1)] * 2, {},
-     ValueError, r"systems\[0\]: expected D = 0 .*no feedthrough.*0.5"),
-    (lambda: _modes()[0], {}, TypeError, r"systems: expected a list of 2 control.StateSpace"),
-    (lambda: [_modes()[0], "plant"], {}, TypeError,
-     r"systems\[1\]: expected a control.StateSpace, found str"),
-    (lambda: [control.tf([1], [1, 0.5], 0.1)] * 2, {}, TypeError, r"systems\[0\]: expected a "
-                                                                  r"control.StateSpace"),
-])
+@pytest.mark.parametrize(
+    "modes, kwargs, error, match",
+    [
+        (
+            lambda: [
+                control.ss([[1.0]], [[1.0]], [[1.0]], 0),
+                control.ss([[1.0]], [[1.0]], [[1.0]], 0),
+            ],
+            {},
+            ValueError,
+            r"systems\[0\]: expected a discrete-time system .*continuous-time dt = 0",
+        ),
+        (
+            lambda: [_modes(0.1)[0], _modes(0.2)[1]],
+            {},
+            ValueError,
+            r"systems: expected one sampling "
+            r"time",
+        ),
+        (
+            lambda: _modes(0.1),
+            {"dt": 0.2},
+            ValueError,
+            r"dt: expected the systems' sampling time 0.1, found 0.2",
+        ),
+        (lambda: _modes(0.1), {"dt": -1.0}, ValueError, r"dt: expected a finite real number > 0"),
+        (
+            lambda: [_modes()[0], control.ss(np.eye(3), np.ones((3, 1)), np.ones((1, 3)), 0, 0.1)],
+            {},
+            ValueError,
+            r"systems: expected equal sizes",
+        ),
+        (lambda: _modes()[:1], {}, ValueError, r"systems: expected 2 systems"),
+        (
+            lambda: [control.ss(np.eye(2), np.ones((2, 1)), np.ones((1, 2)), [[0.5]], 0.1)] * 2,
+            {},
+            ValueError,
+            r"systems\[0\]: expected D = 0 .*no feedthrough.*0.5",
+        ),
+        (lambda: _modes()[0], {}, TypeError, r"systems: expected a list of 2 control.StateSpace"),
+        (
+            lambda: [_modes()[0], "plant"],
+            {},
+            TypeError,
+            r"systems\[1\]: expected a control.StateSpace, found str",
+        ),
+        (
+            lambda: [control.tf([1], [1, 0.5], 0.1)] * 2,
+            {},
+            TypeError,
+            r"systems\[0\]: expected a "
+            r"control.StateSpace",
+        ),
+    ],
+)
 def test_bad_systems_are_named(modes, kwargs, error, match):
     with pytest.raises(error, match=match):
         MJLS.from_statespace(modes(), T, **KEYWORDS, **kwargs)
@@ -95,13 +134,17 @@ def test_to_statespace_rejects_a_contradicting_sampling_time():
 def test_asoc_imports_without_python_control():
     import subprocess
     import sys
-    code = ("import sys; sys.modules['control'] = None\n"
-            "import asoc.mjls\n"
-            "from asoc.mjls.examples import sec354_system\n"
-            "try:\n    sec354_system(1).to_statespace()\n"
-            "except ImportError as e:\n    print('ImportError', e)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
+
+    code = (
+        "import sys; sys.modules['control'] = None\n"
+        "import asoc.mjls\n"
+        "from asoc.mjls.examples import sec354_system\n"
+        "try:\n    sec354_system(1).to_statespace()\n"
+        "except ImportError as e:\n    print('ImportError', e)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
     assert out.startswith("ImportError python-control is needed")
 
 
@@ -118,9 +161,11 @@ def test_the_engineers_path_from_statespace_to_simulation_without_weights():
     plain = MJLS.from_statespace(_modes(0.1), T)
     assert np.array_equal(plain.Q, np.broadcast_to(np.eye(2), (2, 2, 2)))
     assert np.array_equal(plain.R, np.ones((2, 1, 1))) and np.array_equal(plain.H, plain.Q)
-    designs = [static_output_feedback(plain, warn=False), dynamic_output_feedback(plain,
-                                                                                  warn=False),
-               exact_dynamic_output_feedback(plain, warn=False)]
+    designs = [
+        static_output_feedback(plain, warn=False),
+        dynamic_output_feedback(plain, warn=False),
+        exact_dynamic_output_feedback(plain, warn=False),
+    ]
     for res in designs:
         if not res.stabilizing:
             assert average_cost(plain, res) == np.inf
