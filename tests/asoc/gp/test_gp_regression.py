@@ -124,45 +124,48 @@ def test_bad_input():
         gp.DistributionGP().condition(np.array([[0, 1.0], [1.0, 0]]), [0, 1], 1.0, 1.0, 0.0)
 
 
+def _log_ml(K, y, alpha, sigma_n):
+    """log p(y) of a GP with covariance alpha^2 K + sigma_n^2 I and the mean of y (Sec. 2.6.1)."""
+    r = y - y.mean()
+    Ky = alpha**2 * K + sigma_n**2 * np.eye(len(y))
+    sign, logdet = np.linalg.slogdet(Ky)
+    assert sign > 0
+    return -0.5 * r @ np.linalg.solve(Ky, r) - 0.5 * logdet - 0.5 * len(y) * np.log(2 * np.pi)
+
+
 @pytest.mark.parametrize(
     "M, L, d, equal", [(23, 3, 2, True), (21, 4, 1, False), (2, 9, 1, True), (12, 10, 3, False)]
 )
-def test_mean_kernel_blocks_equal_the_full_einsum(M, L, d, equal):
-    """Block rows from the diagonal on (M = 21: a last block of one mixture) against eq. (2.22)
-    summed
-    by np.einsum over the full exponential, and its derivative in log l."""
+def test_mean_kernel_likelihood_and_gradient_follow_eq_2_22(M, L, d, equal):
+    """The likelihood of eq. (2.22)'s kernel for every block layout (M = 21: a last block of
+    one mixture), also where most exponentials round to zero (l = 0.05), and its gradient in
+    log l against central differences."""
     rng = np.random.default_rng(M)
     X = rng.normal(size=(M, L, d))
     W = None if equal else rng.dirichlet(np.ones(L), size=M)
-    model = gp.MeanKernelGP()
-    model.X, model.W = X, np.full((M, L), 1.0 / L) if equal else W
-    model._prepare_kernel()
-    sq = np.sum((X[:, :, None, None, :] - X[None, None]) ** 2, axis=-1)
+    y = rng.normal(size=M)
+    model = gp.MeanKernelGP(n_restarts=0).fit(X, y, rng, W=W)
+    alpha, sigma_n, h = 1.3, 0.2, 1e-5
     for l in (0.05, 1.0, 30.0):
-        E = np.exp(-0.5 * sq / l**2)
-        K, dK = model._unit_kernel(l, grad=True)
-        np.testing.assert_allclose(
-            K, np.einsum("ia,iajb,jb->ij", model.W, E, model.W), rtol=1e-11, atol=0
-        )
-        np.testing.assert_allclose(
-            dK, np.einsum("ia,iajb,jb->ij", model.W, E * sq / l**2, model.W), rtol=1e-11, atol=0
-        )
+        K = gp.mean_kernel_dirac(X, X, W, W, alpha=1.0, Lambda=l**2)
+        lml = model.log_marginal_likelihood(alpha, l, sigma_n)
+        assert lml == pytest.approx(_log_ml(K, y, alpha, sigma_n), rel=1e-12)
+        _, gradient = model.neg_log_ml(np.log([alpha, l, sigma_n]))
+        up, down = (model.log_marginal_likelihood(alpha, l * np.exp(s), sigma_n) for s in (h, -h))
+        assert -gradient[1] == pytest.approx((up - down) / (2 * h), rel=1e-5, abs=1e-6)
 
 
-def test_likelihood_reuses_the_kernel_of_a_length_scale():
+def test_likelihood_of_a_length_scale_does_not_depend_on_what_was_evaluated_before():
+    """The kernels remembered for recent length scales never leak into another one."""
     rng = np.random.default_rng(5)
     X = gp.gaussian_dirac_mixtures(rng.uniform(-3, 3, 15), rng.uniform(0.1, 2, 15), 4)
-    model = gp.MeanKernelGP(n_restarts=0).fit(X, rng.normal(size=15), rng)
-    calls = []
-    unit_kernel = model._unit_kernel
-    model._unit_kernel = lambda l, grad=False: calls.append((l, grad)) or unit_kernel(l, grad)
-    first = [model.log_marginal_likelihood(1.0, 0.7, s) for s in (0.1, 0.2)]
-    model._reset_kernels()
-    again = [model.log_marginal_likelihood(1.0, 0.7, s) for s in (0.1, 0.2)]
-    # one kernel per length scale and training set
-    assert first == again and len(calls) == 2
-    K, dK = model._kernel(0.7, grad=True)  # the derivative is added on demand
-    assert dK is not None and not K.flags.writeable and len(calls) == 3
+    y = rng.normal(size=15)
+    fresh = [gp.MeanKernelGP(n_restarts=0).fit(X, y, np.random.default_rng(1)) for _ in range(2)]
+    for l in (0.3, 0.7, 2.0, 0.7):
+        fresh[1].neg_log_ml(np.log([1.0, l, 0.1]))
+    first = fresh[0].log_marginal_likelihood(1.0, 0.7, 0.2)
+    assert fresh[1].log_marginal_likelihood(1.0, 0.7, 0.2) == first
+    assert fresh[1].log_marginal_likelihood(1.0, 0.3, 0.2) != first
 
 
 @pytest.mark.parametrize(
@@ -187,25 +190,15 @@ def test_covariances_check_their_arguments_unless_told_not_to(name, shape):
         gp.COVARIANCES[name](D, 0.0, **shape)
 
 
-def test_exp_in_place_skips_only_exponents_whose_exponential_is_zero():
-    from asoc.gp.regression import EXP_ZERO_BELOW, _exp_in_place
-
-    E = np.concatenate([np.linspace(-800, -700, 1001), np.linspace(-5, 0, 11)])
-    expected = np.exp(E)
-    assert np.all(expected[E < EXP_ZERO_BELOW] == 0)
-    _exp_in_place(E, E.min())
-    # the zeros, the rest to rounding
-    np.testing.assert_allclose(E, expected, rtol=1e-14, atol=1e-300)
-
-
-def test_distribution_gp_training_kernel_equals_the_checked_covariance():
+def test_distribution_gp_likelihood_uses_the_checked_covariance():
     x = np.random.default_rng(8).uniform(-3, 3, 9)
     D = np.abs(x[:, None] - x[None])
-    for name, shape in (
-        ("matern", {"nu": 1.5}),
-        ("rational_quadratic", {"alpha_rq": 2.0}),
-        ("se", {}),
+    for name, shape, kappa_shape in (
+        ("matern", {"nu": 1.5}, {"nu": 1.5}),
+        ("rational_quadratic", {"alpha_rq": 2.0}, {"alpha": 2.0}),
+        ("se", {}, {}),
     ):
         model = gp.DistributionGP(name, **shape).condition(D, np.sin(x), 1.0, 0.8, 0.1)
-        K, _ = model._unit_kernel(np.float64(0.7), grad=True)
-        np.testing.assert_allclose(K, model._kappa(D, 0.7), rtol=1e-14)
+        K = gp.COVARIANCES[name](D, 0.7, **kappa_shape)
+        expected = _log_ml(K, np.sin(x), 1.0, 0.1)
+        assert model.log_marginal_likelihood(1.0, 0.7, 0.1) == pytest.approx(expected, rel=1e-12)
