@@ -217,6 +217,15 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         "Alg. 3.2 compares its bounds with those of the last this-many iterations: equal to tol "
         "with the previous one means converged, with an earlier one a cycle. The cycles measured "
         "(networked loop of asoc.mjls.examples) have period 2."),
+    "mjls.alg31_cycle_window": (
+        40,
+        INT(2),
+        "Iterations (rounded up to a multiple of the period) over which Alg. 3.1's stopping rule "
+        "measures how fast its iterates approach a cycle: the change against p iterations back "
+        "must fall, over this window, at least twice as fast as the change against the last "
+        "one, which must be too slow to reach tol within max_iter. The networked loop of "
+        "asoc.mjls.examples approaches its 2-cycle at a rate of about 0.98 per iteration, so the "
+        "lag-2 change halves in about 40 iterations while the lag-1 change stays at 0.65."),
     "mjls.alg32_patience": (
         50,
         INT(1),

@@ -38,7 +38,11 @@ class StoppingRule:
       with ``early_cycles`` (Alg. 3.1) also when the lag-p change is below sqrt(tol) and
       below 1e-4 times the lag-1 change: a contraction factor -(1 - e) has lag-2 / lag-1
       changes of about e, so only e < 1e-4 is taken for a cycle, and such an iteration
-      would need more than 2e5 iterations to reach tol = 1e-10;
+      would need more than 2e5 iterations to reach tol = 1e-10; and with ``early_cycles``
+      when the iterates approach a cycle (:meth:`approaches_cycle`): the lag-p change is
+      below 1e-2 of the lag-1 change and falls, over ``mjls.alg31_cycle_window`` iterations,
+      at least twice as fast as the lag-1 change, which is too slow to reach tol within
+      ``max_iter``;
     - ``"diverged"`` when the iterates grow by more than 1e6 within a window of
       w = ``mjls.alg32_patience`` iterations while not settling;
     - ``"no_progress"`` when the smallest change (over p) of the last w iterations is not
@@ -60,6 +64,9 @@ class StoppingRule:
         self.max_period = config.defaults["mjls.alg32_max_period"]
         self.window = config.defaults["mjls.alg32_patience"] if window is None else window
         self.recent = deque(maxlen=self.max_period)
+        self.cycle_window = config.defaults["mjls.alg31_cycle_window"]
+        # the changes at lags 1 .. max_period of the last iterations
+        self.lag_changes = deque(maxlen=self.max_period * self.cycle_window + 1)
         self.smallest, self.norms = [], []
         self.change, self.period, self.predicted, self.lag1_change = np.inf, 1, np.inf, np.inf
 
@@ -76,11 +83,13 @@ class StoppingRule:
             for old in reversed(self.recent)
         ]  # largest over the parts, per lag
         self.recent.append(new)
+        self.lag_changes.append(changes)
         self.change = changes[0]
         if it > 1 and changes[0] < self.tol:
             return StopStatus.CONVERGED
         for period, change in enumerate(changes[1:], start=2):
-            if self._cycles(change, changes[0]):
+            if self._cycles(change, changes[0]) or (self.early_cycles
+                                                    and self.approaches_cycle(it, period)):
                 self.change, self.period, self.lag1_change = change, period, changes[0]
                 return StopStatus.CYCLE
         self.smallest.append(min(changes))
@@ -92,6 +101,45 @@ class StoppingRule:
         if change < self.tol and change_1 > np.sqrt(self.tol):
             return True
         return self.early_cycles and change < np.sqrt(self.tol) and change < 1e-4 * change_1
+
+    def approaches_cycle(self, it, period):
+        """Whether the iterates approach a cycle of ``period`` faster than they settle.
+
+        Over the last W iterations (``mjls.alg31_cycle_window`` rounded up to a multiple of
+        ``period``, so that both ends are in the same phase) the change against ``period``
+        iterations back, c_p, falls by a factor g_p and the change against the last
+        iterate, c_1, by g_1. An iteration that converges with an oscillation (a contraction
+        factor near -1) has g_p = g_1; one that approaches a cycle has g_p < g_1 and c_p much
+        smaller than c_1. Taken for a cycle: c_p < 1e-2 c_1, g_p < g_1 / 2, and c_1 at the
+        rate g_1 would not reach tol within ``max_iter`` iterations.
+
+        Examples
+        --------
+        Iterates x_k = (-1)^k (1 + 0.9^k) approach the 2-cycle +-1:
+
+        >>> rule = StoppingRule(tol=1e-10, max_iter=1000, early_cycles=True)
+        >>> x = [np.full(1, (-1) ** k * (1 + 0.9 ** k)) for k in range(200)]
+        >>> next(k for k in range(1, 200) if rule.status(k, [x[k]])), rule.period
+        (43, 2)
+
+        Iterates x_k = 1 + (-0.9)^k, a contraction with factor -0.9, converge:
+
+        >>> rule = StoppingRule(tol=1e-10, max_iter=1000, early_cycles=True)
+        >>> x = [np.full(1, 1 + (-0.9) ** k) for k in range(300)]
+        >>> [(k, s) for k in range(1, 300) if (s := rule.status(k, [x[k]]))][0]
+        (226, 'converged')
+        """
+        window = period * -(-self.cycle_window // period)
+        if len(self.lag_changes) <= window or len(self.lag_changes[-1 - window]) < period:
+            return False
+        (c1, cp), (c1_then, cp_then) = ((changes[0], changes[period - 1]) for changes in
+                                        (self.lag_changes[-1], self.lag_changes[-1 - window]))
+        if not (0 < cp < 1e-2 * c1 and cp_then > 0 and c1_then > 0):
+            return False
+        g1, gp = c1 / c1_then, cp / cp_then
+        if not gp < 0.5 * g1:
+            return False
+        return bool(g1 >= 1 or window * np.log(self.tol / c1) / np.log(g1) > self.max_iter - it)
 
     def _progress(self, it):
         """Return "diverged" or "no_progress" from the last two windows of changes, else None."""

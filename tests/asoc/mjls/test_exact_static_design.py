@@ -80,10 +80,15 @@ def test_it_agrees_with_alg31_where_alg31_converges(t, C):
 
 def test_alg31_stops_on_the_lossy_loop_with_a_cycle_and_the_cheaper_member(lossy, lossy_alg31):
     r = lossy_alg31
-    assert (r.status, r.period) == ("cycle", 2) and r.iterations < 1000
+    assert (r.status, r.period) == ("cycle", 2) and r.iterations <= 200
     assert "exact_static_output_feedback" in r.message
-    # the other member of the 2-cycle: one more iteration from the returned one
-    other = static_output_feedback(lossy, max_iter=r.iterations + 1, warn=False, moments="step")
+    # the returned member is one of the last two iterates; the other member of the 2-cycle is
+    # the iterate 2 back from the one not returned (the iterates repeat to 1 % at the stop)
+    last_two = [static_output_feedback(lossy, max_iter=r.iterations - k, warn=False)
+                for k in (1, 2)]
+    assert any(np.array_equal(run.L, r.L) for run in last_two)
+    other = next(run for run in last_two if not np.array_equal(run.L, r.L))
+    assert other.status == "max_iterations" and not np.allclose(other.L, r.L, rtol=1e-3)
     members = {float(static_cost(lossy, L)[0]) for L in (r.L, other.L)}
     assert r.cost == min(members) and np.isfinite(r.cost)
 
