@@ -9,7 +9,10 @@ from asoc.mjls import static_output_feedback
 from asoc.mjls.baselines import time_variant_feedback
 from asoc.mjls.controllers import DynamicOutputFeedback, StaticGain
 from asoc.mjls.dynamic import dynamic_output_feedback
-from asoc.mjls.exact_cost_design import exact_dynamic_output_feedback
+from asoc.mjls.exact_cost_design import (
+    exact_dynamic_output_feedback,
+    min_radius_dynamic_output_feedback,
+)
 from asoc.mjls.exact_static_design import exact_static_output_feedback
 from asoc.mjls.examples import (
     SEC354_X0,
@@ -124,6 +127,17 @@ def test_exact_static_design_networked_loop_lossy(benchmark):
     r = benchmark.pedantic(exact_static_output_feedback, args=(networked_loop_lossy(),), rounds=5)
     assert r.converged and r.stabilizing
     benchmark.extra_info.update(target_s=0.5, iterations=r.iterations)
+
+
+def test_min_radius_networked_loop_lossy(benchmark):
+    """min_radius_dynamic_output_feedback on the lossy networked loop, to its stopping rule (it
+    stops without progress at a non-smooth minimum of rho, and warns): under 5 s (issue 33)."""
+    r = benchmark.pedantic(
+        min_radius_dynamic_output_feedback, args=(networked_loop_lossy(),),
+        kwargs={"warn": False}, rounds=3,
+    )
+    assert r.stabilizing
+    benchmark.extra_info.update(target_s=5.0, iterations=r.iterations)
 
 
 def test_alg33_horizon_100(benchmark):

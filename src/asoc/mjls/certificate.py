@@ -33,7 +33,7 @@ from .moment_operator import kronecker_stack, linear_operator, second_moment_map
 from .spectral_estimate import estimates, left_perron_stack
 
 __all__ = ["EPS", "TINY", "certified_upper_bound", "Bracket", "deflated_resolvent_bounds",
-           "lyapunov_upper_bound", "certify"]
+           "lyapunov_upper_bound", "certify", "narrow"]
 
 
 EPS = np.finfo(float).eps
@@ -452,12 +452,13 @@ def _certify_estimates(A, T, method, unit):
             rho = min(rho, upper)
         if best is None or upper - lower < best[1] - best[0]:
             best = lower, upper, rho, X, estimate
-        if lower <= estimate.rho <= upper and _narrow(lower, upper):
+        if lower <= estimate.rho <= upper and narrow(lower, upper):
             break
     return best
 
 
-def _narrow(lower, upper):
+def narrow(lower, upper):
+    """Whether [lower, upper] is narrow: relative width ``mjls.bracket_warn_rtol`` at most."""
     return upper - lower <= config.defaults["mjls.bracket_warn_rtol"] * upper
 
 
@@ -466,12 +467,12 @@ def _singular_perron_bounds(A, T, estimate, lower, upper, rho, X):
     them.
     """
     needs_lower = lower < rho * (1 - np.sqrt(config.defaults["mjls.bracket_rtol"]))
-    if estimate.method == "single_mode" or not (needs_lower or not _narrow(lower, upper)):
+    if estimate.method == "single_mode" or not (needs_lower or not narrow(lower, upper)):
         return lower, upper
     P = left_perron_stack(A, T, rho, estimate.method)
     if needs_lower:
         lower = max(lower, _residual_lower_bound(A, T, rho, X, P, upper))
-    if not _narrow(lower, upper):
+    if not narrow(lower, upper):
         bracket = Bracket(A, T)
         deflated_resolvent_bounds(bracket, rho, X, P)
         upper = min(upper, max(bracket.upper, lower))

@@ -23,11 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import config
-from .certificate import certify
+from .certificate import Bracket, certify, narrow
 from .closed_loops import controller_closed_loop, is_controller
 from .controllers import Controller
 from .moment_operator import mode_stack
-from .spectral_estimate import balance, check_method, left_perron_stack
+from ..threads import single_threaded
+from .spectral_estimate import balance, check_method, estimate, left_perron_stack
 from .system import MJLS
 
 __all__ = ["Verdict", "MeanSquareStability", "ms_spectral_radius", "mean_square_stability",
@@ -332,12 +333,32 @@ def perron_pair(A, T, method="auto"):
     """
     check_method(method)
     balanced = balance(A, T)
-    _, _, rho, X, estimate = certify(balanced.A, balanced.W, method)
-    P = left_perron_stack(balanced.A, balanced.W, rho, estimate.method)
+    with single_threaded():
+        rho, X, solver = _checked_estimate(balanced.A, balanced.W, method)
+        P = left_perron_stack(balanced.A, balanced.W, rho, solver)
     with np.errstate(over="ignore"):
         rho = np.ldexp(rho, balanced.g)
     X, P = balanced.to_stack(X), balanced.to_stack(P, adjoint=True)
     return float(rho), X / np.linalg.norm(X), P / np.linalg.norm(P)
+
+
+def _checked_estimate(A, T, method):
+    """(rho, X, solver) of the balanced (A, T): the eigen-solver's estimate where the
+    Collatz-Wielandt bounds at its X hold it in a narrow bracket (``mjls.bracket_warn_rtol``),
+    else the dense eigenvectors up to M n^2 = ``mjls.dense_fallback_radius`` (near a multiple
+    Perron eigenvalue, e.g. at a minimum of rho over gains, X is ill-conditioned and its bounds
+    wide), else the certificate's (which tries more Krylov sizes and refines X)."""
+    found = estimate(A, T, method)
+    bracket = Bracket(A, T)
+    bracket.consider(found.X, config.defaults["mjls.bracket_rtol"])
+    if bracket.lower <= found.rho <= bracket.upper and narrow(bracket.lower, bracket.upper):
+        return found.rho, found.X, found.method
+    M, n, _ = A.shape
+    if found.method != "dense" and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
+        found = estimate(A, T, "dense")
+        return found.rho, found.X, found.method
+    _, _, rho, X, found = certify(A, T, method)
+    return rho, X, found.method
 
 
 def _certified(A, T, method):

@@ -144,6 +144,17 @@ def test_min_radius_warns_with_its_status_when_it_stops_short():
     assert res.status == "max_iterations"
 
 
+def test_min_radius_on_the_lossy_loop_stops_at_its_kink_and_warns(lossy):
+    """rho is not smooth at its minimum over the gains (Perron eigenvalues coalesce): the design
+    stops without progress, says so, and returns a certified stabilising controller (4.3 s
+    measured at load 2 on 2 cores; 38 s when every BFGS step certified its Perron pair)."""
+    start = time.perf_counter()
+    with pytest.warns(RuntimeWarning, match="status 'no_progress'"):
+        res = min_radius_dynamic_output_feedback(lossy)
+    assert res.status == "no_progress" and res.stabilizing and res.rho < 0.77
+    assert res.iterations < 150 and time.perf_counter() - start < 30.0
+
+
 def test_bfgs_stops_on_a_stall_and_on_a_scaled_gradient():
     fun = lambda z: (float(1.0 + np.exp(-z[0])), -np.exp(-z))  # decreases forever, ever slower
     run = bfgs(fun, [0.0], 1e-30, 500, patience=5, stall=1e-3)
