@@ -123,3 +123,57 @@ def test_the_named_test_files_cover_their_modules():
     )
     stale = sorted(set(COVERED_BY) - set(modules()))
     assert not stale, f"COVERED_BY names modules that no longer exist: {stale}"
+
+
+def private_uses(source):
+    """``name._helper`` and ``from asoc... import _helper`` in a test's source, where ``name`` is
+    bound by an import from ``asoc`` or ``asoc_companion`` (dunder names are not private)."""
+    tree = ast.parse(source)
+    ours, found = set(), []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] in (
+            "asoc",
+            "asoc_companion",
+        ):
+            for alias in node.names:
+                ours.add(alias.asname or alias.name)
+                if alias.name.startswith("_") and not alias.name.startswith("__"):
+                    found.append(f"line {node.lineno}: imports {alias.name}")
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] in ("asoc", "asoc_companion"):
+                    ours.add(alias.asname or alias.name.split(".")[0])
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Attribute)
+            and isinstance(node.value, ast.Name)
+            and node.value.id in ours
+            and node.attr.startswith("_")
+            and not node.attr.startswith("__")
+        ):
+            found.append(f"line {node.lineno}: {node.value.id}.{node.attr}")
+    return found
+
+
+def test_no_test_reaches_into_a_private_helper():
+    """Tests use the public surface (issue 32, item 6): no private name imported from the
+    library or the tooling, none read off a name imported from them."""
+    offenders = {
+        str(path.relative_to(ROOT)): uses
+        for path in sorted((ROOT / "tests").rglob("test_*.py"))
+        if path.name != "test_test_files.py" and (uses := private_uses(path.read_text()))
+    }
+    assert not offenders, f"tests that use private helpers: {offenders}"
+
+
+def test_the_private_helper_check_finds_planted_uses():
+    source = (
+        "import asoc.mjls as m\nfrom asoc.gp.regression import _exp_in_place, EXP\n"
+        "from asoc_companion import cli\nimport argparse\n"
+        "m._spectral(1)\ncli._parser()\nargparse._SubParsersAction\ncli.__name__\n"
+    )
+    assert private_uses(source) == [
+        "line 2: imports _exp_in_place",
+        "line 5: m._spectral",
+        "line 6: cli._parser",
+    ]
