@@ -145,7 +145,6 @@ def machine_sentence(record: dict) -> str:
     runs = ("" if not runs else " Each time is the best of its case's runs: " + ", ".join(
         f"{r} for {k} case{'s' * (k != 1)}" for r, k in sorted(runs.items(), reverse=True)) + ".")
     return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores{load}: the "
-            "author's code "
-            f"(commit {record['author_code']['commit'][:7]}) under Octave {m['octave']}; this "
-            "library under "
-            f"Python {m['python']}, NumPy {m['numpy']} with {m['blas']}.{runs}")
+            f"author's code (commit {record['author_code']['commit'][:7]}) under Octave "
+            f"{m['octave']}; this library under Python {m['python']}, NumPy {m['numpy']} with "
+            f"{m['blas']}.{runs}")

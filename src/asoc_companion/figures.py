@@ -146,8 +146,7 @@ def file_stem(kind: str, number: str) -> str:
     match = NUMBER.fullmatch(str(number))
     if match is None:
         raise ValueError("number must look like '3.4' (thesis numbering) or 'own.1' (not in the "
-                         "thesis), "
-                         f"found {number!r}")
+                         f"thesis), found {number!r}")
     return f"{kind}{match[1]}_{match[2]}" if match[3] is None else f"{kind}_own_{match[3]}"
 
 

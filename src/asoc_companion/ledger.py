@@ -418,8 +418,7 @@ def totals_markdown(rows=None) -> str:
     return (f"**What is counted.** The thesis's numerical sections print {checked}; "
             f"they also record {added} number{'s' * (added != 1)} the thesis does not print "
             f"({badge('new', f'{added} not printed')}). With the companion's own pages, the ledger "
-            "holds "
-            f"{len(rows)} entries: {_counts_badges(counts(rows))}."
+            f"holds {len(rows)} entries: {_counts_badges(counts(rows))}."
             + (f" Every deviation, by its evidence: {kinds}." if kinds else ""))
 
 

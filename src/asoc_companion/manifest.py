@@ -137,8 +137,7 @@ def dependencies(path) -> list:
     depends = json.loads(Path(path).read_text())["metadata"].get("asoc", {}).get("depends", [])
     if isinstance(depends, str) or not all(isinstance(d, str) for d in depends):
         raise ValueError(f"{Path(path).name}: metadata.asoc.depends must be a list of notebook "
-                         "names, "
-                         f"found {depends!r}")
+                         f"names, found {depends!r}")
     return list(depends)
 
 

@@ -176,8 +176,8 @@ def _variants():
         "sec3_6.time_variant_better_than_time_invariant": reversed_order,
         "sec3_6.optimal_38_best": reversed_order,
         "sec3_5.proposed_almost_equal_163": (
-            "the printed transient ratio reversed: the proposed controller "
-            "better than [163] by 5 %",
+            "the printed transient ratio reversed: the proposed controller better than [163] by 5 "
+            "%",
             _swapped_163,
         ),
     }

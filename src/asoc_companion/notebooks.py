@@ -140,8 +140,7 @@ def build_order(infos) -> list:
         for dep in dependencies(infos[name].path):
             if dep not in infos:
                 raise ValueError(f"{name}: metadata.asoc.depends names {dep!r}, which is not a "
-                                 "notebook "
-                                 f"of the book; known: {', '.join(sorted(infos))}")
+                                 f"notebook of the book; known: {', '.join(sorted(infos))}")
             visit(dep, chain + [name])
         done.add(name)
         ordered.append(infos[name])

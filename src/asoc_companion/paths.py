@@ -138,8 +138,8 @@ def _find_root(start=None) -> Path:
         if _is_project(folder):
             return folder
     raise RuntimeError(f"no checkout of the companion found above {here} (a folder with "
-                       "book/_toc.yml and "
-                       f"figures/): run from inside one, pass --root, or set {ENV_VAR}")
+                       "book/_toc.yml and figures/): run from inside one, pass --root, or set "
+                       f"{ENV_VAR}")
 
 
 def project(root=None) -> Project:

@@ -127,8 +127,7 @@ def summarise_3_15(outcomes):
                           "3.16 and Thm. 3.17 use the weight with C_i."),
             "corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
                                        "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf "
-                                       "R_i\\mathbf L\\mathbf "
-                                       "C_i$",
+                                       "R_i\\mathbf L\\mathbf C_i$",
                           "holds": holds, "fails": len(outcomes) - holds,
                           "instances": len(outcomes)}}
 
