@@ -189,6 +189,18 @@ def _parser():
 
 
 def main(argv=None) -> int:
+    """Run ``python -m asoc_companion`` with the arguments ``argv``; return the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        0 on success, 1 when the companion's requirements are missing.
+    """
     missing = missing_requirements()
     if missing:                      # installed without the companion extra
         print(f"asoc-companion needs {', '.join(missing)}: {INSTALL_HINT}", file=sys.stderr)

@@ -44,10 +44,12 @@ class Project:
 
     @property
     def book(self) -> Path:
+        """``book``: the notebooks and pages of the Jupyter Book."""
         return self.root / "book"
 
     @property
     def figures(self) -> Path:
+        """``figures``: the committed figures and ``values/*.json``."""
         return self.root / "figures"
 
     @property
@@ -57,18 +59,22 @@ class Project:
 
     @property
     def src(self) -> Path:
+        """``src``: the library and the companion's tooling."""
         return self.root / "src"
 
     @property
     def environment(self) -> Path:
+        """``environment.txt``: the pinned environment of the runs."""
         return self.root / "environment.txt"
 
     @property
     def ci_output(self) -> Path:
+        """``book/_build/ci``: where ``--fidelity ci`` runs write."""
         return self.book / "_build" / "ci"
 
     @property
     def runs(self) -> Path:
+        """``book/_build/runs``: runs with overridden parameters."""
         return self.book / "_build" / "runs"
 
     @property

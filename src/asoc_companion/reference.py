@@ -85,10 +85,12 @@ class Entry:
 
     @property
     def notebook(self) -> str:
+        """The notebook that records the value: the key's part before the first dot."""
         return self.key.split(".", 1)[0]
 
     @property
     def name(self) -> str:
+        """The value's name in its notebook: the key's part after the first dot."""
         return self.key.split(".", 1)[1]
 
 

@@ -17,6 +17,17 @@ from .report import mutant_text
 
 
 def main(argv=None) -> int:
+    """Run the theorems study with the arguments ``argv``; return the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+    """
     parser = argparse.ArgumentParser(prog="python -m asoc_companion.theorems",
                                      description="Check the thesis's numbered statements on random "
                                                  "instances.")

@@ -139,6 +139,7 @@ def optimality_conditions(sys, Xbar, Xunder, EPbar, EPunder, mu):
 
 
 def split(z, sys):
+    """(F, K, L) from the unknowns ``z`` = [vec F; vec K; vec L] of (3.70) (column-major vec)."""
     n, ny, nu = sys.nx, sys.ny, sys.nu
     F = z[:n * n].reshape((n, n), order="F")
     K = z[n * n:n * n + n * ny].reshape((n, ny), order="F")

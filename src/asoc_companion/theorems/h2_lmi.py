@@ -72,10 +72,12 @@ def _stationary_check(rng, mode_dependent, mutant):
 
 
 def check_3_7(rng, mutant=False):
+    """Prop. 3.7: the H2 norm of (3.10) by its trace formula against Monte Carlo (one L)."""
     return _stationary_check(rng, False, mutant)
 
 
 def check_3_10(rng, mutant=False):
+    """Prop. 3.10: the H2 norm by its trace formula against Monte Carlo (mode-dependent L_i)."""
     return _stationary_check(rng, True, mutant)
 
 
@@ -164,10 +166,12 @@ def _lemma_bmi(rng, mode_dependent, mutant):
 
 
 def check_3_8(rng, mutant=False):
+    """Lemma 3.8: a point satisfying the BMI (3.15) gives a stabilising L (one L)."""
     return _lemma_bmi(rng, False, mutant)
 
 
 def check_3_11(rng, mutant=False):
+    """Lemma 3.11: a point satisfying the BMI gives stabilising gains (mode-dependent L_i)."""
     return _lemma_bmi(rng, True, mutant)
 
 

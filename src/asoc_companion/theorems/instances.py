@@ -252,6 +252,7 @@ class ModeChain:
 
 
 def initial_modes(rng, mu, n_runs):
+    """theta_0 ~ ``mu`` for each of ``n_runs`` runs (one uniform draw per run)."""
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
 
 
@@ -374,11 +375,13 @@ def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, step
 
 
 def random_spd(rng, n, scale=1.0):
+    """A random SPD n x n matrix ``scale`` (G G^T / n + 0.1 I), G standard normal."""
     G = rng.standard_normal((n, n))
     return scale * (G @ G.T / n + 0.1 * np.eye(n))
 
 
 def random_spd_stack(rng, M, n, scale=1.0):
+    """``M`` independent :func:`random_spd` matrices, stacked (M, n, n)."""
     return np.stack([random_spd(rng, n, scale) for _ in range(M)])
 
 
