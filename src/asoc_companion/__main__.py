@@ -132,8 +132,8 @@ def _ledger(fidelity):
     project = paths.project()
     path, values = (project.book / "ledger.md", load_all_values()) if fidelity == "full" \
         else (project.ci_output / "ledger.md", load_all_values(project.ci_output))
-    _write_if_changed(path, ledger_markdown(values=values),
-                      "" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)")
+    small = " (ci fidelity: Monte Carlo cells use small samples)"
+    _write_if_changed(path, ledger_markdown(values=values), "" if fidelity == "full" else small)
     intro = project.book / "intro.md"
     if fidelity == "full":
         from .mutants import write_ledger_mutants

@@ -185,8 +185,9 @@ def _configure(app, config):
     config.latex_use_xindy = False          # makeindex comes with TeX Live; xindy is a package more
     # Jupyter Book listed every .js under _static (a MathJax folder left there by an old
     # build would add 70 scripts): keep the book's own scripts only
+    script = lambda js: str(js[0] if isinstance(js, tuple) else js)
     config.html_js_files = [js for js in config.html_js_files
-                            if not str(js[0] if isinstance(js, tuple) else js).startswith("mathjax/")]
+                            if not script(js).startswith("mathjax/")]
 
 
 def _copy_mathjax(app, exception):
@@ -249,7 +250,8 @@ def public_names(module) -> list:
     Examples
     --------
     >>> import asoc.config
-    >>> "option_context" in public_names(asoc.config) and "Iterator" not in public_names(asoc.config)
+    >>> names = public_names(asoc.config)
+    >>> "option_context" in names and "Iterator" not in names
     True
     """
     if hasattr(module, "__all__"):
@@ -283,8 +285,8 @@ def _attribute_docs(module) -> dict:
 def documented(module, names) -> list:
     """``names`` without the module's data that has no documentation of its own."""
     docs = _attribute_docs(module)
-    return [n for n in names if inspect.isclass(getattr(module, n)) or callable(getattr(module,
-                                                                                        n)) or n in docs]
+    return [n for n in names
+            if inspect.isclass(getattr(module, n)) or callable(getattr(module, n)) or n in docs]
 
 
 def _directive(module, name) -> str:

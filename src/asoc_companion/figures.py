@@ -141,7 +141,8 @@ def file_stem(kind: str, number: str) -> str:
     >>> file_stem("fig", "A.1")
     Traceback (most recent call last):
     ...
-    ValueError: number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis), found 'A.1'
+    ValueError: number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis),
+    found 'A.1'
     """
     match = NUMBER.fullmatch(str(number))
     if match is None:

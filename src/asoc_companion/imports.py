@@ -56,7 +56,8 @@ def imported_names(code: str, package: str | None = None) -> set:
                 if package is None:
                     continue
                 parts = package.split(".")
-                base = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+                named = [node.module] if node.module else []
+                base = ".".join(parts[:len(parts) - node.level + 1] + named)
             else:
                 base = node.module
             names.add(base)

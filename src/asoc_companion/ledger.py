@@ -114,7 +114,8 @@ def _row_details(members, fields=FIELDS) -> str:
         if len(set(texts)) == 1:
             parts.append(f"*{label}:* {quote(texts[0])}.")
         elif texts:
-            parts.append(f"*{label}:* " + "; ".join(f"`{r['name']}`: {quote(r[field])}" for r in members if r[field]) + ".")
+            each = "; ".join(f"`{r['name']}`: {quote(r[field])}" for r in members if r[field])
+            parts.append(f"*{label}:* {each}.")
     return " ".join(parts)
 
 
@@ -138,8 +139,8 @@ def _breakable(name: str) -> str:
 def _notebook_section(notebook, info, mine) -> str:
     links = section_links(info.path, [r["name"] for r in mine]) if info else {}
     ref, notes = {}, []
-    for n, (head, tail,
-            parts) in enumerate(note_groups([r for r in mine if r["note"] or r["claim"] or r["ours_long"]]), 1):
+    noted = [r for r in mine if r["note"] or r["claim"] or r["ours_long"]]
+    for n, (head, tail, parts) in enumerate(note_groups(noted), 1):
         label = f"ledger-{notebook}-n{n}"
         members = [r for _, rs in parts for r in rs]
         ref.update({r["key"]: f"{{ref}}`{n} <{label}>`" for r in members})
@@ -148,15 +149,15 @@ def _notebook_section(notebook, info, mine) -> str:
             notes.append(lead + f"{_row_details(members)} {head}\n")
         else:
             same, differ = _common_fields(members)
-            notes.append(lead + " ".join(t for t in (_row_details(members, same), head,
-                                                     tail) if t) + "\n\n"
-                         + "".join(f"- {_key_list(rs)}: {_row_details(rs, differ)} {own}\n" for own,
-                                   rs in parts))
+            shared = " ".join(t for t in (_row_details(members, same), head, tail) if t)
+            notes.append(lead + shared + "\n\n"
+                         + "".join(f"- {_key_list(rs)}: {_row_details(rs, differ)} {own}\n"
+                                   for own, rs in parts))
     # raw links: Sphinx does not resolve Markdown links to another page's heading ids
-    table = [[f'<a href="{links[r["name"]]}"><code>{_breakable(r["name"])}</code></a>' if r["name"] in links
-              else f"`{r['name']}`",
-              _status_cell(r), r["thesis"], r["ours"], r["tolerance"], ref.get(r["key"],
-                                                                               "")] for r in mine]
+    key_cell = lambda name: (f'<a href="{links[name]}"><code>{_breakable(name)}</code></a>'
+                             if name in links else f"`{name}`")
+    table = [[key_cell(r["name"]), _status_cell(r), r["thesis"], r["ours"], r["tolerance"],
+              ref.get(r["key"], "")] for r in mine]
     title = info.title if info else notebook
     where = f"[`{info.path.name}`]({info.path.stem}): " if info else ""
     return (f"\n({ledger_label(notebook)})=\n## {title}\n\n{where}{counts_badges(counts(mine))} "
@@ -198,7 +199,8 @@ def ledger_markdown(reference=None, values=None) -> str:
     ...         print(line)
     # Reproduction ledger
     ## sec_demo
-    | `rho` | {bdg-warning}`deviates` | 0.2500 | 0.250200 | ± 5e-05 | {ref}`1 <ledger-sec_demo-n1>` |
+    | `rho` | {bdg-warning}`deviates` | 0.2500 | 0.250200 | ± 5e-05 |
+    {ref}`1 <ledger-sec_demo-n1>` |
     """
     rows = ledger_rows(reference, values)
     parts = ["# Reproduction ledger\n\n"
@@ -254,12 +256,14 @@ def write_ledger(path=None) -> str:
     >>> from asoc_companion.recorder import Recorder
     >>> with paths.scratch_project() as root:
     ...     _ = (paths.project().reference / "sec_demo.yaml").write_text(
-    ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5, note: Fine.}")
+    ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5, "
+    ...         "note: Fine.}")
     ...     _ = Recorder("sec_demo", "full", root / "figures").record("rho", 0.2500001)
     ...     text = write_ledger(root / "book" / "ledger.md")
     ...     written = text == (root / "book" / "ledger.md").read_text()
     >>> written, [line for line in text.splitlines() if line.startswith("| `")]
-    (True, ['| `rho` | {bdg-success}`reproduced` | 0.2500 | 0.250000 | ± 5e-05 | {ref}`1 <ledger-sec_demo-n1>` |'])
+    (True, ['| `rho` | {bdg-success}`reproduced` | 0.2500 | 0.250000 | ± 5e-05 |
+    {ref}`1 <ledger-sec_demo-n1>` |'])
     """
     text = ledger_markdown()
     atomic_write_text(path or paths.project().book / "ledger.md", text)

@@ -51,10 +51,12 @@ def decimals(entry) -> int | None:
     """
     if entry.tol:
         return max(0, math.ceil(-math.log10(2 * entry.tol) - 1e-9))
-    numbers = [v for v in _flat(entry.thesis) if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    numbers = [v for v in _flat(entry.thesis)
+               if isinstance(v, (int, float)) and not isinstance(v, bool)]
     if not numbers:
         return None
-    return max(len(repr(float(v)).split(".")[1].rstrip("0")) if "e" not in repr(float(v)) else 4 for v in numbers)
+    places = lambda text: len(text.split(".")[1].rstrip("0")) if "e" not in text else 4
+    return max(places(repr(float(v))) for v in numbers)
 
 
 def _flat(value):

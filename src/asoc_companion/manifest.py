@@ -326,7 +326,8 @@ def changed_inputs(plan) -> list:
     changed = []
     for key in new:
         if key == "modules" and isinstance(old.get(key), dict):
-            edited = sorted(p for p in set(new[key]) | set(old[key]) if new[key].get(p) != old[key].get(p))
+            edited = sorted(p for p in set(new[key]) | set(old[key])
+                            if new[key].get(p) != old[key].get(p))
             if edited:
                 changed.append("modules "
                                f"({', '.join(edited[:3])}{', ...' if len(edited) > 3 else ''})")

@@ -236,7 +236,8 @@ def _check_value(name: str, value, default_source: str, notebook: str):
     >>> _check_value("runs", 0, "100", "demo.ipynb")
     Traceback (most recent call last):
     ...
-    ValueError: parameter runs of demo.ipynb (default 100) is a count: it takes an integer >= 1, found 0
+    ValueError: parameter runs of demo.ipynb (default 100) is a count: it takes an integer >= 1,
+    found 0
     """
     default = _default_value(default_source)
     where = f"parameter {name} of {notebook} (default {default_source})"
@@ -323,10 +324,11 @@ def run(plan, log_output=False, progress_bar=None) -> Path:
     try:
         staged, staged_parameters = plan.staged(stage)
         staged.parent.mkdir(parents=True)
+        if progress_bar is None:
+            progress_bar = sys.stderr.isatty()
         with one_blas_thread():
             papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
-                                       parameters=staged_parameters,
-                                       progress_bar=sys.stderr.isatty() if progress_bar is None else progress_bar,
+                                       parameters=staged_parameters, progress_bar=progress_bar,
                                        log_output=log_output, kernel_name="python3",
                                        extra_arguments=KERNEL_ARGUMENTS)
         normalise(staged, shown_parameters=shown, output_path=target,

@@ -91,7 +91,8 @@ def _is_project(folder) -> bool:
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     before = _is_project(folder)
-    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch(); (Path(folder) / "figures").mkdir()
+    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch()
+    ...     (Path(folder) / "figures").mkdir()
     ...     print(before, _is_project(folder))
     False True
     """
@@ -123,14 +124,16 @@ def _find_root(start=None) -> Path:
     >>> from unittest import mock
     >>> with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ, {ENV_VAR: ""}):
     ...     root = Path(folder).resolve()
-    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch(); (root / "figures").mkdir()
+    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch()
+    ...     (root / "figures").mkdir()
     ...     print(_find_root(root / "book") == root)
     True
     >>> with mock.patch.dict(os.environ, {ENV_VAR: "/"}):
     ...     _find_root()
     Traceback (most recent call last):
     ...
-    RuntimeError: ASOC_COMPANION_ROOT='/' is not a checkout of the companion (expected book/_toc.yml and figures/ in it)
+    RuntimeError: ASOC_COMPANION_ROOT='/' is not a checkout of the companion (expected
+    book/_toc.yml and figures/ in it)
     """
     configured = os.environ.get(ENV_VAR)
     if configured:

@@ -70,7 +70,8 @@ def _format_value(value, spec: str = "") -> str:
     if isinstance(value, dict):
         if "ci" in value and ("median" in value or "value" in value):
             lo, hi = value["ci"]
-            return f"{_format_value(value.get('median', value.get('value')), spec)} [{_format_value(lo, spec)}, {_format_value(hi, spec)}]"
+            centre = _format_value(value.get("median", value.get("value")), spec)
+            return f"{centre} [{_format_value(lo, spec)}, {_format_value(hi, spec)}]"
         if "value" in value:
             return _format_value(value["value"], spec)
     if isinstance(value, bool):
@@ -124,7 +125,8 @@ def thesis_values(reference=None) -> dict:
     from .reference import load_reference
 
     reference = reference if reference is not None else load_reference()
-    return {f"thesis_{e.notebook}.{e.name}": e.thesis for e in reference.values() if e.thesis is not None}
+    return {f"thesis_{e.notebook}.{e.name}": e.thesis for e in reference.values()
+            if e.thesis is not None}
 
 
 def prose(text: str):

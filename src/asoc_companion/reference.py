@@ -124,7 +124,8 @@ def load_reference(path=None) -> dict:
     >>> reference["demo.rho"].thesis, reference["demo.rho"].tol
     (0.25, 5e-05)
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     _ = (Path(folder) / "demo.yaml").write_text("demo.rho: {where: an example, kind: deterministic}")
+    ...     _ = (Path(folder) / "demo.yaml").write_text(
+    ...         "demo.rho: {where: an example, kind: deterministic}")
     ...     load_reference(folder)
     Traceback (most recent call last):
     ...

@@ -225,8 +225,8 @@ def monte_carlo_gap(sys, L, x0, mu0, horizon, runs, rng, noise_scale):
     5.25
     """
     theta = _modes(rng, mu0, sys.T, runs, horizon + 1)
-    w = noise_scale * np.einsum("krab,krb->kra", sys.H[theta[:-1]], rng.standard_normal((horizon,
-                                                                                         runs, sys.nw)))
+    draws = rng.standard_normal((horizon, runs, sys.nw))
+    w = noise_scale * np.einsum("krab,krb->kra", sys.H[theta[:-1]], draws)
     totals = []
     for start in (np.broadcast_to(x0, (runs, sys.nx)), np.zeros((runs, sys.nx))):
         x, J = np.array(start, dtype=float), np.zeros(runs)
