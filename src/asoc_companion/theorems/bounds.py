@@ -84,8 +84,8 @@ def _error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
     KC = K @ sys.C
     AKC, G, FKC = sys.A - KC, sys.A - F + sys.B @ L - KC, F + KC
     m = mu[:, None, None]
-    Xbar_next = predecessor_sum(sys.T,
-                                m * (HHt + KJJK) + factor * (AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)))
+    Xbar_next = predecessor_sum(sys.T, m * (HHt + KJJK)
+                                + factor * (AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)))
     Xunder_next = predecessor_sum(sys.T,
                                   m * KJJK + factor * (KC @ Xbar @ _T(KC) + FKC @ Xunder @ _T(FKC)))
     return Xbar_next, Xunder_next
@@ -178,11 +178,12 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
     A, B, C, E, U = sys.A, sys.B, sys.C, EPbar, EPunder
     S, BL, KC = Xbar + Xunder, B @ L, K @ C
     terms = (_tr(sys.Q, S) + _tr(L.T @ sys.R @ L, Xunder) + _tr(E + U, A @ S @ _T(A))
-             - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC)) + cross * _tr(E + U,
-                                                                                  BL @ Xunder @ _T(A))
-             - 2 * _tr(U, BL @ Xunder @ _T(KC)) - 2 * _tr(U, F @ Xunder @ _T(A)) + 2 * _tr(U, F @ Xunder @ _T(KC))
-             - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U,
-                                                   BL @ Xunder @ _T(BL)) + _tr(U, F @ Xunder @ F.T))
+             - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC))
+             + cross * _tr(E + U, BL @ Xunder @ _T(A))
+             - 2 * _tr(U, BL @ Xunder @ _T(KC)) - 2 * _tr(U, F @ Xunder @ _T(A))
+             + 2 * _tr(U, F @ Xunder @ _T(KC))
+             - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U, BL @ Xunder @ _T(BL))
+             + _tr(U, F @ Xunder @ F.T))
     return terms + _noise_term(sys, K, EPbar, EPunder, mu)
 
 

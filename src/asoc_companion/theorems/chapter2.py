@@ -236,16 +236,17 @@ def expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, of
     """
     mu, second, total = mean.copy(), np.outer(mean, mean), 0.0
     for L, d in zip(gains, offsets):
-        total += (np.trace(Q @ second) - 2 * x_target @ Q @ mu + x_target @ Q @ x_target + np.trace(Q @ Sigma)
-                  + np.trace(L.T @ R @ L @ second) + 2 * d @ R @ L @ mu + d @ R @ d)
+        total += (np.trace(Q @ second) - 2 * x_target @ Q @ mu + x_target @ Q @ x_target
+                  + np.trace(Q @ Sigma) + np.trace(L.T @ R @ L @ second) + 2 * d @ R @ L @ mu
+                  + d @ R @ d)
         F, c = A + B @ L, B @ d
         P, Sigma_next = _kalman_posterior(A, H, C, J, Sigma)
         second = F @ second @ F.T + np.outer(F @ mu, c) + np.outer(c, F @ mu) + np.outer(c, c)
         if innovation:
             second = second + P - Sigma_next
         mu, Sigma = F @ mu + c, Sigma_next
-    return float(total + np.trace(Q_K @ second) - 2 * x_target @ Q_K @ mu + x_target @ Q_K @ x_target
-                 + np.trace(Q_K @ Sigma))
+    return float(total + np.trace(Q_K @ second) - 2 * x_target @ Q_K @ mu
+                 + x_target @ Q_K @ x_target + np.trace(Q_K @ Sigma))
 
 
 def lq_tracking_policy(A, B, Q, R, Q_K, x_target, K):
@@ -290,7 +291,8 @@ def check_theorem_2_5(rng: np.random.Generator, mutant=False) -> Outcome:
                                          *lq_tracking_policy(A, B, Q, R, Q_K, x_target, K), m, cov0,
                                          innovation=not mutant)
     # both sides are sums of O(K n^3) rounded products of numbers up to |exact| in size
-    tol = 1e3 * K * EPS * (abs(exact) + abs(s) + np.abs(v).sum() + np.abs(V).sum() + np.abs(S).sum())
+    tol = 1e3 * K * EPS * (abs(exact) + abs(s) + np.abs(v).sum() + np.abs(V).sum()
+                           + np.abs(S).sum())
     error = abs(theorem - exact)
     error_lqg = abs(theorem - lqg)
     verdict = "holds" if error <= tol and (not optimal or error_lqg <= tol) else "fails"

@@ -265,7 +265,8 @@ SHOW = {
     "statement_3_33": [("Alg. 3.3 converged", "converged", ""),
                        ("largest relative increase of Jbar_0", "largest_relative_increase", ".1e")],
 }
-MARGIN = {"statement_3_15": lambda n: abs(n["objective_printed"] - n["average_cost"]) / n["average_cost"],
+MARGIN = {"statement_3_15": lambda n: (abs(n["objective_printed"] - n["average_cost"])
+                                       / n["average_cost"]),
           "statement_3_19": lambda n: 1 - n["min_rho_over_L"],
           "statement_3_26": lambda n: -min(n["min_eig_bound_minus_X"], n["min_eig_bound_minus_P"]),
           "statement_3_27": lambda n: n["improvement_by_gradient_step"],

@@ -45,7 +45,8 @@ def _min_eig(S):
 def _bhattacharyya(m, s):
     """BC = int sqrt(p_i p_j) of 1-D Gaussians N(m_i, s_i^2), as a matrix."""
     v = s[:, None] ** 2 + s[None, :] ** 2
-    return np.minimum(np.sqrt(2 * s[:, None] * s[None, :] / v) * np.exp(-(m[:, None] - m[None, :]) ** 2 / (4 * v)), 1.0)
+    return np.minimum(np.sqrt(2 * s[:, None] * s[None, :] / v)
+                      * np.exp(-(m[:, None] - m[None, :]) ** 2 / (4 * v)), 1.0)
 
 
 def _l2_gaussians(m, s):
@@ -131,7 +132,8 @@ def check_3_19(rng):
         warnings.simplefilter("ignore", RuntimeWarning)
         run = static_output_feedback(sys, warn=False, moments="step")
     L = np.asarray(run.L).reshape(gains[0].shape)
-    agree = lambda G: run.converged and run.stabilizing and np.abs(L - G).max() <= 1e-6 * (1 + np.abs(G).max())
+    agree = lambda G: (run.converged and run.stabilizing
+                       and np.abs(L - G).max() <= 1e-6 * (1 + np.abs(G).max()))
     verdicts = ("holds" if agree(gains[0]) else "fails"), ("holds" if agree(gains[1]) else "fails")
     if singular:
         return "not_applicable", "not_applicable", verdicts[0]
@@ -261,8 +263,8 @@ def check_3_32(rng):
     def verdict(cross):
         f = lambda v: bounds.functional_b4(sys, *bounds.split(v, sys), *data, cross=cross)
         base = f(z)
-        ok = all(abs(f(z + d) - f(z - d)) <= 1e-9 * (abs(base) + abs(f(z + d) - base)) and f(z + d) >= base
-                 - 1e-9 * abs(base) for d in steps)
+        ok = all(abs(f(z + d) - f(z - d)) <= 1e-9 * (abs(base) + abs(f(z + d) - base))
+                 and f(z + d) >= base - 1e-9 * abs(base) for d in steps)
         return "holds" if ok else "fails"
 
     F, K, L = bounds.split(z, sys)

@@ -138,7 +138,8 @@ def _record_3_26(outcomes, sign_outcomes):
             "a^T + 2 b b^T; for P~, z = [x; x] + [0; -e] in z^T P~ z <= 2 (.) + 2 (.). (For P the "
             "cross terms enter Pbar with +, not - as printed.)"),
             "factor 1 instead of 2, i.e. the bound as printed"),
-            "costate_sign": {"description": "the P~ bound with factor 2 but Pbar = P1 - P12 - P12^T + P2 as printed",
+            "costate_sign": {"description": "the P~ bound with factor 2 but Pbar = P1 - P12 - "
+                                            "P12^T + P2 as printed",
                              **_counts(sign_outcomes)}}}
 
 

@@ -31,7 +31,8 @@ __all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "thm_3_19
 
 
 def _mul(X, Y):
-    return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))] for i in range(len(X))]
+    return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))]
+            for i in range(len(X))]
 
 
 def _tr(X):
@@ -312,7 +313,8 @@ def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
     >>> gp.mcvmd(x, None, y, None)
     Traceback (most recent call last):
     ...
-    ValueError: b_max: expected a width large against the distances between the Dirac locations (the closed form holds for large b_max; its square is -0.017 of its terms), found 100.0
+    ValueError: b_max: expected a width large against the distances between the Dirac locations
+    (the closed form holds for large b_max; its square is -0.017 of its terms), found 100.0
     """
     points = np.concatenate([np.ravel(x), np.ravel(y)])
     c = np.concatenate([np.full(np.size(x), 1 / np.size(x)), np.full(np.size(y), -1 / np.size(y))])

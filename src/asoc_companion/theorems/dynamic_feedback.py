@@ -133,11 +133,10 @@ def check_3_23(rng, mutant=False):
         mm = m[:, None, None]
         new1 = predecessor_sum(sys.T, A @ X1 @ T_(A) + A @ X12 @ T_(BL) + BL @ T_(X12) @ T_(A)
                                + BL @ X2 @ T_(BL) + mm * HHt)
-        new12 = predecessor_sum(sys.T,
-                                A @ X1 @ T_(KC) + A @ X12 @ F.T + BL @ T_(X12) @ T_(KC) + BL @ X2 @ F.T)
-        new2 = predecessor_sum(sys.T,
-                               KC @ X1 @ T_(KC) + KC @ X12 @ F.T + F @ T_(X12) @ T_(KC) + F @ X2 @ F.T
-                               + mm * (K @ JJt @ K.T))
+        new12 = predecessor_sum(sys.T, A @ X1 @ T_(KC) + A @ X12 @ F.T + BL @ T_(X12) @ T_(KC)
+                                + BL @ X2 @ F.T)
+        new2 = predecessor_sum(sys.T, KC @ X1 @ T_(KC) + KC @ X12 @ F.T + F @ T_(X12) @ T_(KC)
+                               + F @ X2 @ F.T + mm * (K @ JJt @ K.T))
         Xt = np.block([[new1, new12], [T_(new12), new2]])
         m = m @ sys.T
         state, theta = step(state, RunModes(theta, sys.M), rng, F, K, L), chain.next(rng, theta)
@@ -206,8 +205,9 @@ def check_3_25(rng, mutant=False):
     noise = np.einsum("ij,iab->jab", sys.T, mu[:, None, None] * (Hd @ transpose(Hd)))
     constraint = moment_map_matrix(Ad, sys.T) @ X.ravel() + noise.ravel() - X.ravel()
     dense = trace_sum(Qd, X) + float(P.ravel() @ constraint)
-    rel = abs(stated - dense) / (abs(trace_sum(Qt, X)) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P),
-                                                                                          inner)))
+    scale = (abs(trace_sum(Qt, X)) + trace_sum(P, X)
+             + abs(trace_sum(successor_average(sys.T, P), inner)))
+    rel = abs(stated - dense) / scale
     return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense,
                    relative_difference=rel)
 

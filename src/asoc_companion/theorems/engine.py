@@ -182,7 +182,8 @@ def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progre
     progress : bool
         tqdm bar over instances (shown on a terminal only).
     """
-    chosen = [st for st in STATEMENTS if st.check is not None and (only is None or st.key in set(only))]
+    chosen = [st for st in STATEMENTS
+              if st.check is not None and (only is None or st.key in set(only))]
     if only is not None:
         unknown = set(only) - {st.key for st in STATEMENTS}
         if unknown:

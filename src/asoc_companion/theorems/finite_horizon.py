@@ -87,8 +87,8 @@ def check_3_29(rng, mutant=False):
         # tr[H~^T E(P) H~] + E_i(omega)
         omega = np.einsum("iab,iba->i", EP, HHt_cl) + sys.T @ omega
         P = Qt + transpose(At) @ EP @ At
-    backward = trace_sum(P, augmented_initial_moment(mean0, cov0, mu0,
-                                                     xhat0)) + (0.0 if mutant else float(mu0 @ omega))
+    backward = (trace_sum(P, augmented_initial_moment(mean0, cov0, mu0, xhat0))
+                + (0.0 if mutant else float(mu0 @ omega)))
     rel = abs(backward - forward) / forward
     return outcome(verdict(rel < 1e-10), sys, backward=backward, forward=forward,
                    relative_difference=rel)
@@ -199,8 +199,8 @@ def check_3_32(rng, mutant=False):
         step = rng.standard_normal(z.size)
         z = z + 0.1 * max(np.linalg.norm(z), 1.0) * step / np.linalg.norm(step)
     best = bound(z)
-    drops = [best - bound(z + scale * rng.standard_normal(z.size)) for scale in (1e-3, 1e-1,
-                                                                                 1.0) for _ in range(5)]
+    drops = [best - bound(z + scale * rng.standard_normal(z.size))
+             for scale in (1e-3, 1e-1, 1.0) for _ in range(5)]
     worst = max(drops) / abs(best)
     return outcome(verdict(worst <= 1e-9), sys, bound_at_solution=best, largest_relative_drop=worst)
 

@@ -235,7 +235,8 @@ class ModeChain:
     def __init__(self, T):
         T = np.asarray(T, dtype=float)
         if T.ndim != 2 or T.shape[0] != T.shape[1]:
-            raise ValueError(f"T: expected a square transition matrix (M, M), found shape {T.shape}")
+            raise ValueError("T: expected a square transition matrix (M, M), found shape "
+                             f"{T.shape}")
         # row j: sum_{l <= j} p_il
         self.thresholds = np.ascontiguousarray(np.cumsum(T, axis=1)[:, :-1].T)
 
@@ -344,7 +345,8 @@ def indicator_moment_estimate(x, theta, n_modes):
     --------
     >>> x, theta = np.array([[1.0, 0.5], [2.0, -1.0], [3.0, 0.0]]), np.array([0, 1, 0])
     >>> mean, se = indicator_moment_estimate(x, theta, 2)
-    >>> (3 * mean).round(12).tolist()                # mode 0: x x^T of runs 0 and 2; mode 1: of run 1
+    >>> # mode 0: x x^T of runs 0 and 2; mode 1: of run 1
+    >>> (3 * mean).round(12).tolist()
     [[[10.0, 0.5], [0.5, 0.25]], [[4.0, -2.0], [-2.0, 1.0]]]
     """
     samples = np.zeros((len(x), n_modes, x.shape[1], x.shape[1]))
@@ -414,8 +416,10 @@ def outcome(verdict, sys=None, **numbers):
     >>> outcome("holds", None, gap=np.float64(0.5), ok=np.bool_(True)).numbers
     {'gap': 0.5, 'ok': True}
     """
-    clean = {k: (v.tolist() if isinstance(v, np.ndarray) else (float(v) if isinstance(v, np.floating) else
-                 (bool(v) if isinstance(v, np.bool_) else v))) for k, v in numbers.items()}
+    plain = lambda v: (v.tolist() if isinstance(v, np.ndarray)
+                       else float(v) if isinstance(v, np.floating)
+                       else bool(v) if isinstance(v, np.bool_) else v)
+    clean = {k: plain(v) for k, v in numbers.items()}
     if sys is not None:
         clean.update(size(sys))
         if verdict == "fails":

@@ -200,8 +200,8 @@ def _search(rng, family, layout, config, name, shape):
         i = int(rng.integers(N))
         trial = theta[i] + sigma * rng.standard_normal(theta[i].shape)
         moved = _decode(family, trial)
-        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family,
-                                                                                theta[j])) for j in range(N)]
+        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family, theta[j]))
+               for j in range(N)]
         D_trial = D.copy()
         D_trial[i, :] = D_trial[:, i] = row
         trial_value, trial_factor = _objective(D_trial, name, shape)
@@ -306,7 +306,8 @@ def search_counterexample(rng: np.random.Generator, family: str, name: str, shap
     l = float(np.exp(refined.x if refined.fun < value else log_factor) * _median_distance(D))
     cert = gram_certificate(family, config, name, shape, l) if l > 0 else \
         {"lambda_min": 1.0, "lambda_min_scipy_evr": 1.0, "rayleigh_exact": 1.0, "tolerance": 0.0}
-    negative = (cert["lambda_min"] < -cert["tolerance"] and cert["lambda_min_scipy_evr"] < -cert["tolerance"]
+    negative = (cert["lambda_min"] < -cert["tolerance"]
+                and cert["lambda_min_scipy_evr"] < -cert["tolerance"]
                 and cert["rayleigh_exact"] < -cert["tolerance"])
     numbers = {"distance": family, "covariance": name, "shape": json.dumps(shape),
                "distributions": layout["N"],

@@ -96,7 +96,8 @@ def mutant_text(record) -> str:
     mutant = record.get("mutant")
     if not mutant:
         return "-"
-    return f"{'caught' if mutant['fails'] else 'NOT caught'} in {mutant['fails']} of {mutant['instances']}"
+    caught = "caught" if mutant["fails"] else "NOT caught"
+    return f"{caught} in {mutant['fails']} of {mutant['instances']}"
 
 
 # The Theorems page as MyST Markdown: rendered by the HTML and the LaTeX builders alike (math

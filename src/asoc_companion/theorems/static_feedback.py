@@ -169,8 +169,8 @@ def check_3_16(rng, mutant=False):
     weight = sys.Q + transpose(LC) @ sys.R @ LC
     stated = trace_sum(weight, X) - trace_sum(P, X) + trace_sum(successor_average(sys.T, P), inner)
     dense = _lagrangian_dense(sys.A, sys.B, sys.C, L, sys.Q, sys.R, sys.H, sys.T, mu, X, P)
-    scale = trace_sum(weight, X) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P),
-                                                                   inner))
+    scale = (trace_sum(weight, X) + trace_sum(P, X)
+             + abs(trace_sum(successor_average(sys.T, P), inner)))
     rel = abs(stated - dense) / scale
     return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense,
                    relative_difference=rel)
@@ -182,9 +182,11 @@ def _gain_residual(sys, L, X, P, weight_R=True):
     (``weight_R=False``: the residual without R_i, a mutant).
     """
     EP = successor_average(sys.T, P)
-    first = ((sys.R if weight_R else 0) + transpose(sys.B) @ EP @ sys.B) @ L @ sys.C @ X @ transpose(sys.C)
+    weight = (sys.R if weight_R else 0) + transpose(sys.B) @ EP @ sys.B
+    first = weight @ L @ sys.C @ X @ transpose(sys.C)
     second = transpose(sys.B) @ EP @ sys.A @ X @ transpose(sys.C)
-    return first.sum(axis=0) + second.sum(axis=0), np.linalg.norm(first.sum(0)) + np.linalg.norm(second.sum(0))
+    scale = np.linalg.norm(first.sum(0)) + np.linalg.norm(second.sum(0))
+    return first.sum(axis=0) + second.sum(axis=0), scale
 
 
 def _costate(sys, L):
@@ -300,7 +302,9 @@ def summarise_3_19(outcomes):
     """
     fails = [o.numbers for o in outcomes if o.verdict == "fails"]
     return {"not_converged": sum(not n["alg_converged"] for n in fails),
-            "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1 for n in fails),
-            "other_limit_from_identity": sum(n["alg_converged"] and n["alg_rho"] < 1 for n in fails),
+            "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1
+                                             for n in fails),
+            "other_limit_from_identity": sum(n["alg_converged"] and n["alg_rho"] < 1
+                                             for n in fails),
             "one_mode": sum(n["n_modes"] == 1 for n in fails),
             "smallest_margin": min((1 - n["min_rho_over_L"] for n in fails), default=float("nan"))}
