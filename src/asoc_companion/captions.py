@@ -56,8 +56,7 @@ def load_claims(path=None) -> dict:
 
 def verdict(keys, reference, values) -> str:
     """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is
-    absent,
-    else ``not-resolved`` if a statistical claim among them is not resolved.
+    absent, else ``not-resolved`` if a statistical claim among them is not resolved.
 
     Examples
     --------

@@ -33,8 +33,7 @@ def _draw(rng):
 
 def _infinite_horizon_gap(rng):
     """Relative gap of Alg. 3.2's controller to the exact-cost design started from it (None if Alg.
-    3.2
-    does not converge to a stabilising controller).
+    3.2 does not converge to a stabilising controller).
 
     Examples
     --------

@@ -11,13 +11,12 @@ file) and its results in ``figures/``; ``ci`` fidelity writes to ``book/_build/c
 with parameter overrides writes to ``book/_build/runs/<notebook>-<hash>/``. Only the first
 changes tracked files.
 
-Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes
-into a fresh staging folder ``<plan.staging>/<notebook>-<random>/``; only when
-papermill finishes without error are its figures, tables, values and executed notebook
-moved into place (:mod:`asoc_companion.staging`: ``os.replace``, signals held off); the caller
-writes the
-manifest entry last. An interrupted or failed run leaves every tracked file as it was, and
-its staging folder is removed.
+Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes into a
+fresh staging folder ``<plan.staging>/<notebook>-<random>/``; only when papermill finishes without
+error are its figures, tables, values and executed notebook moved into place
+(:mod:`asoc_companion.staging`: ``os.replace``, signals held off); the caller writes the manifest
+entry last. An interrupted or failed run leaves every tracked file as it was, and its staging folder
+is removed.
 
 Executed notebooks are normalised (no timestamps, durations or machine paths; the
 injected parameters name the final folder, not the staging one), so an unchanged

@@ -165,9 +165,8 @@ def project(root=None) -> Project:
 @contextmanager
 def scratch_project():
     """An empty project in a temporary folder (``book/_toc.yml``, ``figures/``, the reference
-    folder),
-    made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root, removes it
-    after.
+    folder), made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root,
+    removes it after.
 
     For Examples and experiments that write into a project without touching the checkout.
 

@@ -2,10 +2,10 @@
 
 A notebook calls :func:`setup` once, right after its ``parameters`` cell; it creates a
 :class:`Recorder` and makes it the *active* one (:func:`active`), which :func:`record`,
-:func:`save_figure`,
-:func:`save_table`, :func:`asoc_companion.prose` and :func:`asoc_companion.figure_caption`
-use (the notebook-facing calls stay one-liners, as ``matplotlib.pyplot`` keeps a current
-figure). Code outside a notebook creates a :class:`Recorder` and calls its methods.
+:func:`save_figure`, :func:`save_table`, :func:`asoc_companion.prose` and
+:func:`asoc_companion.figure_caption` use (the notebook-facing calls stay one-liners, as
+``matplotlib.pyplot`` keeps a current figure). Code outside a notebook creates a :class:`Recorder`
+and calls its methods.
 
 Values are written at once to ``<output_dir>/values/<notebook>.json`` (atomically). The
 harness gives every run a staging folder as ``output_dir`` and moves the results into

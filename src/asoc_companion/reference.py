@@ -2,8 +2,7 @@
 value.
 
 Each notebook has its own file (so work on one section does not touch another's). Each entry is
-keyed
-``<notebook>.<key>`` and holds
+keyed ``<notebook>.<key>`` and holds
 
 ``where``    where the thesis prints it (section, figure, table, page);
 ``kind``     ``deterministic`` (a number to its printed decimals), ``monte_carlo`` (a

@@ -39,11 +39,9 @@ def _modes(rng, mu0, T, runs, horizon):
 
 def clairvoyant_costs(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scale=1.0):
     """Per run: the minimum over all input sequences of sum_k (x^T Q x + u^T R u) + x_K^T Q x_K for
-    the
-    run's own modes, x_0 and disturbances d_k = noise_scale H_{theta_k} w_k (a lower bound on the
-    cost of
-    every controller in that run). Backward recursion V_k(x) = x^T P_k x + 2 p_k^T x + c_k, batched
-    over runs.
+    the run's own modes, x_0 and disturbances d_k = noise_scale H_{theta_k} w_k (a lower bound on
+    the cost of every controller in that run). Backward recursion V_k(x) = x^T P_k x + 2 p_k^T x +
+    c_k, batched over runs.
 
     Examples
     --------
@@ -103,8 +101,7 @@ def _final_modes(rng, last, T):
 
 def median_lower_bound(samples, tail=CONFIDENCE_TAIL):
     """A lower confidence bound of the median: the order statistic X_(l) with P(Bin(n, 1/2) <= l -
-    1) <= tail,
-    so P(X_(l) > median) <= tail for any continuous distribution.
+    1) <= tail, so P(X_(l) > median) <= tail for any continuous distribution.
 
     Examples
     --------
@@ -147,8 +144,7 @@ def table_3_3_bounds(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scales):
 
 def _closed_loop_cost_to_go(sys, L, horizon):
     """Pi(0), ..., Pi(K) of a mode-dependent state feedback u = L_theta x over K steps (final cost
-    Q):
-    Pi_i(k) = Q_i + L_i^T R_i L_i + Acl_i^T E_i(Pi(k+1)) Acl_i, Pi(K) = Q.
+    Q): Pi_i(k) = Q_i + L_i^T R_i L_i + Acl_i^T E_i(Pi(k+1)) Acl_i, Pi(K) = Q.
 
     Examples
     --------
@@ -189,8 +185,7 @@ def transient_gap(sys, L, x0, mu0, horizon):
 
 def noise_weight(sys, L, mu0, horizon):
     """Gamma with E{J | x_0 = 0} / K = tr[Gamma W] for the noise covariance W = H H^T (the same in
-    every
-    mode): Gamma = (1 / K) sum_k sum_i mu_k^i E_i(Pi(k + 1)).
+    every mode): Gamma = (1 / K) sum_k sum_i mu_k^i E_i(Pi(k + 1)).
 
     Examples
     --------

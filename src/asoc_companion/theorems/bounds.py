@@ -102,9 +102,8 @@ def _initial_error_blocks(mean0, cov0, mu0, xhat0):
 
 def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
     """Sum over k of sum_i tr[Q~_i factor [[Xbar + Xu, Xu], [Xu, Xu]]] with (3.66)-(3.67)
-    (transported
-    terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56) (Thm. 3.31
-    corrected); with factor 1 the cost of the printed recursions (no bound).
+    (transported terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56)
+    (Thm. 3.31 corrected); with factor 1 the cost of the printed recursions (no bound).
     """
     Xbar, Xunder = _initial_error_blocks(mean0, cov0, mu0, xhat0)
     mu, total = mu0, 0.0
@@ -189,8 +188,7 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
 
 def difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder):
     """sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i] with Z = Q~ + A~^T [[E(Pbar) + E(Pu), -E(Pu)], [-E(Pu),
-    E(Pu)]] A~:
-    the amount by which (3.65) exceeds (B.4) (derived by expanding both).
+    E(Pu)]] A~: the amount by which (3.65) exceeds (B.4) (derived by expanding both).
     """
     n = sys.nx
     At = np.block([[sys.A, np.broadcast_to(sys.B @ L, sys.A.shape)],

@@ -72,12 +72,11 @@ def _gram_verdict(D, name, relative_scale, reference=None):
 
 def check_kernels(rng):
     """Corrected Sec. 2.6.3 on 3-7 random 1-D Gaussians: a Hilbert-embeddable distance (usual
-    Hellinger,
-    L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the definition on
-    sets spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a PSD Gram matrix;
-    the mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule. Third entry, on
-    the spread sets only: (verdict, lowest eigenvalue) of the closed form with b_max = 100
-    (``gp.mcvmd``), which the corrected statement excludes.
+    Hellinger, L2, mCvMd of 3-point Dirac approximations: the closed form within 2 b_max, or the
+    definition on sets spread over about 4 SPREAD) under a random covariance of Table 2.1 gives a
+    PSD Gram matrix; the mutant uses the printed Hellinger (1 - BC)^2 at the same length-scale rule.
+    Third entry, on the spread sets only: (verdict, lowest eigenvalue) of the closed form with b_max
+    = 100 (``gp.mcvmd``), which the corrected statement excludes.
     """
     n = int(rng.integers(3, 8))
     m, s = np.sort(rng.uniform(0.0, 4.0, n)), rng.uniform(0.5, 1.5, n)
@@ -156,10 +155,9 @@ def _stabilised_loop(rng, sys):
 
 def check_3_26(rng, with_sign=False):
     """Corrected Prop. 3.26: X~ <= 2 [[Xbar + X2, X2], [X2, X2]] and P~ <= 2 [[Pbar + P2, -P2],
-    [-P2, P2]]
-    (Pbar = P1 + P12 + P12^T + P2) for the exact X~_inf, P~_inf of a random stabilising (F, K, L).
-    Mutant: factor 1 (the printed bound). ``with_sign`` adds the P-bound with the printed sign and
-    factor 2.
+    [-P2, P2]] (Pbar = P1 + P12 + P12^T + P2) for the exact X~_inf, P~_inf of a random stabilising
+    (F, K, L). Mutant: factor 1 (the printed bound). ``with_sign`` adds the P-bound with the printed
+    sign and factor 2.
     """
     sys, F, K, L = _stabilised_loop(rng, draw_system(rng))
     _, X, _ = steady_state_cost(sys, F, K, L)
@@ -179,8 +177,7 @@ def check_3_26(rng, with_sign=False):
 
 def _lqg(sys, r_factor=1.0):
     """The LQG controller (3.37) of a one-mode system: F = A + B L - K C, K the Kalman predictor
-    gain,
-    L the LQ gain (for r_factor R).
+    gain, L the LQ gain (for r_factor R).
     """
     A, B, C, H, Q, R = sys.A[0], sys.B[0], sys.C[0], sys.H[0], sys.Q[0], r_factor * sys.R[0]
     JJt = sys.J[0] @ sys.J[0].T
@@ -193,8 +190,7 @@ def _lqg(sys, r_factor=1.0):
 
 def check_3_27(rng):
     """Corrected Thm. 3.27 (M = 1): the converged, stabilising solution of Alg. 3.2 has the exact
-    cost of
-    the LQG controller. Mutant: compared with the LQG controller for 2 R.
+    cost of the LQG controller. Mutant: compared with the LQG controller for 2 R.
     """
     sys = draw_system(rng, max_states=2, max_modes=1)
     run = dynamic_output_feedback(sys, max_iter=3000, warn=False)
@@ -222,9 +218,8 @@ def _finite_instance(rng):
 
 def check_3_31(rng):
     """Corrected Thm. 3.31: J_0 <= the doubled forward bound (random gains or Alg. 3.3's, horizons
-    2-8).
-    Mutant: factor 1 (the printed recursions (3.66)-(3.67) summed forward). Third entry: bound /
-    J_0.
+    2-8). Mutant: factor 1 (the printed recursions (3.66)-(3.67) summed forward). Third entry: bound
+    / J_0.
     """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     if rng.random() < 0.5:
@@ -244,10 +239,9 @@ def check_3_31(rng):
 
 def check_3_32(rng):
     """Corrected Thm. 3.32: the solution of (3.70) minimises (B.4) (symmetric differences vanish and
-    random
-    perturbations do not lower it). Mutant: (B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu A^T
-    dropped.
-    Third entry: relative error of (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i].
+    random perturbations do not lower it). Mutant: (B.4) with the factor 2 of 2 E(Pbar + Pu) B L Xu
+    A^T dropped. Third entry: relative error of (3.65) - (B.4) = sum_i tr[(Z12 + Z21 + 2 Z22)
+    Xbar_i].
     """
     sys = draw_system(rng)
     M, n = sys.M, sys.nx
@@ -279,8 +273,8 @@ def check_3_32(rng):
 
 def check_3_33(rng):
     """Alg. 3.3 from random gains, with the Step 5 safeguard and with the literal Step 5
-    (safeguard=False):
-    whether Jbar_0 increases (beyond 1e-8 relative) anywhere, and the largest relative increase.
+    (safeguard=False): whether Jbar_0 increases (beyond 1e-8 relative) anywhere, and the largest
+    relative increase.
     """
     sys = draw_system(rng, max_states=2, max_modes=2)
     horizon = int(rng.integers(2, 9))

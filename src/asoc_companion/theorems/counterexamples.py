@@ -57,9 +57,8 @@ def prop_3_26_example():
     1).
 
     The augmented loop A~ = [[0, 0], [1, 0]] is nilpotent, so X~ = A~ X~ A~^T + diag(1, 0) is
-    reached
-    exactly after two steps. Returns the stationary X~, the printed bound and the corrected bound
-    (factor 2), each minus X~, with the determinant of the 2 x 2 gap (a PSD 2 x 2 matrix has
+    reached exactly after two steps. Returns the stationary X~, the printed bound and the corrected
+    bound (factor 2), each minus X~, with the determinant of the 2 x 2 gap (a PSD 2 x 2 matrix has
     non-negative determinant and diagonal).
 
     Examples

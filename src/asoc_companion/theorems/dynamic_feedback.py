@@ -87,8 +87,8 @@ def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
 
 def loop_step(sys):
     """One step of plant (3.36) and controller (3.37) for all runs:
-    ``step((x, x^), modes, r, F, K, L)``
-    with x, x^ of shape (runs, nx) and ``modes`` the runs' RunModes; the new (x, x^).
+    ``step((x, x^), modes, r, F, K, L)`` with x, x^ of shape (runs, nx) and ``modes`` the runs'
+    RunModes; the new (x, x^).
     """
     J = np.zeros((sys.M, sys.ny, 1)) if sys.J is None else sys.J
     C, meas, A, B, H = (ModeOperator(S) for S in (sys.C, J, sys.A, sys.B, sys.H))
@@ -146,8 +146,7 @@ def check_3_23(rng, mutant=False):
 
 def check_3_24(rng, mutant=False):
     """Prop. 3.24: sum_i tr[Q~_i X~_inf^i] against the Monte Carlo stationary average cost of the
-    loop.
-    Mutant: Q~ without the input's block L^T R_i L.
+    loop. Mutant: Q~ without the input's block L^T R_i L.
     """
     sys = draw_system(rng)
     sys, F, K, L, target = _stabilised_dynamic(rng, sys)
@@ -190,8 +189,7 @@ def _augmented_dense(sys, F, K, L):
 
 def check_3_25(rng, mutant=False):
     """Prop. 3.25: the stated Hamiltonian of (3.42) (with E_i(P~)) against its Lagrangian built
-    densely.
-    Mutant: the stated form without the noise term mu_i H~_i H~_i^T.
+    densely. Mutant: the stated form without the noise term mu_i H~_i H~_i^T.
     """
     sys = draw_system(rng)
     F, K, L = _dynamic_gains(rng, sys)
@@ -214,10 +212,8 @@ def check_3_25(rng, mutant=False):
 
 def check_3_26(rng, mutant=False):
     """Prop. 3.26 as printed: X~ <= [[Xbar + Xu, Xu], [Xu, Xu]] and P~ <= [[Pbar + Pu, -Pu], [-Pu,
-    Pu]]
-    with Xbar = X1 - X12 - X12^T + X2, Xu = X2 (3.43) of the exact X~_inf, P~_inf of a stabilising
-    (F, K, L).
-    Mutant: the inequalities flipped (the bounds read as lower bounds).
+    Pu]] with Xbar = X1 - X12 - X12^T + X2, Xu = X2 (3.43) of the exact X~_inf, P~_inf of a
+    stabilising (F, K, L). Mutant: the inequalities flipped (the bounds read as lower bounds).
     """
     sys = draw_system(rng)
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
@@ -242,8 +238,8 @@ def check_3_26(rng, mutant=False):
 
 def check_3_27(rng, mutant=False):
     """Thm. 3.27: a stabilising solution of (3.45)-(3.49) (Alg. 3.2 converged) is the optimal
-    (3.37):
-    the gradient of the exact cost (3.42) vanishes there. Mutant: the solution's L scaled by 1.2.
+    (3.37): the gradient of the exact cost (3.42) vanishes there. Mutant: the solution's L scaled by
+    1.2.
     """
     sys = draw_system(rng, max_states=2, max_modes=2)
     run = dynamic_output_feedback(sys, max_iter=3000, warn=False)

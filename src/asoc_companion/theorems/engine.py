@@ -55,8 +55,7 @@ def statement(key: str):
 
 def run_instance(key: str, seed: int, index: int, mutant: bool = False):
     """One instance of one statement (or of its mutant, drawn from the seeds of
-    ``key + ":mutant"``):
-    the Outcome, or ("error", message) when the check raised.
+    ``key + ":mutant"``): the Outcome, or ("error", message) when the check raised.
 
     Examples
     --------
@@ -143,9 +142,8 @@ def _tally(key, n, results, seconds):
 
 def _mutant_record(key, results):
     """What the mutant's instances gave: ``{"description", "fails", "instances"}`` (+ premise-false
-    and
-    errors when there were any, and the statement's ``why_not``). The mutant is caught when ``fails
-    > 0``; it has power when it is caught in at least half of its draws.
+    and errors when there were any, and the statement's ``why_not``). The mutant is caught when
+    ``fails > 0``; it has power when it is caught in at least half of its draws.
     """
     verdicts = [out if isinstance(out, tuple) else out.verdict for _, out in results]
     record = {"description": statement(key).mutant, "fails": verdicts.count("fails"),

@@ -46,8 +46,7 @@ def _finite_instance(rng, max_states=3, max_modes=3):
 
 def check_3_28(rng, mutant=False):
     """Prop. 3.28: the expected cost (3.56) by the moment recursion (3.57)-(3.58) against Monte
-    Carlo.
-    Mutant: the moment form evaluated with the gains in reverse time order.
+    Carlo. Mutant: the moment form evaluated with the gains in reverse time order.
     """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     xhat0 = mu0 @ mean0

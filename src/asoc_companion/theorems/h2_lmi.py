@@ -83,8 +83,8 @@ def check_3_10(rng, mutant=False):
 
 def _random_scaled_spd(rng, count, n, scale):
     """``count`` random SPD n x n matrices scale exp(N(0, 0.15^2)) (I + u W_i), u uniform on [0,
-    0.5] and W_i
-    random SPD: spread around a multiple of I, with no relation to any equation of the system.
+    0.5] and W_i random SPD: spread around a multiple of I, with no relation to any equation of the
+    system.
     """
     spread = np.eye(n) + rng.uniform(0.0, 0.5) * random_spd_stack(rng, count, n)
     return spread * (scale * np.exp(0.15 * rng.standard_normal(count)))[:, None, None]
@@ -205,10 +205,9 @@ def decide_3_9(sys, mu=None, mutant=False):
 
 def _failure_kind(sys, lmi, gain):
     """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the
-    recovered gain with
-    the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not
-    stabilise),
-    "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G).
+    recovered gain with the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet
+    the gain does not stabilise), "numerical failure" when it does not (the recovery L = F M^{-1}
+    broke the chain M C_i = C_i G).
     """
     G, Y = lmi.variables["G"], np.stack(lmi.variables["Y"])
     G = np.stack(G) if len(G) == sys.M else np.broadcast_to(G[0], Y.shape)
@@ -222,8 +221,7 @@ def _failure_kind(sys, lmi, gain):
 
 def check_3_12(rng, mutant=False):
     """Thm. 3.12: LMIs (mode observed) feasible -> L_i = F_i M_i^{-1} stabilise the mode-observed
-    loop.
-    Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}.
+    loop. Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}.
     """
     sys = draw_system(rng, max_states=2)
     lmi = static_output_lmi(sys, mode_observed=True)

@@ -127,14 +127,11 @@ def radius_lower_bounds(sys, gains):
 
 def walk_lower_bounds(sys, gains):
     """Lower bounds of :func:`scalar_gain_radii` from single closed walks of the mode chain. For a
-    closed
-    walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ...
-    Acl_{i_0},
-    rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive maps, the
-    map
-    X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2. Walks of
-    length 1
-    (i -> i) and 2 (i -> j -> i); exact for one mode (rho = rho(Acl)^2); the largest bound per gain.
+    closed walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ...
+    Acl_{i_0}, rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive
+    maps, the map X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2.
+    Walks of length 1 (i -> i) and 2 (i -> j -> i); exact for one mode (rho = rho(Acl)^2); the
+    largest bound per gain.
 
     Examples
     --------
@@ -157,12 +154,11 @@ def walk_lower_bounds(sys, gains):
 
 def grid_minimum(sys, gains):
     """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho
-    computed
-    only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m
-    >= the
-    minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then :func:`walk_lower_bounds`)
-    exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin covers the rounding of the
-    bounds and of the eigenvalues) and is skipped (a seed is not evaluated twice).
+    computed only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound
+    gives m >= the minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then
+    :func:`walk_lower_bounds`) exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin
+    covers the rounding of the bounds and of the eigenvalues) and is skipped (a seed is not
+    evaluated twice).
     """
     bounds = radius_lower_bounds(sys, gains)
     seeds = np.argsort(bounds, kind="stable")[:BOUND_SEEDS]
@@ -459,9 +455,8 @@ def sample_mixture(rng, mu0, mean0, cov0, n_runs):
 
 def z_scores(x, theta, exact, mu, min_hits=100):
     """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over
-    the
-    runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
-    modes have too few samples for a normal standard error).
+    the runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits
+    (rarer modes have too few samples for a normal standard error).
     """
     mean, se = indicator_moment_estimate(x, theta, len(mu))
     seen = mu * len(x) >= min_hits
@@ -473,9 +468,8 @@ def z_scores(x, theta, exact, mu, min_hits=100):
 
 def norm_scale(rng, Acl):
     """Factor making max_i ||Acl_i||_2 uniform on [0.5, 1.5]. A Monte Carlo estimate of a moment is
-    only
-    trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i
-    multiplies
-    x x^T by 9 per step, and a few samples decide the mean (the standard error then misleads).
+    only trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i
+    multiplies x x^T by 9 per step, and a few samples decide the mean (the standard error then
+    misleads).
     """
     return float(rng.uniform(0.5, 1.5) / np.max(np.linalg.norm(Acl, ord=2, axis=(1, 2))))

@@ -125,8 +125,7 @@ def _step_density(weights):
 
 def _pair_distance(family, config, a, b, interval=(0.0, 1.0)):
     """The library's distance of Sec. 2.6.3 between two distributions of a configuration
-    (``interval``:
-    the integration limits of the quadrature distances).
+    (``interval``: the integration limits of the quadrature distances).
 
     Examples
     --------

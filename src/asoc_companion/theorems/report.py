@@ -59,8 +59,7 @@ def margin(key, numbers) -> float:
 
 def shown_counterexample(key, entries):
     """Among the failing instances with the fewest states, then modes, the one that fails most
-    clearly
-    (largest margin: its verdict survives rounding and other BLAS kernels); ties by index.
+    clearly (largest margin: its verdict survives rounding and other BLAS kernels); ties by index.
     """
     if not entries:
         return None
@@ -149,8 +148,8 @@ def statements_markdown(statements, records, findings) -> str:
     whether the check caught its mutant, a link to the statement's section), then per statement a
     section with the claim, what one instance checks, the verdict, the mutant, and (when the record
     has them) the diagnosis and the corrected statement with its verdict. ``records`` maps a key to
-    its recorded value
-    (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of the findings page.
+    its recorded value (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of
+    the findings page.
 
     Examples
     --------

@@ -76,12 +76,11 @@ def check_3_14(rng, mutant=False):
 
 def check_3_15(rng, mutant=False):
     """Prop. 3.15 as printed: the average cost (3.11) from a random x_0 and theta_0 ~ mu_inf (the
-    mean stage
-    cost of the moment recursion over steps h..2h-1, rho^h <= 1e-13) equals (3.30)'s objective
-    sum_i tr[(Q_i + L^T R_i L) X_inf^i] (defined when n_y = n_x); the corrected reading with
-    C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected reading
-    with
-    X_inf solved without the noise term (the instance's verdict is then the corrected reading's).
+    mean stage cost of the moment recursion over steps h..2h-1, rho^h <= 1e-13) equals (3.30)'s
+    objective sum_i tr[(Q_i + L^T R_i L) X_inf^i] (defined when n_y = n_x); the corrected reading
+    with C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected
+    reading with X_inf solved without the noise term (the instance's verdict is then the corrected
+    reading's).
     """
     sys = draw_system(rng)
     L = 0.5 * rng.standard_normal((sys.nu, sys.ny))
@@ -134,8 +133,7 @@ def summarise_3_15(outcomes):
 
 def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
     """The Lagrangian of (3.30): sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + <P, map(X) + noise -
-    X>,
-    with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per
+    X>, with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per
     mode).
 
     Examples
@@ -155,8 +153,7 @@ def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
 
 def check_3_16(rng, mutant=False):
     """Prop. 3.16: the stated Hamiltonian (with E_i(P)) against the Lagrangian of (3.30) built
-    densely.
-    Mutant: the stated form without the noise term mu_i H_i H_i^T.
+    densely. Mutant: the stated form without the noise term mu_i H_i H_i^T.
     """
     sys = draw_system(rng)
     L = rng.standard_normal((sys.nu, sys.ny))
@@ -178,8 +175,7 @@ def check_3_16(rng, mutant=False):
 
 def _gain_residual(sys, L, X, P, weight_R=True):
     """(3.31): sum_i (R_i + B_i^T E_i(P) B_i) L C_i X_i C_i^T + B_i^T E_i(P) A_i X_i C_i^T, and its
-    scale
-    (``weight_R=False``: the residual without R_i, a mutant).
+    scale (``weight_R=False``: the residual without R_i, a mutant).
     """
     EP = successor_average(sys.T, P)
     weight = (sys.R if weight_R else 0) + transpose(sys.B) @ EP @ sys.B
@@ -201,8 +197,7 @@ def _costate(sys, L):
 
 def check_3_17(rng, mutant=False):
     """Thm. 3.17: the minimiser of the cost (found by a grid and a scalar search over L) satisfies
-    (3.31).
-    Mutant: the residual of (3.31) without R_i.
+    (3.31). Mutant: the residual of (3.31) without R_i.
     """
     sys = draw_system(rng, siso=True)
     s = np.linspace(-np.pi / 2, np.pi / 2, 403)[1:-1]
@@ -245,8 +240,7 @@ def check_3_17(rng, mutant=False):
 
 def check_3_18(rng, mutant=False):
     """Prop. 3.18: the printed vec formula (column-major vec, C X C^T (x) (R + B^T E(P) B)) solves
-    (3.31).
-    Mutant: the formula with 2 R_i in place of R_i (a factor changed).
+    (3.31). Mutant: the formula with 2 R_i in place of R_i (a factor changed).
     """
     sys = draw_system(rng)
     X, P = random_spd_stack(rng, sys.M, sys.nx), random_spd_stack(rng, sys.M, sys.nx)
@@ -268,9 +262,8 @@ def check_3_18(rng, mutant=False):
 def check_3_19(rng, mutant=False):
     """Thm. 3.19: SOF-stabilisable (grid over scalar L) -> Alg. 3.1 converges to a stabilising,
     unique solution (same limit from X = P = 1e-4 I and from X = P = I), on the thesis's model
-    (3.7),
-    which has no measurement noise (J = None; Alg. 3.1 with J is the library's generalisation).
-    Mutant: Alg. 3.1 stopped after 3 iterations.
+    (3.7), which has no measurement noise (J = None; Alg. 3.1 with J is the library's
+    generalisation). Mutant: Alg. 3.1 stopped after 3 iterations.
     """
     sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable",
                                                 "sparse_T")).replace(J=None)
@@ -297,8 +290,7 @@ def decide_3_19(sys, max_iter=20000):
 
 def summarise_3_19(outcomes):
     """Thm. 3.19: how the failures fail (no convergence; a non-stabilising limit; another limit from
-    I),
-    and how many have one mode (plain linear systems).
+    I), and how many have one mode (plain linear systems).
     """
     fails = [o.numbers for o in outcomes if o.verdict == "fails"]
     return {"not_converged": sum(not n["alg_converged"] for n in fails),
