@@ -236,8 +236,8 @@ def _command(args) -> int:
         print(notebook_list(nbs.notebooks().values()))
         return 0
     if args.command in ("figure", "table", "run"):
-        info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command,
-                                                                             args.number)
+        info = (nbs.by_name(args.name) if args.command == "run"
+                else nbs.find(args.command, args.number))
         overrides = nbs.parse_overrides(info, args.parameter)
         plan = make_plan(paths.project(), info, args.fidelity, overrides)
         if not overrides:

@@ -117,8 +117,8 @@ def _prune_page_assets(app, pagename, templatename, context, doctree):
     if app.builder.format != "html" or "script_files" not in context:
         return
     seen, body = set(), context.get("body", "")
-    context["script_files"][:] = [s for s in context["script_files"] if not _unused_script(s, body,
-                                                                                           seen)]
+    context["script_files"][:] = [s for s in context["script_files"]
+                                  if not _unused_script(s, body, seen)]
     css_seen = set()
     context["css_files"][:] = [c for c in context["css_files"]
                                if not (c.filename in css_seen or css_seen.add(c.filename))]
@@ -263,8 +263,8 @@ def public_names(module) -> list:
             return False
         if getattr(obj, "__module__", None) == module.__name__:
             return True
-        return not (inspect.isclass(obj) or callable(obj)) and re.search(rf"^{name}\b.*=", source,
-                                                                         re.M)
+        return (not (inspect.isclass(obj) or callable(obj))
+                and re.search(rf"^{name}\b.*=", source, re.M))
 
     return [name for name, obj in vars(module).items() if defined_here(name, obj)]
 

@@ -200,8 +200,8 @@ def intro_markdown(text, rows=None) -> str:
     (False, '# Intro', 'The end.', 1)
     """
     rows = rows if rows is not None else ledger_rows()
-    text = _replace_block(_replace_block(text, SUMMARY, _summary_markdown(rows)), FINDINGS,
-                          _findings_markdown())
+    text = _replace_block(text, SUMMARY, _summary_markdown(rows))
+    text = _replace_block(text, FINDINGS, _findings_markdown())
     return _replace_block(text, VERDICT,
                           verdict_markdown(rows) + "\n") if VERDICT[0] in text else text
 

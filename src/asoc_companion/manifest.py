@@ -61,10 +61,9 @@ def source_hash(path) -> str:
     (True, False, 64)
     """
     nb = json.loads(Path(path).read_text())
-    cells = [[c["cell_type"], "".join(c["source"]) if isinstance(c["source"],
-                                                                 list) else c["source"]]
-             for c in nb["cells"] if "injected-parameters" not in c.get("metadata", {}).get("tags",
-                                                                                            [])]
+    source = lambda c: "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+    cells = [[c["cell_type"], source(c)] for c in nb["cells"]
+             if "injected-parameters" not in c.get("metadata", {}).get("tags", [])]
     return _sha256(json.dumps([cells, nb["metadata"].get("asoc")], sort_keys=True).encode())
 
 

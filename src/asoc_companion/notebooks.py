@@ -84,8 +84,8 @@ def notebooks(book=None) -> dict:
         if meta is None:
             continue
         found[path.stem] = NotebookInfo(path.stem, path, meta.get("title", path.stem),
-                                        tuple(meta.get("figures", ())), tuple(meta.get("tables",
-                                                                                       ())))
+                                        tuple(meta.get("figures", ())),
+                                        tuple(meta.get("tables", ())))
     return dict(sorted(found.items(), key=lambda item: (not item[0].startswith("sec"), item[0])))
 
 
@@ -439,8 +439,8 @@ def _names(tree) -> tuple:
 
 def _saves(tree, kind: str, number: str) -> bool:
     call = "save_figure" if kind == "figure" else "save_table"
-    return any(isinstance(n, ast.Call) and getattr(n.func, "attr", getattr(n.func, "id",
-                                                                           None)) == call
+    called = lambda n: getattr(n.func, "attr", getattr(n.func, "id", None))
+    return any(isinstance(n, ast.Call) and called(n) == call
                and any(isinstance(a, ast.Constant) and a.value == number for a in n.args)
                for n in ast.walk(tree))
 

@@ -108,8 +108,8 @@ def fill(text: str, values: dict, notebook: str | None = None) -> str:
     ...     "sec3_5.stable": True}, "sec3_5")
     'rho = 0.250, stable: yes'
     """
-    return PLACEHOLDER.sub(lambda m: _format_value(_lookup(m.group(1), values, notebook),
-                                                   m.group(2) or ""), text)
+    formatted = lambda m: _format_value(_lookup(m.group(1), values, notebook), m.group(2) or "")
+    return PLACEHOLDER.sub(formatted, text)
 
 
 def thesis_values(reference=None) -> dict:

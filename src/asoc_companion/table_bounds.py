@@ -57,8 +57,8 @@ def clairvoyant_costs(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scale=1.0
     x0 = mean0[start] + np.einsum("rab,rb->ra",
                                   np.linalg.cholesky(cov0 + 1e-300 * np.eye(n))[start],
                                   rng.standard_normal((runs, n)))
-    d = noise_scale * np.einsum("krab,krb->kra", sys.H[theta], rng.standard_normal((horizon, runs,
-                                                                                    sys.nw)))
+    draws = rng.standard_normal((horizon, runs, sys.nw))
+    d = noise_scale * np.einsum("krab,krb->kra", sys.H[theta], draws)
     return clairvoyant_minimum(sys, theta, _final_modes(rng, theta[-1], sys.T), x0, d)
 
 
@@ -227,9 +227,9 @@ def monte_carlo_gap(sys, L, x0, mu0, horizon, runs, rng, noise_scale):
         x, J = np.array(start, dtype=float), np.zeros(runs)
         for k in range(horizon):
             u = np.einsum("rab,rb->ra", L[theta[k]], x)
-            J += np.einsum("ra,rab,rb->r", x, sys.Q[theta[k]], x) + np.einsum("ra,rab,rb->r", u,
-                                                                              sys.R[theta[k]], u)
-            x = np.einsum("rab,rb->ra", sys.A[theta[k]], x) + np.einsum("rab,rb->ra",
-                                                                        sys.B[theta[k]], u) + w[k]
+            J += (np.einsum("ra,rab,rb->r", x, sys.Q[theta[k]], x)
+                  + np.einsum("ra,rab,rb->r", u, sys.R[theta[k]], u))
+            x = (np.einsum("rab,rb->ra", sys.A[theta[k]], x)
+                 + np.einsum("rab,rb->ra", sys.B[theta[k]], u) + w[k])
         totals.append(J + np.einsum("ra,rab,rb->r", x, sys.Q[theta[-1]], x))
     return float(np.median(totals[0]) - np.median(totals[1]))

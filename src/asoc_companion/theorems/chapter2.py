@@ -204,10 +204,9 @@ def check_theorem_2_4(rng: np.random.Generator, mutant=False) -> Outcome:
     mean = beta @ z
     cov = (beta[:, None] * (z - mean)).T @ (z - mean)
     half = 1.0 if mutant else 0.5
-    expansion = float(beta @ (s + z @ v + half * np.einsum("ji,ik,jk->j", z, V,
-                                                           z)) + 0.5 * np.trace(S @ cov))
-    scale = float(abs(s) + beta @ (np.abs(z @ v) + 0.5 * np.abs(np.einsum("ji,ik,jk->j", z, V,
-                                                                          z))) + cost_terms.max())
+    quadratic = np.einsum("ji,ik,jk->j", z, V, z)
+    expansion = float(beta @ (s + z @ v + half * quadratic) + 0.5 * np.trace(S @ cov))
+    scale = float(abs(s) + beta @ (np.abs(z @ v) + 0.5 * np.abs(quadratic)) + cost_terms.max())
     tol = 64 * EPS * (M + N) * n ** 2 * scale
     error = abs(expansion - exact)
     verdict = "holds" if error <= tol and not np.any(S) else "fails"

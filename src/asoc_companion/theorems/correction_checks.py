@@ -168,8 +168,8 @@ def check_3_26(rng, with_sign=False):
                                       gap(bounds.costate_bound(P, factor, sign), P)) >= -EIG_TOL
     verdicts = ("holds" if ok(2.0) else "fails"), ("holds" if ok(1.0) else "fails")
     if with_sign:
-        return verdicts + ("holds" if gap(bounds.costate_bound(P, 2.0, -1.0),
-                                          P) >= -EIG_TOL else "fails",)
+        sign_gap = gap(bounds.costate_bound(P, 2.0, -1.0), P)
+        return verdicts + ("holds" if sign_gap >= -EIG_TOL else "fails",)
     return verdicts
 
 
@@ -224,8 +224,8 @@ def check_3_31(rng):
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     if rng.random() < 0.5:
         run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0,
-                                                     mu0=mu0,
-                                                     init=(F, K, L), max_iter=100, warn=False)
+                                                     mu0=mu0, init=(F, K, L), max_iter=100,
+                                                     warn=False)
         F, K, L = run.F, run.K, run.L
     xhat0 = mu0 @ mean0
     exact = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
@@ -264,8 +264,8 @@ def check_3_32(rng):
     F, K, L = bounds.split(z, sys)
     printed = bounds.bound_3_65(sys, F, K, L, *data)
     expanded = bounds.functional_b4(sys, F, K, L, *data)
-    identity = abs(printed - expanded - bounds.difference_3_65_b4(sys, F, K, L, Xbar, EPbar,
-                                                                  EPunder)) / abs(printed)
+    difference = bounds.difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder)
+    identity = abs(printed - expanded - difference) / abs(printed)
     return verdict(2.0), verdict(1.0), identity
 
 
@@ -287,8 +287,8 @@ def check_3_33(rng):
             run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0,
                                                          cov0=cov0, mu0=mu0,
                                                          init=np.random.default_rng(seed),
-                                                         max_iter=300,
-                                                         safeguard=safeguard, warn=False)
+                                                         max_iter=300, safeguard=safeguard,
+                                                         warn=False)
         except (ValueError, np.linalg.LinAlgError):        # the iterates blew up (literal Step 5)
             out.append(np.inf)
             continue

@@ -196,8 +196,8 @@ def _record_3_31(outcomes, ratios):
             "The mutant is the printed bound, so it is caught exactly where Thm. 3.31 as printed "
             "fails on these draws, a minority; the exact counterexample of the diagnosis fails it "
             "always."),
-            "bound_over_exact": {q: float(np.quantile(ratios, p)) for q, p in (("median", 0.5),
-                                                                               ("max", 1.0))}}}
+            "bound_over_exact": {q: float(np.quantile(ratios, p))
+                                 for q, p in (("median", 0.5), ("max", 1.0))}}}
 
 
 def _record_3_32(outcomes, identity_errors):

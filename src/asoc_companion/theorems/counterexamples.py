@@ -136,9 +136,8 @@ def _alg_3_1_one_mode(A, B, C, H, Q, R, start, iterations=400):
     gains = []
     for _ in range(iterations):
         lhs = np.kron(C @ X @ C.T, R + B.T @ P @ B)
-        L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F")).reshape(B.shape[1],
-                                                                                    C.shape[0],
-                                                                                    order="F")
+        vec_L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F"))
+        L = vec_L.reshape(B.shape[1], C.shape[0], order="F")
         Acl = A + B @ L @ C
         X, P = Acl @ X @ Acl.T + H @ H.T, Acl.T @ P @ Acl + Q + C.T @ L.T @ R @ L @ C
         gains.append(L)
@@ -162,9 +161,8 @@ def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
     cycles = []
     for start in starts:
         gains = _alg_3_1_one_mode(**s, start=start)[:, 0, 0]
-        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9) and not np.isclose(gains[-1],
-                                                                                       gains[-2],
-                                                                                       rtol=1e-3))
+        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9)
+                        and not np.isclose(gains[-1], gains[-2], rtol=1e-3))
         cycles.append({"start": start, "gains": sorted([float(gains[-1]), float(gains[-2])]),
                        "rho": sorted([rho(gains[-1]), rho(gains[-2])]), "period_2": period_2})
     candidates = np.linspace(-5.0, 5.0, grid)

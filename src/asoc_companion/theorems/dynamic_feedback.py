@@ -159,9 +159,8 @@ def check_3_24(rng, mutant=False):
     loop = loop_step(sys)
     step = lambda state, modes, r: loop(state, modes, r, F, K, L)
     start = np.zeros((n_runs, sys.nx)), np.zeros((n_runs, sys.nx))
-    mc, se, burn = stationary_average(rng, step, cost, start, initial_modes(rng, sys.mu_inf,
-                                                                            n_runs), sys.T, rho,
-                                      n_runs)
+    modes0 = initial_modes(rng, sys.mu_inf, n_runs)
+    mc, se, burn = stationary_average(rng, step, cost, start, modes0, sys.T, rho, n_runs)
     z = abs(mc - exact) / np.hypot(se, 1e-3 * exact)
     return outcome(verdict(z < Z_SCORE), sys, cost_3_42=exact, monte_carlo=mc, standard_error=se,
                    z=z, rho=rho,
@@ -219,9 +218,8 @@ def check_3_26(rng, mutant=False):
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
     _, Xt, rho = steady_state_cost(sys, F, K, L)
     At, _, Qt = augmented_closed_loop(sys, F, K, L)
-    Pt = np.linalg.solve(np.eye(Qt.size) - ms_operator(At, sys.T, check=False).T,
-                         Qt.ravel()).reshape(Qt.shape)
-    Pt = sym(Pt)
+    Pt = np.linalg.solve(np.eye(Qt.size) - ms_operator(At, sys.T, check=False).T, Qt.ravel())
+    Pt = sym(Pt.reshape(Qt.shape))
     n = sys.nx
     sign = -1.0 if mutant else 1.0
 

@@ -188,8 +188,8 @@ def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progre
             raise ValueError("only: expected statement keys such as 'statement_3_19', found "
                              f"{sorted(unknown)}")
     count = lambda n, st: 0 if n is None else int(n(st) if callable(n) else n)
-    counts = {(st.key, mutant): count(n, st) for st in chosen for mutant, n in ((False, instances),
-                                                                                (True, mutants))}
+    counts = {(st.key, mutant): count(n, st)
+              for st in chosen for mutant, n in ((False, instances), (True, mutants))}
     tasks = [(key, mutant, list(range(start, min(start + BATCH, n))))
              for (key, mutant), n in counts.items() for start in range(0, n, BATCH)]
     jobs = (joblib.delayed(_run_batch)(key, seed, indices, mutant) for key, mutant,

@@ -67,8 +67,7 @@ def _stationary_check(rng, mode_dependent, mutant):
                                       initial_modes(rng, sys.mu_inf, n_runs), sys.T, target, n_runs)
     z = abs(mc - h2) / np.hypot(se, 1e-3 * h2)
     return outcome(verdict(z < Z_SCORE), sys, h2_formula=h2, monte_carlo=mc, standard_error=se, z=z,
-                   rho=target,
-                   burn_in=burn)
+                   rho=target, burn_in=burn)
 
 
 def check_3_7(rng, mutant=False):
@@ -157,8 +156,7 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     h2 = (trace_sum(DE @ steady_state_second_moment(Acl, HHt, sys.T, mu),
                     transpose(DE)) if rho < 1 else np.inf)
     numbers = dict(bmi_margin=bmi_margin, constraint_3_14_margin=constraint_margin, rho=rho,
-                   objective=objective,
-                   h2_norm_squared=h2)
+                   objective=objective, h2_norm_squared=h2)
     if not bmi_margin > 0:
         return outcome("not_applicable", sys, **numbers)
     holds = constraint_margin > 0 and rho < 1 and objective >= h2 * (1 - 1e-9)
@@ -214,8 +212,8 @@ def _failure_kind(sys, lmi, gain):
     Acl = sys.A + sys.B @ gain @ sys.C
     P = np.einsum("ji,jab->iab", sys.T, Y)
     HHt = sys.H @ transpose(sys.H)
-    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G),
-                                                                        G + transpose(G) - P]])
+    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G],
+                       [transpose(Acl @ G), G + transpose(G) - P]])
     return "counterexample" if min_eig(blocks) > 0 else "numerical failure"
 
 

@@ -448,8 +448,8 @@ def sample_mixture(rng, mu0, mean0, cov0, n_runs):
     """``n_runs`` draws (x_0, theta_0) of the mixture."""
     theta = initial_modes(rng, mu0, n_runs)
     chol = ModeOperator(np.linalg.cholesky(cov0))
-    x = mean0[theta] + chol(rng.standard_normal((n_runs, mean0.shape[1])), RunModes(theta,
-                                                                                    len(mu0)))
+    draws = rng.standard_normal((n_runs, mean0.shape[1]))
+    x = mean0[theta] + chol(draws, RunModes(theta, len(mu0)))
     return x, theta
 
 

@@ -253,8 +253,8 @@ def gram_certificate(family, config, name, shape, l):
         delta_D += float(np.abs(D - distance_matrix(family, config, (-1.0, 2.0))).max())
     off = D[np.triu_indices(N, 1)]
     h = 1e-6
-    slope = np.abs(covariance(name, shape, off * (1 + h), l) - covariance(name, shape,
-                                                                          off * (1 - h), l)) \
+    slope = np.abs(covariance(name, shape, off * (1 + h), l)
+                   - covariance(name, shape, off * (1 - h), l)) \
         / (2 * h * np.maximum(off, 1e-300))
     slope = float(np.nanmax(np.where(off > 0, slope, 0.0))) if off.size else 0.0
     tol = N * (slope * delta_D + 16 * EPS)

@@ -190,9 +190,8 @@ def _costate(sys, L):
     Acl = closed_loop(sys, L)
     LC = L @ sys.C
     rhs = (sys.Q + transpose(LC) @ sys.R @ LC).ravel()
-    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T,
-                        rhs).reshape(sys.Q.shape)
-    return sym(P)
+    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T, rhs)
+    return sym(P.reshape(sys.Q.shape))
 
 
 def check_3_17(rng, mutant=False):
@@ -226,9 +225,9 @@ def check_3_17(rng, mutant=False):
         if X is not None:
             costs[index] = h2_cost(sys, np.array([[gain]]), X, check=False)
     best = int(np.argmin(costs))
-    res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1,
-                                                                                  len(s) - 1)]),
-                                         method="bounded", options={"xatol": 1e-12})
+    bracket = (s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)])
+    res = scipy.optimize.minimize_scalar(cost, bounds=bracket, method="bounded",
+                                         options={"xatol": 1e-12})
     t = res.x if res.fun <= costs[best] else s[best]
     L = np.array([[np.tan(t)]])
     X = steady_state_second_moment(closed_loop(sys, L), HHt, sys.T, sys.mu_inf)
