@@ -38,9 +38,7 @@ FIDELITY_HELP = ("full: the thesis's settings, updates figures/ and book/; "
                  "ci: small Monte Carlo sizes, writes to book/_build/ci/ only (default: full)")
 
 def _short(value) -> str:
-    """A recorded value in a few characters (Monte Carlo record -> its estimate, claim ->
-    verdict).
-    """
+    """A recorded value in a few characters (a Monte Carlo record's estimate, a claim's verdict)."""
     if isinstance(value, dict):
         if "holds" in value:
             return f"{'holds' if value['holds'] else 'fails'} ({_short(value.get('value'))})"
@@ -56,8 +54,7 @@ def _short(value) -> str:
 
 
 def compare_with_committed(name, output_dir, fidelity="ci") -> str:
-    """Table of ``name``'s values in ``output_dir`` next to the committed ones (key, committed, this
-    run).
+    """Table of ``name``'s values in ``output_dir`` beside the committed ones (key, committed, run).
 
     The committed values come from the full-fidelity run; the column headers say so, and
     give this run's ``fidelity``.

@@ -158,8 +158,8 @@ def _caption_cell(number, output, count):
 
 
 def _insert_caption_cells(path, with_output=False) -> list:
-    """Add a ``repro.figure_caption`` cell after each figure of the notebook at ``path`` that lacks
-    one.
+    """Add a ``repro.figure_caption`` cell after each figure of the notebook at
+    ``path`` that lacks one.
 
     The cell goes right after the cell that saves the figure (after its Markdown caption, if
     one follows). Other cells are left untouched; ``with_output`` stores the caption rendered

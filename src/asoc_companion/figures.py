@@ -131,8 +131,7 @@ NUMBER = re.compile(r"(\d+)\.(\d+)|own\.(\d+)")
 
 
 def file_stem(kind: str, number: str) -> str:
-    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other
-    numbers.
+    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError otherwise.
 
     Examples
     --------

@@ -131,8 +131,7 @@ def closure(names, src, exclude=()) -> dict:
 
 
 def notebook_modules(path, src, exclude=()) -> dict:
-    """``{module name: file}`` of the project modules the notebook at ``path`` imports,
-    transitively.
+    """``{module name: file}`` of project modules the notebook at ``path`` imports, transitively.
 
     A cell that does not parse makes the whole of ``src`` count (a conservative answer).
 

@@ -155,8 +155,7 @@ def _summary_markdown(rows=None) -> str:
 
 
 def _findings_markdown(path=None) -> str:
-    r"""The intro's list of findings: one link per section of ``book/findings.ipynb``, with its
-    kind.
+    r"""The intro's list of findings: a link per section of ``book/findings.ipynb`` and its kind.
 
     Examples
     --------

@@ -37,8 +37,7 @@ def badge(st: str, text: str | None = None) -> str:
 
 
 def decimals(entry) -> int | None:
-    """Decimals the thesis prints ``entry`` with: from its rounding tolerance, else from the printed
-    number.
+    """Decimals of ``entry`` as printed: from its rounding tolerance, else from the printed number.
 
     Examples
     --------
@@ -68,9 +67,7 @@ def _flat(value):
 
 
 def _fmt(value, places=None) -> str:
-    """``value`` for the table: ``places`` decimals when the thesis's precision is known, else 4
-    digits.
-    """
+    """``value`` for the table: ``places`` decimals if the precision is known, else 4 digits."""
     if value is None:
         return "–"
     if isinstance(value, bool):

@@ -285,8 +285,7 @@ def last_seconds(output_dir) -> dict:
 
 
 def changed_inputs(plan) -> list:
-    """What changed since the run ``plan`` was last made, or what its outputs lack (empty: up to
-    date).
+    """What changed since the run ``plan`` was made, or what its outputs lack (empty: up to date).
 
     Examples
     --------
@@ -336,8 +335,7 @@ def changed_inputs(plan) -> list:
 
 
 def update_manifest(plan, seconds=None) -> dict:
-    """Record the input hashes of the finished run ``plan`` in ``plan.manifest`` (atomically);
-    return the entry.
+    """Record the finished run ``plan``'s input hashes in ``plan.manifest`` atomically; return it.
 
     ``seconds``, the run's wall time, is kept beside the hashes (not compared by
     :func:`changed_inputs`): the parallel build starts the longest notebooks first.

@@ -51,8 +51,7 @@ outputs, not this log)."""
 
 @dataclass(frozen=True)
 class NotebookInfo:
-    """A notebook of the book: its name, file, title and the thesis figures and tables it
-    regenerates.
+    """A notebook of the book: name, file, title and the thesis figures and tables it regenerates.
 
     Examples
     --------
@@ -165,8 +164,7 @@ def by_name(name: str, book=None) -> NotebookInfo:
 
 
 def _parameter_specs(info: NotebookInfo) -> dict:
-    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (``default`` is
-    source text).
+    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (defaults as text).
 
     Examples
     --------
@@ -179,8 +177,7 @@ def _parameter_specs(info: NotebookInfo) -> dict:
 
 
 def default_parameters(info: NotebookInfo) -> dict:
-    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's
-    inspection).
+    """``{name: default source text}`` of the ``parameters`` cell (papermill's inspection).
 
     Examples
     --------
@@ -191,8 +188,7 @@ def default_parameters(info: NotebookInfo) -> dict:
 
 
 def parse_value(text: str):
-    """A ``-p name value`` value, typed as papermill's command line does: bool, None, int, float or
-    str.
+    """A ``-p name value`` value, typed like papermill's command line (bool, None, int, float, str).
 
     Examples
     --------
@@ -219,8 +215,7 @@ def _default_value(source: str):
 
 
 def _check_value(name: str, value, default_source: str, notebook: str):
-    """``value`` for parameter ``name`` if it has the type (and range) of the default; ValueError
-    otherwise.
+    """``value`` for parameter ``name`` if it has the default's type (and range); else ValueError.
 
     The type is the default's: an int parameter takes an int (not a bool, float or text), a
     float parameter a finite int or float, a bool ``True``/``False``, a string anything. The
@@ -282,8 +277,7 @@ def parse_overrides(info: NotebookInfo, pairs) -> dict:
 
 
 def _check_overrides(info: NotebookInfo, overrides: dict) -> dict:
-    """``overrides`` if every name is a parameter of the notebook with a value of its type and
-    range.
+    """``overrides`` if each names a parameter of the notebook and has its type and range.
 
     Examples
     --------

@@ -1,5 +1,4 @@
-"""Numbers in prose come from recorded values (the architecture page, book/architecture.md,
-"Portability").
+"""Numbers in prose come from recorded values (book/architecture.md, "Portability").
 
 Text (a ledger note, a notebook paragraph, the findings page) names a recorded value by a
 placeholder ``{{path:spec}}`` and :func:`fill` replaces it by the value formatted with the

@@ -1,5 +1,4 @@
-"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and the status of each
-value.
+"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and each value's status.
 
 Each notebook has its own file (so work on one section does not touch another's). Each entry is
 keyed ``<notebook>.<key>`` and holds
@@ -94,8 +93,7 @@ class Entry:
 
 
 def load_reference(path=None) -> dict:
-    """Load and validate the reference files (a folder of YAML files, or one file); return
-    ``{key: Entry}``.
+    """Load and check the reference files (a folder of YAML files, or one file) as ``{key: Entry}``.
 
     Parameters
     ----------

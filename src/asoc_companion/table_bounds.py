@@ -1,5 +1,4 @@
-"""Certified evidence that Tables 3.2 and 3.3 cannot come from their printed settings (the findings
-page).
+"""Certified evidence that Tables 3.2 and 3.3 cannot come from their printed settings (findings).
 
 Table 3.3 prints *medians* of J/K, so an expected-cost bound says nothing about them by itself.
 The argument here is per sample: for one realisation of (x_0, theta_0..K-1, w_0..K-1), every
@@ -118,8 +117,7 @@ def median_lower_bound(samples, tail=CONFIDENCE_TAIL):
 
 
 def table_3_3_bounds(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scales):
-    """For each noise scale: (Monte Carlo median of the clairvoyant J/K, its lower confidence
-    bound).
+    """Per noise scale: Monte Carlo median of the clairvoyant J/K and its lower confidence bound.
 
     Examples
     --------
@@ -166,8 +164,7 @@ def _closed_loop_cost_to_go(sys, L, horizon):
 
 
 def transient_gap(sys, L, x0, mu0, horizon):
-    """E{J | x_0} - E{J | x_0 = 0} = sum_i mu0_i x_0^T Pi_i(0) x_0 for u = L_theta x, whatever the
-    noise.
+    """E{J | x_0} - E{J | x_0 = 0} = sum_i mu0_i x_0^T Pi_i(0) x_0 for u = L_theta x, for any noise.
 
     Examples
     --------

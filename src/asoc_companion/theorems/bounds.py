@@ -1,5 +1,4 @@
-"""Corrected bounds for Prop. 3.26, Thm. 3.31 and Thm. 3.32: what holds instead, computed
-independently.
+"""Corrected bounds of Prop. 3.26 and Thms. 3.31, 3.32: what holds instead, computed independently.
 
 Everything here is written from the printed equations, not from ``asoc.mjls.dynamic``: the
 checks of :mod:`asoc_companion.theorems.corrections` compare these computations with the
@@ -92,8 +91,8 @@ def _error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
 
 
 def _initial_error_blocks(mean0, cov0, mu0, xhat0):
-    """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a constant
-    x^_0.
+    """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a
+    constant x^_0.
     """
     dev = mean0 - xhat0
     m = mu0[:, None, None]
@@ -118,9 +117,7 @@ def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
 # ------------------------------------------------------------------ Thm. 3.32: (B.4) and (3.70)
 
 def optimality_conditions(sys, Xbar, Xunder, EPbar, EPunder, mu):
-    """The matrix and vector of (3.70) from (3.50), vec column-major, unknowns [vec F; vec K; vec
-    L].
-    """
+    """Matrix and vector of (3.70) from (3.50); column-major vec, unknowns [vec F; vec K; vec L]."""
     JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
     S, C, B, A = Xbar + Xunder, sys.C, sys.B, sys.A
     ksum = lambda X, Y: sum(np.kron(x, y) for x, y in zip(X, Y))
@@ -160,16 +157,16 @@ def _noise_term(sys, K, EPbar, EPunder, mu):
 
 
 def bound_3_65(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu):
-    """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the constant
-    E_i(omega_{k+1})).
+    """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the
+    constant E_i(omega_{k+1})).
     """
     Pbar, Punder = _step_terms(sys, F, K, L, EPbar, EPunder)
     return _tr(Pbar, Xbar + Xunder) + _tr(Punder, Xbar) + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
-    """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as E_i(Pbar +
-    Punder)).
+    """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as
+    E_i(Pbar + Punder)).
 
     ``cross`` is the factor of the term 2 E_i(Pbar + Punder) B L Xunder A^T (2 as printed; the
     mutant of the corrected Thm. 3.32 drops it to 1).

@@ -226,8 +226,8 @@ def _kalman_posterior(A, H, C, J, Sigma):
 
 def expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, mean, Sigma,
                                    innovation=True):
-    """Exact E{C_K(x_K) + sum_k C_k(x_k, u_k)} of u_k = L_k E{x_k} + d_k from the belief N(mean,
-    Sigma).
+    """Exact E{C_K(x_K) + sum_k C_k(x_k, u_k)} of u_k = L_k E{x_k} + d_k from the belief
+    N(mean, Sigma).
 
     Forward propagation of the first two moments of the Kalman mean x_hat_k (deterministic
     posterior covariances Sigma_k; the innovation adds P_k - Sigma_{k+1} to the second moment;

@@ -1,5 +1,4 @@
-r"""The numbered statements of Chapter 3 (Thm. 3.1 to Thm. 3.33) and how their counterexamples are
-shown.
+r"""The numbered statements of Chapter 3 (Thm. 3.1 to 3.33) and how their counterexamples are shown.
 
 Every numbered item of Chapter 3 that is not a definition (3.3, 3.4, 3.13, 3.22) or a
 problem statement (3.6, 3.21) has one ``Statement`` here, keyed ``statement_3_<n>``; the

@@ -142,9 +142,7 @@ def check_3_19(rng):
 # ------------------------------------------------------------------ Prop. 3.26
 
 def _stabilised_loop(rng, sys):
-    """Random (F, K, L) and the system rescaled so that the augmented loop has rho uniform in [0.2,
-    0.85].
-    """
+    """Random (F, K, L) and the system rescaled: the augmented loop's rho uniform in [0.2, 0.85]."""
     F = 0.5 * rng.standard_normal((sys.nx, sys.nx))
     K = 0.5 * rng.standard_normal((sys.nx, sys.ny))
     L = 0.5 * rng.standard_normal((sys.nu, sys.nx))

@@ -53,8 +53,8 @@ def _congruence(A, X):
 
 
 def prop_3_26_example():
-    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0, A = 0, C = H =
-    1).
+    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k
+    (F = 0, K = 1, L = 0, A = 0, C = H = 1).
 
     The augmented loop A~ = [[0, 0], [1, 0]] is nilpotent, so X~ = A~ X~ A~^T + diag(1, 0) is
     reached exactly after two steps. Returns the stationary X~, the printed bound and the corrected
@@ -291,8 +291,8 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
 
 
 def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
-    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly, for finite
-    ``b_max``.
+    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly,
+    for finite ``b_max``.
 
     With the LCD kernel, :math:`\int (P_1 - P_2)^2 dm = \sqrt\pi\, b \sum_{kl} c_k c_l
     e^{-\Delta_{kl}^2/(4b^2)}` (``c``: the weights, those of ``y`` negative), and

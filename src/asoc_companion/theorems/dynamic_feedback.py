@@ -50,9 +50,7 @@ __all__ = ["check_3_20", "loop_step", "quadratic_form", "check_3_23", "check_3_2
 
 
 def check_3_20(rng, mutant=False):
-    """Prop. 3.20: x~^T Q~ x~ = x^T Q x + u^T R u with u = L x^. Mutant: Q~ = diag(Q, R) (L
-    dropped).
-    """
+    """Prop. 3.20: x~^T Q~ x~ = x^T Q x + u^T R u, u = L x^. Mutant: Q~ = diag(Q, R) (L dropped)."""
     sys = draw_system(rng)
     L = rng.standard_normal((sys.nu, sys.nx))
     i = rng.integers(sys.M)
@@ -75,9 +73,7 @@ def _dynamic_gains(rng, sys, scale=0.5):
 
 
 def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
-    """Random (F, K, L) and the system rescaled (with F, K) so the augmented loop has rho in [low,
-    high].
-    """
+    """Random (F, K, L) and the system rescaled (with F, K) to an augmented rho in [low, high]."""
     F, K, L = _dynamic_gains(rng, sys)
     At = augmented_closed_loop(sys, F, K, L)[0]
     target = rng.uniform(low, high)

@@ -99,9 +99,7 @@ class StatementResult:
     diagnosis: str | None = None
 
     def recorded_value(self) -> dict:
-        """The recorded value: counts, failing indices, the statement's summary, its mutant and
-        timing.
-        """
+        """The recorded value: counts, failing indices, the summary, the mutant and the timing."""
         counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable,
                   "errors": self.errors}
         record = {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds,
@@ -159,8 +157,7 @@ def _mutant_record(key, results):
 
 def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progress=True,
               mutants=None):
-    """Check every statement (or those in ``only``) on its instances; returns {key:
-    StatementResult}.
+    """Check every statement (or those in ``only``) on its instances: {key: StatementResult}.
 
     Parameters
     ----------

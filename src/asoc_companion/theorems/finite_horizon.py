@@ -32,9 +32,7 @@ __all__ = ["check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31",
 
 
 def _finite_instance(rng, max_states=3, max_modes=3):
-    """A random system, horizon 2-8, random time-variant gains (F_k, K_k, L_k) and a
-    Gaussian-mixture x_0.
-    """
+    """A random system, horizon 2-8, time-variant gains (F_k, K_k, L_k), a Gaussian-mixture x_0."""
     sys = draw_system(rng, max_states=max_states, max_modes=max_modes)
     horizon = int(rng.integers(2, 9))
     F = 0.5 * rng.standard_normal((horizon, sys.nx, sys.nx))

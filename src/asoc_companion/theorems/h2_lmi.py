@@ -1,5 +1,4 @@
-"""Checks of Sec. 3.5.2: the H2 norm (Props. 3.7, 3.10), the BMIs (Lemmas 3.8, 3.11) and the LMIs
-(Thms. 3.9, 3.12).
+"""Sec. 3.5.2's checks: H2 norm (Props. 3.7, 3.10), BMIs (Lemmas 3.8, 3.11), LMIs (Thms. 3.9, 3.12).
 
 * The H2 formulas are compared with the Monte Carlo stationary E{z^T z} of the closed loop.
 * The lemmas are implications: a point (L, G, Y) is drawn with no relation to the Lyapunov

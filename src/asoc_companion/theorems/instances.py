@@ -33,9 +33,7 @@ Z_SCORE = 6.0
 
 def draw_system(rng, *, families=FAMILIES, max_states=3, max_modes=3, siso=False,
                 measurement_noise=0.1):
-    """A random MJLS: family, dimensions (nx <= max_states, M <= max_modes) and matrices from
-    ``rng``.
-    """
+    """A random MJLS from ``rng``: family, sizes (nx <= max_states, M <= max_modes), matrices."""
     family = families[rng.integers(len(families))]
     if family == "thesis_like":
         nx, nu, ny = 2, 1, 1
@@ -82,9 +80,7 @@ BOUND_SEEDS = 16
 
 
 def _scalar_closed_loops(sys, gains):
-    """A_i + L B_i C_i for u = L y with scalar L (SISO), for every L in ``gains``: shape (G, M, n,
-    n).
-    """
+    """A_i + L B_i C_i (u = L y, scalar L: SISO) for every L in ``gains``, shape (G, M, n, n)."""
     bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
     return sys.A[None] + gains[:, None, None, None] * bc[None]
 
@@ -322,9 +318,7 @@ class ModeOperator:
         self.stacked = np.ascontiguousarray(S.transpose(2, 0, 1).reshape(n, n_modes * self.m))
 
     def __call__(self, x, modes):
-        """S_{theta_r} x_r for every row of ``x`` (runs, n); ``modes``: the runs'
-        :class:`RunModes`.
-        """
+        """S_{theta_r} x_r per row of ``x`` (runs, n); ``modes``: the runs' :class:`RunModes`."""
         return (x @ self.stacked).reshape(-1, self.m).take(modes.run_major, axis=0)
 
 
@@ -334,8 +328,7 @@ def moment_estimate(samples):
 
 
 def indicator_moment_estimate(x, theta, n_modes):
-    """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n,
-    n).
+    """Mean and standard error over the runs of x_r x_r^T 1(theta_r = i), each of shape (M, n, n).
 
     Examples
     --------
@@ -424,9 +417,7 @@ def outcome(verdict, sys=None, **numbers):
 
 
 def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
-    """Rescale A_i, B_i so that the closed loop of ``gain_fn(sys)`` has rho uniform in [low,
-    high].
-    """
+    """Rescale A_i, B_i so the closed loop of ``gain_fn(sys)`` has rho uniform in [low, high]."""
     target = rng.uniform(low, high)
     factor = _radius_to(sys, gain_fn(sys), target)
     return rescaled(sys, factor), target
@@ -435,9 +426,7 @@ def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
 # ---------------------------------------------------------------- Gaussian-mixture initial states
 
 def gaussian_mixture(rng, sys):
-    """A random Gaussian mixture of x_0 over the modes: weights mu_0, means (M, n), covariances (M,
-    n, n).
-    """
+    """A random Gaussian mixture of x_0: weights mu_0, means (M, n), covariances (M, n, n)."""
     mu0 = rng.dirichlet(np.ones(sys.M))
     mean0 = rng.standard_normal((sys.M, sys.nx))
     cov0 = random_spd_stack(rng, sys.M, sys.nx, 0.2)

@@ -55,9 +55,7 @@ MUTANT_COVARIANCE = "quartic_exponential"
 
 
 def random_covariance(rng):
-    """A covariance of Table 2.1 (name as in ``asoc.gp.COVARIANCES``) and its random shape
-    parameter.
-    """
+    """A Table 2.1 covariance (named as in ``asoc.gp.COVARIANCES``) and a random shape parameter."""
     name = COVARIANCE_NAMES[int(rng.integers(len(COVARIANCE_NAMES)))]
     shape = {"matern": {"nu": float(rng.choice([0.5, 1.5, 2.5]))},
              "gamma_exponential": {"gamma": float(rng.uniform(0.5, 2.0))},
@@ -179,9 +177,7 @@ def _objective(D, name, shape):
 
 
 def _search(rng, family, layout, config, name, shape):
-    """Adversarial search, one distribution moved at a time; returns (theta, value, log factor,
-    moves, restarts).
-    """
+    """Adversarial search, one distribution at a time: theta, value, log factor, moves, restarts."""
     N = layout["N"]
     start = lambda: [rng.normal(size=_parameter_count(family, layout, i)) for i in range(N)]
     theta = start()

@@ -22,9 +22,7 @@ SYSTEMS_KEPT = 20
 
 
 def save_counterexamples(results, seed, folder) -> Path:
-    """Every failing instance (statement, index, its deciding numbers and system) as JSON,
-    atomically.
-    """
+    """Every failing instance (statement, index, deciding numbers, system) as JSON, atomically."""
     statements = {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
                   for key, res in results.items() if res.failures}
     data = {"seed": int(seed), "statements": {key: _trim_systems(key, entries) for key,
@@ -72,9 +70,7 @@ def _order(key, entry):
 
 
 def describe(key, outcome: Outcome) -> str:
-    """One line per deciding number, rounded to what is meant (identical text under other BLAS
-    kernels).
-    """
+    """One line per deciding number, rounded to what is meant (same text, other BLAS kernels)."""
     n = outcome.numbers
     lines = [f"{key}: {outcome.verdict}; {n.get('n_states')} states, {n.get('n_modes')} modes, "
              f"{n.get('n_inputs')} input(s), {n.get('n_outputs')} output(s)"]

@@ -114,9 +114,7 @@ def check_3_15(rng, mutant=False):
 
 
 def summarise_3_15(outcomes):
-    """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i), on every instance
-    drawn.
-    """
+    """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i) on every instance."""
     holds = sum(bool(o.numbers["corrected_holds"]) for o in outcomes)
     return {"diagnosis": ("A typo that starts in (3.11), not in (3.30): with u_k = L y_k = L C_i "
                           "x_k (3.7) the stage cost x_k^T Q_i x_k + u_k^T R_i u_k is x_k^T (Q_i + "
@@ -270,9 +268,7 @@ def check_3_19(rng, mutant=False):
 
 
 def decide_3_19(sys, max_iter=20000):
-    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (two
-    starts).
-    """
+    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (2 starts)."""
     L_best, rho_best = best_scalar_gain(sys)
     if not rho_best < 1:
         return outcome("not_applicable", sys, min_rho_over_L=rho_best, best_L=L_best)
