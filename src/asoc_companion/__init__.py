@@ -24,8 +24,7 @@ if missing_requirements():
         if name not in __all__:
             raise AttributeError(f"module 'asoc_companion' has no attribute {name!r}")
         raise ModuleNotFoundError(f"asoc_companion.{name} needs "
-                                  f"{', '.join(missing_requirements())}: "
-                                  f"{INSTALL_HINT}")
+                                  f"{', '.join(missing_requirements())}: {INSTALL_HINT}")
 else:
     from .captions import figure_caption
     from .figures import STYLE, apply_style, markdown_table

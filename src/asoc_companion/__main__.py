@@ -38,9 +38,7 @@ FIDELITY_HELP = ("full: the thesis's settings, updates figures/ and book/; "
                  "ci: small Monte Carlo sizes, writes to book/_build/ci/ only (default: full)")
 
 def _short(value) -> str:
-    """A recorded value in a few characters (Monte Carlo record -> its estimate, claim ->
-    verdict).
-    """
+    """A recorded value in a few characters (a Monte Carlo record's estimate, a claim's verdict)."""
     if isinstance(value, dict):
         if "holds" in value:
             return f"{'holds' if value['holds'] else 'fails'} ({_short(value.get('value'))})"
@@ -56,8 +54,7 @@ def _short(value) -> str:
 
 
 def compare_with_committed(name, output_dir, fidelity="ci") -> str:
-    """Table of ``name``'s values in ``output_dir`` next to the committed ones (key, committed, this
-    run).
+    """Table of ``name``'s values in ``output_dir`` beside the committed ones (key, committed, run).
 
     The committed values come from the full-fidelity run; the column headers say so, and
     give this run's ``fidelity``.
@@ -132,8 +129,8 @@ def _ledger(fidelity):
     project = paths.project()
     path, values = (project.book / "ledger.md", load_all_values()) if fidelity == "full" \
         else (project.ci_output / "ledger.md", load_all_values(project.ci_output))
-    _write_if_changed(path, ledger_markdown(values=values),
-                      "" if fidelity == "full" else " (ci fidelity: Monte Carlo cells use small samples)")
+    small = " (ci fidelity: Monte Carlo cells use small samples)"
+    _write_if_changed(path, ledger_markdown(values=values), "" if fidelity == "full" else small)
     intro = project.book / "intro.md"
     if fidelity == "full":
         from .mutants import write_ledger_mutants
@@ -189,6 +186,18 @@ def _parser():
 
 
 def main(argv=None) -> int:
+    """Run ``python -m asoc_companion`` with the arguments ``argv``; return the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        0 on success, 1 when the companion's requirements are missing.
+    """
     missing = missing_requirements()
     if missing:                      # installed without the companion extra
         print(f"asoc-companion needs {', '.join(missing)}: {INSTALL_HINT}", file=sys.stderr)
@@ -224,8 +233,8 @@ def _command(args) -> int:
         print(notebook_list(nbs.notebooks().values()))
         return 0
     if args.command in ("figure", "table", "run"):
-        info = nbs.by_name(args.name) if args.command == "run" else nbs.find(args.command,
-                                                                             args.number)
+        info = (nbs.by_name(args.name) if args.command == "run"
+                else nbs.find(args.command, args.number))
         overrides = nbs.parse_overrides(info, args.parameter)
         plan = make_plan(paths.project(), info, args.fidelity, overrides)
         if not overrides:

@@ -1,6 +1,4 @@
-"""Atomic file writing: a failed run leaves the previous file in place (the architecture page,
-book/architecture.md).
-"""
+"""Atomic file writing: a failed run leaves the previous file in place (book/architecture.md)."""
 
 import json
 import os

@@ -73,7 +73,8 @@ def reference_system(record: dict, case: dict) -> MJLS:
     """
     _require(record, ("seed", "cases_count"), "record")
     _require(case, ("n", "M", "radius", "spawn"), "case")
-    rng = np.random.default_rng(np.random.SeedSequence(record["seed"]).spawn(record["cases_count"])[case["spawn"]])
+    children = np.random.SeedSequence(record["seed"]).spawn(record["cases_count"])
+    rng = np.random.default_rng(children[case["spawn"]])
     s = scaling_system(rng, case["n"], case["M"], radius=case["radius"])
     return MJLS(s.A, s.B, s.C, s.H, s.Q, s.R, s.T)
 
@@ -102,7 +103,8 @@ def comparison_table(record: dict):
     ...         "gain_difference": {"auto": 1e-7, "step": 2e-7, "exact": 1e-7}}
     >>> header, rows = comparison_table({"cases": [case]})
     >>> rows[0]
-    ['Alg. 3.1, n = 4, M = 2, open-loop rho 0.5', '1.5 s', '0.010 s (5)', '0.020 s (9)', '0.030 s (3)', '2e-07', '150x']
+    ['Alg. 3.1, n = 4, M = 2, open-loop rho 0.5', '1.5 s', '0.010 s (5)', '0.020 s (9)',
+     '0.030 s (3)', '2e-07', '150x']
     """
     _require(record, ("cases",), "record")
     header = ["case", "author's code (Octave)", "this library: auto (iterations)", "step", "exact",
@@ -130,12 +132,15 @@ def machine_sentence(record: dict) -> str:
     Examples
     --------
     >>> print(machine_sentence({"machine": {"cpu": "AMD EPYC", "cores": 2, "octave": "7.3.0",
-    ...     "numpy": "2.1.0",
-    ...     "blas": "scipy-openblas 0.3.27", "python": "3.11.7", "date": "2026-11-25",
-    ...     "load_average_1min": [0.2, 1.1]},
-    ...     "author_code": {"commit": "94a92e9d"}, "cases": [{"repetitions": 3},
-    ...     {"repetitions": 1}]}))
-    Measured on 2026-11-25 on one AMD EPYC machine with 2 cores (1-minute load average 0.2 before, 1.1 after): the author's code (commit 94a92e9) under Octave 7.3.0; this library under Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27. Each time is the best of its case's runs: 3 for 1 case, 1 for 1 case.
+    ...                                     "numpy": "2.1.0", "blas": "scipy-openblas 0.3.27",
+    ...                                     "python": "3.11.7", "date": "2026-11-25",
+    ...                                     "load_average_1min": [0.2, 1.1]},
+    ...                         "author_code": {"commit": "94a92e9d"},
+    ...                         "cases": [{"repetitions": 3}, {"repetitions": 1}]}))
+    Measured on 2026-11-25 on one AMD EPYC machine with 2 cores (1-minute load average 0.2
+    before, 1.1 after): the author's code (commit 94a92e9) under Octave 7.3.0; this library under
+    Python 3.11.7, NumPy 2.1.0 with scipy-openblas 0.3.27. Each time is the best of its case's
+    runs: 3 for 1 case, 1 for 1 case.
     """
     m = _require(_require(record, ("machine", "author_code"), "record")["machine"],
                  ("date", "cpu", "cores", "octave", "python", "numpy", "blas"), "record['machine']")
@@ -145,7 +150,6 @@ def machine_sentence(record: dict) -> str:
     runs = ("" if not runs else " Each time is the best of its case's runs: " + ", ".join(
         f"{r} for {k} case{'s' * (k != 1)}" for r, k in sorted(runs.items(), reverse=True)) + ".")
     return (f"Measured on {m['date']} on one {m['cpu']} machine with {m['cores']} cores{load}: the "
-            "author's code "
-            f"(commit {record['author_code']['commit'][:7]}) under Octave {m['octave']}; this "
-            "library under "
-            f"Python {m['python']}, NumPy {m['numpy']} with {m['blas']}.{runs}")
+            f"author's code (commit {record['author_code']['commit'][:7]}) under Octave "
+            f"{m['octave']}; this library under Python {m['python']}, NumPy {m['numpy']} with "
+            f"{m['blas']}.{runs}")

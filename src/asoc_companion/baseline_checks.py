@@ -132,8 +132,8 @@ def check_52(rng, n_instances=4):
         raise RuntimeError(f"check_52: no two-mode draw with feasible LMIs in {MAX_DRAWS} tries")
     return {
         "against": "one mode: the DARE optimum (scipy solve_discrete_are); "
-        "two modes: the exact H2 cost "
-        "of the gain (coupled Lyapunov equations, Kronecker solve), which the LMI optimum bounds",
+        "two modes: the exact H2 cost of the gain (coupled Lyapunov equations, Kronecker solve), "
+        "which the LMI optimum bounds",
         "max_rel_diff": float(max(diffs)),
         "bound_holds": bool(min(slacks) >= -1e-6),
         "max_bound_slack": float(max(slacks)),
@@ -227,8 +227,7 @@ def check_time_variant(rng, state_feedback, n_instances=3, horizon=2):
         formula.append(abs(res.costs[-1] / J_var - 1))
     return {
         "against": "brute-force optimum over all gain sequences (grid and Nelder-Mead, "
-        f"horizon {horizon}) of "
-        "the cost by mode-path enumeration, on random two-mode systems",
+        f"horizon {horizon}) of the cost by mode-path enumeration, on random two-mode systems",
         "max_rel_diff": float(max(rel, key=abs)),
         "max_cost_formula_diff": float(max(formula)),
     }

@@ -117,8 +117,8 @@ def _prune_page_assets(app, pagename, templatename, context, doctree):
     if app.builder.format != "html" or "script_files" not in context:
         return
     seen, body = set(), context.get("body", "")
-    context["script_files"][:] = [s for s in context["script_files"] if not _unused_script(s, body,
-                                                                                           seen)]
+    context["script_files"][:] = [s for s in context["script_files"]
+                                  if not _unused_script(s, body, seen)]
     css_seen = set()
     context["css_files"][:] = [c for c in context["css_files"]
                                if not (c.filename in css_seen or css_seen.add(c.filename))]
@@ -185,8 +185,9 @@ def _configure(app, config):
     config.latex_use_xindy = False          # makeindex comes with TeX Live; xindy is a package more
     # Jupyter Book listed every .js under _static (a MathJax folder left there by an old
     # build would add 70 scripts): keep the book's own scripts only
+    script = lambda js: str(js[0] if isinstance(js, tuple) else js)
     config.html_js_files = [js for js in config.html_js_files
-                            if not str(js[0] if isinstance(js, tuple) else js).startswith("mathjax/")]
+                            if not script(js).startswith("mathjax/")]
 
 
 def _copy_mathjax(app, exception):
@@ -249,7 +250,8 @@ def public_names(module) -> list:
     Examples
     --------
     >>> import asoc.config
-    >>> "option_context" in public_names(asoc.config) and "Iterator" not in public_names(asoc.config)
+    >>> names = public_names(asoc.config)
+    >>> "option_context" in names and "Iterator" not in names
     True
     """
     if hasattr(module, "__all__"):
@@ -261,8 +263,8 @@ def public_names(module) -> list:
             return False
         if getattr(obj, "__module__", None) == module.__name__:
             return True
-        return not (inspect.isclass(obj) or callable(obj)) and re.search(rf"^{name}\b.*=", source,
-                                                                         re.M)
+        return (not (inspect.isclass(obj) or callable(obj))
+                and re.search(rf"^{name}\b.*=", source, re.M))
 
     return [name for name, obj in vars(module).items() if defined_here(name, obj)]
 
@@ -283,8 +285,8 @@ def _attribute_docs(module) -> dict:
 def documented(module, names) -> list:
     """``names`` without the module's data that has no documentation of its own."""
     docs = _attribute_docs(module)
-    return [n for n in names if inspect.isclass(getattr(module, n)) or callable(getattr(module,
-                                                                                        n)) or n in docs]
+    return [n for n in names
+            if inspect.isclass(getattr(module, n)) or callable(getattr(module, n)) or n in docs]
 
 
 def _directive(module, name) -> str:

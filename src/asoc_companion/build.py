@@ -103,8 +103,7 @@ def _pending(plans, force) -> list:
 
 
 def reproduce(fidelity, force=False, jobs=None) -> int:
-    """Run every notebook whose inputs changed (all with ``force``), ``jobs`` at a time; 0 if all
-    succeeded.
+    """Run each notebook whose inputs changed (all if ``force``), ``jobs`` at a time; 0 on success.
 
     A notebook starts when the notebooks it depends on (``metadata.asoc.depends``) have
     finished; a failed notebook's dependants are skipped, the others still run.

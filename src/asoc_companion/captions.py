@@ -40,7 +40,8 @@ def load_claims(path=None) -> dict:
     >>> import pathlib, tempfile
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = pathlib.Path(folder) / "figure_claims.yaml"
-    ...     _ = path.write_text("own.1: {where: p. 1, claim: The loop is stable., keys: [sec_demo.rho]}")
+    ...     _ = path.write_text("own.1: {where: p. 1, claim: The loop is stable., "
+    ...                         "keys: [sec_demo.rho]}")
     ...     print(load_claims(path))
     {'own.1': {'where': 'p. 1', 'claim': 'The loop is stable.', 'keys': ['sec_demo.rho']}}
     """
@@ -55,8 +56,7 @@ def load_claims(path=None) -> dict:
 
 def verdict(keys, reference, values) -> str:
     """``reproduced`` if every key is, ``deviates`` if any deviates, ``missing`` if any value is
-    absent,
-    else ``not-resolved`` if a statistical claim among them is not resolved.
+    absent, else ``not-resolved`` if a statistical claim among them is not resolved.
 
     Examples
     --------
@@ -86,7 +86,8 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
     :::{container} asoc-caption
     **Fig. own.1, the thesis** (p. 1): “The loop is stable.”
     <BLANKLINE>
-    **Ours:** {bdg-success}`shows it` checks reproduced: 1 of 1 (`rho`; {ref}`ledger <ledger-sec_demo>`).
+    **Ours:** {bdg-success}`shows it` checks reproduced: 1 of 1 (`rho`;
+    {ref}`ledger <ledger-sec_demo>`).
     :::
     """
     claims = claims if claims is not None else load_claims()
@@ -100,14 +101,16 @@ def caption_markdown(number: str, claims=None, reference=None, values=None) -> s
         raise ValueError(f"figure_claims: figure {number} names unknown reference keys {unknown}")
     head = f"**Fig. {number}, the thesis** ({spec['where']}): “{spec['claim']}”"
     if not spec["keys"]:
-        line = f"**Ours:** {badge('new', 'nothing to check')} the thesis makes no checkable claim about this figure."
+        line = (f"**Ours:** {badge('new', 'nothing to check')} the thesis makes no checkable "
+                "claim about this figure.")
     else:
         st = verdict(spec["keys"], reference, values or {})
-        n_ok = sum(status(reference[k],
-                          (values or {}).get(k)) == "reproduced" for k in spec["keys"])
+        n_ok = sum(status(reference[k], (values or {}).get(k)) == "reproduced"
+                   for k in spec["keys"])
         notebooks = dict.fromkeys(k.split(".", 1)[0] for k in spec["keys"])
         where = ", ".join(f"{{ref}}`ledger <{ledger_label(n)}>`" for n in notebooks)
-        words = "shows it" if st == "reproduced" else "shows it in part" if st == "deviates" and n_ok else STATUS_WORDS[st]
+        words = ("shows it" if st == "reproduced"
+                 else "shows it in part" if st == "deviates" and n_ok else STATUS_WORDS[st])
         line = (f"**Ours:** {badge(st, words)} checks reproduced: {n_ok} of {len(spec['keys'])} "
                 f"({', '.join('`' + k.split('.', 1)[1] + '`' for k in spec['keys'])}; {where}).")
     return f":::{{container}} asoc-caption\n{head}\n\n{line}\n:::\n"
@@ -132,7 +135,8 @@ def figure_caption(number: str):
     ...         "sec_demo.rho: {where: p. 1, kind: deterministic, thesis: 0.25, tol: 5.0e-5}")
     ...     _ = Recorder("sec_demo", "full", root / "figures").record("rho", 0.2502)
     ...     print(figure_caption("own.1").data.splitlines()[3])
-    **Ours:** {bdg-warning}`does not show it` checks reproduced: 0 of 1 (`rho`; {ref}`ledger <ledger-sec_demo>`).
+    **Ours:** {bdg-warning}`does not show it` checks reproduced: 0 of 1 (`rho`;
+    {ref}`ledger <ledger-sec_demo>`).
     """
     from IPython.display import Markdown
 
@@ -154,8 +158,8 @@ def _caption_cell(number, output, count):
 
 
 def _insert_caption_cells(path, with_output=False) -> list:
-    """Add a ``repro.figure_caption`` cell after each figure of the notebook at ``path`` that lacks
-    one.
+    """Add a ``repro.figure_caption`` cell after each figure of the notebook at
+    ``path`` that lacks one.
 
     The cell goes right after the cell that saves the figure (after its Markdown caption, if
     one follows). Other cells are left untouched; ``with_output`` stores the caption rendered
@@ -195,13 +199,13 @@ def _insert_caption_cells(path, with_output=False) -> list:
         if not saves:
             raise ValueError(f"path: {path} saves no figure {number}")
         at = saves[0] + 1
-        if at < len(nb.cells) and nb.cells[at].cell_type == "markdown" and nb.cells[at].source.startswith("**Figure"):
+        if (at < len(nb.cells) and nb.cells[at].cell_type == "markdown"
+                and nb.cells[at].source.startswith("**Figure")):
             at += 1
         count = max((c.get("execution_count") or 0 for c in nb.cells[:at] if c.cell_type == "code"),
                     default=0)
-        nb.cells.insert(at, _caption_cell(number, caption_markdown(number,
-                                                                   values=values) if with_output else None,
-                                          count))
+        caption = caption_markdown(number, values=values) if with_output else None
+        nb.cells.insert(at, _caption_cell(number, caption, count))
         added.append(number)
     if added:
         nbformat.write(nb, path)

@@ -104,8 +104,7 @@ def not_quadratic(X, U, costs, quadrature_error):
 
 
 def not_convex(J, X, U):
-    """Whether J(x, u) is not convex on the grid: the smallest Hessian eigenvalue (central
-    differences) is negative.
+    """Whether J(x, u) is not convex on the grid: a Hessian eigenvalue (central differences) is < 0.
 
     Examples
     --------

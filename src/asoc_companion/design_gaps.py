@@ -33,8 +33,7 @@ def _draw(rng):
 
 def _infinite_horizon_gap(rng):
     """Relative gap of Alg. 3.2's controller to the exact-cost design started from it (None if Alg.
-    3.2
-    does not converge to a stabilising controller).
+    3.2 does not converge to a stabilising controller).
 
     Examples
     --------
@@ -54,8 +53,7 @@ def _infinite_horizon_gap(rng):
 
 
 def _finite_horizon_gap(rng, horizon=20):
-    """Relative gap of Alg. 3.3's controller (random Gaussian-mixture x_0) to the exact-cost design
-    started from it.
+    """Relative gap of Alg. 3.3's controller (random mixture x_0) to the exact-cost design from it.
 
     Examples
     --------
@@ -74,8 +72,7 @@ def _finite_horizon_gap(rng, horizon=20):
 
 
 def design_gaps(seed_sequence, n_systems, horizon=20, progress=False):
-    """Relative gaps of Alg. 3.2 and Alg. 3.3 over ``n_systems`` seeded systems each (one child per
-    system).
+    """Relative gaps of Alg. 3.2 and Alg. 3.3 on ``n_systems`` seeded systems (one child each).
 
     Returns ``{"alg_3_2": [...], "alg_3_3": [...], "alg_3_2_not_applicable": int}``.
 

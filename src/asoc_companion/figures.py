@@ -131,8 +131,7 @@ NUMBER = re.compile(r"(\d+)\.(\d+)|own\.(\d+)")
 
 
 def file_stem(kind: str, number: str) -> str:
-    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError for other
-    numbers.
+    """``fig3_4`` for ("fig", "3.4"), ``fig_own_1`` for ("fig", "own.1"); ValueError otherwise.
 
     Examples
     --------
@@ -141,13 +140,13 @@ def file_stem(kind: str, number: str) -> str:
     >>> file_stem("fig", "A.1")
     Traceback (most recent call last):
     ...
-    ValueError: number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis), found 'A.1'
+    ValueError: number must look like '3.4' (thesis numbering) or 'own.1' (not in the thesis),
+    found 'A.1'
     """
     match = NUMBER.fullmatch(str(number))
     if match is None:
         raise ValueError("number must look like '3.4' (thesis numbering) or 'own.1' (not in the "
-                         "thesis), "
-                         f"found {number!r}")
+                         f"thesis), found {number!r}")
     return f"{kind}{match[1]}_{match[2]}" if match[3] is None else f"{kind}_own_{match[3]}"
 
 

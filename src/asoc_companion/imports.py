@@ -56,7 +56,8 @@ def imported_names(code: str, package: str | None = None) -> set:
                 if package is None:
                     continue
                 parts = package.split(".")
-                base = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+                named = [node.module] if node.module else []
+                base = ".".join(parts[:len(parts) - node.level + 1] + named)
             else:
                 base = node.module
             names.add(base)
@@ -130,8 +131,7 @@ def closure(names, src, exclude=()) -> dict:
 
 
 def notebook_modules(path, src, exclude=()) -> dict:
-    """``{module name: file}`` of the project modules the notebook at ``path`` imports,
-    transitively.
+    """``{module name: file}`` of project modules the notebook at ``path`` imports, transitively.
 
     A cell that does not parse makes the whole of ``src`` count (a conservative answer).
 

@@ -61,10 +61,9 @@ def source_hash(path) -> str:
     (True, False, 64)
     """
     nb = json.loads(Path(path).read_text())
-    cells = [[c["cell_type"], "".join(c["source"]) if isinstance(c["source"],
-                                                                 list) else c["source"]]
-             for c in nb["cells"] if "injected-parameters" not in c.get("metadata", {}).get("tags",
-                                                                                            [])]
+    source = lambda c: "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+    cells = [[c["cell_type"], source(c)] for c in nb["cells"]
+             if "injected-parameters" not in c.get("metadata", {}).get("tags", [])]
     return _sha256(json.dumps([cells, nb["metadata"].get("asoc")], sort_keys=True).encode())
 
 
@@ -137,8 +136,7 @@ def dependencies(path) -> list:
     depends = json.loads(Path(path).read_text())["metadata"].get("asoc", {}).get("depends", [])
     if isinstance(depends, str) or not all(isinstance(d, str) for d in depends):
         raise ValueError(f"{Path(path).name}: metadata.asoc.depends must be a list of notebook "
-                         "names, "
-                         f"found {depends!r}")
+                         f"names, found {depends!r}")
     return list(depends)
 
 
@@ -287,8 +285,7 @@ def last_seconds(output_dir) -> dict:
 
 
 def changed_inputs(plan) -> list:
-    """What changed since the run ``plan`` was last made, or what its outputs lack (empty: up to
-    date).
+    """What changed since the run ``plan`` was made, or what its outputs lack (empty: up to date).
 
     Examples
     --------
@@ -327,7 +324,8 @@ def changed_inputs(plan) -> list:
     changed = []
     for key in new:
         if key == "modules" and isinstance(old.get(key), dict):
-            edited = sorted(p for p in set(new[key]) | set(old[key]) if new[key].get(p) != old[key].get(p))
+            edited = sorted(p for p in set(new[key]) | set(old[key])
+                            if new[key].get(p) != old[key].get(p))
             if edited:
                 changed.append("modules "
                                f"({', '.join(edited[:3])}{', ...' if len(edited) > 3 else ''})")
@@ -337,8 +335,7 @@ def changed_inputs(plan) -> list:
 
 
 def update_manifest(plan, seconds=None) -> dict:
-    """Record the input hashes of the finished run ``plan`` in ``plan.manifest`` (atomically);
-    return the entry.
+    """Record the finished run ``plan``'s input hashes in ``plan.manifest`` atomically; return it.
 
     ``seconds``, the run's wall time, is kept beside the hashes (not compared by
     :func:`changed_inputs`): the parallel build starts the longest notebooks first.

@@ -176,8 +176,8 @@ def _variants():
         "sec3_6.time_variant_better_than_time_invariant": reversed_order,
         "sec3_6.optimal_38_best": reversed_order,
         "sec3_5.proposed_almost_equal_163": (
-            "the printed transient ratio reversed: the proposed controller "
-            "better than [163] by 5 %",
+            "the printed transient ratio reversed: the proposed controller better than [163] by 5 "
+            "%",
             _swapped_163,
         ),
     }
@@ -221,7 +221,8 @@ def ledger_mutants(reference=None, values=None) -> dict:
     >>> decided = Entry("demo.smaller", where="an example", kind="claim", thesis="smaller")
     >>> record = decide_claim(-1.0 - np.arange(9.0), below=0.0)
     >>> ledger_mutants({decided.key: decided}, {decided.key: record})["demo.smaller"]
-    {'description': 'the recorded n = 9 samples shifted so that each one violates the claimed median < 0, decided again', 'caught': True}
+    {'description': 'the recorded n = 9 samples shifted so that each one violates the claimed
+    median < 0, decided again', 'caught': True}
     """
     reference = reference if reference is not None else load_reference()
     values = load_all_values() if values is None else values

@@ -11,13 +11,12 @@ file) and its results in ``figures/``; ``ci`` fidelity writes to ``book/_build/c
 with parameter overrides writes to ``book/_build/runs/<notebook>-<hash>/``. Only the first
 changes tracked files.
 
-Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes
-into a fresh staging folder ``<plan.staging>/<notebook>-<random>/``; only when
-papermill finishes without error are its figures, tables, values and executed notebook
-moved into place (:mod:`asoc_companion.staging`: ``os.replace``, signals held off); the caller
-writes the
-manifest entry last. An interrupted or failed run leaves every tracked file as it was, and
-its staging folder is removed.
+Crash safety (book/architecture.md, "The manifest and crash safety"): every run executes into a
+fresh staging folder ``<plan.staging>/<notebook>-<random>/``; only when papermill finishes without
+error are its figures, tables, values and executed notebook moved into place
+(:mod:`asoc_companion.staging`: ``os.replace``, signals held off); the caller writes the manifest
+entry last. An interrupted or failed run leaves every tracked file as it was, and its staging folder
+is removed.
 
 Executed notebooks are normalised (no timestamps, durations or machine paths; the
 injected parameters name the final folder, not the staging one), so an unchanged
@@ -52,8 +51,7 @@ outputs, not this log)."""
 
 @dataclass(frozen=True)
 class NotebookInfo:
-    """A notebook of the book: its name, file, title and the thesis figures and tables it
-    regenerates.
+    """A notebook of the book: name, file, title and the thesis figures and tables it regenerates.
 
     Examples
     --------
@@ -85,8 +83,8 @@ def notebooks(book=None) -> dict:
         if meta is None:
             continue
         found[path.stem] = NotebookInfo(path.stem, path, meta.get("title", path.stem),
-                                        tuple(meta.get("figures", ())), tuple(meta.get("tables",
-                                                                                       ())))
+                                        tuple(meta.get("figures", ())),
+                                        tuple(meta.get("tables", ())))
     return dict(sorted(found.items(), key=lambda item: (not item[0].startswith("sec"), item[0])))
 
 
@@ -140,8 +138,7 @@ def build_order(infos) -> list:
         for dep in dependencies(infos[name].path):
             if dep not in infos:
                 raise ValueError(f"{name}: metadata.asoc.depends names {dep!r}, which is not a "
-                                 "notebook "
-                                 f"of the book; known: {', '.join(sorted(infos))}")
+                                 f"notebook of the book; known: {', '.join(sorted(infos))}")
             visit(dep, chain + [name])
         done.add(name)
         ordered.append(infos[name])
@@ -167,8 +164,7 @@ def by_name(name: str, book=None) -> NotebookInfo:
 
 
 def _parameter_specs(info: NotebookInfo) -> dict:
-    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (``default`` is
-    source text).
+    """``{name: papermill's inspection}`` of the notebook's ``parameters`` cell (defaults as text).
 
     Examples
     --------
@@ -181,8 +177,7 @@ def _parameter_specs(info: NotebookInfo) -> dict:
 
 
 def default_parameters(info: NotebookInfo) -> dict:
-    """``{name: default source text}`` of the notebook's ``parameters`` cell (papermill's
-    inspection).
+    """``{name: default source text}`` of the ``parameters`` cell (papermill's inspection).
 
     Examples
     --------
@@ -193,8 +188,7 @@ def default_parameters(info: NotebookInfo) -> dict:
 
 
 def parse_value(text: str):
-    """A ``-p name value`` value, typed as papermill's command line does: bool, None, int, float or
-    str.
+    """A ``-p name value`` value, typed like papermill's command line (bool, None, int, float, str).
 
     Examples
     --------
@@ -221,8 +215,7 @@ def _default_value(source: str):
 
 
 def _check_value(name: str, value, default_source: str, notebook: str):
-    """``value`` for parameter ``name`` if it has the type (and range) of the default; ValueError
-    otherwise.
+    """``value`` for parameter ``name`` if it has the default's type (and range); else ValueError.
 
     The type is the default's: an int parameter takes an int (not a bool, float or text), a
     float parameter a finite int or float, a bool ``True``/``False``, a string anything. The
@@ -237,7 +230,8 @@ def _check_value(name: str, value, default_source: str, notebook: str):
     >>> _check_value("runs", 0, "100", "demo.ipynb")
     Traceback (most recent call last):
     ...
-    ValueError: parameter runs of demo.ipynb (default 100) is a count: it takes an integer >= 1, found 0
+    ValueError: parameter runs of demo.ipynb (default 100) is a count: it takes an integer >= 1,
+    found 0
     """
     default = _default_value(default_source)
     where = f"parameter {name} of {notebook} (default {default_source})"
@@ -283,8 +277,7 @@ def parse_overrides(info: NotebookInfo, pairs) -> dict:
 
 
 def _check_overrides(info: NotebookInfo, overrides: dict) -> dict:
-    """``overrides`` if every name is a parameter of the notebook with a value of its type and
-    range.
+    """``overrides`` if each names a parameter of the notebook and has its type and range.
 
     Examples
     --------
@@ -324,10 +317,11 @@ def run(plan, log_output=False, progress_bar=None) -> Path:
     try:
         staged, staged_parameters = plan.staged(stage)
         staged.parent.mkdir(parents=True)
+        if progress_bar is None:
+            progress_bar = sys.stderr.isatty()
         with one_blas_thread():
             papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
-                                       parameters=staged_parameters,
-                                       progress_bar=sys.stderr.isatty() if progress_bar is None else progress_bar,
+                                       parameters=staged_parameters, progress_bar=progress_bar,
                                        log_output=log_output, kernel_name="python3",
                                        extra_arguments=KERNEL_ARGUMENTS)
         normalise(staged, shown_parameters=shown, output_path=target,
@@ -439,8 +433,8 @@ def _names(tree) -> tuple:
 
 def _saves(tree, kind: str, number: str) -> bool:
     call = "save_figure" if kind == "figure" else "save_table"
-    return any(isinstance(n, ast.Call) and getattr(n.func, "attr", getattr(n.func, "id",
-                                                                           None)) == call
+    called = lambda n: getattr(n.func, "attr", getattr(n.func, "id", None))
+    return any(isinstance(n, ast.Call) and called(n) == call
                and any(isinstance(a, ast.Constant) and a.value == number for a in n.args)
                for n in ast.walk(tree))
 

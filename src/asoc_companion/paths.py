@@ -44,10 +44,12 @@ class Project:
 
     @property
     def book(self) -> Path:
+        """``book``: the notebooks and pages of the Jupyter Book."""
         return self.root / "book"
 
     @property
     def figures(self) -> Path:
+        """``figures``: the committed figures and ``values/*.json``."""
         return self.root / "figures"
 
     @property
@@ -57,18 +59,22 @@ class Project:
 
     @property
     def src(self) -> Path:
+        """``src``: the library and the companion's tooling."""
         return self.root / "src"
 
     @property
     def environment(self) -> Path:
+        """``environment.txt``: the pinned environment of the runs."""
         return self.root / "environment.txt"
 
     @property
     def ci_output(self) -> Path:
+        """``book/_build/ci``: where ``--fidelity ci`` runs write."""
         return self.book / "_build" / "ci"
 
     @property
     def runs(self) -> Path:
+        """``book/_build/runs``: runs with overridden parameters."""
         return self.book / "_build" / "runs"
 
     @property
@@ -85,7 +91,8 @@ def _is_project(folder) -> bool:
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     before = _is_project(folder)
-    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch(); (Path(folder) / "figures").mkdir()
+    ...     (Path(folder) / "book").mkdir(); (Path(folder) / "book" / "_toc.yml").touch()
+    ...     (Path(folder) / "figures").mkdir()
     ...     print(before, _is_project(folder))
     False True
     """
@@ -117,14 +124,16 @@ def _find_root(start=None) -> Path:
     >>> from unittest import mock
     >>> with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ, {ENV_VAR: ""}):
     ...     root = Path(folder).resolve()
-    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch(); (root / "figures").mkdir()
+    ...     (root / "book").mkdir(); (root / "book" / "_toc.yml").touch()
+    ...     (root / "figures").mkdir()
     ...     print(_find_root(root / "book") == root)
     True
     >>> with mock.patch.dict(os.environ, {ENV_VAR: "/"}):
     ...     _find_root()
     Traceback (most recent call last):
     ...
-    RuntimeError: ASOC_COMPANION_ROOT='/' is not a checkout of the companion (expected book/_toc.yml and figures/ in it)
+    RuntimeError: ASOC_COMPANION_ROOT='/' is not a checkout of the companion (expected
+    book/_toc.yml and figures/ in it)
     """
     configured = os.environ.get(ENV_VAR)
     if configured:
@@ -138,8 +147,8 @@ def _find_root(start=None) -> Path:
         if _is_project(folder):
             return folder
     raise RuntimeError(f"no checkout of the companion found above {here} (a folder with "
-                       "book/_toc.yml and "
-                       f"figures/): run from inside one, pass --root, or set {ENV_VAR}")
+                       "book/_toc.yml and figures/): run from inside one, pass --root, or set "
+                       f"{ENV_VAR}")
 
 
 def project(root=None) -> Project:
@@ -156,9 +165,8 @@ def project(root=None) -> Project:
 @contextmanager
 def scratch_project():
     """An empty project in a temporary folder (``book/_toc.yml``, ``figures/``, the reference
-    folder),
-    made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root, removes it
-    after.
+    folder), made the project for the block through ``ASOC_COMPANION_ROOT``; yields its root,
+    removes it after.
 
     For Examples and experiments that write into a project without touching the checkout.
 

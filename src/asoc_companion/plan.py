@@ -134,6 +134,7 @@ class RunPlan:
 
     @property
     def name(self) -> str:
+        """The notebook's name (its file name without ``.ipynb``)."""
         return self.notebook.name
 
     def values_of(self, notebook: str) -> Path:

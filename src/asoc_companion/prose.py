@@ -1,5 +1,4 @@
-"""Numbers in prose come from recorded values (the architecture page, book/architecture.md,
-"Portability").
+"""Numbers in prose come from recorded values (book/architecture.md, "Portability").
 
 Text (a ledger note, a notebook paragraph, the findings page) names a recorded value by a
 placeholder ``{{path:spec}}`` and :func:`fill` replaces it by the value formatted with the
@@ -70,7 +69,8 @@ def _format_value(value, spec: str = "") -> str:
     if isinstance(value, dict):
         if "ci" in value and ("median" in value or "value" in value):
             lo, hi = value["ci"]
-            return f"{_format_value(value.get('median', value.get('value')), spec)} [{_format_value(lo, spec)}, {_format_value(hi, spec)}]"
+            centre = _format_value(value.get("median", value.get("value")), spec)
+            return f"{centre} [{_format_value(lo, spec)}, {_format_value(hi, spec)}]"
         if "value" in value:
             return _format_value(value["value"], spec)
     if isinstance(value, bool):
@@ -107,8 +107,8 @@ def fill(text: str, values: dict, notebook: str | None = None) -> str:
     ...     "sec3_5.stable": True}, "sec3_5")
     'rho = 0.250, stable: yes'
     """
-    return PLACEHOLDER.sub(lambda m: _format_value(_lookup(m.group(1), values, notebook),
-                                                   m.group(2) or ""), text)
+    formatted = lambda m: _format_value(_lookup(m.group(1), values, notebook), m.group(2) or "")
+    return PLACEHOLDER.sub(formatted, text)
 
 
 def thesis_values(reference=None) -> dict:
@@ -124,7 +124,8 @@ def thesis_values(reference=None) -> dict:
     from .reference import load_reference
 
     reference = reference if reference is not None else load_reference()
-    return {f"thesis_{e.notebook}.{e.name}": e.thesis for e in reference.values() if e.thesis is not None}
+    return {f"thesis_{e.notebook}.{e.name}": e.thesis for e in reference.values()
+            if e.thesis is not None}
 
 
 def prose(text: str):

@@ -2,10 +2,10 @@
 
 A notebook calls :func:`setup` once, right after its ``parameters`` cell; it creates a
 :class:`Recorder` and makes it the *active* one (:func:`active`), which :func:`record`,
-:func:`save_figure`,
-:func:`save_table`, :func:`asoc_companion.prose` and :func:`asoc_companion.figure_caption`
-use (the notebook-facing calls stay one-liners, as ``matplotlib.pyplot`` keeps a current
-figure). Code outside a notebook creates a :class:`Recorder` and calls its methods.
+:func:`save_figure`, :func:`save_table`, :func:`asoc_companion.prose` and
+:func:`asoc_companion.figure_caption` use (the notebook-facing calls stay one-liners, as
+``matplotlib.pyplot`` keeps a current figure). Code outside a notebook creates a :class:`Recorder`
+and calls its methods.
 
 Values are written at once to ``<output_dir>/values/<notebook>.json`` (atomically). The
 harness gives every run a staging folder as ``output_dir`` and moves the results into
@@ -175,8 +175,7 @@ def scratch_run(notebook: str = "demo", output_dir=None):
 
 
 def active(required: bool = True) -> Recorder | None:
-    """The recorder of the running notebook (:func:`setup`); None if there is none and not
-    ``required``.
+    """The running notebook's recorder (:func:`setup`); None if there is none and not ``required``.
 
     Raises
     ------
@@ -202,8 +201,7 @@ def active(required: bool = True) -> Recorder | None:
 
 
 def record(key: str, value):
-    """Record ``value`` under ``key`` with the active recorder; return ``value`` (see
-    :meth:`Recorder.record`).
+    """Record ``value`` under ``key`` with the active recorder (:meth:`Recorder.record`); return it.
 
     Examples
     --------
@@ -216,8 +214,7 @@ def record(key: str, value):
 
 
 def save_figure(fig, number: str, output_dir=None) -> Path:
-    """Save ``fig`` as ``fig<number>.png`` and ``.pdf`` into ``output_dir`` (default: the active
-    run's folder).
+    """Save ``fig`` as ``fig<number>.png`` and ``.pdf`` in ``output_dir`` (default: the run's).
 
     Examples
     --------
@@ -230,8 +227,8 @@ def save_figure(fig, number: str, output_dir=None) -> Path:
 
 
 def save_table(number: str, header, rows, output_dir=None) -> str:
-    """Save a table as ``table<number>.csv`` and ``.md`` (default folder: the active run's); return
-    the Markdown.
+    """Save a table as ``table<number>.csv`` and ``.md`` (default folder: the active run's);
+    return the Markdown.
 
     Examples
     --------

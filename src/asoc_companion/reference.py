@@ -1,9 +1,7 @@
-"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and the status of each
-value.
+"""The reference files ``tests/reference/thesis_values/<notebook>.yaml`` and each value's status.
 
 Each notebook has its own file (so work on one section does not touch another's). Each entry is
-keyed
-``<notebook>.<key>`` and holds
+keyed ``<notebook>.<key>`` and holds
 
 ``where``    where the thesis prints it (section, figure, table, page);
 ``kind``     ``deterministic`` (a number to its printed decimals), ``monte_carlo`` (a
@@ -85,16 +83,17 @@ class Entry:
 
     @property
     def notebook(self) -> str:
+        """The notebook that records the value: the key's part before the first dot."""
         return self.key.split(".", 1)[0]
 
     @property
     def name(self) -> str:
+        """The value's name in its notebook: the key's part after the first dot."""
         return self.key.split(".", 1)[1]
 
 
 def load_reference(path=None) -> dict:
-    """Load and validate the reference files (a folder of YAML files, or one file); return
-    ``{key: Entry}``.
+    """Load and check the reference files (a folder of YAML files, or one file) as ``{key: Entry}``.
 
     Parameters
     ----------
@@ -122,7 +121,8 @@ def load_reference(path=None) -> dict:
     >>> reference["demo.rho"].thesis, reference["demo.rho"].tol
     (0.25, 5e-05)
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     _ = (Path(folder) / "demo.yaml").write_text("demo.rho: {where: an example, kind: deterministic}")
+    ...     _ = (Path(folder) / "demo.yaml").write_text(
+    ...         "demo.rho: {where: an example, kind: deterministic}")
     ...     load_reference(folder)
     Traceback (most recent call last):
     ...

@@ -1,8 +1,7 @@
 """Crash-safe execution of a notebook run (book/architecture.md, "The manifest and crash safety"): a
-run executes
-into a staging folder; :func:`commit` moves its files into place with SIGINT and SIGTERM held off,
-and :func:`remove_stage` removes the folder whatever happened; :func:`one_blas_thread` gives every
-kernel one BLAS thread, so one machine gives one set of numbers.
+run executes into a staging folder; :func:`commit` moves its files into place with SIGINT and
+SIGTERM held off, and :func:`remove_stage` removes the folder whatever happened;
+:func:`one_blas_thread` gives every kernel one BLAS thread, so one machine gives one set of numbers.
 """
 
 import errno

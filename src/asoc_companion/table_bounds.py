@@ -1,5 +1,4 @@
-"""Certified evidence that Tables 3.2 and 3.3 cannot come from their printed settings (the findings
-page).
+"""Certified evidence that Tables 3.2 and 3.3 cannot come from their printed settings (findings).
 
 Table 3.3 prints *medians* of J/K, so an expected-cost bound says nothing about them by itself.
 The argument here is per sample: for one realisation of (x_0, theta_0..K-1, w_0..K-1), every
@@ -39,11 +38,9 @@ def _modes(rng, mu0, T, runs, horizon):
 
 def clairvoyant_costs(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scale=1.0):
     """Per run: the minimum over all input sequences of sum_k (x^T Q x + u^T R u) + x_K^T Q x_K for
-    the
-    run's own modes, x_0 and disturbances d_k = noise_scale H_{theta_k} w_k (a lower bound on the
-    cost of
-    every controller in that run). Backward recursion V_k(x) = x^T P_k x + 2 p_k^T x + c_k, batched
-    over runs.
+    the run's own modes, x_0 and disturbances d_k = noise_scale H_{theta_k} w_k (a lower bound on
+    the cost of every controller in that run). Backward recursion V_k(x) = x^T P_k x + 2 p_k^T x +
+    c_k, batched over runs.
 
     Examples
     --------
@@ -59,8 +56,8 @@ def clairvoyant_costs(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scale=1.0
     x0 = mean0[start] + np.einsum("rab,rb->ra",
                                   np.linalg.cholesky(cov0 + 1e-300 * np.eye(n))[start],
                                   rng.standard_normal((runs, n)))
-    d = noise_scale * np.einsum("krab,krb->kra", sys.H[theta], rng.standard_normal((horizon, runs,
-                                                                                    sys.nw)))
+    draws = rng.standard_normal((horizon, runs, sys.nw))
+    d = noise_scale * np.einsum("krab,krb->kra", sys.H[theta], draws)
     return clairvoyant_minimum(sys, theta, _final_modes(rng, theta[-1], sys.T), x0, d)
 
 
@@ -103,8 +100,7 @@ def _final_modes(rng, last, T):
 
 def median_lower_bound(samples, tail=CONFIDENCE_TAIL):
     """A lower confidence bound of the median: the order statistic X_(l) with P(Bin(n, 1/2) <= l -
-    1) <= tail,
-    so P(X_(l) > median) <= tail for any continuous distribution.
+    1) <= tail, so P(X_(l) > median) <= tail for any continuous distribution.
 
     Examples
     --------
@@ -121,8 +117,7 @@ def median_lower_bound(samples, tail=CONFIDENCE_TAIL):
 
 
 def table_3_3_bounds(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scales):
-    """For each noise scale: (Monte Carlo median of the clairvoyant J/K, its lower confidence
-    bound).
+    """Per noise scale: Monte Carlo median of the clairvoyant J/K and its lower confidence bound.
 
     Examples
     --------
@@ -147,8 +142,7 @@ def table_3_3_bounds(sys, mean0, cov0, mu0, horizon, runs, rng, noise_scales):
 
 def _closed_loop_cost_to_go(sys, L, horizon):
     """Pi(0), ..., Pi(K) of a mode-dependent state feedback u = L_theta x over K steps (final cost
-    Q):
-    Pi_i(k) = Q_i + L_i^T R_i L_i + Acl_i^T E_i(Pi(k+1)) Acl_i, Pi(K) = Q.
+    Q): Pi_i(k) = Q_i + L_i^T R_i L_i + Acl_i^T E_i(Pi(k+1)) Acl_i, Pi(K) = Q.
 
     Examples
     --------
@@ -170,8 +164,7 @@ def _closed_loop_cost_to_go(sys, L, horizon):
 
 
 def transient_gap(sys, L, x0, mu0, horizon):
-    """E{J | x_0} - E{J | x_0 = 0} = sum_i mu0_i x_0^T Pi_i(0) x_0 for u = L_theta x, whatever the
-    noise.
+    """E{J | x_0} - E{J | x_0 = 0} = sum_i mu0_i x_0^T Pi_i(0) x_0 for u = L_theta x, for any noise.
 
     Examples
     --------
@@ -189,8 +182,7 @@ def transient_gap(sys, L, x0, mu0, horizon):
 
 def noise_weight(sys, L, mu0, horizon):
     """Gamma with E{J | x_0 = 0} / K = tr[Gamma W] for the noise covariance W = H H^T (the same in
-    every
-    mode): Gamma = (1 / K) sum_k sum_i mu_k^i E_i(Pi(k + 1)).
+    every mode): Gamma = (1 / K) sum_k sum_i mu_k^i E_i(Pi(k + 1)).
 
     Examples
     --------
@@ -225,16 +217,16 @@ def monte_carlo_gap(sys, L, x0, mu0, horizon, runs, rng, noise_scale):
     5.25
     """
     theta = _modes(rng, mu0, sys.T, runs, horizon + 1)
-    w = noise_scale * np.einsum("krab,krb->kra", sys.H[theta[:-1]], rng.standard_normal((horizon,
-                                                                                         runs, sys.nw)))
+    draws = rng.standard_normal((horizon, runs, sys.nw))
+    w = noise_scale * np.einsum("krab,krb->kra", sys.H[theta[:-1]], draws)
     totals = []
     for start in (np.broadcast_to(x0, (runs, sys.nx)), np.zeros((runs, sys.nx))):
         x, J = np.array(start, dtype=float), np.zeros(runs)
         for k in range(horizon):
             u = np.einsum("rab,rb->ra", L[theta[k]], x)
-            J += np.einsum("ra,rab,rb->r", x, sys.Q[theta[k]], x) + np.einsum("ra,rab,rb->r", u,
-                                                                              sys.R[theta[k]], u)
-            x = np.einsum("rab,rb->ra", sys.A[theta[k]], x) + np.einsum("rab,rb->ra",
-                                                                        sys.B[theta[k]], u) + w[k]
+            J += (np.einsum("ra,rab,rb->r", x, sys.Q[theta[k]], x)
+                  + np.einsum("ra,rab,rb->r", u, sys.R[theta[k]], u))
+            x = (np.einsum("rab,rb->ra", sys.A[theta[k]], x)
+                 + np.einsum("rab,rb->ra", sys.B[theta[k]], u) + w[k])
         totals.append(J + np.einsum("ra,rab,rb->r", x, sys.Q[theta[-1]], x))
     return float(np.median(totals[0]) - np.median(totals[1]))

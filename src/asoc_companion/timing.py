@@ -67,7 +67,8 @@ def alternating_medians(reference, candidate, repeat: int = 15) -> tuple[float, 
     True
     """
     pairs = [(median_seconds(reference, 1), median_seconds(candidate, 1)) for _ in range(repeat)]
-    return float(statistics.median(p[0] for p in pairs)), float(statistics.median(p[1] for p in pairs))
+    return (float(statistics.median(p[0] for p in pairs)),
+            float(statistics.median(p[1] for p in pairs)))
 
 
 def time_call(fn, repeat=1, clock=time.perf_counter):

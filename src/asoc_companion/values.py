@@ -90,7 +90,8 @@ def _repair_hint(path) -> str:
         committed = path.resolve().parent == values_folder(_committed()).resolve()
     except RuntimeError:
         committed = False
-    return hint + (f" or restore the committed one with `git checkout -- {_shown(path)}`" if committed else "")
+    restore = f" or restore the committed one with `git checkout -- {_shown(path)}`"
+    return hint + (restore if committed else "")
 
 
 def read_values_file(path) -> dict:

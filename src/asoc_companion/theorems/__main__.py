@@ -17,6 +17,17 @@ from .report import mutant_text
 
 
 def main(argv=None) -> int:
+    """Run the theorems study with the arguments ``argv``; return the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+    """
     parser = argparse.ArgumentParser(prog="python -m asoc_companion.theorems",
                                      description="Check the thesis's numbered statements on random "
                                                  "instances.")
@@ -44,8 +55,7 @@ def main(argv=None) -> int:
     if args.mutants < 0:
         parser.error(f"--mutants: expected an integer >= 0, found {args.mutants}")
     results = run_study(count, seed=args.seed, only=args.only, n_jobs=args.jobs,
-                        scheduler=args.scheduler,
-                        mutants=args.mutants or None)
+                        scheduler=args.scheduler, mutants=args.mutants or None)
     recorded = {key: res.recorded_value() for key, res in results.items()}
     for key, value in recorded.items():
         print(f"{key:24s} {verdict_text(value):42s} mutant: {mutant_text(value):22s} failing: "

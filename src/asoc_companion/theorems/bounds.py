@@ -1,5 +1,4 @@
-"""Corrected bounds for Prop. 3.26, Thm. 3.31 and Thm. 3.32: what holds instead, computed
-independently.
+"""Corrected bounds of Prop. 3.26 and Thms. 3.31, 3.32: what holds instead, computed independently.
 
 Everything here is written from the printed equations, not from ``asoc.mjls.dynamic``: the
 checks of :mod:`asoc_companion.theorems.corrections` compare these computations with the
@@ -84,16 +83,16 @@ def _error_blocks_step(sys, F, K, L, Xbar, Xunder, mu, factor=1.0):
     KC = K @ sys.C
     AKC, G, FKC = sys.A - KC, sys.A - F + sys.B @ L - KC, F + KC
     m = mu[:, None, None]
-    Xbar_next = predecessor_sum(sys.T,
-                                m * (HHt + KJJK) + factor * (AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)))
+    Xbar_next = predecessor_sum(sys.T, m * (HHt + KJJK)
+                                + factor * (AKC @ Xbar @ _T(AKC) + G @ Xunder @ _T(G)))
     Xunder_next = predecessor_sum(sys.T,
                                   m * KJJK + factor * (KC @ Xbar @ _T(KC) + FKC @ Xunder @ _T(FKC)))
     return Xbar_next, Xunder_next
 
 
 def _initial_error_blocks(mean0, cov0, mu0, xhat0):
-    """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a constant
-    x^_0.
+    """Xbar_0 = E{e_0 e_0^T 1(theta_0 = i)}, Xunder_0 = E{x^_0 x^_0^T 1(theta_0 = i)} for a
+    constant x^_0.
     """
     dev = mean0 - xhat0
     m = mu0[:, None, None]
@@ -102,9 +101,8 @@ def _initial_error_blocks(mean0, cov0, mu0, xhat0):
 
 def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
     """Sum over k of sum_i tr[Q~_i factor [[Xbar + Xu, Xu], [Xu, Xu]]] with (3.66)-(3.67)
-    (transported
-    terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56) (Thm. 3.31
-    corrected); with factor 1 the cost of the printed recursions (no bound).
+    (transported terms times ``factor``): with factor 2 an upper bound of the exact cost J_0 (3.56)
+    (Thm. 3.31 corrected); with factor 1 the cost of the printed recursions (no bound).
     """
     Xbar, Xunder = _initial_error_blocks(mean0, cov0, mu0, xhat0)
     mu, total = mu0, 0.0
@@ -119,9 +117,7 @@ def forward_bound(sys, F, K, L, mean0, cov0, mu0, xhat0, factor=2.0):
 # ------------------------------------------------------------------ Thm. 3.32: (B.4) and (3.70)
 
 def optimality_conditions(sys, Xbar, Xunder, EPbar, EPunder, mu):
-    """The matrix and vector of (3.70) from (3.50), vec column-major, unknowns [vec F; vec K; vec
-    L].
-    """
+    """Matrix and vector of (3.70) from (3.50); column-major vec, unknowns [vec F; vec K; vec L]."""
     JJt = np.zeros((sys.M, sys.ny, sys.ny)) if sys.J is None else sys.J @ _T(sys.J)
     S, C, B, A = Xbar + Xunder, sys.C, sys.B, sys.A
     ksum = lambda X, Y: sum(np.kron(x, y) for x, y in zip(X, Y))
@@ -139,6 +135,7 @@ def optimality_conditions(sys, Xbar, Xunder, EPbar, EPunder, mu):
 
 
 def split(z, sys):
+    """(F, K, L) from the unknowns ``z`` = [vec F; vec K; vec L] of (3.70) (column-major vec)."""
     n, ny, nu = sys.nx, sys.ny, sys.nu
     F = z[:n * n].reshape((n, n), order="F")
     K = z[n * n:n * n + n * ny].reshape((n, ny), order="F")
@@ -160,16 +157,16 @@ def _noise_term(sys, K, EPbar, EPunder, mu):
 
 
 def bound_3_65(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu):
-    """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the constant
-    E_i(omega_{k+1})).
+    """Jbar_k of (3.65) with Pbar_k, Punder_k from (3.68)-(3.69) (without the
+    constant E_i(omega_{k+1})).
     """
     Pbar, Punder = _step_terms(sys, F, K, L, EPbar, EPunder)
     return _tr(Pbar, Xbar + Xunder) + _tr(Punder, Xbar) + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
-    """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as E_i(Pbar +
-    Punder)).
+    """Jbar_k as the proof expands it in (B.4) (E_i(P_{k+1} + P_{i,k+1}) read as
+    E_i(Pbar + Punder)).
 
     ``cross`` is the factor of the term 2 E_i(Pbar + Punder) B L Xunder A^T (2 as printed; the
     mutant of the corrected Thm. 3.32 drops it to 1).
@@ -177,18 +174,18 @@ def functional_b4(sys, F, K, L, Xbar, Xunder, EPbar, EPunder, mu, cross=2.0):
     A, B, C, E, U = sys.A, sys.B, sys.C, EPbar, EPunder
     S, BL, KC = Xbar + Xunder, B @ L, K @ C
     terms = (_tr(sys.Q, S) + _tr(L.T @ sys.R @ L, Xunder) + _tr(E + U, A @ S @ _T(A))
-             - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC)) + cross * _tr(E + U,
-                                                                                  BL @ Xunder @ _T(A))
-             - 2 * _tr(U, BL @ Xunder @ _T(KC)) - 2 * _tr(U, F @ Xunder @ _T(A)) + 2 * _tr(U, F @ Xunder @ _T(KC))
-             - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U,
-                                                   BL @ Xunder @ _T(BL)) + _tr(U, F @ Xunder @ F.T))
+             - 2 * _tr(_T(KC) @ U @ A, S) + _tr(U, KC @ S @ _T(KC))
+             + cross * _tr(E + U, BL @ Xunder @ _T(A))
+             - 2 * _tr(U, BL @ Xunder @ _T(KC)) - 2 * _tr(U, F @ Xunder @ _T(A))
+             + 2 * _tr(U, F @ Xunder @ _T(KC))
+             - 2 * _tr(U, BL @ Xunder @ F.T) + _tr(E + U, BL @ Xunder @ _T(BL))
+             + _tr(U, F @ Xunder @ F.T))
     return terms + _noise_term(sys, K, EPbar, EPunder, mu)
 
 
 def difference_3_65_b4(sys, F, K, L, Xbar, EPbar, EPunder):
     """sum_i tr[(Z12 + Z21 + 2 Z22) Xbar_i] with Z = Q~ + A~^T [[E(Pbar) + E(Pu), -E(Pu)], [-E(Pu),
-    E(Pu)]] A~:
-    the amount by which (3.65) exceeds (B.4) (derived by expanding both).
+    E(Pu)]] A~: the amount by which (3.65) exceeds (B.4) (derived by expanding both).
     """
     n = sys.nx
     At = np.block([[sys.A, np.broadcast_to(sys.B @ L, sys.A.shape)],

@@ -204,10 +204,9 @@ def check_theorem_2_4(rng: np.random.Generator, mutant=False) -> Outcome:
     mean = beta @ z
     cov = (beta[:, None] * (z - mean)).T @ (z - mean)
     half = 1.0 if mutant else 0.5
-    expansion = float(beta @ (s + z @ v + half * np.einsum("ji,ik,jk->j", z, V,
-                                                           z)) + 0.5 * np.trace(S @ cov))
-    scale = float(abs(s) + beta @ (np.abs(z @ v) + 0.5 * np.abs(np.einsum("ji,ik,jk->j", z, V,
-                                                                          z))) + cost_terms.max())
+    quadratic = np.einsum("ji,ik,jk->j", z, V, z)
+    expansion = float(beta @ (s + z @ v + half * quadratic) + 0.5 * np.trace(S @ cov))
+    scale = float(abs(s) + beta @ (np.abs(z @ v) + 0.5 * np.abs(quadratic)) + cost_terms.max())
     tol = 64 * EPS * (M + N) * n ** 2 * scale
     error = abs(expansion - exact)
     verdict = "holds" if error <= tol and not np.any(S) else "fails"
@@ -227,8 +226,8 @@ def _kalman_posterior(A, H, C, J, Sigma):
 
 def expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, mean, Sigma,
                                    innovation=True):
-    """Exact E{C_K(x_K) + sum_k C_k(x_k, u_k)} of u_k = L_k E{x_k} + d_k from the belief N(mean,
-    Sigma).
+    """Exact E{C_K(x_K) + sum_k C_k(x_k, u_k)} of u_k = L_k E{x_k} + d_k from the belief
+    N(mean, Sigma).
 
     Forward propagation of the first two moments of the Kalman mean x_hat_k (deterministic
     posterior covariances Sigma_k; the innovation adds P_k - Sigma_{k+1} to the second moment;
@@ -236,16 +235,17 @@ def expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, of
     """
     mu, second, total = mean.copy(), np.outer(mean, mean), 0.0
     for L, d in zip(gains, offsets):
-        total += (np.trace(Q @ second) - 2 * x_target @ Q @ mu + x_target @ Q @ x_target + np.trace(Q @ Sigma)
-                  + np.trace(L.T @ R @ L @ second) + 2 * d @ R @ L @ mu + d @ R @ d)
+        total += (np.trace(Q @ second) - 2 * x_target @ Q @ mu + x_target @ Q @ x_target
+                  + np.trace(Q @ Sigma) + np.trace(L.T @ R @ L @ second) + 2 * d @ R @ L @ mu
+                  + d @ R @ d)
         F, c = A + B @ L, B @ d
         P, Sigma_next = _kalman_posterior(A, H, C, J, Sigma)
         second = F @ second @ F.T + np.outer(F @ mu, c) + np.outer(c, F @ mu) + np.outer(c, c)
         if innovation:
             second = second + P - Sigma_next
         mu, Sigma = F @ mu + c, Sigma_next
-    return float(total + np.trace(Q_K @ second) - 2 * x_target @ Q_K @ mu + x_target @ Q_K @ x_target
-                 + np.trace(Q_K @ Sigma))
+    return float(total + np.trace(Q_K @ second) - 2 * x_target @ Q_K @ mu
+                 + x_target @ Q_K @ x_target + np.trace(Q_K @ Sigma))
 
 
 def lq_tracking_policy(A, B, Q, R, Q_K, x_target, K):
@@ -290,7 +290,8 @@ def check_theorem_2_5(rng: np.random.Generator, mutant=False) -> Outcome:
                                          *lq_tracking_policy(A, B, Q, R, Q_K, x_target, K), m, cov0,
                                          innovation=not mutant)
     # both sides are sums of O(K n^3) rounded products of numbers up to |exact| in size
-    tol = 1e3 * K * EPS * (abs(exact) + abs(s) + np.abs(v).sum() + np.abs(V).sum() + np.abs(S).sum())
+    tol = 1e3 * K * EPS * (abs(exact) + abs(s) + np.abs(v).sum() + np.abs(V).sum()
+                           + np.abs(S).sum())
     error = abs(theorem - exact)
     error_lqg = abs(theorem - lqg)
     verdict = "holds" if error <= tol and (not optimal or error_lqg <= tol) else "fails"
@@ -371,45 +372,35 @@ STATEMENTS = [
     Statement(
         key="statement_2_1", label="Lemma 2.1",
         summary=r"For jointly Gaussian state and measurement, the covariance of the next estimate "
-                r"is "
-                r"$\mathbf C^{xx}-\mathbf C^{xy}(\mathbf C^{yy})^{-1}(\mathbf C^{xy})^\top$ over "
-                r"the propagated "
-                r"particles and noise samples.",
+                r"is $\mathbf C^{xx}-\mathbf C^{xy}(\mathbf C^{yy})^{-1}(\mathbf C^{xy})^\top$ "
+                r"over the propagated particles and noise samples.",
         checked="Random linear-Gaussian model (1-3 states, 1-2 outputs), random Dirac mixture, "
-                "noise samples "
-                "with exact moments: asoc.belief's Lemma 2.1 against the information-form Kalman "
-                "update of "
-                "the mixture's moments, within 64 eps x samples x cond(P) cond(S) x |P|.",
+                "noise samples with exact moments: asoc.belief's Lemma 2.1 against the "
+                "information-form Kalman update of the mixture's moments, within 64 eps x samples "
+                "x cond(P) cond(S) x |P|.",
         check=check_lemma_2_1,
         mutant="the reference without the measurement update (the prediction P: the Schur "
                "complement dropped)"),
     Statement(
         key="statement_2_4", label="Theorem 2.4",
         summary=r"The statistical second-order expansion (Def. 2.2) of the terminal value at the "
-                r"reference "
-                r"mixture is $\mathrm E\{s_K+\mathbf v_K^\top\mathbf x+\tfrac12\mathbf "
-                r"x^\top\mathbf V_K\mathbf x\}$ "
-                r"with $\mathbf S_K=\mathbf 0$.",
+                r"reference mixture is $\mathrm E\{s_K+\mathbf v_K^\top\mathbf x+\tfrac12\mathbf "
+                r"x^\top\mathbf V_K\mathbf x\}$ with $\mathbf S_K=\mathbf 0$.",
         checked="Random quadratic terminal cost (PSD, possibly singular weight), random reference "
-                "and evaluation "
-                "mixtures: the library's s_K, v_K, V_K, S_K give E{C_K} under the evaluation "
-                "mixture exactly "
-                "(rounding tolerance).",
+                "and evaluation mixtures: the library's s_K, v_K, V_K, S_K give E{C_K} under the "
+                "evaluation mixture exactly (rounding tolerance).",
         check=check_theorem_2_4, mutant="the expansion with x^T V_K x in place of 1/2 x^T V_K x (a "
                                         "factor changed)"),
     Statement(
         key="statement_2_5", label="Theorem 2.5",
         summary=r"Backwards along the reference, the value is "
                 r"$\mathrm E\{s_k+\mathbf v_k^\top\mathbf x+\tfrac12\mathbf x^\top\mathbf "
-                r"V_k\mathbf x"
-                r"+\tfrac12\mathrm{tr}[\mathbf S_k\mathbf C_k]\}$ with (2.11)-(2.13) for the "
-                r"policy (2.17).",
+                r"V_k\mathbf x+\tfrac12\mathrm{tr}[\mathbf S_k\mathbf C_k]\}$ with (2.11)-(2.13) "
+                r"for the policy (2.17).",
         checked="Random linear-Gaussian system (1-2 states, inputs, outputs; horizon 2-3), "
-                "quadratic costs, random "
-                "reference policy and steps eps_k: the library's V_0 at a random mean against the "
-                "exact expected "
-                "cost of the induced policy (forward moments), and for eps_k = 1 against the "
-                "Riccati/LQG optimum.",
+                "quadratic costs, random reference policy and steps eps_k: the library's V_0 at a "
+                "random mean against the exact expected cost of the induced policy (forward "
+                "moments), and for eps_k = 1 against the Riccati/LQG optimum.",
         check=check_theorem_2_5,
         mutant="the exact costs without the innovation's share P_k - Sigma_{k+1} of the estimate's "
                "second moment"),
@@ -417,31 +408,26 @@ STATEMENTS = [
         key="statement_2_7", label="Proposition 2.7",
         summary=r"The GP predictive distribution has mean "
                 r"$m(\mathbf x_*)+\mathbf k_*^\top\boldsymbol\Sigma_y^{-1}(\mathbf y-m(\mathbf "
-                r"X))$ and variance "
-                r"$k(\mathbf x_*,\mathbf x_*)-\mathbf k_*^\top\boldsymbol\Sigma_y^{-1}\mathbf k_*$.",
+                r"X))$ and variance $k(\mathbf x_*,\mathbf x_*)-\mathbf "
+                r"k_*^\top\boldsymbol\Sigma_y^{-1}\mathbf k_*$.",
         checked="Random inputs in R^1-3, outputs, covariance of Table 2.1 and hyperparameters: "
-                "DistributionGP's "
-                "mean, variance and joint covariance against conditioning the joint Gaussian "
-                "through its "
-                "precision matrix (eigendecomposition), within 64 eps (M + N) cond x scale.",
+                "DistributionGP's mean, variance and joint covariance against conditioning the "
+                "joint Gaussian through its precision matrix (eigendecomposition), within 64 eps "
+                "(M + N) cond x scale.",
         check=check_proposition_2_7,
         mutant="the reference's posterior covariance without the data's share (the prior "
                "covariance)"),
     Statement(
         key="statement_2_6_3_kernels", label="Sec. 2.6.3 (Table 2.1)",
         summary=r"Any stationary covariance function of Table 2.1 over an admissible distance "
-                r"between "
-                r"distributions ($L_q$, Hellinger, Jensen-Shannon, Wasserstein/OMAT/OSPA, mCvMd) "
-                r"gives a valid GP.",
+                r"between distributions ($L_q$, Hellinger, Jensen-Shannon, Wasserstein/OMAT/OSPA, "
+                r"mCvMd) gives a valid GP.",
         checked="Adversarial search with asoc.gp's distances and covariances (one distribution "
-                "moved at a time, "
-                "the length scale on a grid) over 4-7 distributions, for a random distance and "
-                "covariance; a "
-                "negative eigenvalue of the library's Gram matrix beyond the rounding tolerance, "
-                "confirmed by a "
-                "second eigensolver and an exact Rayleigh quotient, refutes the claim for that "
-                "distance and "
-                "covariance. The share of failures is the search's yield, not a failure rate.",
+                "moved at a time, the length scale on a grid) over 4-7 distributions, for a "
+                "random distance and covariance; a negative eigenvalue of the library's Gram "
+                "matrix beyond the rounding tolerance, confirmed by a second eigensolver and an "
+                "exact Rayleigh quotient, refutes the claim for that distance and covariance. The "
+                "share of failures is the search's yield, not a failure rate.",
         check=check_kernels_sec_2_6_3, expensive=True, summarise=summarise_kernels,
         mutant="the covariance exp(-(d/l)^4), outside Table 2.1 and not positive definite even on "
                "the real line"),

@@ -1,5 +1,4 @@
-r"""The numbered statements of Chapter 3 (Thm. 3.1 to Thm. 3.33) and how their counterexamples are
-shown.
+r"""The numbered statements of Chapter 3 (Thm. 3.1 to 3.33) and how their counterexamples are shown.
 
 Every numbered item of Chapter 3 that is not a definition (3.3, 3.4, 3.13, 3.22) or a
 problem statement (3.6, 3.21) has one ``Statement`` here, keyed ``statement_3_<n>``; the
@@ -81,24 +80,20 @@ STATEMENTS = [
               "M built with T in place of T^T (T transposed; draws as for Thm. 3.1's mutant)"),
     Statement("statement_3_5", "Proposition 3.5",
               r"The optimal cost-to-go at $K-1$ is $\mathbf x^\top\boldsymbol\Psi\mathbf x+\Delta$ "
-              r"(the step "
-              r"that makes $K-2$ intractable).",
+              r"(the step that makes $K-2$ intractable).",
               "Closed form against the minimum over u (BFGS) of the exact expectation over modes "
-              "and noise, for a "
-              "random belief.",
+              "and noise, for a random belief.",
               check_3_5, "the closed form without Delta (the noise's cost dropped)"),
     Statement("statement_3_7", "Proposition 3.7",
-              r"The $H_2$ norm of the closed loop (3.10) is "
-              r"$\sum_i\mathrm{tr}[(\mathbf D_i+\mathbf E_i\mathbf L\mathbf C_i)\mathbf "
-              r"X_i(\cdot)^\top]$ with "
-              r"$\mathbf X$ from the coupled Gramian equations.",
+              r"The $H_2$ norm of the closed loop (3.10) is $\sum_i\mathrm{tr}[(\mathbf "
+              r"D_i+\mathbf E_i\mathbf L\mathbf C_i)\mathbf X_i(\cdot)^\top]$ with $\mathbf X$ "
+              r"from the coupled Gramian equations.",
               f"Formula against the Monte Carlo stationary E{{z^T z}} (1000 runs), {MC}.",
               check_3_7, "the formula with D_i in place of D_i + E_i L C_i (the input's share of z "
                          "dropped)"),
     Statement("statement_3_8", "Lemma 3.8",
               r"Any $(\mathbf L,\mathbf G,\mathbf Y)$ satisfying the BMI (3.15) gives an objective "
-              r"that bounds "
-              r"(3.14) from above.",
+              r"that bounds (3.14) from above.",
               "Half the draws: Y_i and G random SPD at random scales, with no relation to L's "
               "Lyapunov equation; half at the BMI's boundary: Y = s Acl D(Y) Acl^T + mu H H^T + "
               "delta I, G from D(Y), s on [0.5, 1.5]; premise: the BMI (3.15) by eigenvalues; "
@@ -107,20 +102,16 @@ STATEMENTS = [
               check_3_8, "the BMI with its corner block G + G^T in place of G + G^T - D_i(Y)"),
     Statement("statement_3_9", "Theorem 3.9",
               r"If the LMIs are feasible, $\mathbf L=\mathbf F\mathbf M^{-1}$ stabilises the MJLS "
-              r"in the "
-              r"mean-square sense.",
+              r"in the mean-square sense.",
               "LMIs solved (Clarabel); feasibility from the certificate (the returned matrices "
-              "satisfy the LMIs by "
-              "eigenvalues, margin >= -eps/2); rho of the recovered gain by the dense "
-              "second-moment map. "
-              "Conservatism: SOF stabilisability by a 2001-point grid over scalar L plus a bounded "
-              "search.",
+              "satisfy the LMIs by eigenvalues, margin >= -eps/2); rho of the recovered gain by "
+              "the dense second-moment map. Conservatism: SOF stabilisability by a 2001-point "
+              "grid over scalar L plus a bounded search.",
               check_3_9, "the gain recovered with a sign error, L = -F M^{-1}", expensive=True,
               summarise=summarise_lmi, why_not=WHY_NOT_LMI),
     Statement("statement_3_10", "Proposition 3.10",
               r"The $H_2$ norm with mode feedback $\mathbf L_i$ is the Gramian formula of Prop. "
-              r"3.7 with "
-              r"$\mathbf L_i$.",
+              r"3.7 with $\mathbf L_i$.",
               f"Formula against the Monte Carlo stationary E{{z^T z}}, {MC}.",
               check_3_10, "the formula with D_i in place of D_i + E_i L_i C_i"),
     Statement("statement_3_11", "Lemma 3.11",
@@ -130,72 +121,61 @@ STATEMENTS = [
                           "D_i(Y)"),
     Statement("statement_3_12", "Theorem 3.12",
               r"If the mode-observed LMIs are feasible, $\mathbf L_i=\mathbf F_i\mathbf M_i^{-1}$ "
-              r"stabilise the "
-              r"MJLS with mode feedback.",
-              "LMIs solved (Clarabel); feasibility from the verified certificate; rho of A_i + B_i "
-              "L_i C_i by the "
-              "dense second-moment map.",
+              r"stabilise the MJLS with mode feedback.",
+              "LMIs solved (Clarabel); feasibility from the verified certificate; rho of A_i + "
+              "B_i L_i C_i by the dense second-moment map.",
               check_3_12, "the gains recovered with a sign error, L_i = -F_i M_i^{-1}",
               expensive=True, why_not=WHY_NOT_LMI),
     Statement("statement_3_14", "Proposition 3.14",
               r"The second moments $\mathbf X_k^i$ follow the recursion (3.29).",
               "Recursion against Monte Carlo E{x_k x_k^T 1(theta_k=i)} (10000 runs, k = 1..3, "
-              "Gaussian-mixture x_0, "
-              f"closed loop scaled to max ||A_i + B_i L C_i|| in [0.5, 1.5]), every entry {MC}.",
+              "Gaussian-mixture x_0, closed loop scaled to max ||A_i + B_i L C_i|| in [0.5, "
+              f"1.5]), every entry {MC}.",
               check_3_14, "the recursion without the noise term mu_k^i H_i H_i^T"),
     Statement("statement_3_15", "Proposition 3.15",
-              r"Problem (3.11) equals (3.30): the average cost is "
-              r"$\sum_i\mathrm{tr}[(\mathbf Q_i+\mathbf L^\top\mathbf R_i\mathbf L)\mathbf "
-              r"X_\infty^i]$ (as printed).",
+              r"Problem (3.11) equals (3.30): the average cost is $\sum_i\mathrm{tr}[(\mathbf "
+              r"Q_i+\mathbf L^\top\mathbf R_i\mathbf L)\mathbf X_\infty^i]$ (as printed).",
               "The printed objective (defined when n_y = n_x) against the average cost, the mean "
-              "stage cost of the "
-              "moment recursion from a random x_0 and theta_0 ~ mu_inf over steps h..2h-1 with "
-              "rho^h <= 1e-13, "
-              "within 1e-8; the reading with C_i^T L^T R_i L C_i is checked beside it.",
+              "stage cost of the moment recursion from a random x_0 and theta_0 ~ mu_inf over "
+              "steps h..2h-1 with rho^h <= 1e-13, within 1e-8; the reading with C_i^T L^T R_i L "
+              "C_i is checked beside it.",
               check_3_15, "the corrected reading with X_inf solved without the noise term",
               summarise=summarise_3_15),
     Statement("statement_3_16", "Proposition 3.16",
               r"The Hamiltonian of (3.30) in terms of $\mathcal E_i(\mathbf P)$.",
               "Stated form against the Lagrangian of (3.30) built densely (closed loop and "
-              "moment-map matrix "
-              "assembled independently), at random L, X, P.",
+              "moment-map matrix assembled independently), at random L, X, P.",
               check_3_16, "the stated form without the noise term mu_i H_i H_i^T"),
     Statement("statement_3_17", "Theorem 3.17",
               r"The optimal static gain satisfies the coupled equations (3.31)-(3.33).",
               "Global minimiser of the exact cost over scalar L (grid + bounded search); residual "
-              "of (3.31) there "
-              "with X, P from (3.32)-(3.33).",
+              "of (3.31) there with X, P from (3.32)-(3.33).",
               check_3_17, "the residual of (3.31) without R_i"),
     Statement("statement_3_18", "Proposition 3.18",
               r"$\mathrm{vec}\,\mathbf L=-(\sum_i\mathbf C_i\mathbf X_i\mathbf "
-              r"C_i^\top\otimes(\mathbf R_i+"
-              r"\mathbf B_i^\top\mathcal E_i(\mathbf P)\mathbf "
-              r"B_i))^{-1}\mathrm{vec}(\sum_i\mathbf B_i^\top"
-              r"\mathcal E_i(\mathbf P)\mathbf A_i\mathbf X_i\mathbf C_i^\top)$ solves (3.31).",
+              r"C_i^\top\otimes(\mathbf R_i+\mathbf B_i^\top\mathcal E_i(\mathbf P)\mathbf "
+              r"B_i))^{-1}\mathrm{vec}(\sum_i\mathbf B_i^\top\mathcal E_i(\mathbf P)\mathbf "
+              r"A_i\mathbf X_i\mathbf C_i^\top)$ solves (3.31).",
               "Printed formula (column-major vec) at random X, P; residual of (3.31); also "
-              "compared with "
-              "asoc.mjls.gain_from_moments.",
+              "compared with asoc.mjls.gain_from_moments.",
               check_3_18, "the formula with 2 R_i in place of R_i"),
     Statement("statement_3_19", "Theorem 3.19",
               r"If the MJLS is SOF-stabilisable, Alg. 3.1 converges to its unique (stabilising) "
               r"solution.",
               "Premise by a 2001-point grid over scalar L plus a bounded search (rho < 1); Alg. "
-              "3.1 "
-              "(asoc.mjls.static_output_feedback) must converge to a stabilising gain, the same "
-              "from 1e-4 I and "
-              "from I.",
+              "3.1 (asoc.mjls.static_output_feedback) must converge to a stabilising gain, the "
+              "same from 1e-4 I and from I.",
               check_3_19, "Alg. 3.1 stopped after 3 iterations", summarise=summarise_3_19),
     Statement("statement_3_20", "Proposition 3.20",
-              r"The cost (3.38) in the augmented state with "
-              r"$\tilde{\mathbf Q}=\mathrm{diag}(\mathbf Q,\mathbf L^\top\mathbf R\mathbf L)$.",
+              r"The cost (3.38) in the augmented state with $\tilde{\mathbf "
+              r"Q}=\mathrm{diag}(\mathbf Q,\mathbf L^\top\mathbf R\mathbf L)$.",
               "x~^T Q~ x~ against x^T Q x + u^T R u at random points.",
               check_3_20, "Q~ = diag(Q, R) (the gain L dropped)"),
     Statement("statement_3_23", "Proposition 3.23",
               r"The second moments of the augmented closed loop (3.39) follow the printed block "
               r"recursion.",
               "Printed blocks against Monte Carlo of plant and controller (10000 runs, k = 1..3, "
-              "max ||A~_i|| in "
-              f"[0.5, 1.5]), {MC}.",
+              f"max ||A~_i|| in [0.5, 1.5]), {MC}.",
               check_3_23, "the recursion without the process noise mu_k^i H_i H_i^T"),
     Statement("statement_3_24", "Proposition 3.24",
               r"Problem (3.41) equals (3.42): the average cost is "
@@ -206,13 +186,12 @@ STATEMENTS = [
     Statement("statement_3_25", "Proposition 3.25",
               r"The Hamiltonian of (3.42) in terms of $\mathcal E_i(\tilde{\mathbf P})$.",
               "Stated form against the Lagrangian built densely: the augmented closed loop, its "
-              "noise and cost "
-              "assembled block by block, the constraint multiplied by P~ as a vector product.",
+              "noise and cost assembled block by block, the constraint multiplied by P~ as a "
+              "vector product.",
               check_3_25, "the stated form without the noise term mu_i H~_i H~_i^T"),
     Statement("statement_3_26", "Proposition 3.26",
               r"$\tilde{\mathbf X}_\infty$ and $\tilde{\mathbf P}_\infty$ are bounded above by the "
-              r"block matrices "
-              r"built from (3.43).",
+              r"block matrices built from (3.43).",
               "Exact X~_inf, P~_inf of a random stabilising (F, K, L); smallest eigenvalue of "
               "bound minus matrix.",
               check_3_26, "the inequalities flipped (the bounds read as lower bounds)"),
@@ -220,19 +199,17 @@ STATEMENTS = [
               r"The dynamic output-feedback law (3.37) is determined by the coupled equations "
               r"(3.45)-(3.49).",
               "Reading: the solution is the optimal (3.37). At a converged, stabilising Alg. 3.2 "
-              "solution, the exact "
-              "cost's gradient must vanish (a gradient step must not lower the cost).",
+              "solution, the exact cost's gradient must vanish (a gradient step must not lower "
+              "the cost).",
               check_3_27, "the solution's L scaled by 1.2", expensive=True),
     Statement("statement_3_28", "Proposition 3.28",
               r"The finite-horizon cost (3.56) equals the moment form (3.57)-(3.58).",
               "Moment form (asoc.mjls.finite_horizon_cost) against Monte Carlo of plant and "
-              "time-variant controller "
-              f"(10000 runs), {MC}.",
+              f"time-variant controller (10000 runs), {MC}.",
               check_3_28, "the moment form evaluated with the gains in reverse time order"),
     Statement("statement_3_29", "Lemma 3.29",
               r"The cost-to-go is $\sum_i\mathrm{tr}[\tilde{\mathbf P}_t^i\tilde{\mathbf "
-              r"X}_t^i]+\mu_t^i\omega_{i,t}$ "
-              r"with the backward recursion (3.64).",
+              r"X}_t^i]+\mu_t^i\omega_{i,t}$ with the backward recursion (3.64).",
               "Backward recursion against the forward sum of stage costs, random gains and "
               "horizons 2-8.",
               check_3_29, "the recursion without the noise term omega"),
@@ -254,17 +231,15 @@ STATEMENTS = [
                        "count (the theorem itself fails, see the diagnosis).")),
     Statement("statement_3_32", "Theorem 3.32",
               r"A minimiser of the bound (3.65) satisfies the linear conditions (3.70).",
-              "At one step, the solution of (3.70) against random perturbations of (F_k, K_k, L_k) "
-              "in Jbar_k "
-              "(3.65)/(3.68)-(3.69).",
+              "At one step, the solution of (3.70) against random perturbations of (F_k, K_k, "
+              "L_k) in Jbar_k (3.65)/(3.68)-(3.69).",
               check_3_32, "the solution of (3.70) moved by a random step of 10% of its norm"),
     Statement("statement_3_33", "Theorem 3.33",
               r"Alg. 3.3's costs $\bar{\mathcal J}_0$ are non-increasing and its parameters "
               r"converge.",
               "Alg. 3.3 (asoc.mjls.finite_horizon_dynamic_output_feedback, Step 5 safeguard on) "
-              "from random gains: "
-              "increases of Jbar_0, convergence within 300 iterations, change of the gains over 20 "
-              "more iterations.",
+              "from random gains: increases of Jbar_0, convergence within 300 iterations, change "
+              "of the gains over 20 more iterations.",
               check_3_33, "Alg. 3.3 stopped after 2 iterations", expensive=True),
 ]
 
@@ -289,7 +264,8 @@ SHOW = {
     "statement_3_33": [("Alg. 3.3 converged", "converged", ""),
                        ("largest relative increase of Jbar_0", "largest_relative_increase", ".1e")],
 }
-MARGIN = {"statement_3_15": lambda n: abs(n["objective_printed"] - n["average_cost"]) / n["average_cost"],
+MARGIN = {"statement_3_15": lambda n: (abs(n["objective_printed"] - n["average_cost"])
+                                       / n["average_cost"]),
           "statement_3_19": lambda n: 1 - n["min_rho_over_L"],
           "statement_3_26": lambda n: -min(n["min_eig_bound_minus_X"], n["min_eig_bound_minus_P"]),
           "statement_3_27": lambda n: n["improvement_by_gradient_step"],

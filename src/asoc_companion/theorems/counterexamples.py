@@ -31,7 +31,8 @@ __all__ = ["prop_3_26_example", "thm_3_31_example", "THM_3_19_SYSTEM", "thm_3_19
 
 
 def _mul(X, Y):
-    return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))] for i in range(len(X))]
+    return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))]
+            for i in range(len(X))]
 
 
 def _tr(X):
@@ -52,13 +53,12 @@ def _congruence(A, X):
 
 
 def prop_3_26_example():
-    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0, A = 0, C = H =
-    1).
+    """Prop. 3.26 on one state, x_{k+1} = w_k, x^_{k+1} = x_k
+    (F = 0, K = 1, L = 0, A = 0, C = H = 1).
 
     The augmented loop A~ = [[0, 0], [1, 0]] is nilpotent, so X~ = A~ X~ A~^T + diag(1, 0) is
-    reached
-    exactly after two steps. Returns the stationary X~, the printed bound and the corrected bound
-    (factor 2), each minus X~, with the determinant of the 2 x 2 gap (a PSD 2 x 2 matrix has
+    reached exactly after two steps. Returns the stationary X~, the printed bound and the corrected
+    bound (factor 2), each minus X~, with the determinant of the 2 x 2 gap (a PSD 2 x 2 matrix has
     non-negative determinant and diagonal).
 
     Examples
@@ -136,9 +136,8 @@ def _alg_3_1_one_mode(A, B, C, H, Q, R, start, iterations=400):
     gains = []
     for _ in range(iterations):
         lhs = np.kron(C @ X @ C.T, R + B.T @ P @ B)
-        L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F")).reshape(B.shape[1],
-                                                                                    C.shape[0],
-                                                                                    order="F")
+        vec_L = -np.linalg.solve(lhs, (B.T @ P @ A @ X @ C.T).ravel(order="F"))
+        L = vec_L.reshape(B.shape[1], C.shape[0], order="F")
         Acl = A + B @ L @ C
         X, P = Acl @ X @ Acl.T + H @ H.T, Acl.T @ P @ Acl + Q + C.T @ L.T @ R @ L @ C
         gains.append(L)
@@ -162,9 +161,8 @@ def thm_3_19_example(starts=(1e-4, 1.0, 10.0), grid=20001):
     cycles = []
     for start in starts:
         gains = _alg_3_1_one_mode(**s, start=start)[:, 0, 0]
-        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9) and not np.isclose(gains[-1],
-                                                                                       gains[-2],
-                                                                                       rtol=1e-3))
+        period_2 = bool(np.isclose(gains[-1], gains[-3], rtol=1e-9)
+                        and not np.isclose(gains[-1], gains[-2], rtol=1e-3))
         cycles.append({"start": start, "gains": sorted([float(gains[-1]), float(gains[-2])]),
                        "rho": sorted([rho(gains[-1]), rho(gains[-2])]), "period_2": period_2})
     candidates = np.linspace(-5.0, 5.0, grid)
@@ -293,8 +291,8 @@ def thm_3_27_fixed_points(seed=2017, index=THM_3_27_INSTANCE, random_starts=10, 
 
 
 def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
-    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly, for finite
-    ``b_max``.
+    r"""The mCvMd of two equally weighted 1-D Dirac sets from its definition, exactly,
+    for finite ``b_max``.
 
     With the LCD kernel, :math:`\int (P_1 - P_2)^2 dm = \sqrt\pi\, b \sum_{kl} c_k c_l
     e^{-\Delta_{kl}^2/(4b^2)}` (``c``: the weights, those of ``y`` negative), and
@@ -312,7 +310,8 @@ def mcvmd_integral(x, y, b_max=DEFAULT_B_MAX):
     >>> gp.mcvmd(x, None, y, None)
     Traceback (most recent call last):
     ...
-    ValueError: b_max: expected a width large against the distances between the Dirac locations (the closed form holds for large b_max; its square is -0.017 of its terms), found 100.0
+    ValueError: b_max: expected a width large against the distances between the Dirac locations
+    (the closed form holds for large b_max; its square is -0.017 of its terms), found 100.0
     """
     points = np.concatenate([np.ravel(x), np.ravel(y)])
     c = np.concatenate([np.full(np.size(x), 1 / np.size(x)), np.full(np.size(y), -1 / np.size(y))])

@@ -50,9 +50,7 @@ __all__ = ["check_3_20", "loop_step", "quadratic_form", "check_3_23", "check_3_2
 
 
 def check_3_20(rng, mutant=False):
-    """Prop. 3.20: x~^T Q~ x~ = x^T Q x + u^T R u with u = L x^. Mutant: Q~ = diag(Q, R) (L
-    dropped).
-    """
+    """Prop. 3.20: x~^T Q~ x~ = x^T Q x + u^T R u, u = L x^. Mutant: Q~ = diag(Q, R) (L dropped)."""
     sys = draw_system(rng)
     L = rng.standard_normal((sys.nu, sys.nx))
     i = rng.integers(sys.M)
@@ -75,9 +73,7 @@ def _dynamic_gains(rng, sys, scale=0.5):
 
 
 def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
-    """Random (F, K, L) and the system rescaled (with F, K) so the augmented loop has rho in [low,
-    high].
-    """
+    """Random (F, K, L) and the system rescaled (with F, K) to an augmented rho in [low, high]."""
     F, K, L = _dynamic_gains(rng, sys)
     At = augmented_closed_loop(sys, F, K, L)[0]
     target = rng.uniform(low, high)
@@ -87,8 +83,8 @@ def _stabilised_dynamic(rng, sys, low=0.2, high=0.85):
 
 def loop_step(sys):
     """One step of plant (3.36) and controller (3.37) for all runs:
-    ``step((x, x^), modes, r, F, K, L)``
-    with x, x^ of shape (runs, nx) and ``modes`` the runs' RunModes; the new (x, x^).
+    ``step((x, x^), modes, r, F, K, L)`` with x, x^ of shape (runs, nx) and ``modes`` the runs'
+    RunModes; the new (x, x^).
     """
     J = np.zeros((sys.M, sys.ny, 1)) if sys.J is None else sys.J
     C, meas, A, B, H = (ModeOperator(S) for S in (sys.C, J, sys.A, sys.B, sys.H))
@@ -133,11 +129,10 @@ def check_3_23(rng, mutant=False):
         mm = m[:, None, None]
         new1 = predecessor_sum(sys.T, A @ X1 @ T_(A) + A @ X12 @ T_(BL) + BL @ T_(X12) @ T_(A)
                                + BL @ X2 @ T_(BL) + mm * HHt)
-        new12 = predecessor_sum(sys.T,
-                                A @ X1 @ T_(KC) + A @ X12 @ F.T + BL @ T_(X12) @ T_(KC) + BL @ X2 @ F.T)
-        new2 = predecessor_sum(sys.T,
-                               KC @ X1 @ T_(KC) + KC @ X12 @ F.T + F @ T_(X12) @ T_(KC) + F @ X2 @ F.T
-                               + mm * (K @ JJt @ K.T))
+        new12 = predecessor_sum(sys.T, A @ X1 @ T_(KC) + A @ X12 @ F.T + BL @ T_(X12) @ T_(KC)
+                                + BL @ X2 @ F.T)
+        new2 = predecessor_sum(sys.T, KC @ X1 @ T_(KC) + KC @ X12 @ F.T + F @ T_(X12) @ T_(KC)
+                               + F @ X2 @ F.T + mm * (K @ JJt @ K.T))
         Xt = np.block([[new1, new12], [T_(new12), new2]])
         m = m @ sys.T
         state, theta = step(state, RunModes(theta, sys.M), rng, F, K, L), chain.next(rng, theta)
@@ -147,8 +142,7 @@ def check_3_23(rng, mutant=False):
 
 def check_3_24(rng, mutant=False):
     """Prop. 3.24: sum_i tr[Q~_i X~_inf^i] against the Monte Carlo stationary average cost of the
-    loop.
-    Mutant: Q~ without the input's block L^T R_i L.
+    loop. Mutant: Q~ without the input's block L^T R_i L.
     """
     sys = draw_system(rng)
     sys, F, K, L, target = _stabilised_dynamic(rng, sys)
@@ -161,9 +155,8 @@ def check_3_24(rng, mutant=False):
     loop = loop_step(sys)
     step = lambda state, modes, r: loop(state, modes, r, F, K, L)
     start = np.zeros((n_runs, sys.nx)), np.zeros((n_runs, sys.nx))
-    mc, se, burn = stationary_average(rng, step, cost, start, initial_modes(rng, sys.mu_inf,
-                                                                            n_runs), sys.T, rho,
-                                      n_runs)
+    modes0 = initial_modes(rng, sys.mu_inf, n_runs)
+    mc, se, burn = stationary_average(rng, step, cost, start, modes0, sys.T, rho, n_runs)
     z = abs(mc - exact) / np.hypot(se, 1e-3 * exact)
     return outcome(verdict(z < Z_SCORE), sys, cost_3_42=exact, monte_carlo=mc, standard_error=se,
                    z=z, rho=rho,
@@ -191,8 +184,7 @@ def _augmented_dense(sys, F, K, L):
 
 def check_3_25(rng, mutant=False):
     """Prop. 3.25: the stated Hamiltonian of (3.42) (with E_i(P~)) against its Lagrangian built
-    densely.
-    Mutant: the stated form without the noise term mu_i H~_i H~_i^T.
+    densely. Mutant: the stated form without the noise term mu_i H~_i H~_i^T.
     """
     sys = draw_system(rng)
     F, K, L = _dynamic_gains(rng, sys)
@@ -206,26 +198,24 @@ def check_3_25(rng, mutant=False):
     noise = np.einsum("ij,iab->jab", sys.T, mu[:, None, None] * (Hd @ transpose(Hd)))
     constraint = moment_map_matrix(Ad, sys.T) @ X.ravel() + noise.ravel() - X.ravel()
     dense = trace_sum(Qd, X) + float(P.ravel() @ constraint)
-    rel = abs(stated - dense) / (abs(trace_sum(Qt, X)) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P),
-                                                                                          inner)))
+    scale = (abs(trace_sum(Qt, X)) + trace_sum(P, X)
+             + abs(trace_sum(successor_average(sys.T, P), inner)))
+    rel = abs(stated - dense) / scale
     return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense,
                    relative_difference=rel)
 
 
 def check_3_26(rng, mutant=False):
     """Prop. 3.26 as printed: X~ <= [[Xbar + Xu, Xu], [Xu, Xu]] and P~ <= [[Pbar + Pu, -Pu], [-Pu,
-    Pu]]
-    with Xbar = X1 - X12 - X12^T + X2, Xu = X2 (3.43) of the exact X~_inf, P~_inf of a stabilising
-    (F, K, L).
-    Mutant: the inequalities flipped (the bounds read as lower bounds).
+    Pu]] with Xbar = X1 - X12 - X12^T + X2, Xu = X2 (3.43) of the exact X~_inf, P~_inf of a
+    stabilising (F, K, L). Mutant: the inequalities flipped (the bounds read as lower bounds).
     """
     sys = draw_system(rng)
     sys, F, K, L, _ = _stabilised_dynamic(rng, sys)
     _, Xt, rho = steady_state_cost(sys, F, K, L)
     At, _, Qt = augmented_closed_loop(sys, F, K, L)
-    Pt = np.linalg.solve(np.eye(Qt.size) - ms_operator(At, sys.T, check=False).T,
-                         Qt.ravel()).reshape(Qt.shape)
-    Pt = sym(Pt)
+    Pt = np.linalg.solve(np.eye(Qt.size) - ms_operator(At, sys.T, check=False).T, Qt.ravel())
+    Pt = sym(Pt.reshape(Qt.shape))
     n = sys.nx
     sign = -1.0 if mutant else 1.0
 
@@ -242,8 +232,8 @@ def check_3_26(rng, mutant=False):
 
 def check_3_27(rng, mutant=False):
     """Thm. 3.27: a stabilising solution of (3.45)-(3.49) (Alg. 3.2 converged) is the optimal
-    (3.37):
-    the gradient of the exact cost (3.42) vanishes there. Mutant: the solution's L scaled by 1.2.
+    (3.37): the gradient of the exact cost (3.42) vanishes there. Mutant: the solution's L scaled by
+    1.2.
     """
     sys = draw_system(rng, max_states=2, max_modes=2)
     run = dynamic_output_feedback(sys, max_iter=3000, warn=False)

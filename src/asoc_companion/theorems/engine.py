@@ -55,8 +55,7 @@ def statement(key: str):
 
 def run_instance(key: str, seed: int, index: int, mutant: bool = False):
     """One instance of one statement (or of its mutant, drawn from the seeds of
-    ``key + ":mutant"``):
-    the Outcome, or ("error", message) when the check raised.
+    ``key + ":mutant"``): the Outcome, or ("error", message) when the check raised.
 
     Examples
     --------
@@ -100,9 +99,7 @@ class StatementResult:
     diagnosis: str | None = None
 
     def recorded_value(self) -> dict:
-        """The recorded value: counts, failing indices, the statement's summary, its mutant and
-        timing.
-        """
+        """The recorded value: counts, failing indices, the summary, the mutant and the timing."""
         counts = {"holds": self.holds, "fails": self.fails, "not_applicable": self.not_applicable,
                   "errors": self.errors}
         record = {"verdict": verdict_text(counts), "instances": self.instances, "holds": self.holds,
@@ -143,9 +140,8 @@ def _tally(key, n, results, seconds):
 
 def _mutant_record(key, results):
     """What the mutant's instances gave: ``{"description", "fails", "instances"}`` (+ premise-false
-    and
-    errors when there were any, and the statement's ``why_not``). The mutant is caught when ``fails
-    > 0``; it has power when it is caught in at least half of its draws.
+    and errors when there were any, and the statement's ``why_not``). The mutant is caught when
+    ``fails > 0``; it has power when it is caught in at least half of its draws.
     """
     verdicts = [out if isinstance(out, tuple) else out.verdict for _, out in results]
     record = {"description": statement(key).mutant, "fails": verdicts.count("fails"),
@@ -161,8 +157,7 @@ def _mutant_record(key, results):
 
 def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progress=True,
               mutants=None):
-    """Check every statement (or those in ``only``) on its instances; returns {key:
-    StatementResult}.
+    """Check every statement (or those in ``only``) on its instances: {key: StatementResult}.
 
     Parameters
     ----------
@@ -182,15 +177,16 @@ def run_study(instances, seed=2017, only=None, n_jobs=-1, scheduler=None, progre
     progress : bool
         tqdm bar over instances (shown on a terminal only).
     """
-    chosen = [st for st in STATEMENTS if st.check is not None and (only is None or st.key in set(only))]
+    chosen = [st for st in STATEMENTS
+              if st.check is not None and (only is None or st.key in set(only))]
     if only is not None:
         unknown = set(only) - {st.key for st in STATEMENTS}
         if unknown:
             raise ValueError("only: expected statement keys such as 'statement_3_19', found "
                              f"{sorted(unknown)}")
     count = lambda n, st: 0 if n is None else int(n(st) if callable(n) else n)
-    counts = {(st.key, mutant): count(n, st) for st in chosen for mutant, n in ((False, instances),
-                                                                                (True, mutants))}
+    counts = {(st.key, mutant): count(n, st)
+              for st in chosen for mutant, n in ((False, instances), (True, mutants))}
     tasks = [(key, mutant, list(range(start, min(start + BATCH, n))))
              for (key, mutant), n in counts.items() for start in range(0, n, BATCH)]
     jobs = (joblib.delayed(_run_batch)(key, seed, indices, mutant) for key, mutant,

@@ -32,9 +32,7 @@ __all__ = ["check_3_28", "check_3_29", "check_3_30", "bound_cost", "check_3_31",
 
 
 def _finite_instance(rng, max_states=3, max_modes=3):
-    """A random system, horizon 2-8, random time-variant gains (F_k, K_k, L_k) and a
-    Gaussian-mixture x_0.
-    """
+    """A random system, horizon 2-8, time-variant gains (F_k, K_k, L_k), a Gaussian-mixture x_0."""
     sys = draw_system(rng, max_states=max_states, max_modes=max_modes)
     horizon = int(rng.integers(2, 9))
     F = 0.5 * rng.standard_normal((horizon, sys.nx, sys.nx))
@@ -46,8 +44,7 @@ def _finite_instance(rng, max_states=3, max_modes=3):
 
 def check_3_28(rng, mutant=False):
     """Prop. 3.28: the expected cost (3.56) by the moment recursion (3.57)-(3.58) against Monte
-    Carlo.
-    Mutant: the moment form evaluated with the gains in reverse time order.
+    Carlo. Mutant: the moment form evaluated with the gains in reverse time order.
     """
     sys, horizon, F, K, L, mu0, mean0, cov0 = _finite_instance(rng)
     xhat0 = mu0 @ mean0
@@ -58,10 +55,10 @@ def check_3_28(rng, mutant=False):
     state, total = (x, np.broadcast_to(xhat0, x.shape).copy()), np.zeros(n_runs)
     step, chain = loop_step(sys), ModeChain(sys.T)
     for k in range(horizon):
-        total += quadratic_form(sys.Q, theta, state[0]) + quadratic_form(sys.R, theta,
-                                                                         state[1] @ L[k].T)
-        state, theta = step(state, RunModes(theta, sys.M), rng, F[k], K[k],
-                            L[k]), chain.next(rng, theta)
+        total += (quadratic_form(sys.Q, theta, state[0])
+                  + quadratic_form(sys.R, theta, state[1] @ L[k].T))
+        state, theta = (step(state, RunModes(theta, sys.M), rng, F[k], K[k], L[k]),
+                        chain.next(rng, theta))
     total += quadratic_form(sys.Q, theta, state[0])
     mc, se = moment_estimate(total)
     z = abs(mc - exact) / max(se, 1e-12 * exact)
@@ -87,8 +84,8 @@ def check_3_29(rng, mutant=False):
         # tr[H~^T E(P) H~] + E_i(omega)
         omega = np.einsum("iab,iba->i", EP, HHt_cl) + sys.T @ omega
         P = Qt + transpose(At) @ EP @ At
-    backward = trace_sum(P, augmented_initial_moment(mean0, cov0, mu0,
-                                                     xhat0)) + (0.0 if mutant else float(mu0 @ omega))
+    backward = (trace_sum(P, augmented_initial_moment(mean0, cov0, mu0, xhat0))
+                + (0.0 if mutant else float(mu0 @ omega)))
     rel = abs(backward - forward) / forward
     return outcome(verdict(rel < 1e-10), sys, backward=backward, forward=forward,
                    relative_difference=rel)
@@ -110,8 +107,7 @@ def check_3_30(rng, mutant=False):
     X, Y = A + scale * psd(), B + scale * psd()
     small, large = np.trace(A @ B), np.trace(X @ Y)
     return outcome(verdict(small <= large * (1 + 1e-12) + 1e-12), None, tr_AB=small, tr_XY=large,
-                   n_states=n,
-                   n_modes=1)
+                   n_states=n, n_modes=1)
 
 
 def bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=True):
@@ -128,9 +124,8 @@ def bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=True):
     Pbar, Punder, omega = sys.Q.copy(), np.zeros_like(sys.Q), np.zeros(sys.M)
     for k in range(horizon - 1, -1, -1):
         EPbar, EPunder = successor_average(sys.T, Pbar), successor_average(sys.T, Punder)
-        omega = (np.einsum("iab,iba->i", EPbar + EPunder, HHt) + np.einsum("iab,iba->i", EPunder,
-                                                                           K[k] @ JJt @ K[k].T)
-                 + sys.T @ omega)
+        omega = (np.einsum("iab,iba->i", EPbar + EPunder, HHt)
+                 + np.einsum("iab,iba->i", EPunder, K[k] @ JJt @ K[k].T) + sys.T @ omega)
         Pbar, Punder = bound_costate_step(sys, F[k], K[k], L[k], EPbar, EPunder)
     Xbar, Xunder = X_seq[0]
     return trace_sum(Pbar, Xbar + Xunder) + trace_sum(Punder,
@@ -145,8 +140,8 @@ def check_3_31(rng, mutant=False):
     optimised = bool(rng.random() < 0.5)
     if optimised:                                                     # the gains Alg. 3.3 returns
         run = finite_horizon_dynamic_output_feedback(sys, horizon=horizon, mean0=mean0, cov0=cov0,
-                                                     mu0=mu0,
-                                                     init=(F, K, L), max_iter=100, warn=False)
+                                                     mu0=mu0, init=(F, K, L), max_iter=100,
+                                                     warn=False)
         F, K, L = run.F, run.K, run.L
     exact = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0)
     bound = bound_cost(sys, F, K, L, mean0, cov0, mu0, noise=not mutant)
@@ -189,8 +184,8 @@ def check_3_32(rng, mutant=False):
     def bound(z):
         F, K, L = unpack(z)
         Pbar, Punder = bound_costate_step(sys, F, K, L, EPbar, EPunder)
-        omega = np.einsum("iab,iba->i", EPbar + EPunder, HHt) + np.einsum("iab,iba->i", EPunder,
-                                                                          K @ JJt @ K.T) + Eomega
+        omega = (np.einsum("iab,iba->i", EPbar + EPunder, HHt)
+                 + np.einsum("iab,iba->i", EPunder, K @ JJt @ K.T) + Eomega)
         return trace_sum(Pbar, Xbar + Xunder) + trace_sum(Punder, Xbar) + float(mu @ omega)
 
     H, rho = optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
@@ -199,8 +194,8 @@ def check_3_32(rng, mutant=False):
         step = rng.standard_normal(z.size)
         z = z + 0.1 * max(np.linalg.norm(z), 1.0) * step / np.linalg.norm(step)
     best = bound(z)
-    drops = [best - bound(z + scale * rng.standard_normal(z.size)) for scale in (1e-3, 1e-1,
-                                                                                 1.0) for _ in range(5)]
+    drops = [best - bound(z + scale * rng.standard_normal(z.size))
+             for scale in (1e-3, 1e-1, 1.0) for _ in range(5)]
     worst = max(drops) / abs(best)
     return outcome(verdict(worst <= 1e-9), sys, bound_at_solution=best, largest_relative_drop=worst)
 
@@ -228,8 +223,7 @@ def check_3_33(rng, mutant=False):
                                                   max_iter=run.iterations + 20,
                                                   tol=1e-300, **kwargs)
     theta = lambda r: np.concatenate([r.F.ravel(), r.K.ravel(), r.L.ravel()])
-    change = float(np.linalg.norm(theta(more) - theta(run)) / max(np.linalg.norm(theta(run)),
-                                                                  1e-12))
+    change = float(np.linalg.norm(theta(more) - theta(run))
+                   / max(np.linalg.norm(theta(run)), 1e-12))
     return outcome(verdict(largest_increase <= 1e-8 and change < 1e-4), sys,
-                   parameter_change_after_20=change,
-                   **numbers)
+                   parameter_change_after_20=change, **numbers)

@@ -1,5 +1,4 @@
-"""Checks of Sec. 3.5.2: the H2 norm (Props. 3.7, 3.10), the BMIs (Lemmas 3.8, 3.11) and the LMIs
-(Thms. 3.9, 3.12).
+"""Sec. 3.5.2's checks: H2 norm (Props. 3.7, 3.10), BMIs (Lemmas 3.8, 3.11), LMIs (Thms. 3.9, 3.12).
 
 * The H2 formulas are compared with the Monte Carlo stationary E{z^T z} of the closed loop.
 * The lemmas are implications: a point (L, G, Y) is drawn with no relation to the Lyapunov
@@ -67,22 +66,23 @@ def _stationary_check(rng, mode_dependent, mutant):
                                       initial_modes(rng, sys.mu_inf, n_runs), sys.T, target, n_runs)
     z = abs(mc - h2) / np.hypot(se, 1e-3 * h2)
     return outcome(verdict(z < Z_SCORE), sys, h2_formula=h2, monte_carlo=mc, standard_error=se, z=z,
-                   rho=target,
-                   burn_in=burn)
+                   rho=target, burn_in=burn)
 
 
 def check_3_7(rng, mutant=False):
+    """Prop. 3.7: the H2 norm of (3.10) by its trace formula against Monte Carlo (one L)."""
     return _stationary_check(rng, False, mutant)
 
 
 def check_3_10(rng, mutant=False):
+    """Prop. 3.10: the H2 norm by its trace formula against Monte Carlo (mode-dependent L_i)."""
     return _stationary_check(rng, True, mutant)
 
 
 def _random_scaled_spd(rng, count, n, scale):
     """``count`` random SPD n x n matrices scale exp(N(0, 0.15^2)) (I + u W_i), u uniform on [0,
-    0.5] and W_i
-    random SPD: spread around a multiple of I, with no relation to any equation of the system.
+    0.5] and W_i random SPD: spread around a multiple of I, with no relation to any equation of the
+    system.
     """
     spread = np.eye(n) + rng.uniform(0.0, 0.5) * random_spd_stack(rng, count, n)
     return spread * (scale * np.exp(0.15 * rng.standard_normal(count)))[:, None, None]
@@ -155,8 +155,7 @@ def _lemma_bmi(rng, mode_dependent, mutant):
     h2 = (trace_sum(DE @ steady_state_second_moment(Acl, HHt, sys.T, mu),
                     transpose(DE)) if rho < 1 else np.inf)
     numbers = dict(bmi_margin=bmi_margin, constraint_3_14_margin=constraint_margin, rho=rho,
-                   objective=objective,
-                   h2_norm_squared=h2)
+                   objective=objective, h2_norm_squared=h2)
     if not bmi_margin > 0:
         return outcome("not_applicable", sys, **numbers)
     holds = constraint_margin > 0 and rho < 1 and objective >= h2 * (1 - 1e-9)
@@ -164,10 +163,12 @@ def _lemma_bmi(rng, mode_dependent, mutant):
 
 
 def check_3_8(rng, mutant=False):
+    """Lemma 3.8: a point satisfying the BMI (3.15) gives a stabilising L (one L)."""
     return _lemma_bmi(rng, False, mutant)
 
 
 def check_3_11(rng, mutant=False):
+    """Lemma 3.11: a point satisfying the BMI gives stabilising gains (mode-dependent L_i)."""
     return _lemma_bmi(rng, True, mutant)
 
 
@@ -201,25 +202,23 @@ def decide_3_9(sys, mu=None, mutant=False):
 
 def _failure_kind(sys, lmi, gain):
     """Why a certified-feasible LMI gives a non-stabilising gain: "counterexample" when the
-    recovered gain with
-    the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet the gain does not
-    stabilise),
-    "numerical failure" when it does not (the recovery L = F M^{-1} broke the chain M C_i = C_i G).
+    recovered gain with the solver's G, Y satisfies Lemma 3.8's BMI (the proof's chain holds, yet
+    the gain does not stabilise), "numerical failure" when it does not (the recovery L = F M^{-1}
+    broke the chain M C_i = C_i G).
     """
     G, Y = lmi.variables["G"], np.stack(lmi.variables["Y"])
     G = np.stack(G) if len(G) == sys.M else np.broadcast_to(G[0], Y.shape)
     Acl = sys.A + sys.B @ gain @ sys.C
     P = np.einsum("ji,jab->iab", sys.T, Y)
     HHt = sys.H @ transpose(sys.H)
-    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G], [transpose(Acl @ G),
-                                                                        G + transpose(G) - P]])
+    blocks = np.block([[Y - sys.mu_inf[:, None, None] * HHt, Acl @ G],
+                       [transpose(Acl @ G), G + transpose(G) - P]])
     return "counterexample" if min_eig(blocks) > 0 else "numerical failure"
 
 
 def check_3_12(rng, mutant=False):
     """Thm. 3.12: LMIs (mode observed) feasible -> L_i = F_i M_i^{-1} stabilise the mode-observed
-    loop.
-    Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}.
+    loop. Mutant: the gains recovered with a sign error, L_i = -F_i M_i^{-1}.
     """
     sys = draw_system(rng, max_states=2)
     lmi = static_output_lmi(sys, mode_observed=True)

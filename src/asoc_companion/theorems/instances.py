@@ -33,9 +33,7 @@ Z_SCORE = 6.0
 
 def draw_system(rng, *, families=FAMILIES, max_states=3, max_modes=3, siso=False,
                 measurement_noise=0.1):
-    """A random MJLS: family, dimensions (nx <= max_states, M <= max_modes) and matrices from
-    ``rng``.
-    """
+    """A random MJLS from ``rng``: family, sizes (nx <= max_states, M <= max_modes), matrices."""
     family = families[rng.integers(len(families))]
     if family == "thesis_like":
         nx, nu, ny = 2, 1, 1
@@ -82,9 +80,7 @@ BOUND_SEEDS = 16
 
 
 def _scalar_closed_loops(sys, gains):
-    """A_i + L B_i C_i for u = L y with scalar L (SISO), for every L in ``gains``: shape (G, M, n,
-    n).
-    """
+    """A_i + L B_i C_i (u = L y, scalar L: SISO) for every L in ``gains``, shape (G, M, n, n)."""
     bc = sys.B[:, :, :1] @ sys.C[:, :1, :]                             # (M, n, n): B_i C_i
     return sys.A[None] + gains[:, None, None, None] * bc[None]
 
@@ -127,14 +123,11 @@ def radius_lower_bounds(sys, gains):
 
 def walk_lower_bounds(sys, gains):
     """Lower bounds of :func:`scalar_gain_radii` from single closed walks of the mode chain. For a
-    closed
-    walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ...
-    Acl_{i_0},
-    rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive maps, the
-    map
-    X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2. Walks of
-    length 1
-    (i -> i) and 2 (i -> j -> i); exact for one mode (rho = rho(Acl)^2); the largest bound per gain.
+    closed walk i_0 -> ... -> i_{k-1} -> i_0 with probability P and product Pi = Acl_{i_{k-1}} ...
+    Acl_{i_0}, rho^k >= P rho(Pi)^2: the k-th power of the second-moment map dominates, as positive
+    maps, the map X -> P Pi X_{i_0} Pi^T into mode i_0 alone, whose spectral radius is P rho(Pi)^2.
+    Walks of length 1 (i -> i) and 2 (i -> j -> i); exact for one mode (rho = rho(Acl)^2); the
+    largest bound per gain.
 
     Examples
     --------
@@ -157,12 +150,11 @@ def walk_lower_bounds(sys, gains):
 
 def grid_minimum(sys, gains):
     """Index and value of the first smallest entry of ``scalar_gain_radii(sys, gains)``, with rho
-    computed
-    only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound gives m
-    >= the
-    minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then :func:`walk_lower_bounds`)
-    exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin covers the rounding of the
-    bounds and of the eigenvalues) and is skipped (a seed is not evaluated twice).
+    computed only where it can be the smallest. rho at the BOUND_SEEDS gains of smallest lower bound
+    gives m >= the minimum; a gain whose lower bound (:func:`radius_lower_bounds`, then
+    :func:`walk_lower_bounds`) exceeds BOUND_MARGIN max(m, BOUND_FLOOR) has a larger rho (the margin
+    covers the rounding of the bounds and of the eigenvalues) and is skipped (a seed is not
+    evaluated twice).
     """
     bounds = radius_lower_bounds(sys, gains)
     seeds = np.argsort(bounds, kind="stable")[:BOUND_SEEDS]
@@ -235,7 +227,8 @@ class ModeChain:
     def __init__(self, T):
         T = np.asarray(T, dtype=float)
         if T.ndim != 2 or T.shape[0] != T.shape[1]:
-            raise ValueError(f"T: expected a square transition matrix (M, M), found shape {T.shape}")
+            raise ValueError("T: expected a square transition matrix (M, M), found shape "
+                             f"{T.shape}")
         # row j: sum_{l <= j} p_il
         self.thresholds = np.ascontiguousarray(np.cumsum(T, axis=1)[:, :-1].T)
 
@@ -252,6 +245,7 @@ class ModeChain:
 
 
 def initial_modes(rng, mu, n_runs):
+    """theta_0 ~ ``mu`` for each of ``n_runs`` runs (one uniform draw per run)."""
     return np.minimum((rng.random(n_runs)[:, None] > np.cumsum(mu)[None]).sum(axis=1), len(mu) - 1)
 
 
@@ -324,9 +318,7 @@ class ModeOperator:
         self.stacked = np.ascontiguousarray(S.transpose(2, 0, 1).reshape(n, n_modes * self.m))
 
     def __call__(self, x, modes):
-        """S_{theta_r} x_r for every row of ``x`` (runs, n); ``modes``: the runs'
-        :class:`RunModes`.
-        """
+        """S_{theta_r} x_r per row of ``x`` (runs, n); ``modes``: the runs' :class:`RunModes`."""
         return (x @ self.stacked).reshape(-1, self.m).take(modes.run_major, axis=0)
 
 
@@ -336,14 +328,14 @@ def moment_estimate(samples):
 
 
 def indicator_moment_estimate(x, theta, n_modes):
-    """Mean and standard error over the runs of the samples x_r x_r^T 1(theta_r = i), each (M, n,
-    n).
+    """Mean and standard error over the runs of x_r x_r^T 1(theta_r = i), each of shape (M, n, n).
 
     Examples
     --------
     >>> x, theta = np.array([[1.0, 0.5], [2.0, -1.0], [3.0, 0.0]]), np.array([0, 1, 0])
     >>> mean, se = indicator_moment_estimate(x, theta, 2)
-    >>> (3 * mean).round(12).tolist()                # mode 0: x x^T of runs 0 and 2; mode 1: of run 1
+    >>> # mode 0: x x^T of runs 0 and 2; mode 1: of run 1
+    >>> (3 * mean).round(12).tolist()
     [[[10.0, 0.5], [0.5, 0.25]], [[4.0, -2.0], [-2.0, 1.0]]]
     """
     samples = np.zeros((len(x), n_modes, x.shape[1], x.shape[1]))
@@ -374,11 +366,13 @@ def stationary_average(rng, step, stage_cost, state, theta, T, rho, n_runs, step
 
 
 def random_spd(rng, n, scale=1.0):
+    """A random SPD n x n matrix ``scale`` (G G^T / n + 0.1 I), G standard normal."""
     G = rng.standard_normal((n, n))
     return scale * (G @ G.T / n + 0.1 * np.eye(n))
 
 
 def random_spd_stack(rng, M, n, scale=1.0):
+    """``M`` independent :func:`random_spd` matrices, stacked (M, n, n)."""
     return np.stack([random_spd(rng, n, scale) for _ in range(M)])
 
 
@@ -411,8 +405,10 @@ def outcome(verdict, sys=None, **numbers):
     >>> outcome("holds", None, gap=np.float64(0.5), ok=np.bool_(True)).numbers
     {'gap': 0.5, 'ok': True}
     """
-    clean = {k: (v.tolist() if isinstance(v, np.ndarray) else (float(v) if isinstance(v, np.floating) else
-                 (bool(v) if isinstance(v, np.bool_) else v))) for k, v in numbers.items()}
+    plain = lambda v: (v.tolist() if isinstance(v, np.ndarray)
+                       else float(v) if isinstance(v, np.floating)
+                       else bool(v) if isinstance(v, np.bool_) else v)
+    clean = {k: plain(v) for k, v in numbers.items()}
     if sys is not None:
         clean.update(size(sys))
         if verdict == "fails":
@@ -421,9 +417,7 @@ def outcome(verdict, sys=None, **numbers):
 
 
 def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
-    """Rescale A_i, B_i so that the closed loop of ``gain_fn(sys)`` has rho uniform in [low,
-    high].
-    """
+    """Rescale A_i, B_i so the closed loop of ``gain_fn(sys)`` has rho uniform in [low, high]."""
     target = rng.uniform(low, high)
     factor = _radius_to(sys, gain_fn(sys), target)
     return rescaled(sys, factor), target
@@ -432,9 +426,7 @@ def stabilised(rng, sys, gain_fn, low=0.2, high=0.85):
 # ---------------------------------------------------------------- Gaussian-mixture initial states
 
 def gaussian_mixture(rng, sys):
-    """A random Gaussian mixture of x_0 over the modes: weights mu_0, means (M, n), covariances (M,
-    n, n).
-    """
+    """A random Gaussian mixture of x_0: weights mu_0, means (M, n), covariances (M, n, n)."""
     mu0 = rng.dirichlet(np.ones(sys.M))
     mean0 = rng.standard_normal((sys.M, sys.nx))
     cov0 = random_spd_stack(rng, sys.M, sys.nx, 0.2)
@@ -445,16 +437,15 @@ def sample_mixture(rng, mu0, mean0, cov0, n_runs):
     """``n_runs`` draws (x_0, theta_0) of the mixture."""
     theta = initial_modes(rng, mu0, n_runs)
     chol = ModeOperator(np.linalg.cholesky(cov0))
-    x = mean0[theta] + chol(rng.standard_normal((n_runs, mean0.shape[1])), RunModes(theta,
-                                                                                    len(mu0)))
+    draws = rng.standard_normal((n_runs, mean0.shape[1]))
+    x = mean0[theta] + chol(draws, RunModes(theta, len(mu0)))
     return x, theta
 
 
 def z_scores(x, theta, exact, mu, min_hits=100):
     """Largest |Monte Carlo - exact| / standard error, the Monte Carlo of E{x x^T 1(theta = i)} over
-    the
-    runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits (rarer
-    modes have too few samples for a normal standard error).
+    the runs (x, theta), over the entries of the modes with at least ``min_hits`` expected visits
+    (rarer modes have too few samples for a normal standard error).
     """
     mean, se = indicator_moment_estimate(x, theta, len(mu))
     seen = mu * len(x) >= min_hits
@@ -466,9 +457,8 @@ def z_scores(x, theta, exact, mu, min_hits=100):
 
 def norm_scale(rng, Acl):
     """Factor making max_i ||Acl_i||_2 uniform on [0.5, 1.5]. A Monte Carlo estimate of a moment is
-    only
-    trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i
-    multiplies
-    x x^T by 9 per step, and a few samples decide the mean (the standard error then misleads).
+    only trustworthy when no rare mode path carries it: with ||Acl_i|| = 3, a path staying in mode i
+    multiplies x x^T by 9 per step, and a few samples decide the mean (the standard error then
+    misleads).
     """
     return float(rng.uniform(0.5, 1.5) / np.max(np.linalg.norm(Acl, ord=2, axis=(1, 2))))

@@ -55,9 +55,7 @@ MUTANT_COVARIANCE = "quartic_exponential"
 
 
 def random_covariance(rng):
-    """A covariance of Table 2.1 (name as in ``asoc.gp.COVARIANCES``) and its random shape
-    parameter.
-    """
+    """A Table 2.1 covariance (named as in ``asoc.gp.COVARIANCES``) and a random shape parameter."""
     name = COVARIANCE_NAMES[int(rng.integers(len(COVARIANCE_NAMES)))]
     shape = {"matern": {"nu": float(rng.choice([0.5, 1.5, 2.5]))},
              "gamma_exponential": {"gamma": float(rng.uniform(0.5, 2.0))},
@@ -125,8 +123,7 @@ def _step_density(weights):
 
 def _pair_distance(family, config, a, b, interval=(0.0, 1.0)):
     """The library's distance of Sec. 2.6.3 between two distributions of a configuration
-    (``interval``:
-    the integration limits of the quadrature distances).
+    (``interval``: the integration limits of the quadrature distances).
 
     Examples
     --------
@@ -180,9 +177,7 @@ def _objective(D, name, shape):
 
 
 def _search(rng, family, layout, config, name, shape):
-    """Adversarial search, one distribution moved at a time; returns (theta, value, log factor,
-    moves, restarts).
-    """
+    """Adversarial search, one distribution at a time: theta, value, log factor, moves, restarts."""
     N = layout["N"]
     start = lambda: [rng.normal(size=_parameter_count(family, layout, i)) for i in range(N)]
     theta = start()
@@ -200,8 +195,8 @@ def _search(rng, family, layout, config, name, shape):
         i = int(rng.integers(N))
         trial = theta[i] + sigma * rng.standard_normal(theta[i].shape)
         moved = _decode(family, trial)
-        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family,
-                                                                                theta[j])) for j in range(N)]
+        row = [0.0 if j == i else _pair_distance(family, config, moved, _decode(family, theta[j]))
+               for j in range(N)]
         D_trial = D.copy()
         D_trial[i, :] = D_trial[:, i] = row
         trial_value, trial_factor = _objective(D_trial, name, shape)
@@ -254,8 +249,8 @@ def gram_certificate(family, config, name, shape, l):
         delta_D += float(np.abs(D - distance_matrix(family, config, (-1.0, 2.0))).max())
     off = D[np.triu_indices(N, 1)]
     h = 1e-6
-    slope = np.abs(covariance(name, shape, off * (1 + h), l) - covariance(name, shape,
-                                                                          off * (1 - h), l)) \
+    slope = np.abs(covariance(name, shape, off * (1 + h), l)
+                   - covariance(name, shape, off * (1 - h), l)) \
         / (2 * h * np.maximum(off, 1e-300))
     slope = float(np.nanmax(np.where(off > 0, slope, 0.0))) if off.size else 0.0
     tol = N * (slope * delta_D + 16 * EPS)
@@ -306,7 +301,8 @@ def search_counterexample(rng: np.random.Generator, family: str, name: str, shap
     l = float(np.exp(refined.x if refined.fun < value else log_factor) * _median_distance(D))
     cert = gram_certificate(family, config, name, shape, l) if l > 0 else \
         {"lambda_min": 1.0, "lambda_min_scipy_evr": 1.0, "rayleigh_exact": 1.0, "tolerance": 0.0}
-    negative = (cert["lambda_min"] < -cert["tolerance"] and cert["lambda_min_scipy_evr"] < -cert["tolerance"]
+    negative = (cert["lambda_min"] < -cert["tolerance"]
+                and cert["lambda_min_scipy_evr"] < -cert["tolerance"]
                 and cert["rayleigh_exact"] < -cert["tolerance"])
     numbers = {"distance": family, "covariance": name, "shape": json.dumps(shape),
                "distributions": layout["N"],

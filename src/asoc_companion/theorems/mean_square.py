@@ -174,18 +174,17 @@ def check_3_5(rng, mutant=False):
     def expected_cost(u):
         nxt = A @ x + B @ u
         return float(belief @ (np.einsum("a,iab,b->i", x, Q, x) + np.einsum("a,iab,b->i", u, R, u)
-                               + np.einsum("ia,iab,ib->i", nxt, EQ, nxt) + np.einsum("iab,ba->i",
-                                                                                     EQ, W)))
+                               + np.einsum("ia,iab,ib->i", nxt, EQ, nxt)
+                               + np.einsum("iab,ba->i", EQ, W)))
 
     res = scipy.optimize.minimize(expected_cost, np.zeros(sys.nu), method="BFGS",
                                   options={"gtol": 1e-12})
     Ew = lambda S: np.einsum("i,i...->...", belief, S)
     At, Bt = transpose(A), transpose(B)
-    psi = Ew(Q + At @ EQ @ A) - Ew(At @ EQ @ B) @ np.linalg.solve(Ew(R + Bt @ EQ @ B),
-                                                                  Ew(Bt @ EQ @ A))
+    psi = (Ew(Q + At @ EQ @ A)
+           - Ew(At @ EQ @ B) @ np.linalg.solve(Ew(R + Bt @ EQ @ B), Ew(Bt @ EQ @ A)))
     delta = 0.0 if mutant else float(belief @ np.einsum("iab,ba->i", EQ, W))
     closed = float(x @ psi @ x + delta)
     rel = abs(closed - res.fun) / max(abs(res.fun), 1e-12)
     return outcome(verdict(rel < 1e-7), sys, closed_form=closed, minimised=res.fun,
-                   relative_difference=rel,
-                   delta=delta)
+                   relative_difference=rel, delta=delta)

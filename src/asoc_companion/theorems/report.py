@@ -22,9 +22,7 @@ SYSTEMS_KEPT = 20
 
 
 def save_counterexamples(results, seed, folder) -> Path:
-    """Every failing instance (statement, index, its deciding numbers and system) as JSON,
-    atomically.
-    """
+    """Every failing instance (statement, index, deciding numbers, system) as JSON, atomically."""
     statements = {key: [{"index": int(i), "numbers": res.failures[i]} for i in sorted(res.failures)]
                   for key, res in results.items() if res.failures}
     data = {"seed": int(seed), "statements": {key: _trim_systems(key, entries) for key,
@@ -59,8 +57,7 @@ def margin(key, numbers) -> float:
 
 def shown_counterexample(key, entries):
     """Among the failing instances with the fewest states, then modes, the one that fails most
-    clearly
-    (largest margin: its verdict survives rounding and other BLAS kernels); ties by index.
+    clearly (largest margin: its verdict survives rounding and other BLAS kernels); ties by index.
     """
     if not entries:
         return None
@@ -73,9 +70,7 @@ def _order(key, entry):
 
 
 def describe(key, outcome: Outcome) -> str:
-    """One line per deciding number, rounded to what is meant (identical text under other BLAS
-    kernels).
-    """
+    """One line per deciding number, rounded to what is meant (same text, other BLAS kernels)."""
     n = outcome.numbers
     lines = [f"{key}: {outcome.verdict}; {n.get('n_states')} states, {n.get('n_modes')} modes, "
              f"{n.get('n_inputs')} input(s), {n.get('n_outputs')} output(s)"]
@@ -96,7 +91,8 @@ def mutant_text(record) -> str:
     mutant = record.get("mutant")
     if not mutant:
         return "-"
-    return f"{'caught' if mutant['fails'] else 'NOT caught'} in {mutant['fails']} of {mutant['instances']}"
+    caught = "caught" if mutant["fails"] else "NOT caught"
+    return f"{caught} in {mutant['fails']} of {mutant['instances']}"
 
 
 # The Theorems page as MyST Markdown: rendered by the HTML and the LaTeX builders alike (math
@@ -148,8 +144,8 @@ def statements_markdown(statements, records, findings) -> str:
     whether the check caught its mutant, a link to the statement's section), then per statement a
     section with the claim, what one instance checks, the verdict, the mutant, and (when the record
     has them) the diagnosis and the corrected statement with its verdict. ``records`` maps a key to
-    its recorded value
-    (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of the findings page.
+    its recorded value (``StatementResult.recorded_value()``); ``findings`` maps a key to a label of
+    the findings page.
 
     Examples
     --------

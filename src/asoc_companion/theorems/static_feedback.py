@@ -76,12 +76,11 @@ def check_3_14(rng, mutant=False):
 
 def check_3_15(rng, mutant=False):
     """Prop. 3.15 as printed: the average cost (3.11) from a random x_0 and theta_0 ~ mu_inf (the
-    mean stage
-    cost of the moment recursion over steps h..2h-1, rho^h <= 1e-13) equals (3.30)'s objective
-    sum_i tr[(Q_i + L^T R_i L) X_inf^i] (defined when n_y = n_x); the corrected reading with
-    C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected reading
-    with
-    X_inf solved without the noise term (the instance's verdict is then the corrected reading's).
+    mean stage cost of the moment recursion over steps h..2h-1, rho^h <= 1e-13) equals (3.30)'s
+    objective sum_i tr[(Q_i + L^T R_i L) X_inf^i] (defined when n_y = n_x); the corrected reading
+    with C_i^T L^T R_i L C_i is checked beside it (``corrected_holds``). Mutant: the corrected
+    reading with X_inf solved without the noise term (the instance's verdict is then the corrected
+    reading's).
     """
     sys = draw_system(rng)
     L = 0.5 * rng.standard_normal((sys.nu, sys.ny))
@@ -115,9 +114,7 @@ def check_3_15(rng, mutant=False):
 
 
 def summarise_3_15(outcomes):
-    """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i), on every instance
-    drawn.
-    """
+    """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i) on every instance."""
     holds = sum(bool(o.numbers["corrected_holds"]) for o in outcomes)
     return {"diagnosis": ("A typo that starts in (3.11), not in (3.30): with u_k = L y_k = L C_i "
                           "x_k (3.7) the stage cost x_k^T Q_i x_k + u_k^T R_i u_k is x_k^T (Q_i + "
@@ -127,16 +124,14 @@ def summarise_3_15(outcomes):
                           "3.16 and Thm. 3.17 use the weight with C_i."),
             "corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
                                        "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf "
-                                       "R_i\\mathbf L\\mathbf "
-                                       "C_i$",
+                                       "R_i\\mathbf L\\mathbf C_i$",
                           "holds": holds, "fails": len(outcomes) - holds,
                           "instances": len(outcomes)}}
 
 
 def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
     """The Lagrangian of (3.30): sum_i tr[(Q_i + C_i^T L^T R_i L C_i) X_i] + <P, map(X) + noise -
-    X>,
-    with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per
+    X>, with the closed loop and the moment map's matrix assembled here (``L`` one gain or one per
     mode).
 
     Examples
@@ -156,8 +151,7 @@ def _lagrangian_dense(A, B, C, L, Q, R, H, T, mu, X, P):
 
 def check_3_16(rng, mutant=False):
     """Prop. 3.16: the stated Hamiltonian (with E_i(P)) against the Lagrangian of (3.30) built
-    densely.
-    Mutant: the stated form without the noise term mu_i H_i H_i^T.
+    densely. Mutant: the stated form without the noise term mu_i H_i H_i^T.
     """
     sys = draw_system(rng)
     L = rng.standard_normal((sys.nu, sys.ny))
@@ -170,8 +164,8 @@ def check_3_16(rng, mutant=False):
     weight = sys.Q + transpose(LC) @ sys.R @ LC
     stated = trace_sum(weight, X) - trace_sum(P, X) + trace_sum(successor_average(sys.T, P), inner)
     dense = _lagrangian_dense(sys.A, sys.B, sys.C, L, sys.Q, sys.R, sys.H, sys.T, mu, X, P)
-    scale = trace_sum(weight, X) + trace_sum(P, X) + abs(trace_sum(successor_average(sys.T, P),
-                                                                   inner))
+    scale = (trace_sum(weight, X) + trace_sum(P, X)
+             + abs(trace_sum(successor_average(sys.T, P), inner)))
     rel = abs(stated - dense) / scale
     return outcome(verdict(rel < 1e-12), sys, stated=stated, lagrangian=dense,
                    relative_difference=rel)
@@ -179,13 +173,14 @@ def check_3_16(rng, mutant=False):
 
 def _gain_residual(sys, L, X, P, weight_R=True):
     """(3.31): sum_i (R_i + B_i^T E_i(P) B_i) L C_i X_i C_i^T + B_i^T E_i(P) A_i X_i C_i^T, and its
-    scale
-    (``weight_R=False``: the residual without R_i, a mutant).
+    scale (``weight_R=False``: the residual without R_i, a mutant).
     """
     EP = successor_average(sys.T, P)
-    first = ((sys.R if weight_R else 0) + transpose(sys.B) @ EP @ sys.B) @ L @ sys.C @ X @ transpose(sys.C)
+    weight = (sys.R if weight_R else 0) + transpose(sys.B) @ EP @ sys.B
+    first = weight @ L @ sys.C @ X @ transpose(sys.C)
     second = transpose(sys.B) @ EP @ sys.A @ X @ transpose(sys.C)
-    return first.sum(axis=0) + second.sum(axis=0), np.linalg.norm(first.sum(0)) + np.linalg.norm(second.sum(0))
+    scale = np.linalg.norm(first.sum(0)) + np.linalg.norm(second.sum(0))
+    return first.sum(axis=0) + second.sum(axis=0), scale
 
 
 def _costate(sys, L):
@@ -193,15 +188,13 @@ def _costate(sys, L):
     Acl = closed_loop(sys, L)
     LC = L @ sys.C
     rhs = (sys.Q + transpose(LC) @ sys.R @ LC).ravel()
-    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T,
-                        rhs).reshape(sys.Q.shape)
-    return sym(P)
+    P = np.linalg.solve(np.eye(rhs.size) - ms_operator(Acl, sys.T, check=False).T, rhs)
+    return sym(P.reshape(sys.Q.shape))
 
 
 def check_3_17(rng, mutant=False):
     """Thm. 3.17: the minimiser of the cost (found by a grid and a scalar search over L) satisfies
-    (3.31).
-    Mutant: the residual of (3.31) without R_i.
+    (3.31). Mutant: the residual of (3.31) without R_i.
     """
     sys = draw_system(rng, siso=True)
     s = np.linspace(-np.pi / 2, np.pi / 2, 403)[1:-1]
@@ -230,9 +223,9 @@ def check_3_17(rng, mutant=False):
         if X is not None:
             costs[index] = h2_cost(sys, np.array([[gain]]), X, check=False)
     best = int(np.argmin(costs))
-    res = scipy.optimize.minimize_scalar(cost, bounds=(s[max(best - 1, 0)], s[min(best + 1,
-                                                                                  len(s) - 1)]),
-                                         method="bounded", options={"xatol": 1e-12})
+    bracket = (s[max(best - 1, 0)], s[min(best + 1, len(s) - 1)])
+    res = scipy.optimize.minimize_scalar(cost, bounds=bracket, method="bounded",
+                                         options={"xatol": 1e-12})
     t = res.x if res.fun <= costs[best] else s[best]
     L = np.array([[np.tan(t)]])
     X = steady_state_second_moment(closed_loop(sys, L), HHt, sys.T, sys.mu_inf)
@@ -244,8 +237,7 @@ def check_3_17(rng, mutant=False):
 
 def check_3_18(rng, mutant=False):
     """Prop. 3.18: the printed vec formula (column-major vec, C X C^T (x) (R + B^T E(P) B)) solves
-    (3.31).
-    Mutant: the formula with 2 R_i in place of R_i (a factor changed).
+    (3.31). Mutant: the formula with 2 R_i in place of R_i (a factor changed).
     """
     sys = draw_system(rng)
     X, P = random_spd_stack(rng, sys.M, sys.nx), random_spd_stack(rng, sys.M, sys.nx)
@@ -267,9 +259,8 @@ def check_3_18(rng, mutant=False):
 def check_3_19(rng, mutant=False):
     """Thm. 3.19: SOF-stabilisable (grid over scalar L) -> Alg. 3.1 converges to a stabilising,
     unique solution (same limit from X = P = 1e-4 I and from X = P = I), on the thesis's model
-    (3.7),
-    which has no measurement noise (J = None; Alg. 3.1 with J is the library's generalisation).
-    Mutant: Alg. 3.1 stopped after 3 iterations.
+    (3.7), which has no measurement noise (J = None; Alg. 3.1 with J is the library's
+    generalisation). Mutant: Alg. 3.1 stopped after 3 iterations.
     """
     sys = draw_system(rng, siso=True, families=("thesis_like", "unstable", "stable",
                                                 "sparse_T")).replace(J=None)
@@ -277,9 +268,7 @@ def check_3_19(rng, mutant=False):
 
 
 def decide_3_19(sys, max_iter=20000):
-    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (two
-    starts).
-    """
+    """Thm. 3.19 on one SISO system: premise by the gain grid, conclusion by Alg. 3.1 (2 starts)."""
     L_best, rho_best = best_scalar_gain(sys)
     if not rho_best < 1:
         return outcome("not_applicable", sys, min_rho_over_L=rho_best, best_L=L_best)
@@ -296,12 +285,13 @@ def decide_3_19(sys, max_iter=20000):
 
 def summarise_3_19(outcomes):
     """Thm. 3.19: how the failures fail (no convergence; a non-stabilising limit; another limit from
-    I),
-    and how many have one mode (plain linear systems).
+    I), and how many have one mode (plain linear systems).
     """
     fails = [o.numbers for o in outcomes if o.verdict == "fails"]
     return {"not_converged": sum(not n["alg_converged"] for n in fails),
-            "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1 for n in fails),
-            "other_limit_from_identity": sum(n["alg_converged"] and n["alg_rho"] < 1 for n in fails),
+            "converged_not_stabilising": sum(n["alg_converged"] and not n["alg_rho"] < 1
+                                             for n in fails),
+            "other_limit_from_identity": sum(n["alg_converged"] and n["alg_rho"] < 1
+                                             for n in fails),
             "one_mode": sum(n["n_modes"] == 1 for n in fails),
             "smallest_margin": min((1 - n["min_rho_over_L"] for n in fails), default=float("nan"))}
