@@ -63,7 +63,8 @@ bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations)
 Algs. 3.1 and 3.2), ``exact_static_design`` (the exact-cost static gain, not in the thesis),
 ``lmi`` (Thms. 3.9, 3.12),
 ``moment_bounds``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26, (3.49)-(3.51)),
-``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg`` (the
+``finite_horizon_model`` (the time-variant MJLS (3.54) over a horizon) and ``finite_horizon``
+(Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg`` (the
 mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
 ``gradients`` and ``exact_cost_design`` (exact-cost optimisation of (3.37) and (3.55), not in the
 thesis), ``costs`` (the exact average cost (3.9)), ``monte_carlo`` (simulation),
@@ -73,31 +74,31 @@ and what every design's result shares), ``examples`` (the thesis's examples), ``
 
 from .closed_loops import closed_loop
 from .controllers import (
-                      Controller,
-                      DynamicOutputFeedback,
-                      ModeDependentGain,
-                      StaticGain,
-                      TimeVariantGain,
+    Controller,
+    DynamicOutputFeedback,
+    ModeDependentGain,
+    StaticGain,
+    TimeVariantGain,
 )
 from .costs import average_cost
 from .dynamic import (
-                      DynamicOutputFeedbackResult,
-                      augmented_closed_loop,
-                      dynamic_output_feedback,
-                      steady_state_cost,
+    DynamicOutputFeedbackResult,
+    augmented_closed_loop,
+    dynamic_output_feedback,
+    steady_state_cost,
 )
 from .exact_cost_design import (
-                      ExactDynamicOutputFeedbackResult,
-                      ExactFiniteHorizonResult,
-                      exact_dynamic_output_feedback,
-                      exact_finite_horizon_dynamic_output_feedback,
-                      min_radius_dynamic_output_feedback,
+    ExactDynamicOutputFeedbackResult,
+    ExactFiniteHorizonResult,
+    exact_dynamic_output_feedback,
+    exact_finite_horizon_dynamic_output_feedback,
+    min_radius_dynamic_output_feedback,
 )
 from .exact_static_design import ExactStaticOutputFeedbackResult, exact_static_output_feedback
 from .finite_horizon import (
-                      FiniteHorizonResult,
-                      finite_horizon_cost,
-                      finite_horizon_dynamic_output_feedback,
+    FiniteHorizonResult,
+    finite_horizon_cost,
+    finite_horizon_dynamic_output_feedback,
 )
 from .gradients import average_cost_and_gradient, radius_and_gradient
 from .lmi import LMIResult, static_output_lmi
@@ -109,10 +110,10 @@ from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observe
 from .random import random_mjls
 from .stability import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
 from .static import (
-                      StaticOutputFeedbackResult,
-                      gain_from_moments,
-                      static_cost,
-                      static_output_feedback,
+    StaticOutputFeedbackResult,
+    gain_from_moments,
+    static_cost,
+    static_output_feedback,
 )
 from .system import MJLS, predecessor_sum, stationary_distribution, successor_average
 

@@ -28,13 +28,11 @@ from .design_result import CertifiedDesignResult, DesignResult
 from .dynamic import iterate_bounds
 from .finite_horizon import (
     augmented_initial_moment,
-    check_initial_state,
     finite_horizon_cost,
     finite_horizon_dynamic_output_feedback,
     initial_gains,
-    mode_distributions,
-    stages,
 )
+from .finite_horizon_model import check_initial_state, mode_distributions, stages
 from .gradients import (
     average_cost_and_gradient,
     closed_loop_radius,

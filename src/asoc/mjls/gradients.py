@@ -46,6 +46,7 @@ def _closed_loop_gradient(sys, G):
     gL = (transpose(sys.B) @ G[:, :nx, nx:]).sum(axis=0)
     return gF, gK, gL
 
+
 def _gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     """dJ/dF, dJ/dK, dJ/dL from the moments X and costates E_i(P) (adjoint of Prop. 3.23).
 
@@ -87,6 +88,7 @@ def _gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     gK += 2.0 * (mu[:, None, None] * EP[:, nx:, nx:] @ K @ JJt).sum(axis=0)
     gL += 2.0 * (sys.R @ L @ X[:, nx:, nx:]).sum(axis=0)
     return gF, gK, gL
+
 
 def average_cost_and_gradient(sys, F, K, L):
     """Exact average cost (3.42) (Prop. 3.24) of (3.37) and its gradient over (F, K, L).
@@ -141,6 +143,7 @@ def average_cost_and_gradient(sys, F, K, L):
     return cost, _gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False),
                                 noise_covariances(sys)[1], mu)
 
+
 def positive_definite(Y):
     """True when every matrix of the stack ``Y`` has a Cholesky factor (is positive definite).
 
@@ -155,6 +158,7 @@ def positive_definite(Y):
         return False
     return True
 
+
 def closed_loop_radius(sys, F, K, L):
     """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39).
 
@@ -167,6 +171,7 @@ def closed_loop_radius(sys, F, K, L):
     1.3449
     """
     return mean_square_stability(augmented_closed_loop(sys, F, K, L)[0], sys.T, check=False).rho
+
 
 def radius_and_gradient(sys, F, K, L):
     """Mean-square spectral radius rho (Cor. 3.2) of (3.37) and its gradient over (F, K, L).
@@ -210,13 +215,14 @@ def radius_and_gradient(sys, F, K, L):
     return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V,
                                                                    check=False) @ At @ X / inner)
 
+
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.
 
     Parameters
     ----------
     st : Stages
-        The stages of the horizon (``asoc.mjls.finite_horizon.Stages``).
+        The stages of the horizon (``asoc.mjls.finite_horizon_model.Stages``).
     F, K, L : numpy.ndarray
         Gains of (3.55), shapes (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc).
     X0 : numpy.ndarray, shape (M, n, n)
@@ -236,8 +242,8 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> from asoc.mjls.finite_horizon import (augmented_initial_moment, finite_horizon_cost,
-    ...                                       mode_distributions, stages)
+    >>> from asoc.mjls.finite_horizon import augmented_initial_moment, finite_horizon_cost
+    >>> from asoc.mjls.finite_horizon_model import mode_distributions, stages
     >>> st = stages(sys, 3)
     >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)),
     ...     -np.ones((1, 2)))]

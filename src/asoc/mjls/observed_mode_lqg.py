@@ -37,13 +37,8 @@ import numpy as np
 from ..linalg import transpose
 from ..validation import real_array
 from .controllers import Controller
-from .finite_horizon import (
-    augmented_cost,
-    augmented_initial_moment,
-    check_initial_state,
-    mode_distributions,
-    stages,
-)
+from .finite_horizon import augmented_cost, augmented_initial_moment
+from .finite_horizon_model import check_initial_state, mode_distributions, stages
 from .system import check_system
 
 __all__ = ["ModeObservedResult", "ModeObservedLQG", "mode_observed_lqg"]
@@ -151,7 +146,7 @@ def _control_riccati(st):
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
-    >>> from asoc.mjls.finite_horizon import stages
+    >>> from asoc.mjls.finite_horizon_model import stages
     >>> F, X = _control_riccati(stages(sys, 3))
     >>> F.shape, np.allclose(X[-1], sys.Q)
     ((3, 2, 1, 2), True)
@@ -178,7 +173,7 @@ def _markov_jump_filter(st, Y0, mu):
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
-    >>> from asoc.mjls.finite_horizon import mode_distributions, stages
+    >>> from asoc.mjls.finite_horizon_model import mode_distributions, stages
     >>> st = stages(sys, 3)
     >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)),
     ...     mode_distributions(st,
