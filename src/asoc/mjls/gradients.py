@@ -1,5 +1,5 @@
-"""Gradients of the exact costs and of the mean-square spectral radius over the gains (3.37),
-(3.55).
+"""Gradients of the exact costs and of the mean-square spectral radius over the gains of (3.37)
+and (3.55).
 
 The exact designs of :mod:`asoc.mjls.exact_cost_design` minimise these functions. With the augmented
 closed loop A~_i, W_i = H~_i H~_i^T and Q~_i of (3.39)-(3.40) and Prop. 3.20,
@@ -210,10 +210,11 @@ def radius_and_gradient(sys, F, K, L):
     At = augmented_closed_loop(sys, F, K, L)[0]
     rho, X, V = perron_pair(At, sys.T)
     inner = float(np.einsum("iab,iab->", V, X))
-    if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * np.linalg.norm(V) * np.linalg.norm(X):
+    scale = np.linalg.norm(V) * np.linalg.norm(X)
+    if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * scale:
         return rho, _closed_loop_gradient(sys, np.zeros_like(At))
-    return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V,
-                                                                   check=False) @ At @ X / inner)
+    EV = successor_average(sys.T, V, check=False)
+    return rho, _closed_loop_gradient(sys, 2.0 * EV @ At @ X / inner)
 
 
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
@@ -245,14 +246,13 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     >>> from asoc.mjls.finite_horizon import augmented_initial_moment, finite_horizon_cost
     >>> from asoc.mjls.finite_horizon_model import mode_distributions, stages
     >>> st = stages(sys, 3)
-    >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)),
-    ...     -np.ones((1, 2)))]
-    >>> X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
-    ...     SEC373_MU0 @ SEC373_MEAN0[1])
-    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0, mode_distributions(st,
-    ...     SEC373_MU0))
-    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0,
-    ...     SEC373_MU0))), gL.shape
+    >>> gains = [np.broadcast_to(g, (3,) + g.shape)
+    ...          for g in (0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))]
+    >>> mean0, cov0, mu0 = SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0
+    >>> X0 = augmented_initial_moment(mean0, cov0, mu0, mu0 @ mean0)
+    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0,
+    ...                                                       mode_distributions(st, mu0))
+    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, mean0, cov0, mu0))), gL.shape
     (True, (3, 1, 2))
     """
     m = st.stacked
