@@ -330,7 +330,8 @@ def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=
     if not np.any(rho):
         return np.zeros(size), GainSolve("cg", 0.0)
     delta = (np.finfo(float).eps * size if rcond is None else rcond) * preconditioner.scale
-    max_iter = max(1, int(config.defaults["mjls.cg_max_iter_factor"] * size)) if max_iter is None else max_iter
+    if max_iter is None:
+        max_iter = max(1, int(config.defaults["mjls.cg_max_iter_factor"] * size))
     tol = config.defaults["mjls.cg_tolerance"] if tol is None else tol
     norm_rho = float(np.linalg.norm(rho))
     shifted = scipy.sparse.linalg.LinearOperator((size, size),

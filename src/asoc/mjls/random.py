@@ -113,7 +113,8 @@ def random_mjls(rng, n_states, n_inputs, n_outputs, n_modes, *, family="stable",
     >>> random_mjls(np.random.default_rng(1), 3, 1, 1, 2, family="thesis_like")
     Traceback (most recent call last):
     ...
-    ValueError: family: expected n_states=2, n_inputs=1, n_outputs=1 for 'thesis_like', found 3, 1, 1
+    ValueError: family: expected n_states=2, n_inputs=1, n_outputs=1 for 'thesis_like',
+    found 3, 1, 1
     """
     rng = generator(rng, "rng")
     n_states = integer(n_states, "n_states", minimum=1)

@@ -250,7 +250,8 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     --------
     >>> from asoc.mjls.examples import sec32_system
     >>> r = mean_square_stability(sec32_system())
-    >>> r.verdict, r.stabilizing, bool(r.rho_lower <= r.rho <= r.rho_upper), bool(r.rho_upper - r.rho_lower < 1e-9)
+    >>> inside, narrow = r.rho_lower <= r.rho <= r.rho_upper, r.rho_upper - r.rho_lower < 1e-9
+    >>> r.verdict, r.stabilizing, bool(inside), bool(narrow)
     (<Verdict.UNSTABLE: 'unstable'>, False, True, True)
 
     A mode with eigenvalue 1 has rho = 1: undecided, never stable.
