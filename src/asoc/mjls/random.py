@@ -22,8 +22,7 @@ def _matrix_with_radius(rng, n, radius):
     """A standard normal n x n matrix rescaled to spectral radius ``radius``."""
     G = rng.standard_normal((n, n))
     rho = np.max(np.abs(np.linalg.eigvals(G)))
-    # a nilpotent draw (probability 0) has no radius to scale
-    while rho < 1e-8:
+    while rho < 1e-8:                      # a nilpotent draw (probability 0) has no radius to scale
         G = rng.standard_normal((n, n))
         rho = np.max(np.abs(np.linalg.eigvals(G)))
     return G * (radius / rho)
