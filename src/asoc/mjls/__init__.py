@@ -117,19 +117,19 @@ from .static import (
 )
 from .system import MJLS, predecessor_sum, stationary_distribution, successor_average
 
-__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator",
-           "ms_spectral_radius",
-           "mean_square_stability", "MeanSquareStability", "Verdict",
-           "closed_loop", "second_moment_step", "second_moments", "steady_state_second_moment",
-           "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
-           "static_output_lmi", "LMIResult", "observed_mode_state_feedback", "ObservedModeResult",
-           "dynamic_output_feedback", "DynamicOutputFeedbackResult", "augmented_closed_loop",
-           "steady_state_cost", "finite_horizon_dynamic_output_feedback", "FiniteHorizonResult",
-           "finite_horizon_cost", "mode_observed_lqg", "ModeObservedLQG", "ModeObservedResult",
-           "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
-           "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
+__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution",
+           "ms_operator", "ms_spectral_radius", "mean_square_stability", "MeanSquareStability",
+           "Verdict", "closed_loop", "second_moment_step", "second_moments",
+           "steady_state_second_moment", "h2_cost", "static_output_feedback",
+           "StaticOutputFeedbackResult", "gain_from_moments", "static_output_lmi", "LMIResult",
+           "observed_mode_state_feedback", "ObservedModeResult", "dynamic_output_feedback",
+           "DynamicOutputFeedbackResult", "augmented_closed_loop", "steady_state_cost",
+           "finite_horizon_dynamic_output_feedback", "FiniteHorizonResult", "finite_horizon_cost",
+           "mode_observed_lqg", "ModeObservedLQG", "ModeObservedResult", "simulate",
+           "SimulationResult", "Controller", "StaticGain", "ModeDependentGain", "TimeVariantGain",
+           "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
            "min_radius_dynamic_output_feedback", "radius_and_gradient",
-           "ExactDynamicOutputFeedbackResult",
-           "ExactFiniteHorizonResult", "random_mjls", "average_cost", "static_cost",
-           "exact_static_output_feedback", "ExactStaticOutputFeedbackResult"]
+           "ExactDynamicOutputFeedbackResult", "ExactFiniteHorizonResult", "random_mjls",
+           "average_cost", "static_cost", "exact_static_output_feedback",
+           "ExactStaticOutputFeedbackResult"]
