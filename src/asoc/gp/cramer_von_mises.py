@@ -212,7 +212,6 @@ def _combined(sums, cb, d, symmetric, b_max):
     return out
 
 
-
 def _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress):
     """The weighted sums of :func:`mcvmd_matrix`: D1 (N,), D2 (M,), D12 and Dm (N, M)."""
     D1 = np.einsum("na,nab,nb->n", WX, _xlog_sq(X[:, :, None], X[:, None]), WX)
