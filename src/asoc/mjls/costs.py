@@ -43,8 +43,8 @@ def average_cost(sys, controller):
     >>> from asoc.mjls import exact_dynamic_output_feedback, static_output_feedback
     >>> from asoc.mjls.examples import networked_loop
     >>> sys = networked_loop()
-    >>> round(average_cost(sys, static_output_feedback(sys)), 4), round(average_cost(sys,
-    ...     exact_dynamic_output_feedback(sys)), 4)
+    >>> static, dynamic = static_output_feedback(sys), exact_dynamic_output_feedback(sys)
+    >>> round(average_cost(sys, static), 4), round(average_cost(sys, dynamic), 4)
     (0.1412, 0.1376)
     """
     check_system(sys)
