@@ -1,5 +1,4 @@
-"""The modified Cramer-von Mises distance (mCvMd) by localized cumulative distributions (Sec. 2.6.3,
-item 5).
+"""Modified Cramer-von Mises distance (Sec. 2.6.3, item 5) by localized cumulative distributions.
 
 Closed form between Dirac mixtures (:func:`mcvmd`, :func:`mcvmd_matrix`), the localized
 cumulative distributions of Dirac mixtures and Gaussians (:func:`lcd_dirac`,

@@ -102,8 +102,8 @@ class Bracket:
 
     def width_reached(self, rtol):
         """The bracket is as narrow as asked, or as rounding allows (margin <= sqrt(rtol) rho)."""
-        narrow = self.upper - self.lower <= rtol * self.upper + 4.0 * self.margin
-        return bool(np.isfinite(self.upper) and narrow
+        return bool(np.isfinite(self.upper)
+                    and self.upper - self.lower <= rtol * self.upper + 4.0 * self.margin
                     and self.margin <= np.sqrt(rtol) * self.upper)
 
     def consider(self, X, rtol):

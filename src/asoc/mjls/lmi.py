@@ -144,8 +144,8 @@ def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_resi
     rho = np.nan if stability is None else stability.rho
     common = dict(solver_status=solver_status, margin=margin, equality_residual=equality_residual,
                   variables=variables or {})
-    certified = solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2
-    verified = (L is not None and certified
+    verified = (L is not None
+                and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
                 and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
     if not verified:
         status, message = _not_feasible(solver_status, L, margin, equality_residual, eps)
