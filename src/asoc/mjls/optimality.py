@@ -214,8 +214,8 @@ class KroneckerPreconditioner:
     def __init__(self, sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
         B, C = sys.B, sys.C
         pairs = (_nearest_kronecker(Xunder, EPunder),
-                 _nearest_kronecker(C @ (Xbar + Xunder) @ transpose(C) + mu[:, None, None] * JJt,
-                                    EPunder),
+                 _nearest_kronecker(C @ (Xbar + Xunder) @ transpose(C)
+                                    + mu[:, None, None] * JJt, EPunder),
                  _nearest_kronecker(Xunder, sys.R + transpose(B) @ (EPbar + EPunder) @ B))
         self.factors = [(*np.linalg.eigh(X0), *np.linalg.eigh(Y0)) for X0, Y0 in pairs]
         self.shapes = _gain_shapes(sys)
