@@ -57,13 +57,13 @@ True
 Modules, by the thesis's numbers: ``system`` (the model (3.7)), ``moment_operator`` (the
 second-moment operator L of (3.29) and its adjoint), ``closed_loops`` ((3.10), (3.39)-(3.40)),
 ``stability`` -> ``certificate`` -> ``spectral_estimate`` (Cor. 3.2: the verdict, the certified
-bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations), ``moments`` (Prop.
-3.7, 3.14), ``static`` and ``static_iterates`` (Alg. 3.1), ``stopping`` (the stopping rule of Algs.
-3.1 and 3.2), ``exact_static_design`` (the exact-cost static gain, not in the thesis), ``lmi``
-(Thms. 3.9, 3.12), ``moment_bounds``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26,
-(3.49)-(3.51)), ``finite_horizon_model`` (the time-variant MJLS (3.54) over a horizon) and
-``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg`` (the
-mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
+bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations), ``moments``
+(Prop. 3.7, 3.14), ``static`` and ``static_iterates`` (Alg. 3.1), ``stopping`` (the stopping rule of
+Algs. 3.1 and 3.2), ``exact_static_design`` (the exact-cost static gain, not in the thesis), ``lmi``
+(Thms. 3.9, 3.12), ``moment_bounds``, ``optimality`` and ``dynamic``
+(Alg. 3.2: Prop. 3.26, (3.49)-(3.51)), ``finite_horizon_model`` (the time-variant MJLS (3.54) over a
+horizon) and ``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg``
+(the mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
 ``gradients`` and ``exact_cost_design`` (exact-cost optimisation of (3.37) and (3.55), not in the
 thesis), ``costs`` (the exact average cost (3.9)), ``monte_carlo`` (simulation),
 ``monte_carlo_comparison`` (Table 3.2), ``controllers`` and ``design_result`` (the controllers and
