@@ -230,7 +230,8 @@ def accepts_settings(*keys):
     >>> threshold(rank_rtol="tight")
     Traceback (most recent call last):
         ...
-    TypeError: rank_rtol (mjls.rank_rtol): expected a real number in (0, 1) or None, found str 'tight'
+    TypeError: rank_rtol (mjls.rank_rtol): expected a real number in (0, 1) or None,
+    found str 'tight'
     """
     names = {_checked_key(key).split(".", 1)[1]: key for key in keys}
 

@@ -85,7 +85,7 @@ def relative_change(old, new, floor=None, axis=None):
     Two old iterates against one new, each row its own norm:
 
     >>> relative_change(np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([[1.0, 0.0], [0.0, 2.0]]),
-    ...     axis=-1)
+    ...                 axis=-1)
     array([0. , 0.5])
     """
     floor = config.defaults["linalg.norm_floor"] if floor is None else floor

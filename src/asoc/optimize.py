@@ -3,9 +3,8 @@
 :func:`bfgs` minimises a smooth function z -> (f, grad f) by BFGS (dense inverse Hessian) or
 L-BFGS (the last few curvature pairs), with a backtracking Armijo line search that rejects
 steps out of the domain (f = inf) like any other step that does not decrease f. The
-exact-cost designs of :mod:`asoc.mjls.exact_cost_design` use it on the mean-square stabilising set,
-where
-the cost is finite; nothing in it is specific to them.
+exact-cost designs of :mod:`asoc.mjls.exact_cost_design` use it on the mean-square stabilising
+set, where the cost is finite; nothing in it is specific to them.
 
 Nocedal and Wright, Numerical Optimization, 2nd ed., 2006: Alg. 6.1 (BFGS), Alg. 7.4
 (two-loop recursion), Alg. 3.1 (backtracking).
@@ -96,7 +95,8 @@ class _InverseHessian:
 
     def update(self, s, y):
         sy = float(s @ y)
-        if not sy > config.defaults["optimize.curvature_rtol"] * np.linalg.norm(s) * np.linalg.norm(y):
+        scale = np.linalg.norm(s) * np.linalg.norm(y)
+        if not sy > config.defaults["optimize.curvature_rtol"] * scale:
             return                                     # curvature condition fails: skip
         if self.memory is not None:
             self.scale = sy / float(y @ y)
@@ -162,7 +162,7 @@ def bfgs(fun, z0, tol=1e-10, max_iter=1000, progress=False, desc="BFGS", memory=
     --------
     >>> fun = lambda z: ((z[0] - 1) ** 2 + 10 * (z[1] - z[0] ** 2) ** 2,
     ...                  np.array([2 * (z[0] - 1) - 40 * z[0] * (z[1] - z[0] ** 2),
-    ...     20 * (z[1] - z[0] ** 2)]))
+    ...                            20 * (z[1] - z[0] ** 2)]))
     >>> result = bfgs(fun, [-1.0, 1.0], 1e-14, 200)
     >>> result.status, result.z.round(4)
     ('converged', array([1., 1.]))

@@ -219,8 +219,8 @@ def decide_claim(samples, above=None, below=None, level: float = 0.95,
     bounds = " and ".join(text for text in (None if above is None else f"> {above:g}",
                                              None if below is None else f"< {below:g}") if text)
     test = (f"claim: median of the {what} {bounds}; exact percentile-bootstrap {level:.0%} "
-            "interval of "
-            f"the median over n = {ci['n']}: inside holds, outside fails, straddling not resolved")
+            f"interval of the median over n = {ci['n']}: inside holds, outside fails, "
+            "straddling not resolved")
     if low == high and np.ptp(np.asarray(samples, dtype=float)) == 0:
         test += (f"; all {ci['n']} samples are equal, so the quantity does not vary between them "
                  f"and the verdict is exact, not statistical")

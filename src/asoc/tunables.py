@@ -1,5 +1,4 @@
-"""Every tunable of the library: its shipped value, the values it accepts, and why it has that
-value.
+"""Every tunable of the library: its shipped value, the values it accepts, and why it has it.
 
 :mod:`asoc.config` serves them as ``config.defaults`` (checked when set), ``config.ALLOWED`` and
 ``config.DESCRIPTIONS``; this module only holds the table, keyed ``"<subpackage>.<name>"``.
@@ -98,18 +97,16 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
     "mjls.power_tol": (
         1e-13,
         REAL(0, 1),
-        "The shifted power method for the left Perron stack stops when an iterate, scaled to unit "
-        "largest entry, changes by at most this: a few hundred units of rounding of an entry of "
-        "order 1."),
+        "The shifted power method for the left Perron stack stops when an iterate, scaled to "
+        "unit largest entry, changes by at most this: a few hundred units of rounding of an "
+        "entry of order 1."),
     "mjls.deflated_resolvent_steps": (
         1000,
         INT(1),
         "Iterations for the non-Perron part of the resolvent stack that tightens the upper bound "
-        "of "
-        "rho where the Perron stack is singular (asoc.mjls.certificate.deflated_resolvent_bounds): "
-        "they "
-        "contract at the second-largest eigenvalue modulus over rho; Alg. 3.2's closed loop at n = "
-        "32, M = 8 needs 45 "
+        "of rho where the Perron stack is singular "
+        "(asoc.mjls.certificate.deflated_resolvent_bounds): they contract at the second-largest "
+        "eigenvalue modulus over rho; Alg. 3.2's closed loop at n = 32, M = 8 needs 45 "
         "(0.012 s)."),
     # --- the certified rho (asoc.mjls.stability -> certificate -> spectral_estimate), issue 33
     "mjls.mode_scale_spread": (
@@ -197,8 +194,7 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         1e-6,
         REAL(0, 1),
         "Largest residual of an LMI problem's equality constraints (e.g. M C_i = C_i G of Thm. "
-        "3.9), "
-        "relative to max(1, largest entry), at which the returned matrices still count as a "
+        "3.9), relative to max(1, largest entry), at which the returned matrices still count as a "
         "certificate: Clarabel's feasibility tolerance is 1e-8, and the gain F M^{-1} stays within "
         "rounding of the exact one far below 1e-6."),
     "mjls.solve_tolerance": (
@@ -240,8 +236,8 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         INT(0),
         "Iterations of Alg. 3.2 run to start exact_dynamic_output_feedback (with the averaged LQG "
         "compensator as the other candidate). At n = 16, M = 4, 10 and 30 iterations give a start "
-        "within 1e-4 of the optimum's cost, so a full run (to 10,000 iterations there) buys "
-        "nothing."),
+        "within 1e-4 of the optimum's cost, so a full run (to 10,000 iterations there) "
+        "buys nothing."),
     "mjls.rho_start": (
         0.999,
         REAL(0, 1),
@@ -253,17 +249,18 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
     "mjls.lbfgs_memory": (
         200,
         INT(1),
-        "Pairs kept by L-BFGS in the exact finite-horizon design (K (nc^2 + nc ny + nu nc) gains)."),
+        "Pairs kept by L-BFGS in the exact finite-horizon design "
+        "(K (nc^2 + nc ny + nu nc) gains)."),
     "mjls.auto_switch_iterations": (
         200,
         INT(0),
         "Alg. 3.1 with moments='auto' switches from the thesis's iteration to exact moment solves "
         "when its convergence rate predicts more than this many further iterations. Measured on "
-        "the "
-        "Scaling page's family (2 cores, load about 9): n = 16, M = 4, easy (20 iterations): auto "
-        "0.055 s, step 0.063 s, exact 0.46 s; open loop at rho 0.995: step 3.0 s (1,049 "
+        "the Scaling page's family (2 cores, load about 9): n = 16, M = 4, easy (20 iterations): "
+        "auto 0.055 s, step 0.063 s, exact 0.46 s; open loop at rho 0.995: step 3.0 s (1,049 "
         "iterations), exact 2.6 s, auto 1.0 s. n = 64, M = 8, easy: auto as step (CPU 0.62-0.69 s "
-        "against 0.65-0.74 s); rho 0.995: step 221 s (1,629 iterations), exact 13.3 s, auto 15.6 s."),
+        "against 0.65-0.74 s); rho 0.995: step 221 s (1,629 iterations), exact 13.3 s, "
+        "auto 15.6 s."),
     "mjls.stationary_atol": (
         1e-8,
         REAL(0, 1),
@@ -349,12 +346,12 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         10,
         INT(1),
         "Mixtures per block row of the mean kernel (2.22) in MeanKernelGP's likelihood: blocks of "
-        "a "
-        "few MB (200 mixtures of 10 components) that stay in cache."),
+        "a few MB (200 mixtures of 10 components) that stay in cache."),
     "gp.dirac_max_iterations": (
         1000,
         INT(1),
-        "Iteration cap of BFGS in the mCvMd Dirac approximation of N(0, 1) (it converges in tens)."),
+        "Iteration cap of BFGS in the mCvMd Dirac approximation of N(0, 1) "
+        "(it converges in tens)."),
     "gp.max_dirac_components": (
         400,
         INT(1),

@@ -68,8 +68,7 @@ def process_count(value, name: str) -> int:
 
 
 def real_scalar(value, name: str, *, low=None, high=None, low_open=False, high_open=False) -> float:
-    """A finite real number, optionally in ``[low, high]`` (``low_open``/``high_open`` exclude the
-    end).
+    """A finite real number, optionally in ``[low, high]`` (``low_open``/``high_open``: open ends).
 
     Examples
     --------
@@ -80,12 +79,13 @@ def real_scalar(value, name: str, *, low=None, high=None, low_open=False, high_o
     ...
     ValueError: eps: expected a finite real number > 0, found -1
     """
-    if isinstance(value, (bool, np.bool_, str, bytes)) or not isinstance(value, (numbers.Real,
-                                                                                 np.ndarray)):
+    if (isinstance(value, (bool, np.bool_, str, bytes))
+            or not isinstance(value, (numbers.Real, np.ndarray))):
         raise TypeError(f"{name}: expected a real number, found {_describe(value)}")
     if isinstance(value, np.ndarray):
         if value.shape != () or not np.issubdtype(value.dtype, np.number) or np.iscomplexobj(value):
-            raise TypeError(f"{name}: expected a real number, found an array of shape {value.shape}")
+            raise TypeError(f"{name}: expected a real number, "
+                            f"found an array of shape {value.shape}")
         value = value.item()
     bounds = []
     if low is not None:
@@ -121,23 +121,22 @@ def real_array(value, name: str, *, shape=None, ndim=None, finite=True) -> np.nd
         raise TypeError(f"{name}: expected a real array, found {_describe(value)}") from err
     if np.iscomplexobj(array):
         raise TypeError(f"{name}: expected a real array, found complex dtype {array.dtype}")
-    if array.dtype == bool or not (np.issubdtype(array.dtype,
-                                                 np.integer) or np.issubdtype(array.dtype,
-                                                                              np.floating)):
+    if array.dtype == bool or not (np.issubdtype(array.dtype, np.integer)
+                                   or np.issubdtype(array.dtype, np.floating)):
         raise TypeError(f"{name}: expected a real array, found dtype {array.dtype}")
     array = array.astype(float)
     if ndim is not None and array.ndim != ndim:
         raise ValueError(f"{name}: expected a {ndim}-dimensional array, found shape {array.shape}")
     if shape is not None:
         want = tuple(shape)
-        if array.ndim != len(want) or any(w is not None and w != s for w,
-                                          s in zip(want, array.shape)):
-            text = "(" + ", ".join("any" if w is None else str(w) for w in want) + ("," if len(want) == 1 else "") + ")"
+        if array.ndim != len(want) or any(w is not None and w != s
+                                          for w, s in zip(want, array.shape)):
+            entries = ", ".join("any" if w is None else str(w) for w in want)
+            text = "(" + entries + ("," if len(want) == 1 else "") + ")"
             raise ValueError(f"{name}: expected shape {text}, found shape {array.shape}")
     if finite and not np.all(np.isfinite(array)):
-        raise ValueError(f"{name}: expected finite entries, found "
-                         f"{int(np.size(array) - np.isfinite(array).sum())} "
-                         f"non-finite")
+        n_bad = int(np.size(array) - np.isfinite(array).sum())
+        raise ValueError(f"{name}: expected finite entries, found {n_bad} non-finite")
     return array
 
 
@@ -179,8 +178,8 @@ def semidefinite(array, name: str, *, definite=False) -> np.ndarray:
     lam = np.linalg.eigvalsh(array).min()
     scale = max(1.0, np.abs(array).max())
     if definite and lam <= 0:
-        raise ValueError(f"{name}: expected a positive definite matrix, found smallest eigenvalue "
-                         f"{lam:.3g}")
+        raise ValueError(f"{name}: expected a positive definite matrix, "
+                         f"found smallest eigenvalue {lam:.3g}")
     if lam < -SYMMETRY_RTOL * scale:
         raise ValueError(f"{name}: expected a positive semi-definite matrix, found smallest "
                          f"eigenvalue {lam:.3g}")
@@ -203,7 +202,8 @@ def probability_vector(value, name: str, size: int | None = None) -> np.ndarray:
     if p.size == 0:
         raise ValueError(f"{name}: expected at least one probability, found none")
     if np.any(p < 0):
-        raise ValueError(f"{name}: expected non-negative probabilities, found minimum {p.min():.3g}")
+        raise ValueError(f"{name}: expected non-negative probabilities, "
+                         f"found minimum {p.min():.3g}")
     if abs(p.sum() - 1.0) > WEIGHT_ATOL:
         raise ValueError(f"{name}: expected probabilities summing to 1, found sum {p.sum():.10g}")
     return p
@@ -244,8 +244,8 @@ def instance(value, types, name: str, what: str | None = None):
     """
     if not isinstance(value, types):
         names = " or ".join(t.__name__ for t in (types if isinstance(types, tuple) else (types,)))
-        raise TypeError(f"{name}: expected {what or 'a ' + names}, found {type(value).__name__} "
-                        f"{_describe(value)}")
+        raise TypeError(f"{name}: expected {what or 'a ' + names}, "
+                        f"found {type(value).__name__} {_describe(value)}")
     return value
 
 
@@ -262,8 +262,8 @@ def function(value, name: str):
     TypeError: g: expected a callable, found float 1.0
     """
     if not callable(value):
-        raise TypeError(f"{name}: expected a callable, found {type(value).__name__} "
-                        f"{_describe(value)}")
+        raise TypeError(f"{name}: expected a callable, "
+                        f"found {type(value).__name__} {_describe(value)}")
     return value
 
 
@@ -285,17 +285,17 @@ def stochastic_matrix(value, name: str, size: int | None = None) -> np.ndarray:
     """
     matrix = real_array(value, name, ndim=2)
     if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
-        raise ValueError(f"{name}: expected a square (M, M) matrix with M >= 1, found shape "
-                         f"{matrix.shape}")
+        raise ValueError(f"{name}: expected a square (M, M) matrix with M >= 1, "
+                         f"found shape {matrix.shape}")
     if size is not None and matrix.shape[0] != size:
         raise ValueError(f"{name}: expected shape ({size}, {size}), found shape {matrix.shape}")
     for i, row in enumerate(matrix):
         if np.any(row < 0):
-            raise ValueError(f"{name}: expected non-negative probabilities, found {row.min():.3g} "
-                             f"in row {i}")
+            raise ValueError(f"{name}: expected non-negative probabilities, "
+                             f"found {row.min():.3g} in row {i}")
         if abs(row.sum() - 1.0) > WEIGHT_ATOL:
-            raise ValueError(f"{name}: expected rows summing to 1, found sum {row.sum():.10g} in "
-                             f"row {i}")
+            raise ValueError(f"{name}: expected rows summing to 1, "
+                             f"found sum {row.sum():.10g} in row {i}")
     return matrix
 
 
@@ -360,8 +360,8 @@ def covariance(value, name: str, size: int | None = None, *, definite=False,
     want = "(n, n)" if size is None else f"({size}, {size})"
     if array.ndim != 2 or array.shape[0] != array.shape[1] or array.shape[0] == 0 \
             or (size is not None and array.shape[0] != size):
-        raise ValueError(f"{name}: expected a square matrix of shape {want}, found shape "
-                         f"{array.shape}")
+        raise ValueError(f"{name}: expected a square matrix of shape {want}, "
+                         f"found shape {array.shape}")
     return semidefinite(array, name, definite=definite)
 
 
@@ -417,11 +417,11 @@ def probability_rows(value, name: str, shape) -> np.ndarray:
     """
     rows = real_array(value, name, shape=tuple(shape))
     if np.any(rows < 0):
-        raise ValueError(f"{name}: expected non-negative probabilities, found minimum "
-                         f"{rows.min():.3g}")
+        raise ValueError(f"{name}: expected non-negative probabilities, "
+                         f"found minimum {rows.min():.3g}")
     sums = rows.sum(axis=-1)
     worst = np.argmax(np.abs(sums - 1.0)) if sums.size else None
     if worst is not None and abs(sums.flat[worst] - 1.0) > WEIGHT_ATOL:
-        raise ValueError(f"{name}: expected each row to sum to 1, found a sum "
-                         f"{sums.flat[worst]:.10g}")
+        raise ValueError(f"{name}: expected each row to sum to 1, "
+                         f"found a sum {sums.flat[worst]:.10g}")
     return rows

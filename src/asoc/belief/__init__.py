@@ -18,19 +18,19 @@ from .damped import DampedResult, optimize_damped
 from .ekf import ekf_step
 from .filters import BeliefFilter, DiracMixture, next_estimate_covariance, sigma_points
 from .improvement import (
-                     LineSearch,
-                     affine_policy_value,
-                     improved_policy_value,
-                     line_search,
-                     policy_step,
+    LineSearch,
+    affine_policy_value,
+    improved_policy_value,
+    line_search,
+    policy_step,
 )
 from .models import (
-                     GaussianNoise,
-                     LandmarkExample,
-                     NonlinearModel,
-                     QuadraticCost,
-                     landmark_example,
-                     linear_gaussian_model,
+    GaussianNoise,
+    LandmarkExample,
+    NonlinearModel,
+    QuadraticCost,
+    landmark_example,
+    linear_gaussian_model,
 )
 from .particle import ParticleFilter
 from .planning import bend_toward_landmark, covariance_aware_optimum
@@ -38,41 +38,37 @@ from .policy import AffinePolicy, MeanAffineController
 from .simulate import ClosedLoop, Noise, draw_noise, simulate
 from .stage import Expansion, StageProblem, Value, terminal_value
 from .taylor import (
-                     QuadraticExpansion,
-                     sigma_point_linearizations,
-                     statistical_taylor_expansion,
-                     statistical_taylor_linearization_error,
+    QuadraticExpansion,
+    sigma_point_linearizations,
+    statistical_taylor_expansion,
+    statistical_taylor_linearization_error,
 )
 from .trajectory import (
-                     IndefiniteStep,
-                     Reference,
-                     TrajectoryOptimizationResult,
-                     backward_pass,
-                     optimize_belief_trajectory,
-                     reference_trajectory,
+    IndefiniteStep,
+    Reference,
+    TrajectoryOptimizationResult,
+    backward_pass,
+    optimize_belief_trajectory,
+    reference_trajectory,
 )
 from .ukf import UKF
 from .vdberg import (
-                     BeliefAffineController,
-                     BeliefDynamics,
-                     BeliefILQGResult,
-                     belief_ilqg,
-                     belief_vector,
+    BeliefAffineController,
+    BeliefDynamics,
+    BeliefILQGResult,
+    belief_ilqg,
+    belief_vector,
 )
 
 __all__ = ["UKF", "BeliefFilter", "DiracMixture", "ParticleFilter", "ekf_step",
-           "next_estimate_covariance",
-           "sigma_points", "GaussianNoise", "LandmarkExample", "NonlinearModel", "QuadraticCost",
-           "landmark_example",
-           "linear_gaussian_model", "BeliefAffineController", "ClosedLoop", "MeanAffineController",
-           "Noise",
-           "draw_noise", "simulate", "QuadraticExpansion", "sigma_point_linearizations",
-           "statistical_taylor_expansion", "statistical_taylor_linearization_error", "AffinePolicy",
-           "Expansion",
-           "LineSearch", "Reference", "StageProblem", "TrajectoryOptimizationResult", "Value",
-           "affine_policy_value", "backward_pass", "improved_policy_value", "line_search",
-           "policy_step",
-           "optimize_belief_trajectory", "reference_trajectory", "terminal_value", "BeliefDynamics",
-           "BeliefILQGResult", "belief_ilqg", "belief_vector", "IndefiniteStep", "DampedResult",
-           "optimize_damped",
+           "next_estimate_covariance", "sigma_points", "GaussianNoise", "LandmarkExample",
+           "NonlinearModel", "QuadraticCost", "landmark_example", "linear_gaussian_model",
+           "BeliefAffineController", "ClosedLoop", "MeanAffineController", "Noise", "draw_noise",
+           "simulate", "QuadraticExpansion", "sigma_point_linearizations",
+           "statistical_taylor_expansion", "statistical_taylor_linearization_error",
+           "AffinePolicy", "Expansion", "LineSearch", "Reference", "StageProblem",
+           "TrajectoryOptimizationResult", "Value", "affine_policy_value", "backward_pass",
+           "improved_policy_value", "line_search", "policy_step", "optimize_belief_trajectory",
+           "reference_trajectory", "terminal_value", "BeliefDynamics", "BeliefILQGResult",
+           "belief_ilqg", "belief_vector", "IndefiniteStep", "DampedResult", "optimize_damped",
            "bend_toward_landmark", "covariance_aware_optimum"]

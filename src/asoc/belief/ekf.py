@@ -25,8 +25,8 @@ def _jacobians(model, x, u, w, v):
     if model.jacobians is not None:
         return model.jacobians(x, u, w, v)
     if np.asarray(x).ndim > 1:
-        raise ValueError("mean: expected one state (numerical Jacobians), found a batch; give "
-                         "model.jacobians")
+        raise ValueError("mean: expected one state (numerical Jacobians), found a batch; "
+                         "give model.jacobians")
     return _numeric_jacobians(model, x, u, w, v)
 
 
@@ -64,8 +64,7 @@ def ekf_predict(model, mean, cov, u):
 
 
 def ekf_gain(model, mean, cov):
-    """EKF measurement linearisation at (mean, E{v}): (y_hat, gain K, innovation covariance,
-    posterior).
+    """EKF measurement linearisation at (mean, E{v}): y_hat, gain K, innovation and posterior cov.
 
     Broadcasts over leading axes; the arguments are not checked (see :func:`ekf_step`).
 

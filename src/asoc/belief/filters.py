@@ -4,8 +4,7 @@
   :class:`~asoc.belief.UKF` and :class:`~asoc.belief.ParticleFilter` implement it;
 * :class:`DiracMixture`: p(x) = sum_i alpha_i delta(x - x_i), eq. (2.5);
 * :func:`sigma_points`: the unscented transform's points of a Gaussian [101];
-* :func:`next_estimate_covariance`: Lemma 2.1, the covariance of the next estimate from joint
-  samples.
+* :func:`next_estimate_covariance`: Lemma 2.1, the next estimate's covariance from joint samples.
 
 Functions of Gaussian estimates broadcast over leading axes of ``mean`` (batches of runs).
 """
@@ -48,17 +47,23 @@ class BeliefFilter(Protocol):
     True
     """
 
-    def initial(self, mean, cov): ...
+    def initial(self, mean, cov):
+        """The estimate p_0 of a Gaussian initial state with ``mean`` and ``cov``."""
 
-    def step(self, estimate, u, y): ...
+    def step(self, estimate, u, y):
+        """The next estimate after the input ``u`` and the measurement ``y``."""
 
-    def mean(self, estimate) -> np.ndarray: ...
+    def mean(self, estimate) -> np.ndarray:
+        """E{x} under the estimate (the policy (2.18) acts on it)."""
 
-    def mixture(self, estimate) -> "DiracMixture": ...
+    def mixture(self, estimate) -> "DiracMixture":
+        """The estimate's Dirac mixture, the expansion point of Definition 2.2."""
 
-    def next_covariance(self, estimate, u) -> np.ndarray: ...
+    def next_covariance(self, estimate, u) -> np.ndarray:
+        """C_{k+1}(u) of Lemma 2.1 (checked arguments)."""
 
-    def covariance_map(self, estimate) -> Callable[[np.ndarray], np.ndarray]: ...
+    def covariance_map(self, estimate) -> Callable[[np.ndarray], np.ndarray]:
+        """The function u -> C_{k+1}(u) for one estimate (u a float array (n_u,), unchecked)."""
 
 
 #: The methods of :class:`BeliefFilter`, in the order of its documentation.
@@ -94,11 +99,11 @@ class DiracMixture:
     def __post_init__(self):
         pts = validation.real_array(self.points, "points", ndim=2)
         if 0 in pts.shape:
-            raise ValueError("points: expected a non-empty array of shape (M, n), found shape "
-                             f"{pts.shape}")
+            raise ValueError("points: expected a non-empty array of shape (M, n), "
+                             f"found shape {pts.shape}")
+        weights = validation.weights_or_equal(self.weights, "weights", pts.shape[0])
         object.__setattr__(self, "points", pts)
-        object.__setattr__(self, "weights", validation.weights_or_equal(self.weights, "weights",
-                                                                        pts.shape[0]))
+        object.__setattr__(self, "weights", weights)
 
     @property
     def mean(self) -> np.ndarray:
@@ -113,8 +118,7 @@ class DiracMixture:
 
 
 def checked_estimate(mean, cov, mean_name, cov_name, n=None, definite_check=True):
-    """A batch of Gaussian estimates: mean (..., n), cov (..., n, n) PSD, broadcastable; raise
-    otherwise.
+    """The validated batch of Gaussian estimates: mean (..., n), cov (..., n, n) PSD, broadcastable.
 
     Examples
     --------
@@ -124,8 +128,8 @@ def checked_estimate(mean, cov, mean_name, cov_name, n=None, definite_check=True
     """
     mean = validation.real_array(mean, mean_name)
     if mean.ndim == 0 or mean.shape[-1] == 0 or (n is not None and mean.shape[-1] != n):
-        raise ValueError(f"{mean_name}: expected shape (..., {n or 'n'}) with n >= 1, found shape "
-                         f"{mean.shape}")
+        raise ValueError(f"{mean_name}: expected shape (..., {n or 'n'}) with n >= 1, "
+                         f"found shape {mean.shape}")
     n = mean.shape[-1]
     cov = validation.real_array(cov, cov_name)
     if cov.ndim < 2 or cov.shape[-2:] != (n, n):
@@ -195,7 +199,8 @@ def sigma_points(mean, cov, kappa: float = KAPPA, check: bool = True):
 
 def _sigma_points(mean, cov, kappa):
     n = mean.shape[-1]
-    return points_around(mean, np.sqrt(n + kappa) * covariance_root(cov)), unscented_weights(n, kappa)
+    points = points_around(mean, np.sqrt(n + kappa) * covariance_root(cov))
+    return points, unscented_weights(n, kappa)
 
 
 def points_around(mean, L):
@@ -207,8 +212,8 @@ def points_around(mean, L):
     [0.0, 1.0, -1.0]
     """
     Lt = L.swapaxes(-1, -2)
-    return mean[..., None, :] + np.concatenate([np.zeros(Lt.shape[:-2] + (1, Lt.shape[-1])), Lt,
-                                                -Lt], axis=-2)
+    centre = np.zeros(Lt.shape[:-2] + (1, Lt.shape[-1]))
+    return mean[..., None, :] + np.concatenate([centre, Lt, -Lt], axis=-2)
 
 
 def unscented_weights(n, kappa):
@@ -265,15 +270,13 @@ def solve_or_pinv(S, B):
 
 
 def conditional_covariance(e, n, weights):
-    """C^{xx} - C^{xy} (C^{yy})^{-1} C^{yx} and the gain from centred joint samples e = [x, y]
-    (Lemma 2.1).
+    """C^{xx} - C^{xy} (C^{yy})^{-1} C^{yx} and the gain from centred samples [x, y] (Lemma 2.1).
 
     ``e`` is (..., M, n + n_y), its first ``n`` columns the state.
 
     Examples
     --------
-    >>> e = np.array([[-1.0, -1.0], [1.0,
-    ...     1.0]])          # y = x: the measurement removes all uncertainty
+    >>> e = np.array([[-1.0, -1.0], [1.0, 1.0]])   # y = x: the measurement removes all uncertainty
     >>> post, gain = conditional_covariance(e, 1, np.array([0.5, 0.5]))
     >>> post.tolist(), gain.tolist()
     ([[0.0]], [[1.0]])
@@ -335,8 +338,8 @@ def next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta=None,
         v_samples = validation.real_array(v_samples, "v_samples", shape=(None, model.v.dim))
         for name, samples in (("w_samples", w_samples), ("v_samples", v_samples)):
             if samples.shape[0] == 0:
-                raise ValueError(f"{name}: expected at least one sample, found shape "
-                                 f"{samples.shape}")
+                raise ValueError(f"{name}: expected at least one sample, "
+                                 f"found shape {samples.shape}")
         beta = validation.weights_or_equal(beta, "beta", w_samples.shape[0])
         gamma = validation.weights_or_equal(gamma, "gamma", v_samples.shape[0])
     return _next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta, gamma)
@@ -346,8 +349,8 @@ def _next_estimate_covariance(mixture, u, model, w_samples, v_samples, beta, gam
     x_im = model.a(mixture.points[:, None, :], u, w_samples[None, :, :])
     y_imn = model.h(x_im[:, :, None, :], v_samples[None, None, :, :])
     weights = (mixture.weights[:, None, None] * beta[None, :, None] * gamma[None, None, :]).ravel()
-    xs = np.broadcast_to(x_im[:, :, None, :],
-                         y_imn.shape[:3] + x_im.shape[-1:]).reshape(-1, x_im.shape[-1])
+    n_x = x_im.shape[-1]
+    xs = np.broadcast_to(x_im[:, :, None, :], y_imn.shape[:3] + (n_x,)).reshape(-1, n_x)
     ys = y_imn.reshape(-1, y_imn.shape[-1])
     _, e = weighted_moments(np.concatenate([xs, ys], axis=-1), weights)
     return conditional_covariance(e, xs.shape[-1], weights)[0]

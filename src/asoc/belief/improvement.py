@@ -1,5 +1,4 @@
-"""Theorem 2.5 (the value of the improved policy), the policy (2.17) and Algorithm 2.3 (line
-search).
+"""Theorem 2.5 (the improved policy's value), the policy (2.17) and Algorithm 2.3 (line search).
 
 From the :class:`~asoc.belief.stage.Expansion` (2.15) of phi_k at the reference:
 :func:`policy_step` is the improved policy (2.17) with step epsilon_k, :func:`line_search`
@@ -25,15 +24,13 @@ def _expansion(exp, name="exp"):
     tilde = exp.tilde
     lam = np.linalg.eigvalsh(tilde[3]).min()
     if not lam > 0:
-        raise ValueError(f"{name}: expected R~_k positive definite (Assumption 2.3), found "
-                         "smallest eigenvalue "
-                         f"{lam:.3g}")
+        raise ValueError(f"{name}: expected R~_k positive definite (Assumption 2.3), "
+                         f"found smallest eigenvalue {lam:.3g}")
     return tilde
 
 
 def improved_policy_value(exp: Expansion, eps: float) -> Value:
-    """Theorem 2.5: s_k, v_k, V_k, S_k of eq. (2.11) for the improved policy (2.17) with step
-    ``eps``.
+    """Theorem 2.5: s_k, v_k, V_k, S_k of eq. (2.11) for the improved policy (2.17), step ``eps``.
 
     Parameters
     ----------
@@ -54,9 +51,8 @@ def improved_policy_value(exp: Expansion, eps: float) -> Value:
     Examples
     --------
     >>> exp = Expansion(phi=np.array([1.0]), p=np.zeros((1, 1)), r=np.array([[2.0]]),
-    ...     Q=np.eye(1)[None],
-    ...                 P=np.zeros((1, 1, 1)), R=np.eye(1)[None], points=np.zeros((1,
-    ...     1)), alpha=np.ones(1))
+    ...                 Q=np.eye(1)[None], P=np.zeros((1, 1, 1)), R=np.eye(1)[None],
+    ...                 points=np.zeros((1, 1)), alpha=np.ones(1))
     >>> improved_policy_value(exp, 1.0).s     # phi - r^2 / (2 R): the minimum over u
     -1.0
     """
@@ -70,8 +66,8 @@ def _improved_policy_value(exp, eps):
     Ri = np.linalg.inv(R_t)
     a, X = exp.alpha, exp.points
     s = ((eps ** 2 / 2 - eps) * r_t @ Ri @ r_t - 0.5 * p_t @ Ri @ p_t + r_t @ Ri @ p_t
-         + a @ (exp.phi - np.einsum("ij,ij->i", exp.p, X) + 0.5 * np.einsum("ij,ijk,ik->i", X,
-                                                                            exp.Q, X)))
+         + a @ (exp.phi - np.einsum("ij,ij->i", exp.p, X)
+                + 0.5 * np.einsum("ij,ijk,ik->i", X, exp.Q, X)))
     v = P_t.T @ Ri @ p_t - P_t.T @ Ri @ r_t + a @ (exp.p - np.einsum("ijk,ik->ij", exp.Q, X))
     S = P_t.T @ Ri @ P_t
     V = -S + np.einsum("i,ijk->jk", a, exp.Q)
@@ -105,9 +101,8 @@ def affine_policy_value(exp: Expansion, L, d, u_bar) -> Value:
     Examples
     --------
     >>> exp = Expansion(phi=np.array([1.0]), p=np.zeros((1, 1)), r=np.array([[2.0]]),
-    ...     Q=np.eye(1)[None],
-    ...                 P=np.zeros((1, 1, 1)), R=np.eye(1)[None], points=np.zeros((1,
-    ...     1)), alpha=np.ones(1))
+    ...                 Q=np.eye(1)[None], P=np.zeros((1, 1, 1)), R=np.eye(1)[None],
+    ...                 points=np.zeros((1, 1)), alpha=np.ones(1))
     >>> affine_policy_value(exp, np.zeros((1, 1)), np.array([-2.0]), np.zeros(1)).s
     -1.0
     """
@@ -126,17 +121,18 @@ def _affine_policy_value(exp, L, d, u_bar):
     g = r_t - p_t
     M = P_t.T @ L + L.T @ P_t + L.T @ R_t @ L
     s = (g @ delta + 0.5 * delta @ R_t @ delta
-         + a @ (exp.phi - np.einsum("ij,ij->i", exp.p, X) + 0.5 * np.einsum("ij,ijk,ik->i", X,
-                                                                            exp.Q, X)))
-    v = L.T @ g + P_t.T @ delta + L.T @ R_t @ delta + a @ (exp.p - np.einsum("ijk,ik->ij", exp.Q,
-                                                                             X))
+         + a @ (exp.phi - np.einsum("ij,ij->i", exp.p, X)
+                + 0.5 * np.einsum("ij,ijk,ik->i", X, exp.Q, X)))
+    v = (L.T @ g + P_t.T @ delta + L.T @ R_t @ delta
+         + a @ (exp.p - np.einsum("ijk,ik->ij", exp.Q, X)))
     V = np.einsum("i,ijk->jk", a, exp.Q) + M
     return Value(float(s), v, 0.5 * (V + V.T), -0.5 * (M + M.T))
 
 
 def policy_step(exp: Expansion, u_bar, eps):
-    """The improved policy (2.17): L_k = -R~^{-1} P~, d_k = R~^{-1} p~ - eps R~^{-1} r~ + u_bar_k
-    (Alg. 2.2, Step 6).
+    """The improved policy (2.17) of Alg. 2.2, Step 6.
+
+    L_k = -R~^{-1} P~ and d_k = R~^{-1} p~ - eps R~^{-1} r~ + u_bar_k.
 
     Parameters
     ----------
@@ -163,9 +159,8 @@ def policy_step(exp: Expansion, u_bar, eps):
     Examples
     --------
     >>> exp = Expansion(phi=np.array([1.0]), p=np.zeros((1, 1)), r=np.array([[2.0]]),
-    ...     Q=np.eye(1)[None],
-    ...                 P=np.zeros((1, 1, 1)), R=np.eye(1)[None], points=np.zeros((1,
-    ...     1)), alpha=np.ones(1))
+    ...                 Q=np.eye(1)[None], P=np.zeros((1, 1, 1)), R=np.eye(1)[None],
+    ...                 points=np.zeros((1, 1)), alpha=np.ones(1))
     >>> L, d = policy_step(exp, np.zeros(1), 0.5)
     >>> L.tolist(), d.tolist()
     ([[-0.0]], [-1.0])

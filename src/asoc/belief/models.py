@@ -51,9 +51,7 @@ class GaussianNoise:
         return self.mean.size
 
     def sample(self, rng: np.random.Generator, size=()) -> np.ndarray:
-        """Draw samples of shape ``size + (dim,)`` from ``rng`` (``size`` an int or a tuple of
-        ints).
-        """
+        """Draw samples of shape ``size + (dim,)`` from ``rng`` (``size``: an int or ints)."""
         rng = check.generator(rng)
         shape = (size,) if not isinstance(size, tuple) else size
         shape = tuple(check.integer(s, "size", minimum=0) for s in shape)
@@ -97,8 +95,8 @@ class NonlinearModel:
     Examples
     --------
     >>> m = NonlinearModel(a=lambda x, u, w: x + u + w, h=lambda x, v: x + v,
-    ...                    w=GaussianNoise([0.0], [[1.0]]), v=GaussianNoise([0.0],
-    ...     [[1.0]]), n_x=1, n_u=1)
+    ...                    w=GaussianNoise([0.0], [[1.0]]), v=GaussianNoise([0.0], [[1.0]]),
+    ...                    n_x=1, n_u=1)
     >>> m.n_y
     1
     """
@@ -125,12 +123,11 @@ class NonlinearModel:
         x_next = np.asarray(self.a(np.zeros(self.n_x), np.zeros(self.n_u), self.w.mean))
         if x_next.shape != (self.n_x,) or not np.all(np.isfinite(x_next)):
             raise ValueError(f"a: expected a finite state of shape ({self.n_x},) at x = 0, u = 0, "
-                             f"w = E{{w}}, "
-                             f"found {x_next!r}")
+                             f"w = E{{w}}, found {x_next!r}")
         y = np.asarray(self.h(np.zeros(self.n_x), self.v.mean))
         if y.ndim != 1 or y.size == 0 or not np.all(np.isfinite(y)):
-            raise ValueError("h: expected a finite non-empty measurement vector at x = 0, v = "
-                             f"E{{v}}, found {y!r}")
+            raise ValueError("h: expected a finite non-empty measurement vector at x = 0, "
+                             f"v = E{{v}}, found {y!r}")
 
     @property
     def n_y(self) -> int:
@@ -140,8 +137,8 @@ class NonlinearModel:
 
 @dataclass(frozen=True)
 class QuadraticCost:
-    """Cost (2.3) with C_k(x, u) = (x - x_T)^T Q (x - x_T) + u^T R u, C_K(x) = (x - x_T)^T Q_K (x -
-    x_T).
+    """Cost (2.3) with C_k(x, u) = (x - x_T)^T Q (x - x_T) + u^T R u and
+    C_K(x) = (x - x_T)^T Q_K (x - x_T).
 
     This is the form of the example's cost (2.19). ``R`` must be positive definite and
     ``Q``, ``Q_K`` positive semi-definite (Assumption 2.3, eq. 2.9); ``K`` is the horizon.
@@ -169,8 +166,8 @@ class QuadraticCost:
         x_t = check.vector(self.x_target, "x_target")
         n = x_t.size
         object.__setattr__(self, "x_target", x_t)
-        for name, definite, meaning in (("Q", False, "grad_xx C_k >= 0"), ("Q_K", False,
-                                                                           "grad_xx C_K >= 0"),
+        for name, definite, meaning in (("Q", False, "grad_xx C_k >= 0"),
+                                        ("Q_K", False, "grad_xx C_K >= 0"),
                                         ("R", True, "grad_uu C_k > 0")):
             try:
                 value = check.covariance(getattr(self, name), name, None if name == "R" else n,
@@ -184,8 +181,8 @@ class QuadraticCost:
         """C_k(x, u), broadcasting over leading axes."""
         e = np.asarray(x) - self.x_target
         u = np.asarray(u)
-        return np.einsum("...i,ij,...j->...", e, self.Q, e) + np.einsum("...i,ij,...j->...", u,
-                                                                        self.R, u)
+        return (np.einsum("...i,ij,...j->...", e, self.Q, e)
+                + np.einsum("...i,ij,...j->...", u, self.R, u))
 
     def terminal(self, x):
         """C_K(x)."""
@@ -207,15 +204,15 @@ class QuadraticCost:
     def gaussian_stage(self, mean, cov, u):
         """E{C_k(x, u)} for x ~ (mean, cov): the cost written in the belief, eq. (2.20)."""
         e = np.asarray(mean) - self.x_target
-        return (np.einsum("...i,ij,...j->...", e, self.Q, e) + np.einsum("ij,...ji->...", self.Q,
-                                                                         cov)
+        return (np.einsum("...i,ij,...j->...", e, self.Q, e)
+                + np.einsum("ij,...ji->...", self.Q, cov)
                 + np.einsum("...i,ij,...j->...", np.asarray(u), self.R, np.asarray(u)))
 
     def gaussian_terminal(self, mean, cov):
         """E{C_K(x)} for x ~ (mean, cov), eq. (2.20)."""
         e = np.asarray(mean) - self.x_target
-        return np.einsum("...i,ij,...j->...", e, self.Q_K, e) + np.einsum("ij,...ji->...", self.Q_K,
-                                                                          cov)
+        return (np.einsum("...i,ij,...j->...", e, self.Q_K, e)
+                + np.einsum("ij,...ji->...", self.Q_K, cov))
 
 
 def cost_for(cost, model_, name: str = "cost") -> QuadraticCost:
@@ -230,8 +227,8 @@ def cost_for(cost, model_, name: str = "cost") -> QuadraticCost:
     check.instance(cost, QuadraticCost, name)
     if cost.Q.shape[0] != model_.n_x or cost.R.shape[0] != model_.n_u:
         raise ValueError(f"{name}: expected Q of shape ({model_.n_x}, {model_.n_x}) and R of shape "
-                         f"({model_.n_u}, {model_.n_u}) (the model's n_x, n_u), found "
-                         f"{cost.Q.shape} and {cost.R.shape}")
+                         f"({model_.n_u}, {model_.n_u}) (the model's n_x, n_u), "
+                         f"found {cost.Q.shape} and {cost.R.shape}")
     return cost
 
 
@@ -314,9 +311,7 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
         return np.asarray(x) + np.asarray(u) + noise_gain * np.asarray(w)
 
     def distance(x):
-        """||x - x^|| (last axis kept): np.linalg.norm's sum of squares without its argument
-        handling.
-        """
+        """||x - x^|| (last axis kept): np.linalg.norm's sum of squares, without its checks."""
         diff = np.asarray(x) - lm
         return np.sqrt(np.add.reduce(diff * diff, axis=-1, keepdims=True))
 
@@ -337,8 +332,8 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
         d = distance(x)
         batch = x.shape[:-1]
         eye, gain_eye = ((identity, gain_identity) if not batch else
-                         (np.broadcast_to(identity, batch + (n, n)), np.broadcast_to(gain_identity,
-                                                                                     batch + (n, n))))
+                         (np.broadcast_to(identity, batch + (n, n)),
+                          np.broadcast_to(gain_identity, batch + (n, n))))
         h_x = ((1.0 + range_noise * np.asarray(v)) * diff / d)[..., None, :]
         h_v = (range_noise * d)[..., None]
         return eye, eye, gain_eye, h_x, h_v
@@ -346,8 +341,8 @@ def landmark_example(K: int = 20, landmark=(-3.0, 0.0), mean0=(-5.0, 3.0), std0=
     model_ = NonlinearModel(a=a, h=h, w=GaussianNoise(np.zeros(n), np.eye(n)),
                             v=GaussianNoise(np.zeros(1), np.eye(1)), n_x=n, n_u=n,
                             likelihood=likelihood, jacobians=jacobians, affine=True)
-    cost = QuadraticCost(Q=np.eye(n), R=input_weight * np.eye(n), Q_K=np.eye(n), x_target=x_target,
-                         K=K)
+    cost = QuadraticCost(Q=np.eye(n), R=input_weight * np.eye(n), Q_K=np.eye(n),
+                         x_target=x_target, K=K)
     return LandmarkExample(model_, cost, mean0, std0 ** 2 * np.eye(n), lm)
 
 
@@ -412,6 +407,5 @@ def linear_gaussian_model(A, B, H, C, J) -> NonlinearModel:
         return tuple(np.broadcast_to(M, batch + M.shape) for M in (A, B, H, C, J))
 
     return NonlinearModel(a=a, h=h, w=GaussianNoise(np.zeros(H.shape[1]), np.eye(H.shape[1])),
-                          v=GaussianNoise(np.zeros(J.shape[1]), np.eye(J.shape[1])), n_x=n_x,
-                          n_u=n_u,
-                          likelihood=likelihood, jacobians=jacobians, affine=True)
+                          v=GaussianNoise(np.zeros(J.shape[1]), np.eye(J.shape[1])),
+                          n_x=n_x, n_u=n_u, likelihood=likelihood, jacobians=jacobians, affine=True)

@@ -45,8 +45,7 @@ class ParticleFilter:
         self.model = check.instance(model, NonlinearModel, "model")
         if model.likelihood is None:
             raise ValueError("model: expected a model with a likelihood(y, x) for the particle "
-                             "filter, found "
-                             "likelihood None")
+                             "filter, found likelihood None")
         self.M = check.integer(n_particles, "n_particles", minimum=1)
         self.rng = check.generator(rng)
         self.threshold = check.real_scalar(resample_threshold, "resample_threshold", low=0, high=1)
@@ -88,8 +87,7 @@ class ParticleFilter:
         w = estimate.weights * m.likelihood(y, x)
         if not np.isfinite(w.sum()) or w.sum() <= 0:
             raise ValueError("y: expected a measurement with positive likelihood under some "
-                             "particle, found zero under "
-                             "all")
+                             "particle, found zero under all")
         w = w / w.sum()
         if 1.0 / np.sum(w ** 2) < self.threshold * w.size:
             idx = np.searchsorted(np.cumsum(w), (rng.random() + np.arange(w.size)) / w.size)
@@ -103,13 +101,10 @@ class ParticleFilter:
 
     def _next_covariance(self, estimate, u):
         return next_estimate_covariance(estimate, u, self.model, self._w_points, self._v_points,
-                                        self._beta,
-                                        self._gamma, check=False)
+                                        self._beta, self._gamma, check=False)
 
     def covariance_map(self, estimate):
-        """U -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once (u
-        unchecked).
-        """
+        """U -> C_{k+1}(u) of :meth:`next_covariance` for one estimate, checked once (u not)."""
         estimate = self._checked(estimate, np.zeros(self.model.n_u))[0]
         return partial(self._next_covariance, estimate)
 

@@ -1,6 +1,4 @@
-"""The affine policy u_k = L_k E{x_k} + d_k of eq. (2.18), and the controller that applies it with
-the UKF.
-"""
+"""The affine policy u_k = L_k E{x_k} + d_k of eq. (2.18), and its controller with the UKF."""
 
 from dataclasses import dataclass
 
@@ -36,19 +34,20 @@ class AffinePolicy:
     def __post_init__(self):
         L = check.real_array(self.L, "L", ndim=3)
         if 0 in L.shape:
-            raise ValueError("L: expected a non-empty array of shape (K, n_u, n_x), found shape "
-                             f"{L.shape}")
+            raise ValueError("L: expected a non-empty array of shape (K, n_u, n_x), "
+                             f"found shape {L.shape}")
         object.__setattr__(self, "L", L)
         object.__setattr__(self, "d", check.real_array(self.d, "d", shape=L.shape[:2]))
 
     @classmethod
     def zero(cls, K, n_u, n_x):
         """The initial policy L_k = 0, d_k = 0 (Sec. 2.5.2)."""
-        K, n_u, n_x = (check.integer(v, name, minimum=1) for v, name in ((K, "K"), (n_u, "n_u"),
-                                                                         (n_x, "n_x")))
+        named = ((K, "K"), (n_u, "n_u"), (n_x, "n_x"))
+        K, n_u, n_x = (check.integer(v, name, minimum=1) for v, name in named)
         return cls(np.zeros((K, n_u, n_x)), np.zeros((K, n_u)))
 
     def __call__(self, k, mean):
+        """The input u_k = L_k mean + d_k of eq. (2.18) at step ``k``."""
         return self.L[k] @ mean + self.d[k]
 
 

@@ -88,9 +88,8 @@ class ClosedLoop:
     >>> from asoc.belief import AffinePolicy, MeanAffineController, landmark_example
     >>> ex = landmark_example(K=2)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 5, np.random.default_rng(0))
-    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, MeanAffineController(ex.model,
-    ...     AffinePolicy.zero(2, 2, 2)),
-    ...     noise)
+    >>> controller = MeanAffineController(ex.model, AffinePolicy.zero(2, 2, 2))
+    >>> run = simulate(ex.model, ex.cost, ex.mean0, ex.cov0, controller, noise)
     >>> run.x.shape, run.u.shape, run.costs.shape
     ((5, 3, 2), (5, 2, 2), (5,))
     """
@@ -103,8 +102,7 @@ class ClosedLoop:
 
 
 def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
-    """Closed loop of (2.1)-(2.2) under ``controller`` for the draws ``noise``; costs by
-    (2.3)/(2.19).
+    """Closed loop of (2.1)-(2.2) under ``controller`` for the draws ``noise``, costs (2.3)/(2.19).
 
     Parameters
     ----------
@@ -147,18 +145,17 @@ def simulate(model, cost, mean0, cov0, controller, noise: Noise) -> ClosedLoop:
     N, K = noise.w.shape[:2]
     if (noise.x0.shape != (N, model.n_x) or noise.w.shape != (N, K, model.w.dim)
             or noise.v.shape != (N, K, model.v.dim) or K != cost.K):
-        raise ValueError(f"noise: expected draws x0 (N, {model.n_x}), w (N, {cost.K}, "
-                         f"{model.w.dim}), "
-                         f"v (N, {cost.K}, {model.v.dim}), found {noise.x0.shape}, "
-                         f"{noise.w.shape}, {noise.v.shape}")
+        raise ValueError(f"noise: expected draws x0 (N, {model.n_x}), "
+                         f"w (N, {cost.K}, {model.w.dim}), v (N, {cost.K}, {model.v.dim}), "
+                         f"found {noise.x0.shape}, {noise.w.shape}, {noise.v.shape}")
     for method in ("control", "step"):
         if not callable(getattr(controller, method, None)):
             raise TypeError("controller: expected an object with control(k, mean, cov) and "
-                            "step(mean, cov, u, y), "
-                            f"found {type(controller).__name__}")
+                            "step(mean, cov, u, y), found "
+                            f" {type(controller).__name__}")
     if getattr(controller, "horizon", K) < K:
-        raise ValueError(f"controller: expected a horizon >= {K} (the draws'), found "
-                         f"{controller.horizon}")
+        raise ValueError(f"controller: expected a horizon >= {K} (the draws'), "
+                         f"found {controller.horizon}")
     return _simulate(model, cost, mean0, cov0, controller, noise)
 
 

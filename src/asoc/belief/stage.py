@@ -1,5 +1,4 @@
-"""The stage problem of Algorithm 2.2: phi_k of eq. (2.13) and its expansion (2.15) at the
-reference.
+"""The stage problem of Algorithm 2.2: phi_k of eq. (2.13), expanded as (2.15) at the reference.
 
 Theorem 2.4 (:func:`terminal_value`) starts the backward pass; :class:`StageProblem` is
 phi_k at one time step, whose gradient and Hessian at the particles of the reference
@@ -39,8 +38,8 @@ def filter_for(filt, model, name="filt"):
     missing = [m for m in FILTER_METHODS if not callable(getattr(filt, m, None))]
     if missing:
         raise TypeError(f"{name}: expected a filter (UKF, ParticleFilter or an object with methods "
-                        f"{', '.join(FILTER_METHODS)}), found {type(filt).__name__} without "
-                        f"{', '.join(missing)}")
+                        f"{', '.join(FILTER_METHODS)}), "
+                        f"found {type(filt).__name__} without {', '.join(missing)}")
     return filt
 
 
@@ -70,7 +69,8 @@ class Value:
     def at(self, mean, cov) -> float:
         """The approximation for an estimate with the given mean and covariance."""
         q = QuadraticExpansion(self.s, self.v, self.V)
-        return q.expectation(mean, cov) + 0.5 * float(np.trace(self.S @ np.asarray(cov, dtype=float)))
+        covariance_term = 0.5 * float(np.trace(self.S @ np.asarray(cov, dtype=float)))
+        return q.expectation(mean, cov) + covariance_term
 
 
 def terminal_value(cost, mixture) -> Value:
@@ -125,8 +125,8 @@ class Expansion:
     Examples
     --------
     >>> exp = Expansion(phi=np.zeros(1), p=np.zeros((1, 1)), r=np.ones((1, 1)), Q=np.eye(1)[None],
-    ...                 P=np.zeros((1, 1, 1)), R=2 * np.eye(1)[None], points=np.zeros((1,
-    ...     1)), alpha=np.ones(1))
+    ...                 P=np.zeros((1, 1, 1)), R=2 * np.eye(1)[None], points=np.zeros((1, 1)),
+    ...                 alpha=np.ones(1))
     >>> [t.tolist() for t in exp.tilde]
     [[0.0], [1.0], [[0.0]], [[2.0]]]
     """
@@ -145,10 +145,10 @@ class Expansion:
         r = check.real_array(self.r, "r", shape=(points.shape[0], None))
         M, n_x, n_u = points.shape[0], points.shape[1], r.shape[1]
         if 0 in (M, n_x, n_u):
-            raise ValueError("points, r: expected non-empty (M, n_x) and (M, n_u), found "
-                             f"{points.shape} and {r.shape}")
-        shapes = {"phi": (M,), "p": (M, n_x), "Q": (M, n_x, n_x), "P": (M, n_u, n_x), "R": (M, n_u,
-                                                                                            n_u)}
+            raise ValueError("points, r: expected non-empty (M, n_x) and (M, n_u), "
+                             f"found {points.shape} and {r.shape}")
+        shapes = {"phi": (M,), "p": (M, n_x), "Q": (M, n_x, n_x), "P": (M, n_u, n_x),
+                  "R": (M, n_u, n_u)}
         for name, shape in shapes.items():
             object.__setattr__(self, name, check.real_array(getattr(self, name), name, shape=shape))
         object.__setattr__(self, "points", points)
@@ -168,10 +168,9 @@ class StageProblem:
 
     phi_k(x, u) = sum_m beta_m [C_k(x, u) + s_{k+1} + v_{k+1}^T a(x, u, w_m)
     + 1/2 a^T V_{k+1} a] + 1/2 tr[S_{k+1} C_{k+1}(u)], where C_{k+1}(u) is the covariance of the
-      next estimate from
-    Lemma 2.1 (the filter's
-    ``covariance_map``), which is what makes the controller dual. ``covariance_term=False``
-    drops that term (the certainty-equivalent control run of the notebook).
+    next estimate from Lemma 2.1 (the filter's ``covariance_map``), which is what makes the
+    controller dual. ``covariance_term=False`` drops that term (the certainty-equivalent control
+    run of the notebook).
 
     Parameters
     ----------
@@ -205,8 +204,7 @@ class StageProblem:
     """
 
     def __init__(self, model, cost, filt, estimate, nxt: Value, w_points, beta,
-                 covariance_hessian="psd",
-                 covariance_term=True):
+                 covariance_hessian="psd", covariance_term=True):
         self.model = check.instance(model, NonlinearModel, "model")
         self.cost, self.filt = cost_for(cost, model), filter_for(filt, model)
         self.covariance_hessian = check.choice(covariance_hessian, "covariance_hessian",
@@ -214,16 +212,15 @@ class StageProblem:
         self.covariance_term = check.boolean(covariance_term, "covariance_term")
         self.nxt = check.instance(nxt, Value, "nxt")
         if nxt.v.shape != (model.n_x,):
-            raise ValueError(f"nxt: expected a value of state dimension {model.n_x}, found v of "
-                             f"shape {nxt.v.shape}")
+            raise ValueError(f"nxt: expected a value of state dimension {model.n_x}, "
+                             f"found v of shape {nxt.v.shape}")
         self.w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
         self.beta = check.probability_vector(beta, "beta", self.w_points.shape[0])
         try:
             self.mixture = filt.mixture(estimate)
         except (TypeError, ValueError, IndexError, AttributeError) as err:
             raise TypeError(f"estimate: expected an estimate of the filter {type(filt).__name__}, "
-                            "found "
-                            f"{type(estimate).__name__} ({err})") from None
+                            f"found {type(estimate).__name__} ({err})") from None
         check.real_array(self.mixture.points, "estimate", shape=(None, model.n_x))
         self._next_covariance = self.filt.covariance_map(estimate)
         self._has_covariance_term = self.covariance_term and bool(np.any(nxt.S))
@@ -241,17 +238,15 @@ class StageProblem:
         return self._covariance_part(check.vector(u, "u", self.model.n_u))
 
     def _covariance_part(self, u):
-        """:meth:`covariance_part` for a float array u (n_u,), unchecked: numdifftools' inner
-        loop.
-        """
+        """:meth:`covariance_part` for an unchecked float array u (n_u,), in numdifftools' loop."""
         if not self._has_covariance_term:
             return 0.0
         return 0.5 * float(np.trace(self.nxt.S @ self._next_covariance(u)))
 
     def cost_to_go(self, u) -> float:
         """sum_i alpha_i phi_k(x_i, u): the costs-to-go at p_bar_k compared in Alg. 2.3."""
-        return float(self.mixture.weights @ self.particle_part(self.mixture.points,
-                                                               u)) + self.covariance_part(u)
+        particles = float(self.mixture.weights @ self.particle_part(self.mixture.points, u))
+        return particles + self.covariance_part(u)
 
     def expansion(self, u_bar, derivatives="analytic") -> Expansion:
         """Gradient and Hessian of phi_k at (x_i, u_bar) for every particle (eq. 2.12).
@@ -265,7 +260,8 @@ class StageProblem:
         u_bar = check.real_array(u_bar, "u_bar", shape=(self.model.n_u,))
         X, alpha = self.mixture.points, self.mixture.weights
         nx, nu = X.shape[1], np.size(u_bar)
-        analytic = derivatives == "analytic" and self.model.jacobians is not None and self.model.affine
+        analytic = (derivatives == "analytic" and self.model.jacobians is not None
+                    and self.model.affine)
         G = np.zeros((X.shape[0], nx + nu))
         H = np.zeros((X.shape[0], nx + nu, nx + nu))
         for i, x in enumerate(X):
@@ -344,10 +340,10 @@ class StageProblem:
         R = len(self.beta)
         xs, us = np.broadcast_to(x, (R, x.size)), np.broadcast_to(u, (R, np.size(u)))
         a = m.a(xs, us, self.w_points)                                # (R, n_x)
-        a_x, a_u = m.jacobians(xs, us, self.w_points, np.broadcast_to(m.v.mean,
-                                                                      (R,) + m.v.mean.shape))[:2]
+        v_mean = np.broadcast_to(m.v.mean, (R,) + m.v.mean.shape)
+        a_x, a_u = m.jacobians(xs, us, self.w_points, v_mean)[:2]
+        # J: (R, n_x, n_x + n_u)
         J = np.concatenate([np.broadcast_to(a_x, (R,) + a_x.shape[-2:]),
-                            # (R, n_x, n_x + n_u)
                             np.broadcast_to(a_u, (R,) + a_u.shape[-2:])], axis=-1)
         lam = a @ nxt.V + nxt.v                                       # dV_{k+1}/dx at a
         g = gC + np.einsum("m,mij,mi->j", self.beta, J, lam)

@@ -29,13 +29,12 @@ __all__ = ["Sweep", "distribution", "perturbation_sweep"]
 
 @dataclass(frozen=True)
 class Sweep:
-    """Per member: ``iterations``, ``converged``, ``costs`` (mean cost (2.19) of the final policy
-    on the evaluation draws), ``diverged_iterates`` (fraction of iterates eta >= 1 with J^[eta] >
-    J^[0]); ``baseline`` the mean cost of the zero policy on the evaluation draws; ``bends``
-    the bend of the final reference toward the landmark
-    (:func:`~asoc.belief.planning.bend_toward_landmark`,
-    NaN without a landmark); ``increases`` the largest relative increase of J^[eta] between
-    iterations (<= 0 when J never rose).
+    """Per member: ``iterations``, ``converged``, ``costs`` (mean cost (2.19) of the final policy on
+    the evaluation draws), ``diverged_iterates`` (fraction of iterates eta >= 1 with
+    J^[eta] > J^[0]); ``baseline`` the mean cost of the zero policy on the evaluation draws;
+    ``bends`` the bend of the final reference toward the landmark
+    (:func:`~asoc.belief.planning.bend_toward_landmark`, NaN without a landmark); ``increases`` the
+    largest relative increase of J^[eta] between iterations (<= 0 when J never rose).
 
     Examples
     --------
@@ -81,8 +80,7 @@ def distribution(samples) -> dict:
 
 
 def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e-9, progress=False,
-                       n_jobs=1,
-                       landmark=None, **options) -> Sweep:
+                       n_jobs=1, landmark=None, **options) -> Sweep:
     """Algorithm 2.2 from ``n_members`` perturbed zero policies; costs on the draws ``noise``.
 
     Parameters
@@ -118,8 +116,7 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     >>> ex = landmark_example(K=2)
     >>> noise = draw_noise(ex.model, ex.mean0, ex.cov0, 2, 10, np.random.default_rng(0))
     >>> s = perturbation_sweep(ex.model, ex.cost, ex.mean0, ex.cov0, noise, 2,
-    ...     np.random.default_rng(1),
-    ...                        n_cost_runs=10)
+    ...                        np.random.default_rng(1), n_cost_runs=10)
     >>> s.converged.tolist(), bool(np.ptp(s.costs) < 1e-3 * s.costs.mean())
     ([True, True], True)
     """
@@ -130,15 +127,13 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     scale = check.real_scalar(scale, "scale", low=0, low_open=True)
     progress = check.boolean(progress, "progress")
     n_jobs = check.process_count(n_jobs, "n_jobs")
-    simulate(model, cost, mean0, cov0, MeanAffineController(model, AffinePolicy.zero(cost.K,
-                                                                                     model.n_u,
-                                                                                     model.n_x)),
-             # checks mean0, cov0 and noise before the runs
-             noise)
+    zero = AffinePolicy.zero(cost.K, model.n_u, model.n_x)
+    # checks mean0, cov0 and noise before the runs
+    simulate(model, cost, mean0, cov0, MeanAffineController(model, zero), noise)
 
     children = rng.spawn(n_members)
-    options = {**options, "landmark": None if landmark is None else check.vector(landmark,
-                                                                                 "landmark", 2)}
+    options = {**options,
+               "landmark": None if landmark is None else check.vector(landmark, "landmark", 2)}
     if n_jobs == 1:
         outputs = [_member(model, cost, mean0, cov0, noise, child, scale, options)
                    for child in progress_bar(children, progress, desc="perturbed Alg. 2.2")]
@@ -148,14 +143,12 @@ def perturbation_sweep(model, cost, mean0, cov0, noise, n_members, rng, scale=1e
     rows = _reissued(outputs)
     it, conv, costs, div, bends, increases = (np.array(c) for c in zip(*rows))
     return Sweep(it, conv.astype(bool), costs, div,
-                 _mean_cost(model, cost, mean0, cov0, noise, AffinePolicy.zero(cost.K, model.n_u,
-                                                                               model.n_x)),
-                 bends, increases)
+                 _mean_cost(model, cost, mean0, cov0, noise, zero), bends, increases)
 
 
 def _mean_cost(model, cost, mean0, cov0, noise, policy) -> float:
-    return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, policy),
-                          noise).costs.mean())
+    run = simulate(model, cost, mean0, cov0, MeanAffineController(model, policy), noise)
+    return float(run.costs.mean())
 
 
 def _member(model, cost, mean0, cov0, noise, child, scale, options):
@@ -175,20 +168,18 @@ def _member(model, cost, mean0, cov0, noise, child, scale, options):
             res = optimize_belief_trajectory(model, cost, mean0, cov0, policy=start, rng=child,
                                              **options)
         J = np.asarray(res.costs)
-        means = [UKF.mean(e) for e in res.reference.estimates] if res.reference is not None else None
+        means = (None if res.reference is None
+                 else [UKF.mean(e) for e in res.reference.estimates])
         bend = (np.nan if landmark is None or means is None
                 else bend_toward_landmark(means, mean0, cost.x_target, landmark))
-        row = (res.iterations, res.converged, _mean_cost(model, cost, mean0, cov0, noise,
-                                                         res.policy),
-               float(np.mean(J[1:] > J[0])), bend,
+        mean_cost = _mean_cost(model, cost, mean0, cov0, noise, res.policy)
+        row = (res.iterations, res.converged, mean_cost, float(np.mean(J[1:] > J[0])), bend,
                float(np.max(np.diff(J) / J[:-1])) if J.size > 1 else 0.0)
     return row, [(w.message, w.category) for w in caught]
 
 
 def _reissued(member_outputs):
-    """The members' rows, after re-issuing their warnings here, in member order (the caller's
-    filters apply).
-    """
+    """The members' rows, their warnings re-issued here in member order (the caller's filters)."""
     rows = []
     for row, caught in member_outputs:
         for message, category in caught:
@@ -206,7 +197,7 @@ def _members_in_parallel(model, cost, mean0, cov0, noise, children, scale, optio
         import joblib
     except ImportError as err:                                   # the optional extra asoc[studies]
         raise ImportError("n_jobs != 1 needs joblib: pip install 'asoc[studies]'") from err
-    tasks = (joblib.delayed(_member)(model, cost, mean0, cov0, noise, child, scale,
-                                     options) for child in children)
+    tasks = (joblib.delayed(_member)(model, cost, mean0, cov0, noise, child, scale, options)
+             for child in children)
     rows = joblib.Parallel(n_jobs=n_jobs, return_as="generator")(tasks)
     return list(progress_bar(rows, progress, desc="perturbed Alg. 2.2", total=len(children)))

@@ -65,8 +65,8 @@ def derivatives(g, x, grad=None, hess=None):
     return G.reshape(x.size), H.reshape(x.size, x.size)
 
 
-def statistical_taylor_expansion(g, mixture: DiracMixture, grad=None,
-                                 hess=None) -> QuadraticExpansion:
+def statistical_taylor_expansion(g, mixture: DiracMixture, grad=None, hess=None
+                                 ) -> QuadraticExpansion:
     """Second-order expansion of a(p) = E{g(x)} at a Dirac mixture (Definition 2.2, eq. 2.8).
 
     sum_i alpha_i [g(x_i) + grad g(x_i)^T (x - x_i) + 1/2 (x - x_i)^T hess g(x_i) (x - x_i)],

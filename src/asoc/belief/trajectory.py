@@ -43,9 +43,8 @@ class Reference:
         u_bar = check.real_array(self.u_bar, "u_bar", ndim=2)
         check.instance(self.estimates, (list, tuple), "estimates", "a list of estimates")
         if len(self.estimates) != u_bar.shape[0] + 1:
-            raise ValueError(f"estimates: expected {u_bar.shape[0] + 1} estimates (one more than "
-                             "inputs), "
-                             f"found {len(self.estimates)}")
+            raise ValueError(f"estimates: expected {u_bar.shape[0] + 1} estimates "
+                             f"(one more than inputs), found {len(self.estimates)}")
         object.__setattr__(self, "u_bar", u_bar)
 
 
@@ -85,7 +84,7 @@ def reference_trajectory(model, filt, policy: AffinePolicy, mean0, cov0, mode="n
     >>> ex = landmark_example(K=3)
     >>> from asoc.belief import UKF
     >>> ref = reference_trajectory(ex.model, UKF(ex.model), AffinePolicy.zero(3, 2, 2), ex.mean0,
-    ...     ex.cov0)
+    ...                            ex.cov0)
     >>> len(ref.estimates), ref.u_bar.shape
     (4, (3, 2))
     """
@@ -119,8 +118,7 @@ def _reference_trajectory(model, filt, policy, mean0, cov0, mode, rng):
 
 @dataclass(kw_only=True)
 class TrajectoryOptimizationResult(IterativeResult):
-    """Result of Algorithm 2.2 (belief-space trajectory optimisation by statistical Taylor
-    expansion).
+    """Result of Algorithm 2.2 (belief-space trajectory optimisation, statistical Taylor expansion).
 
     ``policy`` the final affine policy; ``policies`` the policy of every iteration
     (policies[0] the initial one); ``costs`` J of each policy in ``policies`` (Monte Carlo
@@ -136,8 +134,7 @@ class TrajectoryOptimizationResult(IterativeResult):
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=3)
     >>> res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0,
-    ...     rng=np.random.default_rng(0),
-    ...                                  n_cost_runs=10)
+    ...                                  rng=np.random.default_rng(0), n_cost_runs=10)
     >>> res.status, res.iterations, round(res.costs[-1], 2) < round(res.costs[0], 2)
     ('converged', 2, True)
     """
@@ -154,8 +151,7 @@ class TrajectoryOptimizationResult(IterativeResult):
 
 def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_points, beta,
                   derivatives="analytic", alpha_min=2.0 ** -10, covariance_hessian="psd",
-                  covariance_term=True,
-                  damping=None):
+                  covariance_term=True, damping=None):
     """Steps 3-8 of Algorithm 2.2 along ``ref``; returns (new policy, V_0, eps, rejected).
 
     Parameters
@@ -208,9 +204,8 @@ def backward_pass(model, cost, filt, ref: Reference, policy: AffinePolicy, w_poi
     check.instance(ref, Reference, "ref")
     K = ref.u_bar.shape[0]
     if K != cost.K or len(ref.estimates) != K + 1:
-        raise ValueError(f"ref: expected a reference of horizon cost.K = {cost.K}, found {K} "
-                         "inputs and "
-                         f"{len(ref.estimates)} estimates")
+        raise ValueError(f"ref: expected a reference of horizon cost.K = {cost.K}, "
+                         f"found {K} inputs and {len(ref.estimates)} estimates")
     policy = policy_for(policy, K, model)
     w_points = check.real_array(w_points, "w_points", shape=(None, model.w.dim))
     beta = check.probability_vector(beta, "beta", w_points.shape[0])
@@ -232,8 +227,7 @@ class IndefiniteStep(np.linalg.LinAlgError):
 
 
 def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, alpha_min,
-                   covariance_hessian,
-                   covariance_term, damping=None):
+                   covariance_hessian, covariance_term, damping=None):
     """Steps 3-8 of Alg. 2.2; ``damping`` mu adds mu I to every R_k^i (so to R~_k) and raises
     :class:`IndefiniteStep` where R~_k + mu I is still indefinite (the damped variant).
     """
@@ -243,15 +237,14 @@ def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, 
     eps_k, rejected = np.zeros(K), 0
     for k in range(K - 1, -1, -1):
         stage = StageProblem(model, cost, filt, ref.estimates[k], value, w_points, beta,
-                             covariance_hessian,
-                             covariance_term)
+                             covariance_hessian, covariance_term)
         exp = stage.expansion(ref.u_bar[k], derivatives)
         if damping is not None:
             exp = replace(exp, R=exp.R + damping * np.eye(exp.R.shape[-1]))
         lam = np.linalg.eigvalsh(exp.tilde[3]).min()
         if not lam > 0 and damping is not None:
-            raise IndefiniteStep(f"R~_{k} + {damping:g} I is indefinite (minimal eigenvalue "
-                                 f"{lam:.3g})")
+            raise IndefiniteStep(f"R~_{k} + {damping:g} I is indefinite "
+                                 f"(minimal eigenvalue {lam:.3g})")
         if not lam > 0:
             warnings.warn(f"Assumption 2.3 fails at k={k}: R~_k is not positive definite "
                           f"(minimal eigenvalue {lam:.3g}); keeping the policy", RuntimeWarning,
@@ -271,10 +264,9 @@ def _backward_pass(model, cost, filt, ref, policy, w_points, beta, derivatives, 
 
 
 def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None, max_iterations=50,
-                               rtol=1e-4,
-                               n_cost_runs=200, rng=None, derivatives="analytic",
-                               reference_mode="nominal",
-                               alpha_min=2.0 ** -10, covariance_hessian="psd", covariance_term=True,
+                               rtol=1e-4, n_cost_runs=200, rng=None, derivatives="analytic",
+                               reference_mode="nominal", alpha_min=2.0 ** -10,
+                               covariance_hessian="psd", covariance_term=True,
                                progress=False) -> TrajectoryOptimizationResult:
     """Algorithm 2.2: belief-space trajectory optimisation by statistical Taylor expansion.
 
@@ -335,8 +327,7 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     >>> from asoc.belief import landmark_example
     >>> ex = landmark_example(K=3)
     >>> res = optimize_belief_trajectory(ex.model, ex.cost, ex.mean0, ex.cov0,
-    ...     rng=np.random.default_rng(0),
-    ...                                  n_cost_runs=10)
+    ...                                  rng=np.random.default_rng(0), n_cost_runs=10)
     >>> res.converged, res.iterations, res.policy.L.shape
     (True, 2, (3, 2, 2))
     """
@@ -346,8 +337,8 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     mean0 = check.vector(mean0, "mean0", model.n_x)
     cov0 = check.covariance(cov0, "cov0", model.n_x)
     filt = filter_for(filt, model)
-    policy = AffinePolicy.zero(K, model.n_u, model.n_x) if policy is None else policy_for(policy, K,
-                                                                                          model)
+    policy = (AffinePolicy.zero(K, model.n_u, model.n_x) if policy is None
+              else policy_for(policy, K, model))
     max_iterations = check.integer(max_iterations, "max_iterations", minimum=1)
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     n_cost_runs = check.integer(n_cost_runs, "n_cost_runs", minimum=1)
@@ -359,8 +350,8 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     noise = draw_noise(model, mean0, cov0, K, n_cost_runs, rng)
 
     def J(pol):
-        return float(simulate(model, cost, mean0, cov0, MeanAffineController(model, pol),
-                              noise).costs.mean())
+        run = simulate(model, cost, mean0, cov0, MeanAffineController(model, pol), noise)
+        return float(run.costs.mean())
 
     policies, costs, predicted, eps_all, rejected_all = [policy], [J(policy)], [], [], []
     status, ref, error = "max_iterations", None, None
@@ -372,11 +363,12 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
         except np.linalg.LinAlgError as err:
             status, error = "linalg_error", err
             break
-        # the inputs are checked: a non-finite intermediate (value, policy)
         except ValueError as err:
+            # the inputs are checked: a non-finite intermediate (value, policy)
             status, error = "diverged", err
             break
-        policies.append(policy), costs.append(J(policy)), eps_all.append(eps), rejected_all.append(rejected)
+        policies.append(policy), costs.append(J(policy))
+        eps_all.append(eps), rejected_all.append(rejected)
         predicted.append(value.at(mean0, cov0))
         if not np.isfinite(costs[-1]):
             status = "diverged"
@@ -388,18 +380,19 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
     messages = {
         "converged": lambda: f"the relative change of J, {_change(costs):.3g}, met rtol = {rtol:g} "
                              f"after {iterations} iterations",
-        "max_iterations": lambda: f"stopped after max_iterations = {max_iterations} with relative change of J "
-                                  f"{_change(costs):.3g} > rtol = {rtol:g}",
-        "diverged": lambda: (f"J became non-finite ({costs[-1]}) at iteration {iterations}" if error is None
-                             else f"an iterate became non-finite at iteration {iterations + 1}: "
-                                  f"{error}"),
-        "linalg_error": lambda: f"a linear-algebra step failed at iteration {iterations + 1}: {error}",
+        "max_iterations": lambda: f"stopped after max_iterations = {max_iterations} with relative "
+                                  f"change of J {_change(costs):.3g} > rtol = {rtol:g}",
+        "diverged": lambda: (f"J became non-finite ({costs[-1]}) at iteration {iterations}"
+                             if error is None else
+                             f"an iterate became non-finite at iteration {iterations + 1}: "
+                             f"{error}"),
+        "linalg_error": lambda: (f"a linear-algebra step failed at iteration {iterations + 1}: "
+                                 f"{error}"),
     }
     result = TrajectoryOptimizationResult(
         policy=policy, policies=policies, costs=costs, predicted=predicted, eps=eps_all,
-        rejected=rejected_all,
-        iterations=iterations, reference=ref, converged=status == "converged", status=status,
-        message=messages[status]())
+        rejected=rejected_all, iterations=iterations, reference=ref,
+        converged=status == "converged", status=status, message=messages[status]())
     if not result.converged:
         warnings.warn(f"Algorithm 2.2 did not converge: {result.message}", RuntimeWarning,
                       stacklevel=2)
@@ -407,4 +400,6 @@ def optimize_belief_trajectory(model, cost, mean0, cov0, filt=None, policy=None,
 
 
 def _change(costs):
-    return abs(costs[-1] - costs[-2]) / abs(costs[-2]) if len(costs) > 1 and costs[-2] != 0 else float("inf")
+    if len(costs) > 1 and costs[-2] != 0:
+        return abs(costs[-1] - costs[-2]) / abs(costs[-2])
+    return float("inf")

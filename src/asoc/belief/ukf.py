@@ -44,8 +44,8 @@ def _cholesky(cov):
 
 
 class _Augmented:
-    """Sigma points of a state estimate augmented by a noise, N([mean, E{w}], [[cov, 0], [0,
-    Cov{w}]]).
+    """Sigma points of a state estimate augmented by a noise:
+    N([mean, E{w}], [[cov, 0], [0, Cov{w}]]).
 
     The root of the block-diagonal covariance is the Cholesky factor, whose blocks are those
     of ``cov`` and Cov{w}: the noise's offsets of the sigma points and the weights are
@@ -64,15 +64,14 @@ class _Augmented:
         except np.linalg.LinAlgError:
             self.noise_offsets = None
         else:
-            self.noise_offsets = points_around(np.zeros(n),
-                                               self.scale * _block_diag(np.zeros((n_x, n_x)),
-                                                                        noise_root))
+            noise_block = _block_diag(np.zeros((n_x, n_x)), noise_root)
+            self.noise_offsets = points_around(np.zeros(n), self.scale * noise_block)
 
     def points(self, mean, cov):
         """State part (..., 2n+1, n_x) and noise part (..., 2n+1, n_w) of the sigma points."""
         offsets = self._offsets(cov)
-        return mean[..., None,
-                    :] + offsets[..., :self.n_x], self.noise.mean + offsets[..., self.n_x:]
+        states = mean[..., None, :] + offsets[..., :self.n_x]
+        return states, self.noise.mean + offsets[..., self.n_x:]
 
     def _offsets(self, cov):
         """Sigma points of N(0, [[cov, 0], [0, Cov{w}]])."""
@@ -128,8 +127,8 @@ class UKF:
 
     def __init__(self, model, kappa: float = KAPPA):
         self.model = check.instance(model, NonlinearModel, "model")
-        self.kappa = check.real_scalar(kappa, "kappa", low=-(model.n_x + min(model.w.dim,
-                                                                             model.v.dim)),
+        self.kappa = check.real_scalar(kappa, "kappa",
+                                       low=-(model.n_x + min(model.w.dim, model.v.dim)),
                                        low_open=True)
         self._process = _Augmented(model.w, model.n_x, self.kappa)
         self._sensor = _Augmented(model.v, model.n_x, self.kappa)
@@ -159,12 +158,12 @@ class UKF:
         if extra_name is None:
             return mean, cov
         if extra is None:
-            raise TypeError(f"{extra_name}: expected a real array of shape (..., {size}), found "
-                            "None")
+            raise TypeError(f"{extra_name}: expected a real array of shape (..., {size}), "
+                            "found None")
         extra = check.real_array(extra, extra_name)
         if extra.ndim == 0 or extra.shape[-1] != size:
-            raise ValueError(f"{extra_name}: expected shape (..., {size}), found shape "
-                             f"{extra.shape}")
+            raise ValueError(f"{extra_name}: expected shape (..., {size}), "
+                             f"found shape {extra.shape}")
         return mean, cov, extra
 
     def predict(self, mean, cov, u):
@@ -182,17 +181,16 @@ class UKF:
         """Predicted mean and covariance from the prior's joint sigma points (:meth:`_prior`)."""
         x_points, w_points = prior
         weights = self._process.weights
-        mean_p, e = weighted_moments(self.model.a(x_points, np.asarray(u)[..., None, :], w_points),
-                                     weights)
+        next_points = self.model.a(x_points, np.asarray(u)[..., None, :], w_points)
+        mean_p, e = weighted_moments(next_points, weights)
         return mean_p, weighted_covariance(e, weights)
 
     def _measurement(self, mean, cov):
         x_points, v_points = self._sensor.points(mean, cov)
         weights = self._sensor.weights
         n = x_points.shape[-1]
-        joint_mean, e = weighted_moments(np.concatenate([x_points, self.model.h(x_points,
-                                                                                v_points)],
-                                                                                axis=-1), weights)
+        joint = np.concatenate([x_points, self.model.h(x_points, v_points)], axis=-1)
+        joint_mean, e = weighted_moments(joint, weights)
         post, gain = conditional_covariance(e, n, weights)
         return joint_mean[..., n:], gain, post
 
@@ -241,8 +239,8 @@ class UKF:
         >>> ex = landmark_example()
         >>> ukf = UKF(ex.model)
         >>> C = ukf.covariance_map((ex.mean0, ex.cov0))
-        >>> bool(np.allclose(C(np.array([1.0, 0.0])), ukf.next_covariance((ex.mean0, ex.cov0), [1.0,
-        ...     0.0])))
+        >>> direct = ukf.next_covariance((ex.mean0, ex.cov0), [1.0, 0.0])
+        >>> bool(np.allclose(C(np.array([1.0, 0.0])), direct))
         True
         """
         mean, cov = self._checked(*_pair(estimate))

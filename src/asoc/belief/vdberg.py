@@ -99,12 +99,13 @@ def _belief_vector(mean, cov):
     mean, tril = np.asarray(mean, dtype=float), root[..., i, j]
     if mean.shape[:-1] != tril.shape[:-1]:
         batch = np.broadcast_shapes(mean.shape[:-1], tril.shape[:-1])
-        mean, tril = np.broadcast_to(mean, batch + mean.shape[-1:]), np.broadcast_to(tril, batch + tril.shape[-1:])
+        mean = np.broadcast_to(mean, batch + mean.shape[-1:])
+        tril = np.broadcast_to(tril, batch + tril.shape[-1:])
     return np.concatenate([mean, tril], axis=-1)
 
 
 def belief_mean_and_root(b, n):
-    """(mean, sqrt(cov)) from a belief vector b = (mean, vech(sqrt(cov))) of [159] (inverse of
+    """(mean, sqrt(cov)) from a belief vector b = (mean, vech(sqrt(cov))) of [159] (the inverse of
     :func:`belief_vector`).
 
     Examples
@@ -236,8 +237,8 @@ def _linearize(dyn, b, u):
     # one central difference of step 1e-4 (no Richardson extrapolation): within 1e-8 of
     # numdifftools' adaptive default on this problem, at an eighth of the evaluations
     step = nd.MinStepGenerator(base_step=1e-4, num_steps=1)
-    Jz = nd.Jacobian(stacked, method="central", order=2, step=step,
-                     richardson_terms=0)(np.concatenate([b, u]))
+    jacobian = nd.Jacobian(stacked, method="central", order=2, step=step, richardson_terms=0)
+    Jz = jacobian(np.concatenate([b, u]))
     g, W = dyn._dynamics(b, u)
     m = W.shape[1]
     A, B = Jz[:lb, :lb], Jz[:lb, lb:]
@@ -246,9 +247,7 @@ def _linearize(dyn, b, u):
 
 
 def _rollout(dyn, bcost, b0, u_bar, b_bar=None, L=None, l=None, eps=1.0):
-    """Forward pass with w = 0: u_t = u_bar_t + L_t (b_t - b_bar_t) + eps l_t. Returns (b, u,
-    cost).
-    """
+    """Forward pass with w = 0: u_t = u_bar_t + L_t (b_t - b_bar_t) + eps l_t; (b, u, cost)."""
     K = u_bar.shape[0]
     b, bs, us, total = b0, [b0], [], 0.0
     for t in range(K):
@@ -262,8 +261,7 @@ def _rollout(dyn, bcost, b0, u_bar, b_bar=None, L=None, l=None, eps=1.0):
 
 def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=1e-4,
                 eps_min=2.0 ** -12, progress=False) -> BeliefILQGResult:
-    """Belief-space iLQG of [159] for the model (2.1)-(2.2) and the cost (2.20) (the competitor,
-    Sec. 2.5.3).
+    """Belief-space iLQG of [159] for the model (2.1)-(2.2) and the cost (2.20), Sec. 2.5.3's rival.
 
     Parameters
     ----------
@@ -313,8 +311,8 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
     K, n = cost.K, model.n_x
     mean0 = check.vector(mean0, "mean0", n)
     cov0 = check.covariance(cov0, "cov0", n)
-    u_bar = np.zeros((K, model.n_u)) if u_init is None else check.real_array(u_init, "u_init",
-                                                                             shape=(K, model.n_u))
+    u_bar = (np.zeros((K, model.n_u)) if u_init is None
+             else check.real_array(u_init, "u_init", shape=(K, model.n_u)))
     max_iterations = check.integer(max_iterations, "max_iterations", minimum=1)
     rtol = check.real_scalar(rtol, "rtol", low=0, low_open=True)
     eps_min = check.real_scalar(eps_min, "eps_min", low=0, high=1, low_open=True)
@@ -347,12 +345,11 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
             status = "converged"
             break
     bar.close()
-    messages = {"converged": lambda: f"converged after {it} iterations (relative cost change or predicted "
-                                     f"decrease <= rtol = {rtol:g})",
-                "no_progress": lambda: f"no step eps >= {eps_min:g} decreases the cost at iteration {it}, although "
-                                       f"a full step predicts a decrease of {decrease:.3g} > rtol "
-                                       "|J| = "
-                                       f"{rtol * abs(J):.3g}",
+    messages = {"converged": lambda: f"converged after {it} iterations (relative cost change or "
+                                     f"predicted decrease <= rtol = {rtol:g})",
+                "no_progress": lambda: f"no step eps >= {eps_min:g} decreases the cost at "
+                                       f"iteration {it}, although a full step predicts a decrease "
+                                       f"of {decrease:.3g} > rtol |J| = {rtol * abs(J):.3g}",
                 "linalg_error": lambda: f"D_t is not positive definite at iteration {it}",
                 "max_iterations": lambda: f"stopped after max_iterations = {max_iterations}"}
     message = messages[status]()
@@ -361,9 +358,8 @@ def belief_ilqg(model, cost, mean0, cov0, u_init=None, max_iterations=100, rtol=
                       stacklevel=2)
     L, _, expected, _ = _backward(dyn, bcost, b_bar, u_bar)
     return BeliefILQGResult(b_bar=b_bar, u_bar=u_bar, L=L, costs=costs,
-                            expected_cost=float(expected),
-                            iterations=it, converged=status == "converged", status=status,
-                            message=message)
+                            expected_cost=float(expected), iterations=it,
+                            converged=status == "converged", status=status, message=message)
 
 
 class BeliefAffineController:
@@ -392,10 +388,11 @@ class BeliefAffineController:
     def __init__(self, model, result):
         self.model = check.instance(model, NonlinearModel, "model")
         self.result = check.instance(result, BeliefILQGResult, "result")
-        if result.u_bar.shape[1] != model.n_u or result.b_bar.shape[1] != model.n_x + model.n_x * (model.n_x + 1) // 2:
-            raise ValueError(f"result: expected a belief iLQG result for n_x = {model.n_x}, n_u = "
-                             f"{model.n_u}, "
-                             f"found beliefs {result.b_bar.shape} and inputs {result.u_bar.shape}")
+        n_belief = model.n_x + model.n_x * (model.n_x + 1) // 2
+        if result.u_bar.shape[1] != model.n_u or result.b_bar.shape[1] != n_belief:
+            raise ValueError(f"result: expected a belief iLQG result for n_x = {model.n_x}, "
+                             f"n_u = {model.n_u}, found beliefs {result.b_bar.shape} and inputs "
+                             f"{result.u_bar.shape}")
         self.horizon = result.u_bar.shape[0]
 
     def control(self, k, mean, cov):

@@ -1,5 +1,4 @@
-"""The modified Cramer-von Mises distance (mCvMd) via localized cumulative distributions (Sec.
-2.6.3, item 5).
+"""Modified Cramer-von Mises distance (Sec. 2.6.3, item 5) by localized cumulative distributions.
 
 Closed form between Dirac mixtures (:func:`mcvmd`, :func:`mcvmd_matrix`), the localized
 cumulative distributions of Dirac mixtures and Gaussians (:func:`lcd_dirac`,
@@ -31,8 +30,7 @@ ROUNDING_RTOL = 1e-9
 
 
 def mcvmd_constant(b_max: float) -> float:
-    r"""The constant :math:`c_b` of the large-``b_max`` closed form of the mCvMd (Sec. 2.6.3, item
-    5).
+    r"""The constant :math:`c_b` of the mCvMd's closed form at large ``b_max`` (Sec. 2.6.3, 5).
 
     Integrating the definition, :math:`\int_0^{b_{\max}} w(b) \int (P_1 - P_2)^2\,dm\,db`,
     term by term with the LCD kernel of Sec. 2.6.3 gives
@@ -162,8 +160,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     >>> D = mcvmd_matrix(np.array([[0.0, 1.0], [0.5, 0.5], [2.0, 3.0]]))
     >>> D.round(3).tolist()
     [[0.0, 0.392, 4.014], [0.392, 0.0, 4.073], [4.014, 4.073, 0.0]]
-    >>> mcvmd_matrix(np.array([[0.0, 1.0], [2.0, 3.0]]), b_max=[10.0, 100.0])[:, 0,
-    ...     1].round(3).tolist()
+    >>> X = np.array([[0.0, 1.0], [2.0, 3.0]])
+    >>> mcvmd_matrix(X, b_max=[10.0, 100.0])[:, 0, 1].round(3).tolist()
     [2.82, 4.014]
     """
     X = v.mixture_set(X, "X")
@@ -174,8 +172,8 @@ def mcvmd_matrix(X, Y=None, WX=None, WY=None, b_max: float = DEFAULT_B_MAX,
     v.same_dimension(X, Y, "X, Y")
     several = np.ndim(b_max) == 1
     if several and len(b_max) == 0:
-        raise ValueError("b_max: expected a positive number or a non-empty sequence of them, found "
-                         "an empty sequence")
+        raise ValueError("b_max: expected a positive number or a non-empty sequence of them, "
+                         "found an empty sequence")
     constants = [mcvmd_constant(value) for value in (b_max if several else [b_max])]
     chunk = check.integer(chunk, "chunk", minimum=1)
     progress = check.boolean(progress, "progress")
@@ -213,7 +211,6 @@ def _combined(sums, cb, d, symmetric, b_max):
     return out
 
 
-
 def _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress):
     """The weighted sums of :func:`mcvmd_matrix`: D1 (N,), D2 (M,), D12 and Dm (N, M)."""
     D1 = np.einsum("na,nab,nb->n", WX, _xlog_sq(X[:, :, None], X[:, None]), WX)
@@ -231,8 +228,8 @@ def _mcvmd_sums(X, WX, Y, WY, symmetric, chunk, progress):
 def lcd_dirac(x, wx, m, b) -> np.ndarray:
     r"""Localized cumulative distribution of a Dirac mixture, :math:`P(\underline m, b)`.
 
-    :math:`P(\underline m, b) = \sum_i w_i \exp(-\tfrac12 \|\underline x_i - \underline m\|^2 /
-    b^2)`
+    :math:`P(\underline m, b) =
+    \sum_i w_i \exp(-\tfrac12 \|\underline x_i - \underline m\|^2 / b^2)`
     (Sec. 2.6.3, LCD with the radial basis kernel). ``m``: (K, d) evaluation points,
     ``b``: scalar or (K,) widths. Returns (K,).
 
@@ -373,7 +370,8 @@ def mcvmd_quadrature(lcd1, lcd2, b_max: float = DEFAULT_B_MAX, center: float = 0
         extra = (points[:, None] + b * np.arange(-8, 9)[None]).ravel()
         edges = np.union1d(np.linspace(center - half, center + half, panels + 1),
                            extra[np.abs(extra - center) < half])
-        m = (0.5 * np.diff(edges)[:, None] * t[None] + 0.5 * (edges[:-1] + edges[1:])[:, None]).ravel()
+        midpoints = 0.5 * (edges[:-1] + edges[1:])
+        m = (0.5 * np.diff(edges)[:, None] * t[None] + midpoints[:, None]).ravel()
         wm = (0.5 * np.diff(edges)[:, None] * w[None]).ravel()
         return float(wm @ (lcd1(m[:, None], b) - lcd2(m[:, None], b)) ** 2)
 

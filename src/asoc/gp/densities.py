@@ -137,19 +137,17 @@ def hellinger_gaussian(m1, C1, m2, C2) -> float:
 
 
 def _hellinger_gaussian(m1, C1, m2, C2):
-    """:func:`hellinger_gaussian` of broadcastable stacks of means (..., d) and covariances (..., d,
-    d).
-    """
+    """:func:`hellinger_gaussian` of broadcastable stacks of means and covariances."""
     Cbar = 0.5 * (C1 + C2)
     d = m1 - m2
     quad = np.einsum("...i,...i->...", d, np.linalg.solve(Cbar, d[..., None])[..., 0])
-    bc = (np.linalg.det(C1) * np.linalg.det(C2)) ** 0.25 / np.sqrt(np.linalg.det(Cbar)) * np.exp(-0.125 * quad)
+    determinants = (np.linalg.det(C1) * np.linalg.det(C2)) ** 0.25 / np.sqrt(np.linalg.det(Cbar))
+    bc = determinants * np.exp(-0.125 * quad)
     return np.sqrt(np.clip(1.0 - bc, 0.0, None))
 
 
 def hellinger_gaussian_matrix(means_i, covs_i, means_j=None, covs_j=None) -> np.ndarray:
-    """Pairwise Hellinger distances between two sets of Gaussians (vectorised
-    :func:`hellinger_gaussian`).
+    """Pairwise Hellinger distances between two sets of Gaussians (:func:`hellinger_gaussian`).
 
     Parameters
     ----------
@@ -177,9 +175,8 @@ def hellinger_gaussian_matrix(means_i, covs_i, means_j=None, covs_j=None) -> np.
     mj, Cj = (mi, Ci) if symmetric else v.gaussian_set(means_j, covs_j, "means_j", "covs_j",
                                                        definite=True)
     if mj.shape[1] != mi.shape[1]:
-        raise ValueError("means_i, means_j: expected Gaussians of the same dimension, found "
-                         f"{mi.shape[1]} "
-                         f"and {mj.shape[1]}")
+        raise ValueError("means_i, means_j: expected Gaussians of the same dimension, "
+                         f"found {mi.shape[1]} and {mj.shape[1]}")
     out = _hellinger_gaussian(mi[:, None], Ci[:, None], mj[None], Cj[None])
     if symmetric:
         np.fill_diagonal(out, 0.0)
@@ -229,17 +226,14 @@ def jensen_shannon(p1, p2, lower=-np.inf, upper=np.inf) -> float:
 
 
 def _cell_pairs(heights, edges, other):
-    """Heights (N, B) and (M, B) and the cell widths (B,) of piecewise-constant densities,
-    checked.
-    """
+    """Heights (N, B) and (M, B) and cell widths (B,) of piecewise-constant densities, checked."""
     H, widths = v.piecewise_constant(heights, edges, "heights")
     G = H if other is None else v.piecewise_constant(other, edges, "other")[0]
     return H[:, None, :], G[None, :, :], widths
 
 
 def lq_distance_matrix(heights, edges, other=None, q: float = 2) -> np.ndarray:
-    r"""Pairwise :math:`L_q` distances (Sec. 2.6.3, item 1) between piecewise-constant densities,
-    exactly.
+    r"""Pairwise :math:`L_q` distances (Sec. 2.6.3, item 1) of piecewise-constant densities, exact.
 
     :math:`d_q = (\sum_b w_b |h_{1,b} - h_{2,b}|^q)^{1/q}` for densities of height
     :math:`h_b` on the cells of widths :math:`w_b` between ``edges``.
@@ -266,8 +260,8 @@ def lq_distance_matrix(heights, edges, other=None, q: float = 2) -> np.ndarray:
 
     Examples
     --------
-    >>> lq_distance_matrix([[2.0, 0.0], [1.0, 1.0]], [0.0, 0.5, 1.0],
-    ...     q=1).tolist()   # |2 - 1| / 2 + |0 - 1| / 2
+    >>> # |2 - 1| / 2 + |0 - 1| / 2
+    >>> lq_distance_matrix([[2.0, 0.0], [1.0, 1.0]], [0.0, 0.5, 1.0], q=1).tolist()
     [[0.0, 1.0], [1.0, 0.0]]
     """
     q = v.order(q, "q")
@@ -276,8 +270,7 @@ def lq_distance_matrix(heights, edges, other=None, q: float = 2) -> np.ndarray:
 
 
 def hellinger_matrix(heights, edges, other=None) -> np.ndarray:
-    r"""Pairwise Hellinger distances (Sec. 2.6.3, item 2) between piecewise-constant densities,
-    exactly.
+    r"""Pairwise Hellinger distances (Sec. 2.6.3, item 2) of piecewise-constant densities, exact.
 
     :math:`d = (1 - \sum_b w_b \sqrt{h_{1,b} h_{2,b}})^{1/2}` (the reading of :func:`hellinger`).
 
@@ -312,8 +305,7 @@ def hellinger_matrix(heights, edges, other=None) -> np.ndarray:
 
 
 def jensen_shannon_matrix(heights, edges, other=None) -> np.ndarray:
-    r"""Pairwise Jensen-Shannon divergences (Sec. 2.6.3, item 3) between piecewise-constant
-    densities, exactly.
+    r"""Pairwise Jensen-Shannon divergences (Sec. 2.6.3, item 3) of piecewise-constant densities.
 
     :math:`d = \tfrac12 \sum_b w_b [h_{1,b} \log(h_{1,b}/g_b) + h_{2,b} \log(h_{2,b}/g_b)]`,
     :math:`g = (h_1 + h_2)/2` (natural logarithm, as :func:`jensen_shannon`).

@@ -14,8 +14,9 @@ GRID_STEP_RANGE = (1e-3, 10.0)   #: the steps of the test grid one can ask for (
 
 
 def quadratic_function(mu, var):
-    r"""Quadratic test function :math:`v_1(\mu, \sigma) = \mu^2 + \sigma^2 = \mathrm E\{x^2\}` (Sec.
-    2.6.4).
+    r"""Quadratic test function (Sec. 2.6.4) :math:`v_1(\mu, \sigma) = \mu^2 + \sigma^2`.
+
+    :math:`v_1 = \mathrm E\{x^2\}` for :math:`x \sim \mathcal N(\mu, \sigma^2)`.
 
     Parameters
     ----------
@@ -48,13 +49,13 @@ def _inputs(mu, var):
     try:
         np.broadcast_shapes(mu.shape, var.shape)
     except ValueError:
-        raise ValueError(f"mu, var: expected broadcastable shapes, found {mu.shape} and {var.shape}") from None
+        raise ValueError(f"mu, var: expected broadcastable shapes, found {mu.shape} and "
+                         f"{var.shape}") from None
     return mu, var
 
 
 def modified_rosenbrock(mu, var, a=0.1, b=4.0, c=0.1, d=-4.0):
-    r"""Modified Rosenbrock test function :math:`v_2` (Sec. 2.6.4) with :math:`x_1 = \mu`,
-    :math:`x_2 = \sigma^2`.
+    r"""Modified Rosenbrock test function :math:`v_2` (Sec. 2.6.4), x_1 = mu, x_2 = sigma^2.
 
     :math:`v_2(\mu, \sigma) = a(\mu + b)^2 + c(\mu^2 - \sigma^2 + d)^2 = 0.1(\mu + 4)^2 +
     0.1(\mu^2 - \sigma^2 - 4)^2`. The thesis lists :math:`b = 0.4` but its final formula
@@ -83,8 +84,8 @@ def modified_rosenbrock(mu, var, a=0.1, b=4.0, c=0.1, d=-4.0):
     [14.4, 4.1]
     """
     mu, var = _inputs(mu, var)
-    a, b, c, d = (check.real_scalar(value, name) for value, name in ((a, "a"), (b, "b"), (c, "c"),
-                                                                     (d, "d")))
+    named = ((a, "a"), (b, "b"), (c, "c"), (d, "d"))
+    a, b, c, d = (check.real_scalar(value, name) for value, name in named)
     return a * (mu + b) ** 2 + c * (mu**2 - var + d) ** 2
 
 
@@ -121,8 +122,7 @@ def training_gaussians(n: int, rng: np.random.Generator):
 
 
 def evaluation_grid(step: float = 0.1):
-    """Uniform grid of the test Gaussians of Sec. 2.6.4 with increment ``step`` in mean and
-    variance.
+    """Uniform grid of the test Gaussians of Sec. 2.6.4, increment ``step`` in mean and variance.
 
     Returns ``(mu_axis, var_axis)``: the means from -5 to 5 and the variances from 0.1^2
     upwards while <= 2^2 (with step 0.1: 101 x 40 = 4040 test Gaussians).
@@ -157,8 +157,7 @@ def evaluation_grid(step: float = 0.1):
 
 
 def error_metrics(prediction, truth) -> dict:
-    """Error metrics of Sec. 2.6.4: RMSE, maximum quadratic error, RMSE normalised by the range of
-    ``truth``, R^2.
+    """Error metrics of Sec. 2.6.4: RMSE, max quadratic error, range-normalised RMSE, R^2.
 
     Parameters
     ----------

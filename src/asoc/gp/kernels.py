@@ -363,13 +363,13 @@ def mean_kernel_gaussian(means_i, covs_i, means_j, covs_j, *, alpha: float, Lamb
     mi = validation.real_array(means_i, "means_i", ndim=2)
     d = mi.shape[1]
     mj = validation.real_array(means_j, "means_j", shape=(None, d))
-    Ci = validation.semidefinite(validation.real_array(covs_i, "covs_i", shape=(len(mi), d, d)),
-                                 "covs_i")
-    Cj = validation.semidefinite(validation.real_array(covs_j, "covs_j", shape=(len(mj), d, d)),
-                                 "covs_j")
+    Ci = validation.real_array(covs_i, "covs_i", shape=(len(mi), d, d))
+    Ci = validation.semidefinite(Ci, "covs_i")
+    Cj = validation.real_array(covs_j, "covs_j", shape=(len(mj), d, d))
+    Cj = validation.semidefinite(Cj, "covs_j")
     if 0 in mi.shape + mj.shape:
-        raise ValueError(f"means_i, means_j: expected non-empty (N, d) arrays, found {mi.shape} "
-                         f"and {mj.shape}")
+        raise ValueError("means_i, means_j: expected non-empty (N, d) arrays, "
+                         f"found {mi.shape} and {mj.shape}")
     Lam = np.linalg.inv(_lambda_inverse(Lambda, d))
     alpha = v.positive(alpha, "alpha")
     S = Lam + Ci[:, None] + Cj[None]                                   # (N, M, d, d)

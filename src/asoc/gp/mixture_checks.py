@@ -27,8 +27,7 @@ def weights(w, m: int, name: str) -> np.ndarray:
 
 
 def locations(x, name: str) -> np.ndarray:
-    """Dirac locations as an ``(M, d)`` float array; a number or a 1-D array is read as ``M``
-    scalars.
+    """Dirac locations as an ``(M, d)`` float array; a number or 1-D array is read as M scalars.
 
     Examples
     --------
@@ -45,8 +44,8 @@ def locations(x, name: str) -> np.ndarray:
     if x.ndim < 2:
         x = x.reshape(-1, 1)
     if x.ndim != 2 or 0 in x.shape:
-        raise ValueError(f"{name}: expected non-empty locations of shape (M, d), found shape "
-                         f"{x.shape}")
+        raise ValueError(f"{name}: expected non-empty locations of shape (M, d), "
+                         f"found shape {x.shape}")
     return x
 
 
@@ -62,8 +61,8 @@ def same_dimension(x, y, names: str):
     ValueError: x, y: expected mixtures of the same dimension, found 2 and 1
     """
     if x.shape[-1] != y.shape[-1]:
-        raise ValueError(f"{names}: expected mixtures of the same dimension, found {x.shape[-1]} "
-                         f"and {y.shape[-1]}")
+        raise ValueError(f"{names}: expected mixtures of the same dimension, "
+                         f"found {x.shape[-1]} and {y.shape[-1]}")
 
 
 def mixture_set(X, name: str) -> np.ndarray:
@@ -82,8 +81,8 @@ def mixture_set(X, name: str) -> np.ndarray:
     if X.ndim == 2:
         X = X[:, :, None]
     if X.ndim != 3 or 0 in X.shape:
-        raise ValueError(f"{name}: expected a non-empty array of shape (N, L, d), found shape "
-                         f"{X.shape}")
+        raise ValueError(f"{name}: expected a non-empty array of shape (N, L, d), "
+                         f"found shape {X.shape}")
     return X
 
 
@@ -165,7 +164,8 @@ def distances(delta, name: str = "delta") -> np.ndarray:
     """
     delta = check.real_array(delta, name)
     if np.any(delta < 0):
-        raise ValueError(f"{name}: expected non-negative distances, found minimum {delta.min():.3g}")
+        raise ValueError(f"{name}: expected non-negative distances, "
+                         f"found minimum {delta.min():.3g}")
     return delta
 
 
@@ -207,8 +207,8 @@ def limits(lower, upper):
     """
     out = []
     for name, value in (("lower", lower), ("upper", upper)):
-        if isinstance(value, (bool, np.bool_, str,
-                              bytes)) or not np.isscalar(value) or np.iscomplexobj(value):
+        if (isinstance(value, (bool, np.bool_, str, bytes)) or not np.isscalar(value)
+                or np.iscomplexobj(value)):
             raise TypeError(f"{name}: expected a real number or an infinity, found {value!r}")
         value = float(value)
         if np.isnan(value):
@@ -220,8 +220,7 @@ def limits(lower, upper):
 
 
 def gaussian_set(means, covs, means_name: str, covs_name: str, definite=False):
-    """Gaussians as means (N, d) and covariances (N, d, d), symmetric PSD (positive definite if
-    ``definite``).
+    """Gaussians: means (N, d), symmetric PSD covariances (N, d, d) (definite if ``definite``).
 
     Examples
     --------
@@ -237,22 +236,20 @@ def gaussian_set(means, covs, means_name: str, covs_name: str, definite=False):
     if means.ndim == 1:
         means = means[:, None]
     if means.ndim != 2 or 0 in means.shape:
-        raise ValueError(f"{means_name}: expected a non-empty array of shape (N, d), found shape "
-                         f"{means.shape}")
+        raise ValueError(f"{means_name}: expected a non-empty array of shape (N, d), "
+                         f"found shape {means.shape}")
     N, d = means.shape
     covs = check.real_array(covs, covs_name)
     if covs.ndim == 1 and d == 1:
         covs = covs[:, None, None]
     if covs.shape != (N, d, d):
         raise ValueError(f"{covs_name}: expected shape ({N}, {d}, {d}) (one covariance per mean), "
-                         "found shape "
-                         f"{covs.shape}")
+                         f"found shape {covs.shape}")
     return means, check.semidefinite(covs, covs_name, definite=definite)
 
 
 def piecewise_constant(heights, edges, heights_name: str = "heights"):
-    """Densities constant on the cells of ``edges``: heights (N, B) >= 0 and edges (B + 1,)
-    increasing.
+    """Densities constant on the cells of ``edges``: heights (N, B) >= 0, increasing edges (B + 1,).
 
     Examples
     --------
@@ -265,12 +262,12 @@ def piecewise_constant(heights, edges, heights_name: str = "heights"):
     """
     edges = check.real_array(edges, "edges", ndim=1)
     if edges.size < 2 or not np.all(np.diff(edges) > 0):
-        raise ValueError("edges: expected at least two increasing cell edges, found "
-                         f"{edges.tolist()}")
+        raise ValueError("edges: expected at least two increasing cell edges, "
+                         f"found {edges.tolist()}")
     heights = check.real_array(heights, heights_name, shape=(None, edges.size - 1))
     if heights.shape[0] == 0 or np.any(heights < 0):
-        raise ValueError(f"{heights_name}: expected non-empty non-negative heights of shape (N, "
-                         f"{edges.size - 1}), "
-                         f"found shape {heights.shape} and minimum "
-                         f"{heights.min() if heights.size else 'none'}")
+        minimum = heights.min() if heights.size else "none"
+        raise ValueError(f"{heights_name}: expected non-empty non-negative heights of shape "
+                         f"(N, {edges.size - 1}), found shape {heights.shape} and "
+                         f"minimum {minimum}")
     return heights, np.diff(edges)

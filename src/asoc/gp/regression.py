@@ -48,7 +48,7 @@ PARAMS = ("alpha", "l", "sigma_n")
 #: the OMAT fits of Sec. 2.6.4, whose likelihood grows without bound along alpha, l -> infinity
 #: (OMAT is Euclidean in (mu, sigma) there and v_1 a polynomial), ran into cond ~ 1e18 with alpha
 #: at its bound, where the jittered Cholesky no longer matches the gradient: they stopped
-#: unconverged.
+#: without converging.
 ALPHA_CAP = 1e2
 NOISE_FLOOR = 1e-3
 #: Polishing restarts of L-BFGS-B from its own end point when the projected gradient is above the
@@ -62,8 +62,7 @@ LOG_ML_TIE = 1e-3
 
 @dataclass(kw_only=True)
 class FitResult(IterativeResult):
-    """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum and why it
-    stopped.
+    """Outcome of the hyperparameter estimation (Sec. 2.6.1): the best start's optimum, and why.
 
     ``converged`` when the projected gradient of the log marginal likelihood in
     log-parameters is below ``config.defaults["gp.gradient_tol"]`` at the chosen start (the best
@@ -73,8 +72,8 @@ class FitResult(IterativeResult):
     Examples
     --------
     >>> x = np.linspace(-2, 2, 8)
-    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x),
-    ...     np.random.default_rng(0))
+    >>> D = np.abs(x[:, None] - x[None])
+    >>> gp = DistributionGP("se", n_restarts=1).fit(D, np.sin(x), np.random.default_rng(0))
     >>> from asoc import config
     >>> gp.result.status, gp.result.gradient_norm < config.defaults["gp.gradient_tol"]
     ('converged', True)
@@ -85,7 +84,8 @@ class FitResult(IterativeResult):
     sigma_n: float          #: noise standard deviation
     log_ml: float           #: log marginal likelihood at the optimum
     iterations: int         #: iterations of the best start
-    gradient_norm: float = 0.0  #: largest projected gradient component (log-parameters) at the optimum
+    #: largest projected gradient component (log-parameters) at the optimum
+    gradient_norm: float = 0.0
     starts: list = field(default_factory=list)  #: (start, optimum, log_ml, converged) per start
 
 
@@ -94,16 +94,15 @@ def _cholesky(Ky):
     scale = np.mean(np.diag(Ky))
     for jitter in (0.0, 1e-12, 1e-10, 1e-8, 1e-6):
         try:
-            return cho_factor(Ky if jitter == 0.0 else Ky + jitter * scale * np.eye(len(Ky)),
-                              lower=True)
+            jittered = Ky if jitter == 0.0 else Ky + jitter * scale * np.eye(len(Ky))
+            return cho_factor(jittered, lower=True)
         except LinAlgError:
             continue
     raise LinAlgError("Sigma_y is not positive definite even with jitter 1e-6 * mean(diag)")
 
 
 def _projected_gradient(res, log_b) -> float:
-    """Largest component of the gradient projected onto the box ``log_b`` (zero where a bound is
-    active).
+    """Largest component of the gradient projected onto the box ``log_b`` (0 at an active bound).
 
     On the flat ridges of the likelihood (alpha and l growing together) L-BFGS-B often
     ends with an abnormal line search at a point whose projected gradient is negligible;
@@ -117,12 +116,13 @@ def _projected_gradient(res, log_b) -> float:
 
 def _status(gradient, iterations, tolerance, max_iterations):
     if gradient <= tolerance:
-        return "converged", f"projected gradient {gradient:.2g} <= {tolerance:g} after {iterations} iterations"
+        return "converged", (f"projected gradient {gradient:.2g} <= {tolerance:g} "
+                             f"after {iterations} iterations")
     if iterations >= max_iterations:
-        return "max_iterations", f"stopped after {iterations} iterations with projected gradient {gradient:.2g}"
+        return "max_iterations", (f"stopped after {iterations} iterations "
+                                  f"with projected gradient {gradient:.2g}")
     return "no_progress", (f"L-BFGS-B stopped after {iterations} iterations with projected "
-                           "gradient "
-                           f"{gradient:.2g} > {tolerance:g}")
+                           f"gradient {gradient:.2g} > {tolerance:g}")
 
 
 class _LikelihoodGP:
@@ -155,10 +155,11 @@ class _LikelihoodGP:
         key = float(l)
         entry = self._kernels.get(key)
         if entry is None or (grad and entry[1] is None):
-            entry = self._kernels[key] = tuple(_read_only(K) for K in self._unit_kernel(l, grad=grad))
+            kernels = self._unit_kernel(l, grad=grad)
+            entry = self._kernels[key] = tuple(_read_only(K) for K in kernels)
         self._kernels.move_to_end(key)
-        while len(self._kernels) > 1 and sum(K.nbytes for pair in self._kernels.values() for K in pair
-                                             if K is not None) > budget:
+        while len(self._kernels) > 1 and sum(K.nbytes for pair in self._kernels.values()
+                                             for K in pair if K is not None) > budget:
             self._kernels.popitem(last=False)
         return entry
 
@@ -180,16 +181,15 @@ class _LikelihoodGP:
                 "sigma_n": (NOISE_FLOOR * sy, 1.0 * sy)}
 
     def neg_log_ml(self, log_theta, grad=True):
-        """Negative log marginal likelihood (and gradient) at ``log(alpha, l, sigma_n)`` (Sec.
-        2.6.1).
-        """
+        """Negative log marginal likelihood (Sec. 2.6.1) and gradient at log(alpha, l, sigma_n)."""
         self._fitted_data()
         log_theta = check.real_array(log_theta, "log_theta", shape=(3,))
         return self._neg_log_ml(log_theta, check.boolean(grad, "grad"))
 
     def _fitted_data(self):
         if not hasattr(self, "y"):
-            raise RuntimeError("call fit() or condition() first: the likelihood needs training data")
+            raise RuntimeError("call fit() or condition() first: "
+                               "the likelihood needs training data")
 
     def _neg_log_ml(self, log_theta, grad=True):
         alpha, l, sn = np.exp(log_theta)
@@ -214,12 +214,10 @@ class _LikelihoodGP:
         return nll, g
 
     def log_marginal_likelihood(self, alpha, l, sigma_n) -> float:
-        """Log marginal likelihood log p(y | X) at the given hyperparameters (for likelihood
-        surfaces).
-        """
+        """Log marginal likelihood log p(y | X) at given hyperparameters (likelihood surfaces)."""
         self._fitted_data()
-        theta = [v.positive(value, name) for value, name in ((alpha, "alpha"), (l, "l"), (sigma_n,
-                                                                                          "sigma_n"))]
+        named = ((alpha, "alpha"), (l, "l"), (sigma_n, "sigma_n"))
+        theta = [v.positive(value, name) for value, name in named]
         return -self._neg_log_ml(np.log(theta), grad=False)
 
     def _optimise(self, rng: np.random.Generator):
@@ -230,7 +228,8 @@ class _LikelihoodGP:
         guess = np.log(np.clip([sy, self._length_scale_guess(), 1e-2 * sy],
                                [b[0] for b in np.exp(log_b)], [b[1] for b in np.exp(log_b)]))
         starts = [guess] + [rng.uniform(log_b[:, 0], log_b[:, 1]) for _ in range(self.n_restarts)]
-        tolerance, max_iterations = config.defaults["gp.gradient_tol"], config.defaults["gp.max_iterations"]
+        tolerance = config.defaults["gp.gradient_tol"]
+        max_iterations = config.defaults["gp.max_iterations"]
         runs = []
         for x0 in starts:
             res, iterations = self._minimise(x0, log_b, max_iterations), 0
@@ -242,8 +241,7 @@ class _LikelihoodGP:
                 iterations += int(res.nit)
             gradient = _projected_gradient(res, log_b)
             runs.append((np.exp(x0), np.exp(res.x), -float(res.fun), gradient <= tolerance,
-                         iterations,
-                         gradient))
+                         iterations, gradient))
         best = max(runs, key=lambda run: run[2])
         tied = [run for run in runs if run[3] and run[2] >= best[2] - LOG_ML_TIE]
         best = max(tied, key=lambda run: run[2]) if tied else best
@@ -312,8 +310,8 @@ class DistributionGP(_LikelihoodGP):
     Examples
     --------
     >>> x = np.linspace(-3, 3, 12)                        # inputs: Dirac distributions at x
-    >>> gp = DistributionGP("se", n_restarts=1).fit(np.abs(x[:, None] - x[None]), np.sin(x),
-    ...     np.random.default_rng(0))
+    >>> D = np.abs(x[:, None] - x[None])
+    >>> gp = DistributionGP("se", n_restarts=1).fit(D, np.sin(x), np.random.default_rng(0))
     >>> mean, var = gp.predict(np.abs(np.array([[0.5]]) - x[None]), return_var=True)
     >>> round(float(mean[0]), 3), bool(var[0] < 1e-3)     # sin(0.5) = 0.479
     (0.479, True)
@@ -326,8 +324,7 @@ class DistributionGP(_LikelihoodGP):
         if set(shape) - allowed:
             extra = ", ".join(sorted(set(shape) - allowed))
             raise TypeError(f"{extra}: expected the shape parameters of {covariance!r}, "
-                            f"{sorted(allowed) or 'none'}, "
-                            f"found {sorted(shape)}")
+                            f"{sorted(allowed) or 'none'}, found {sorted(shape)}")
         super().__init__(n_restarts, bounds)
         self.covariance = covariance
         fn = COVARIANCES[covariance]
@@ -353,13 +350,12 @@ class DistributionGP(_LikelihoodGP):
         if self.covariance == "se":
             return K, K * (self.D / l) ** 2
         h = 1e-6                                       # central difference in log l
-        return K, (self._kappa_training(l * np.exp(h)) - self._kappa_training(l * np.exp(-h))) / (2 * h)
+        difference = self._kappa_training(l * np.exp(h)) - self._kappa_training(l * np.exp(-h))
+        return K, difference / (2 * h)
 
     @config.accepts_settings("gp.gradient_tol", "gp.max_iterations")
     def fit(self, D, y, rng: np.random.Generator):
-        """Estimate the hyperparameters from the training distance matrix ``D`` (M, M) and outputs
-        ``y`` (M,).
-        """
+        """Estimate the hyperparameters from distances ``D`` (M, M) and outputs ``y`` (M,)."""
         check.generator(rng)
         self._check_training(D, y)
         self._optimise(rng)
@@ -372,13 +368,12 @@ class DistributionGP(_LikelihoodGP):
             raise ValueError(f"D: expected a square distance matrix, found shape {D.shape}")
         if not np.allclose(D, D.T) or np.any(np.diag(D) != 0):
             raise ValueError("D: expected a symmetric distance matrix with zero diagonal, found "
-                             "asymmetry "
-                             f"{np.abs(D - D.T).max():.3g} and largest diagonal entry "
+                             f"asymmetry {np.abs(D - D.T).max():.3g} and largest diagonal entry "
                              f"{np.abs(np.diag(D)).max():.3g}")
         y = self._set_outputs(y)
         if len(y) != len(D):
-            raise ValueError(f"y: expected {len(D)} outputs (one per training input), found "
-                             f"{len(y)}")
+            raise ValueError(f"y: expected {len(D)} outputs (one per training input), "
+                             f"found {len(y)}")
         self.D = D
         self._reset_kernels()
 
@@ -389,8 +384,7 @@ class DistributionGP(_LikelihoodGP):
                                                                           (sigma_n, "sigma_n")))
         log_ml = -self._neg_log_ml(np.log([alpha, l, sigma_n]), grad=False)
         self.result = FitResult(alpha=alpha, l=l, sigma_n=sigma_n, log_ml=float(log_ml),
-                                iterations=0,
-                                converged=True, status="converged",
+                                iterations=0, converged=True, status="converged",
                                 message="conditioned on given hyperparameters (no estimation)")
         self._factor()
         return self
@@ -404,10 +398,11 @@ class DistributionGP(_LikelihoodGP):
         D_star = np.atleast_2d(v.distances(D_star, "D_star"))
         D_ss = v.distances(D_star_star, "D_star_star")
         if D_ss.shape != (len(D_star), len(D_star)):
-            raise ValueError(f"D_star_star: expected shape {(len(D_star),) * 2}, found {D_ss.shape}")
+            raise ValueError(f"D_star_star: expected shape {(len(D_star),) * 2}, "
+                             f"found {D_ss.shape}")
         Ks = self.result.alpha**2 * self._kappa(D_star, self.result.l)
-        cov = self.result.alpha**2 * self._kappa(D_ss, self.result.l) - Ks @ cho_solve(self._cf,
-                                                                                       Ks.T)
+        prior = self.result.alpha**2 * self._kappa(D_ss, self.result.l)
+        cov = prior - Ks @ cho_solve(self._cf, Ks.T)
         return mean, 0.5 * (cov + cov.T)
 
     def predict(self, D_star, return_var: bool = False):
@@ -415,9 +410,8 @@ class DistributionGP(_LikelihoodGP):
         self._fitted()
         D_star = np.atleast_2d(v.distances(D_star, "D_star"))
         if D_star.ndim != 2 or D_star.shape[1] != len(self.y):
-            raise ValueError("D_star: expected non-negative distances of shape (N, "
-                             f"{len(self.y)}), "
-                             f"found shape {D_star.shape}")
+            raise ValueError("D_star: expected non-negative distances of shape "
+                             f"(N, {len(self.y)}), found shape {D_star.shape}")
         return_var = check.boolean(return_var, "return_var")
         return self._predict(self._kappa(D_star, self.result.l), np.ones(len(D_star)), return_var)
 
@@ -452,8 +446,8 @@ class MeanKernelGP(_LikelihoodGP):
 
     def _unit_kernel(self, l, grad=False):
         # eq. (2.22) block row by block row, from the diagonal block on (the kernel is symmetric:
-        # half the
-        # exponentials), and its derivative in log l, sum_ab w_ia w_jb exp(-sq / (2 l^2)) sq / l^2
+        # half the exponentials), and its derivative in log l,
+        # sum_ab w_ia w_jb exp(-sq / (2 l^2)) sq / l^2
         M, l2 = len(self.W), l**2
         K = np.empty((M, M))
         dK = np.empty((M, M)) if grad else None
@@ -475,8 +469,8 @@ class MeanKernelGP(_LikelihoodGP):
         self.W = v.set_weights(W, self.X.shape, "W")
         y = self._set_outputs(y)
         if len(y) != len(self.X):
-            raise ValueError(f"y: expected {len(self.X)} outputs (one per training input), found "
-                             f"{len(y)}")
+            raise ValueError(f"y: expected {len(self.X)} outputs (one per training input), "
+                             f"found {len(y)}")
         self._prepare_kernel()
         self._optimise(rng)
         self._factor()
@@ -538,8 +532,7 @@ def _view(buffer, shape):
 
 
 def _expected_kernel_rows(V, W, rows, out):
-    """Rows ``rows`` of eq. (2.22) from the diagonal block on, and their mirror below it, into
-    ``out``.
+    """Rows ``rows`` of eq. (2.22) from the diagonal block on, and their mirror below, into ``out``.
 
     ``V[i, a, j, b]`` (B, L, M - rows.start, L) holds the component kernel of mixture ``i`` of
     ``rows`` (component a) and mixture ``rows.start + j`` (component b); ``W`` the weights (M, L).
@@ -567,7 +560,7 @@ def _bounds(bounds):
     for name in PARAMS:
         pair = check.real_array(bounds[name], f"bounds[{name!r}]", shape=(2,))
         if not 0 < pair[0] < pair[1]:
-            raise ValueError(f"bounds[{name!r}]: expected 0 < low < high, found ({pair[0]}, "
-                             f"{pair[1]})")
+            raise ValueError(f"bounds[{name!r}]: expected 0 < low < high, "
+                             f"found ({pair[0]}, {pair[1]})")
         out[name] = (float(pair[0]), float(pair[1]))
     return out

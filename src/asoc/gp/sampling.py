@@ -31,8 +31,7 @@ __all__ = ["gradient_tolerance", "DiracApproximation", "mcvmd_standard_normal_di
 
 
 def gradient_tolerance(b_max: float) -> float:
-    r"""The gradient norm below which the mCvMd minimisation has converged: :math:`\sqrt{\epsilon
-    S}`.
+    r"""The gradient norm :math:`\sqrt{\epsilon S}` below which the mCvMd minimisation converged.
 
     The squared distance is a difference of terms of size :math:`S = \sqrt\pi\, b_{\max}^2 / 2`
     (the integral of the growing parts of the integrand), so it is known to about
@@ -51,8 +50,7 @@ def gradient_tolerance(b_max: float) -> float:
 
 @dataclass(kw_only=True)
 class DiracApproximation(IterativeResult):
-    """Result of :func:`standard_normal_dirac_approximation`: the locations and why the minimisation
-    stopped.
+    """Result of :func:`standard_normal_dirac_approximation`: the locations, and why it stopped.
 
     ``converged`` when the gradient norm of the squared distance at the optimum is below
     ``gradient_tolerance`` (the library's criterion, not the optimiser's status).
@@ -85,8 +83,7 @@ def _b_nodes(b_max, per_panel=24):
 
 
 def mcvmd_standard_normal_dirac(x, wx=None, b_max: float = DEFAULT_B_MAX, nodes=None) -> float:
-    r"""MCvMd (Sec. 2.6.3, item 5) between :math:`\mathcal N(0, 1)` and a 1-D Dirac mixture
-    (continuous/Dirac pair).
+    r"""MCvMd (Sec. 2.6.3, item 5) between :math:`\mathcal N(0, 1)` and a 1-D Dirac mixture.
 
     The inner integral over :math:`m` of :math:`(P_1 - P_2)^2` is done in closed form
     (products of Gaussians in :math:`m`); with :math:`w(b) = 1` in one dimension,
@@ -132,8 +129,8 @@ def mcvmd_standard_normal_dirac(x, wx=None, b_max: float = DEFAULT_B_MAX, nodes=
     s = 1 + 2 * b**2
     C = np.sqrt(2 * np.pi) * b**2 / np.sqrt(s) * (np.exp(-x[None] ** 2 / (2 * s[:, None])) @ wx)
     d2 = (x[:, None] - x[None]) ** 2
-    D = np.sqrt(np.pi) * b * np.einsum("i,bij,j->b", wx, np.exp(-d2[None] / (4 * b[:, None,
-                                                                                   None] ** 2)), wx)
+    kernel = np.exp(-d2[None] / (4 * b[:, None, None] ** 2))
+    D = np.sqrt(np.pi) * b * np.einsum("i,bij,j->b", wx, kernel, wx)
     return float(np.sqrt(max(wb @ (G - 2 * C + D), 0.0)))
 
 
@@ -155,8 +152,8 @@ def _objective_and_gradient(x, nodes):
 
 def _nodes(nodes):
     if not isinstance(nodes, tuple) or len(nodes) != 2:
-        raise TypeError("nodes: expected a tuple (nodes, weights) of quadrature over b, found "
-                        f"{type(nodes).__name__}")
+        raise TypeError("nodes: expected a tuple (nodes, weights) of quadrature over b, "
+                        f"found {type(nodes).__name__}")
     b = check.real_array(nodes[0], "nodes", ndim=1)
     return b, check.real_array(nodes[1], "nodes", shape=b.shape)
 
@@ -169,15 +166,14 @@ def _lcd_standard_normal(L: int, b_max: float, max_iterations: int):
     res = minimize(_objective_and_gradient, x0, args=(nodes,), jac=True, method="BFGS",
                    options={"gtol": 1e-9, "maxiter": max_iterations})
     x = np.sort(res.x)
-    # the gradient norm decides, not BFGS's status: it often ends with "precision loss" at a flat
-    # optimum,
-    # after a number of iterations that depends on the last bits of the arithmetic
+    # the gradient norm decides, not BFGS's status: it often ends with "precision loss" at a
+    # flat optimum, after a number of iterations that depends on the last bits of the arithmetic
     gradient = float(np.linalg.norm(_objective_and_gradient(res.x, nodes)[1]))
     return x, mcvmd_standard_normal_dirac(x, nodes=nodes), gradient, int(res.nit)
 
 
-def standard_normal_dirac_approximation(L: int = 10,
-                                        b_max: float = DEFAULT_B_MAX) -> DiracApproximation:
+def standard_normal_dirac_approximation(L: int = 10, b_max: float = DEFAULT_B_MAX
+                                        ) -> DiracApproximation:
     r"""L equally weighted Dirac components approximating N(0, 1) by mCvMd minimisation [82].
 
     Starts from the midpoint quantiles :math:`\Phi^{-1}((2i - 1) / (2L))` and minimises
@@ -214,16 +210,17 @@ def standard_normal_dirac_approximation(L: int = 10,
     x, dist, gradient, nit = _lcd_standard_normal(L, b_max, max_iterations)
     tol = gradient_tolerance(b_max)
     if gradient <= tol:
-        status, message = "converged", f"gradient norm {gradient:.2g} <= {tol:.2g} after {nit} iterations"
+        status = "converged"
+        message = f"gradient norm {gradient:.2g} <= {tol:.2g} after {nit} iterations"
     else:
         status = "max_iterations" if nit >= max_iterations else "no_progress"
-        message = f"BFGS stopped after {nit} iterations with gradient norm {gradient:.2g} > {tol:.2g}"
+        message = (f"BFGS stopped after {nit} iterations with gradient norm {gradient:.2g} "
+                   f"> {tol:.2g}")
         warnings.warn("standard_normal_dirac_approximation: minimisation did not converge "
-                      f"(L={L}): {message}",
-                      RuntimeWarning)
+                      f"(L={L}): {message}", RuntimeWarning)
     return DiracApproximation(x=x.copy(), distance=dist, iterations=nit, gradient_norm=gradient,
-                              b_max=b_max,
-                              converged=status == "converged", status=status, message=message)
+                              b_max=b_max, converged=status == "converged", status=status,
+                              message=message)
 
 
 def gaussian_dirac_mixtures(means, variances, L: int = 10, b_max: float = DEFAULT_B_MAX):
@@ -255,8 +252,8 @@ def gaussian_dirac_mixtures(means, variances, L: int = 10, b_max: float = DEFAUL
     mu = np.atleast_1d(check.real_array(means, "means"))
     var = np.atleast_1d(check.real_array(variances, "variances"))
     if mu.shape != var.shape or mu.ndim != 1 or mu.size == 0:
-        raise ValueError(f"means, variances: expected equal 1-D shapes, found {mu.shape} and "
-                         f"{var.shape}")
+        raise ValueError("means, variances: expected equal 1-D shapes, "
+                         f"found {mu.shape} and {var.shape}")
     if np.any(var < 0):
         raise ValueError(f"variances: expected non-negative values, found minimum {var.min():.3g}")
     x = standard_normal_dirac_approximation(L, b_max).x

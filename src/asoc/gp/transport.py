@@ -1,5 +1,4 @@
-"""Distances of optimal transport (Sec. 2.6.3, item 4): Wasserstein-2 of Gaussians, OMAT (2.23),
-OSPA.
+"""Optimal-transport distances (Sec. 2.6.3, item 4): Gaussian Wasserstein-2, OMAT (2.23), OSPA.
 
 Wasserstein-2 has a closed form between Gaussians (:func:`wasserstein_gaussian`,
 :func:`wasserstein_gaussian_matrix`); between equally weighted Dirac mixtures it is the OMAT
@@ -28,8 +27,8 @@ def wasserstein_gaussian(m1, C1, m2, C2) -> float:
     r"""Wasserstein-2 distance between two Gaussians (closed form [75], Sec. 2.6.3, item 4).
 
     :math:`d_2^2 = \|\underline\mu_1 - \underline\mu_2\|^2 + \mathrm{tr}\,\mathbf C_1 +
-    \mathrm{tr}\,\mathbf C_2 - 2\,\mathrm{tr}\sqrt{\sqrt{\mathbf C_1}\mathbf C_2\sqrt{\mathbf
-    C_1}}`.
+    \mathrm{tr}\,\mathbf C_2 -
+    2\,\mathrm{tr}\sqrt{\sqrt{\mathbf C_1}\mathbf C_2\sqrt{\mathbf C_1}}`.
     Continuous/continuous (Gaussian) pairs only.
 
     Parameters
@@ -69,8 +68,7 @@ def wasserstein_gaussian(m1, C1, m2, C2) -> float:
 
 
 def wasserstein_gaussian_matrix(means_i, covs_i, means_j=None, covs_j=None) -> np.ndarray:
-    r"""Pairwise Wasserstein-2 distances between two sets of Gaussians (vectorised
-    :func:`wasserstein_gaussian`).
+    r"""Pairwise Wasserstein-2 distances between sets of Gaussians (:func:`wasserstein_gaussian`).
 
     Parameters
     ----------
@@ -97,14 +95,13 @@ def wasserstein_gaussian_matrix(means_i, covs_i, means_j=None, covs_j=None) -> n
     symmetric = means_j is None and covs_j is None
     mj, Cj = (mi, Ci) if symmetric else v.gaussian_set(means_j, covs_j, "means_j", "covs_j")
     if mj.shape[1] != mi.shape[1]:
-        raise ValueError("means_i, means_j: expected Gaussians of the same dimension, found "
-                         f"{mi.shape[1]} "
-                         f"and {mj.shape[1]}")
+        raise ValueError("means_i, means_j: expected Gaussians of the same dimension, "
+                         f"found {mi.shape[1]} and {mj.shape[1]}")
     Si = _sqrtm_psd(Ci)
     cross = np.linalg.eigvalsh(Si[:, None] @ Cj[None] @ Si[:, None])               # (N, M, d)
     d2 = (np.sum((mi[:, None] - mj[None]) ** 2, axis=-1) + np.trace(Ci, axis1=1, axis2=2)[:, None]
-          + np.trace(Cj, axis1=1, axis2=2)[None] - 2 * np.sqrt(np.clip(cross, 0.0,
-                                                                       None)).sum(axis=-1))
+          + np.trace(Cj, axis1=1, axis2=2)[None]
+          - 2 * np.sqrt(np.clip(cross, 0.0, None)).sum(axis=-1))
     out = np.sqrt(np.clip(d2, 0.0, None))
     if symmetric:
         np.fill_diagonal(out, 0.0)
@@ -183,8 +180,8 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
     Raises
     ------
     ValueError, TypeError
-        If the sets are invalid, of different dimensions or numbers of components, or ``q`` outside
-        [1, 100].
+        If the sets are invalid, of different dimensions or numbers of components, or ``q``
+        outside [1, 100].
 
     Examples
     --------
@@ -201,17 +198,16 @@ def omat_matrix(X, Y=None, q: float = 2, progress: bool = False) -> np.ndarray:
         raise ValueError(f"X, Y: expected the same number of components (OMAT), found {X.shape[1]} "
                          f"and {Y.shape[1]}")
     rows = progress_bar(range(len(X)), progress, desc="OMAT", leave=False)
-    out = _mean_sorted_matching_costs(X[..., 0], Y[..., 0], q, symmetric,
-                                      rows) if X.shape[2] == 1 and q > 1 \
-        else _mean_optimal_assignment_costs(X, Y, q, symmetric, rows)
+    if X.shape[2] == 1 and q > 1:
+        out = _mean_sorted_matching_costs(X[..., 0], Y[..., 0], q, symmetric, rows)
+    else:
+        out = _mean_optimal_assignment_costs(X, Y, q, symmetric, rows)
     out = out ** (1 / q)
     return out + out.T if symmetric else out
 
 
 def _mean_optimal_assignment_costs(X, Y, q, symmetric, rows):
-    """Mean cost of the optimal assignment of every pair (upper triangle if ``symmetric``), (N,
-    M).
-    """
+    """Mean cost (N, M) of the optimal assignment of every pair (upper triangle if symmetric)."""
     out = np.zeros((len(X), len(Y)))
     for i in rows:
         j0 = i + 1 if symmetric else 0
@@ -263,8 +259,8 @@ def ospa(x, y, c: float, p: float = 2) -> float:
     Raises
     ------
     ValueError, TypeError
-        If the mixtures are invalid or of different dimensions, ``c`` <= 0 or ``p`` outside [1,
-        100].
+        If the mixtures are invalid or of different dimensions, ``c`` <= 0 or ``p`` outside
+        [1, 100].
 
     Examples
     --------
@@ -287,16 +283,15 @@ def _ospa(x, y, c, p):
 
 
 def ospa_matrix(X, Y=None, c: float = 1.0, p: float = 2, progress: bool = False) -> np.ndarray:
-    """Pairwise OSPA distances (:func:`ospa`) between sets of equally weighted mixtures of any
-    sizes.
+    """Pairwise OSPA distances (:func:`ospa`) between sets of equally weighted mixtures, any sizes.
 
     Parameters
     ----------
     X : sequence of array_like, each (m_i, d) or (m_i,)
         Locations of the mixtures (their numbers of components may differ).
     Y : sequence of array_like, optional
-        The second set; ``None``: ``X`` (a symmetric matrix with zero diagonal, upper triangle
-        computed).
+        The second set; ``None``: ``X`` (a symmetric matrix with zero diagonal, upper
+        triangle computed).
     c : float
         Cut-off distance, > 0.
     p : float
@@ -325,8 +320,8 @@ def ospa_matrix(X, Y=None, c: float = 1.0, p: float = 2, progress: bool = False)
     xs = [v.locations(x, f"X[{i}]") for i, x in enumerate(X)]
     ys = xs if symmetric else [v.locations(y, f"Y[{j}]") for j, y in enumerate(Y)]
     if not xs or not ys:
-        raise ValueError(f"X, Y: expected non-empty sequences of mixtures, found {len(xs)} and "
-                         f"{len(ys)}")
+        raise ValueError("X, Y: expected non-empty sequences of mixtures, "
+                         f"found {len(xs)} and {len(ys)}")
     for j, y in enumerate(ys):
         v.same_dimension(xs[0], y, f"X[0], {'X' if symmetric else 'Y'}[{j}]")
     c, p = v.positive(c, "c"), v.order(p, "p")

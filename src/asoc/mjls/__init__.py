@@ -26,9 +26,8 @@ Simulate
     :func:`simulate` (Monte Carlo) takes any design result or :class:`Controller`.
 Compare
     :func:`average_cost` (exact), :func:`finite_horizon_cost`,
-    :mod:`asoc.mjls.monte_carlo_comparison`
-    (Table 3.2's Monte Carlo comparison), :func:`mode_observed_lqg` (the mode-observing
-    optimum, a lower bound).
+    :mod:`asoc.mjls.monte_carlo_comparison` (Table 3.2's Monte Carlo comparison),
+    :func:`mode_observed_lqg` (the mode-observing optimum, a lower bound).
 
 Every design returns a result with ``.controller``, ``.cost``, ``.status`` and ``.message``;
 a time-invariant design's also holds ``.stability``, the certificate of its closed loop
@@ -60,44 +59,44 @@ second-moment operator L of (3.29) and its adjoint), ``closed_loops`` ((3.10), (
 ``stability`` -> ``certificate`` -> ``spectral_estimate`` (Cor. 3.2: the verdict, the certified
 bracket, the eigen-solver's estimate), ``lyapunov`` (coupled Lyapunov equations), ``moments``
 (Prop. 3.7, 3.14), ``static`` and ``static_iterates`` (Alg. 3.1), ``stopping`` (the stopping rule of
-Algs. 3.1 and 3.2), ``exact_static_design`` (the exact-cost static gain, not in the thesis),
-``lmi`` (Thms. 3.9, 3.12),
-``moment_bounds``, ``optimality`` and ``dynamic`` (Alg. 3.2: Prop. 3.26, (3.49)-(3.51)),
-``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg`` (the
-mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
+Algs. 3.1 and 3.2), ``exact_static_design`` (the exact-cost static gain, not in the thesis), ``lmi``
+(Thms. 3.9, 3.12), ``moment_bounds``, ``optimality`` and ``dynamic``
+(Alg. 3.2: Prop. 3.26, (3.49)-(3.51)), ``finite_horizon_model`` (the time-variant MJLS (3.54) over a
+horizon) and ``finite_horizon`` (Alg. 3.3), ``observed_mode_feedback`` and ``observed_mode_lqg``
+(the mode-observing optima [38]), ``baselines`` ([52], [163], [165]), ``intractability`` (Sec. 3.4),
 ``gradients`` and ``exact_cost_design`` (exact-cost optimisation of (3.37) and (3.55), not in the
 thesis), ``costs`` (the exact average cost (3.9)), ``monte_carlo`` (simulation),
-``monte_carlo_comparison`` (Table 3.2), ``controllers`` and ``design_result`` (the controllers
-and what every design's result shares), ``examples`` (the thesis's examples), ``random``.
+``monte_carlo_comparison`` (Table 3.2), ``controllers`` and ``design_result`` (the controllers and
+what every design's result shares), ``examples`` (the thesis's examples), ``random``.
 """
 
 from .closed_loops import closed_loop
 from .controllers import (
-                      Controller,
-                      DynamicOutputFeedback,
-                      ModeDependentGain,
-                      StaticGain,
-                      TimeVariantGain,
+    Controller,
+    DynamicOutputFeedback,
+    ModeDependentGain,
+    StaticGain,
+    TimeVariantGain,
 )
 from .costs import average_cost
 from .dynamic import (
-                      DynamicOutputFeedbackResult,
-                      augmented_closed_loop,
-                      dynamic_output_feedback,
-                      steady_state_cost,
+    DynamicOutputFeedbackResult,
+    augmented_closed_loop,
+    dynamic_output_feedback,
+    steady_state_cost,
 )
 from .exact_cost_design import (
-                      ExactDynamicOutputFeedbackResult,
-                      ExactFiniteHorizonResult,
-                      exact_dynamic_output_feedback,
-                      exact_finite_horizon_dynamic_output_feedback,
-                      min_radius_dynamic_output_feedback,
+    ExactDynamicOutputFeedbackResult,
+    ExactFiniteHorizonResult,
+    exact_dynamic_output_feedback,
+    exact_finite_horizon_dynamic_output_feedback,
+    min_radius_dynamic_output_feedback,
 )
 from .exact_static_design import ExactStaticOutputFeedbackResult, exact_static_output_feedback
 from .finite_horizon import (
-                      FiniteHorizonResult,
-                      finite_horizon_cost,
-                      finite_horizon_dynamic_output_feedback,
+    FiniteHorizonResult,
+    finite_horizon_cost,
+    finite_horizon_dynamic_output_feedback,
 )
 from .gradients import average_cost_and_gradient, radius_and_gradient
 from .lmi import LMIResult, static_output_lmi
@@ -109,26 +108,26 @@ from .observed_mode_lqg import ModeObservedLQG, ModeObservedResult, mode_observe
 from .random import random_mjls
 from .stability import MeanSquareStability, Verdict, mean_square_stability, ms_spectral_radius
 from .static import (
-                      StaticOutputFeedbackResult,
-                      gain_from_moments,
-                      static_cost,
-                      static_output_feedback,
+    StaticOutputFeedbackResult,
+    gain_from_moments,
+    static_cost,
+    static_output_feedback,
 )
 from .system import MJLS, predecessor_sum, stationary_distribution, successor_average
 
-__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution", "ms_operator",
-           "ms_spectral_radius",
-           "mean_square_stability", "MeanSquareStability", "Verdict",
-           "closed_loop", "second_moment_step", "second_moments", "steady_state_second_moment",
-           "h2_cost", "static_output_feedback", "StaticOutputFeedbackResult", "gain_from_moments",
-           "static_output_lmi", "LMIResult", "observed_mode_state_feedback", "ObservedModeResult",
-           "dynamic_output_feedback", "DynamicOutputFeedbackResult", "augmented_closed_loop",
-           "steady_state_cost", "finite_horizon_dynamic_output_feedback", "FiniteHorizonResult",
-           "finite_horizon_cost", "mode_observed_lqg", "ModeObservedLQG", "ModeObservedResult",
-           "simulate", "SimulationResult", "Controller", "StaticGain", "ModeDependentGain",
-           "TimeVariantGain", "DynamicOutputFeedback", "exact_dynamic_output_feedback",
+__all__ = ["MJLS", "predecessor_sum", "successor_average", "stationary_distribution",
+           "ms_operator", "ms_spectral_radius", "mean_square_stability", "MeanSquareStability",
+           "Verdict", "closed_loop", "second_moment_step", "second_moments",
+           "steady_state_second_moment", "h2_cost", "static_output_feedback",
+           "StaticOutputFeedbackResult", "gain_from_moments", "static_output_lmi", "LMIResult",
+           "observed_mode_state_feedback", "ObservedModeResult", "dynamic_output_feedback",
+           "DynamicOutputFeedbackResult", "augmented_closed_loop", "steady_state_cost",
+           "finite_horizon_dynamic_output_feedback", "FiniteHorizonResult", "finite_horizon_cost",
+           "mode_observed_lqg", "ModeObservedLQG", "ModeObservedResult", "simulate",
+           "SimulationResult", "Controller", "StaticGain", "ModeDependentGain", "TimeVariantGain",
+           "DynamicOutputFeedback", "exact_dynamic_output_feedback",
            "exact_finite_horizon_dynamic_output_feedback", "average_cost_and_gradient",
            "min_radius_dynamic_output_feedback", "radius_and_gradient",
-           "ExactDynamicOutputFeedbackResult",
-           "ExactFiniteHorizonResult", "random_mjls", "average_cost", "static_cost",
-           "exact_static_output_feedback", "ExactStaticOutputFeedbackResult"]
+           "ExactDynamicOutputFeedbackResult", "ExactFiniteHorizonResult", "random_mjls",
+           "average_cost", "static_cost", "exact_static_output_feedback",
+           "ExactStaticOutputFeedbackResult"]

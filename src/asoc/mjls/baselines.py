@@ -149,8 +149,8 @@ def _forward_moments(sys, G, X0, mu0):
     HHt = sys.H @ np.swapaxes(sys.H, 1, 2)
     for k in range(K):
         Acl = sys.A + sys.B @ G[k] @ sys.C
-        X[k + 1] = sys.predecessor_sum(Acl @ X[k] @ np.swapaxes(Acl, 1, 2) + pi[k][:, None,
-                                                                                   None] * HHt)
+        moment = Acl @ X[k] @ np.swapaxes(Acl, 1, 2) + pi[k][:, None, None] * HHt
+        X[k + 1] = sys.predecessor_sum(moment)
         pi[k + 1] = pi[k] @ sys.T
     return X, pi
 
@@ -243,8 +243,8 @@ def time_variant_feedback(sys, horizon, x0, mu0=None, x0_cov=None, G0=None, tol=
     warn = boolean(warn, "warn")
     second = np.outer(x0, x0) + (0 if x0_cov is None else x0_cov)
     X0 = mu0[:, None, None] * second
-    G = np.zeros((K, sys.nu, sys.ny)) if G0 is None else real_array(G0, "G0", shape=(K, sys.nu,
-                                                                                     sys.ny))
+    shape = (K, sys.nu, sys.ny)
+    G = np.zeros(shape) if G0 is None else real_array(G0, "G0", shape=shape)
     start = time.perf_counter()
     costs, status = [], "max_iterations"
     for it in range(1, max_iter + 1):
@@ -258,11 +258,13 @@ def time_variant_feedback(sys, horizon, x0, mu0=None, x0_cov=None, G0=None, tol=
             status = "converged"
             break
     decrease = (costs[-2] - costs[-1]) / abs(costs[-1]) if len(costs) > 1 else np.inf
-    message = {"converged": f"converged after {it} sweeps (relative decrease {decrease:.2g} <= tol = {tol:.2g})",
-               "max_iterations": f"did not converge in {it} sweeps (relative decrease {decrease:.2g} > tol = {tol:.2g})",
+    message = {"converged": f"converged after {it} sweeps "
+                            f"(relative decrease {decrease:.2g} <= tol = {tol:.2g})",
+               "max_iterations": f"did not converge in {it} sweeps "
+                                 f"(relative decrease {decrease:.2g} > tol = {tol:.2g})",
                "diverged": f"stopped at sweep {it}: the cost became non-finite"}[status]
     if warn and status != "converged":
         warnings.warn(f"variational method {message}", RuntimeWarning, stacklevel=2)
     return TimeVariantResult(G=G, costs=np.array(costs), converged=status == "converged",
-                             status=status,
-                             message=message, iterations=it, seconds=time.perf_counter() - start)
+                             status=status, message=message, iterations=it,
+                             seconds=time.perf_counter() - start)

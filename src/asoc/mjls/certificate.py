@@ -40,33 +40,31 @@ EPS = np.finfo(float).eps
 #: The smallest normal double: gamma n TINY bounds, with the safety factor 10, the absolute rounding
 #: of the (2 n + M) subnormal operations behind an entry of L(X) (each off by at most 2^-1075).
 TINY = np.finfo(float).tiny
-#: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector estimate
-#: into the interior of the cone for the Collatz-Wielandt bounds: the first valid one gives the
-#: bounds.
+#: Relative shifts eta (times the largest eigenvalue of X) that move a singular eigenvector
+#: estimate into the interior of the cone for the Collatz-Wielandt bounds: the first valid one
+#: gives the bounds.
 _SHIFTS = (0.0, 1e-12, 1e-9, 1e-6, 1e-3)
 #: Relative distances r / rho_hat - 1 of the resolvent equations tried, largest first (while they
-#: improve
-#: the upper bound): near a defective eigenvalue only the larger ones give a well-conditioned X.
+#: improve the upper bound): near a defective eigenvalue only the larger ones give a
+#: well-conditioned X.
 _RESOLVENT_GAPS = (1.0, 0.3, 0.1, 1e-2, 1e-3, 1e-6, 1e-9, 1e-12)
 #: Relative gaps r / rho - 1 of :func:`deflated_resolvent_bounds`, largest first.
 _DEFLATED_GAPS = (1e-3, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7)
 
 
-
 def certified_upper_bound(A, T, X):
-    """The Collatz-Wielandt upper bound of rho (Cor. 3.2) at a stack X > 0, with its rounding
-    margin.
+    """The Collatz-Wielandt upper bound of rho (Cor. 3.2) at a stack X > 0, rounding included.
 
     max_j lambda_max(X_j^{-1/2} L(X)_j X_j^{-1/2}) widened as in
-    :func:`asoc.mjls.mean_square_stability`;
-    inf when X is not positive definite. For the solution of X = L(X) + W with W > 0 it is
-    below 1 iff the closed loop is mean-square stable (Thm. 3.1). Arguments are not validated.
+    :func:`asoc.mjls.mean_square_stability`; inf when X is not positive definite. For the solution
+    of X = L(X) + W with W > 0 it is below 1 iff the closed loop is mean-square stable (Thm. 3.1).
+    Arguments are not validated.
 
     Examples
     --------
     >>> A = np.array([[[0.5]]]); T = np.array([[1.0]])
-    >>> round(certified_upper_bound(A, T, np.array([[[4 / 3]]])), 9), certified_upper_bound(A, T,
-    ...     -np.ones((1, 1, 1)))
+    >>> X = np.array([[[4 / 3]]])
+    >>> round(certified_upper_bound(A, T, X), 9), certified_upper_bound(A, T, -X)
     (0.25, inf)
     """
     bracket = Bracket(A, T)
@@ -103,10 +101,9 @@ class Bracket:
         self.L_identity = None
 
     def width_reached(self, rtol):
-        """The bracket is as narrow as asked, or as rounding allows (a margin below sqrt(rtol)
-        rho).
-        """
-        return bool(np.isfinite(self.upper) and self.upper - self.lower <= rtol * self.upper + 4.0 * self.margin
+        """The bracket is as narrow as asked, or as rounding allows (margin <= sqrt(rtol) rho)."""
+        return bool(np.isfinite(self.upper)
+                    and self.upper - self.lower <= rtol * self.upper + 4.0 * self.margin
                     and self.margin <= np.sqrt(rtol) * self.upper)
 
     def consider(self, X, rtol):
@@ -131,8 +128,7 @@ class Bracket:
         self.lower = max(self.lower, other.lower)
 
     def bounds(self, X, Y, sharp=False):
-        """Update the bracket with the bounds at X > 0 with Y = L(X) (nothing when X is not
-        definite).
+        """Update the bracket with the bounds at X > 0 and Y = L(X) (none where X is not definite).
 
         The rounding margin scales with ||C_j^-1||^2 = 1 / lambda_min(X_j): bounded by the Frobenius
         norm (cheap), or with ``sharp`` computed as the spectral norm (M singular value
@@ -149,8 +145,8 @@ class Bracket:
         if not np.all(np.isfinite(lam)):
             return
         alpha, beta = lam[:, 0], lam[:, -1]
-        inv_norm2 = np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp else np.einsum("iab,iab->i",
-                                                                                    Ci, Ci)
+        inv_norm2 = (np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp
+                     else np.einsum("iab,iab->i", Ci, Ci))
         norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
         rounding = (self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
                     + self.underflow)
@@ -164,11 +160,9 @@ class Bracket:
 
 def _refine(A, T, X0, rho):
     """(lower, upper, rho, X): Collatz-Wielandt bounds at the eigenvector estimate X0 of rho (nan:
-    none, the
-    power method alone), at resolvent solutions (small sizes) and along the shifted cone power
-    method;
-    X the last iterate. Call it with BLAS on one thread (``asoc.threads.single_threaded``):
-    its work is small products and M small eigenproblems.
+    none, the power method alone), at resolvent solutions (small sizes) and along the shifted cone
+    power method; X the last iterate. Call it with BLAS on one thread
+    (``asoc.threads.single_threaded``): its work is small products and M small eigenproblems.
 
     Examples
     --------
@@ -183,16 +177,15 @@ def _refine(A, T, X0, rho):
     if not np.isfinite(rho):
         X, rho = _power_method(bracket, X0, Y, rtol)
     else:
-        if not bracket.width_reached(rtol) and M * n * n <= config.defaults["mjls.dense_fallback_radius"]:
+        small = M * n * n <= config.defaults["mjls.dense_fallback_radius"]
+        if not bracket.width_reached(rtol) and small:
             _resolvent_bounds(bracket, rho, rtol)
         X = _power_steps(bracket, X0, Y, rho, rtol)
     return bracket.lower, bracket.upper, float(np.clip(rho, bracket.lower, bracket.upper)), X
 
 
 def _resolvent_bounds(bracket, rho, rtol):
-    """Bounds at solutions of r X - L(X) = I for r from 2 rho down towards rho, while they
-    improve.
-    """
+    """Bounds at solutions of r X - L(X) = I, r from 2 rho down towards rho, while they improve."""
     previous = np.inf
     radii = [max(rho, 1e-300) * (1 + gap) for gap in _RESOLVENT_GAPS]
     for _, X_r in _resolvent_stacks(bracket.A, bracket.T, radii):
@@ -205,9 +198,7 @@ def _resolvent_bounds(bracket, rho, rtol):
 
 
 def _power_steps(bracket, X, Y, rho, rtol):
-    """Up to ``mjls.bracket_power_steps`` steps X <- L(X) + rho X, while each narrows the bracket by
-    10 %.
-    """
+    """Up to ``mjls.bracket_power_steps`` steps X <- L(X) + rho X, while each narrows it by 10 %."""
     width = np.inf
     for _ in range(config.defaults["mjls.bracket_power_steps"]):
         if bracket.width_reached(rtol):
@@ -226,8 +217,7 @@ def _power_steps(bracket, X, Y, rho, rtol):
 
 def _power_method(bracket, X, Y, rtol):
     """The shifted cone power method alone: X <- L(X) + r X with r = tr L(X) / tr X, its estimate of
-    rho,
-    until the bracket is narrow, or X has converged (to ``mjls.power_tol``, e.g. to a singular
+    rho, until the bracket is narrow, or X has converged (to ``mjls.power_tol``, e.g. to a singular
     Perron stack, where the bracket stays wide), or L(X) = 0, or ``mjls.power_max_steps``.
     """
     rho = np.inf
@@ -247,24 +237,19 @@ def _power_method(bracket, X, Y, rtol):
 
 
 def deflated_resolvent_bounds(bracket, rho, X, P):
-    """Upper bounds at solutions Z of r Z - L(Z) = I for r just above rho, at sizes without a dense
-    solve.
+    """Upper bounds at solutions Z of r Z - L(Z) = I, r just above rho, without a dense solve.
 
     With the Perron pair (rho, X) and the left Perron stack P, Z = c X + Z_c with
     c = <P, I> / ((r - rho) <P, X>) in closed form, and Z_c the solution of rho Z_c - L(Z_c) = B on
     B = I - (<P, I> / <P, X>) X, which has no Perron component: the iteration Z_c <- (B + L(Z_c)) /
-    rho
-    contracts at ``|lambda_2| / rho``. Z > 0 even where X is singular (a Perron stack that does not
-    reach
-    every direction, e.g. an unexcited controller block), where the Collatz-Wielandt bounds at X, or
-    at
-    X shifted by a multiple of I, stay wide. Z is only a candidate: its bounds are computed from
-    L(Z)
-    with the (sharp) rounding margin, so an inexact Z_c costs tightness, never validity. The gaps
-    r / rho - 1 go down while the upper bound improves (the margin grows like 1 / (r - rho)).
-    Nothing is done for rho = 0 (nilpotent modes: the lower end 0 is exact, and no gap is relative
-    to it).
-    Arguments are not validated (the caller, :func:`asoc.mjls.mean_square_stability`, has).
+    rho contracts at ``|lambda_2| / rho``. Z > 0 even where X is singular (a Perron stack that does
+    not reach every direction, e.g. an unexcited controller block), where the Collatz-Wielandt
+    bounds at X, or at X shifted by a multiple of I, stay wide. Z is only a candidate: its bounds
+    are computed from L(Z) with the (sharp) rounding margin, so an inexact Z_c costs tightness,
+    never validity. The gaps r / rho - 1 go down while the upper bound improves (the margin grows
+    like 1 / (r - rho)). Nothing is done for rho = 0 (nilpotent modes: the lower end 0 is exact, and
+    no gap is relative to it). Arguments are not validated (the caller,
+    :func:`asoc.mjls.mean_square_stability`, has).
 
     Examples
     --------
@@ -303,8 +288,7 @@ def deflated_resolvent_bounds(bracket, rho, X, P):
 
 
 def _residual_lower_bound(A, T, rho, X, P, upper):
-    """Rho - 10 s ||E|| for an eigen-pair estimate (rho, X) of Cor. 3.2's operator and its left
-    Perron stack P.
+    """Rho - 10 s ||E|| for an eigen-pair (rho, X) of Cor. 3.2's operator and its left Perron P.
 
     The pair is exact for L + E with ||E|| = ||L(X) - rho X|| / ||X|| (plus the rounding of that
     residual, bounded as in the Collatz-Wielandt margin), and rho moves by at most s ||E|| to first
@@ -314,8 +298,8 @@ def _residual_lower_bound(A, T, rho, X, P, upper):
 
     Examples
     --------
-    >>> A = np.array([[[0.9, 0.0], [0.0, 0.5]]]); T = np.array([[1.0]]); X = np.array([[[1.0, 0.0],
-    ...     [0.0, 0.0]]])
+    >>> A = np.array([[[0.9, 0.0], [0.0, 0.5]]]); T = np.array([[1.0]])
+    >>> X = np.array([[[1.0, 0.0], [0.0, 0.0]]])
     >>> bool(0.81 - 1e-12 < _residual_lower_bound(A, T, 0.81, X, X, 1.0) <= 0.81)
     True
     """
@@ -417,10 +401,8 @@ def _residual_upper_bound(A, T, X, r):
 
 def certify(A, T, method, unit=1.0):
     """(lower, upper, rho, X, estimate) of the balanced (A, T): ``_certify_estimates`` with BLAS on
-    one thread: its work
-    is small products and M small
-    eigenproblems, where threads only cost (a stack of 8 eigh of 32 x 32: 0.49 s with threads on a
-    loaded 2-core machine, 1 ms without).
+    one thread: its work is small products and M small eigenproblems, where threads only cost (a
+    stack of 8 eigh of 32 x 32: 0.49 s with threads on a loaded 2-core machine, 1 ms without).
 
     Examples
     --------
@@ -435,10 +417,8 @@ def certify(A, T, method, unit=1.0):
 
 def _certify_estimates(A, T, method, unit):
     """(lower, upper, rho, X, estimate) for the balanced (A, T): the first estimate inside a narrow
-    bracket
-    (relative width ``mjls.bracket_warn_rtol``), else the narrowest (a subdominant eigenvalue from a
-    small
-    Krylov space fails the test: the bracket holds rho, not it).
+    bracket (relative width ``mjls.bracket_warn_rtol``), else the narrowest (a subdominant
+    eigenvalue from a small Krylov space fails the test: the bracket holds rho, not it).
     """
     best = None
     for estimate in estimates(A, T, method):
@@ -463,9 +443,7 @@ def narrow(lower, upper):
 
 
 def _singular_perron_bounds(A, T, estimate, lower, upper, rho, X):
-    """(lower, upper) improved by the bounds from the left Perron stack, when the bracket needs
-    them.
-    """
+    """(lower, upper) improved by the left Perron stack's bounds where the bracket needs them."""
     needs_lower = lower < rho * (1 - np.sqrt(config.defaults["mjls.bracket_rtol"]))
     if estimate.method == "single_mode" or not (needs_lower or not narrow(lower, upper)):
         return lower, upper

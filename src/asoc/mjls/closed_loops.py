@@ -137,7 +137,8 @@ def _check_gains(sys, F, K, L):
     >>> _check_gains(sec373_system(1), np.eye(2), np.ones((2, 1)), np.ones((1, 3)))
     Traceback (most recent call last):
     ...
-    ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys), found shape (1, 3)
+    ValueError: L: expected shape (1, 2) (nc = 2 from F, nu = 1, ny = 1 from sys),
+    found shape (1, 3)
     """
     check_system(sys)
     F = np.atleast_2d(real_array(F, "F"))
@@ -146,9 +147,8 @@ def _check_gains(sys, F, K, L):
     K, L = np.atleast_2d(real_array(K, "K")), np.atleast_2d(real_array(L, "L"))
     for name, g, shape in (("K", K, (nc, sys.ny)), ("L", L, (sys.nu, nc))):
         if g.shape != shape:
-            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, nu = {sys.nu}, ny "
-                             f"= {sys.ny} "
-                             f"from sys), found shape {g.shape}")
+            raise ValueError(f"{name}: expected shape {shape} (nc = {nc} from F, "
+                             f"nu = {sys.nu}, ny = {sys.ny} from sys), found shape {g.shape}")
     return F, K, L
 
 

@@ -43,8 +43,8 @@ def average_cost(sys, controller):
     >>> from asoc.mjls import exact_dynamic_output_feedback, static_output_feedback
     >>> from asoc.mjls.examples import networked_loop
     >>> sys = networked_loop()
-    >>> round(average_cost(sys, static_output_feedback(sys)), 4), round(average_cost(sys,
-    ...     exact_dynamic_output_feedback(sys)), 4)
+    >>> static, dynamic = static_output_feedback(sys), exact_dynamic_output_feedback(sys)
+    >>> round(average_cost(sys, static), 4), round(average_cost(sys, dynamic), 4)
     (0.1412, 0.1376)
     """
     check_system(sys)
@@ -54,7 +54,7 @@ def average_cost(sys, controller):
         return static_cost(sys, controller.L)[0]
     if isinstance(controller, DynamicOutputFeedback) and not controller.time_variant:
         return steady_state_cost(sys, controller.F, controller.K, controller.L)[0]
+    variant = " (time-variant)" if getattr(controller, "time_variant", False) else ""
     raise TypeError("controller: expected a StaticGain or a time-invariant DynamicOutputFeedback, "
-                    "found "
-                    f"{type(controller).__name__}{' (time-variant)' if getattr(controller, 'time_variant', False) else ''}; "
-                    f"for a finite horizon use finite_horizon_cost or simulate")
+                    f"found {type(controller).__name__}{variant}; "
+                    "for a finite horizon use finite_horizon_cost or simulate")

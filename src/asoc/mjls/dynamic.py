@@ -107,9 +107,8 @@ def steady_state_cost(sys, F, K=None, L=None):
 
 
 def _certified_steady_state_cost(sys, F, K=None, L=None):
-    """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in place
-    of
-    its rho, for callers that report the bracket too: one spectral radius per controller.
+    """:func:`steady_state_cost` with the closed loop's certificate (a MeanSquareStability) in
+    place of its rho, for callers that report the bracket too: one spectral radius per controller.
 
     Examples
     --------
@@ -117,8 +116,8 @@ def _certified_steady_state_cost(sys, F, K=None, L=None):
     >>> sys = sec373_system(1)
     >>> r = dynamic_output_feedback(sys)
     >>> cost, X, stability = _certified_steady_state_cost(sys, r.F, r.K, r.L)
-    >>> round(cost, 3) == round(r.cost,
-    ...     3), stability.stabilizing, stability.bracket == r.rho_bracket
+    >>> same_bracket = stability.bracket == r.rho_bracket
+    >>> round(cost, 3) == round(r.cost, 3), stability.stabilizing, same_bracket
     (True, True, True)
     """
     At, HHt_cl, Qt = augmented_closed_loop(sys, F, K, L)
@@ -347,7 +346,8 @@ def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
     """
     HHt, JJt = noise_covariances(sys)
     mu = sys.mu_inf
-    divergence, rank_rtol = config.defaults["mjls.divergence_threshold"], config.defaults["mjls.rank_rtol"]
+    divergence = config.defaults["mjls.divergence_threshold"]
+    rank_rtol = config.defaults["mjls.rank_rtol"]
     bounds = tuple(initial_bounds(sys, init, rng))
     traces = [np.trace(np.array(bounds), axis1=-2, axis2=-1)]
     stopping = StoppingRule(tol, max_iter)
@@ -363,8 +363,8 @@ def iterate_bounds(sys, tol, max_iter, init=1e-4, rng=None, method="lstsq"):
         except np.linalg.LinAlgError as error:
             status, failure = Status.LINALG_ERROR, str(error)
             break
-        worst_residual = max(worst_residual,
-                             solve.residual) if np.isfinite(solve.residual) else np.nan
+        worst_residual = (max(worst_residual, solve.residual) if np.isfinite(solve.residual)
+                          else np.nan)
         new = (*bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt),
                *bound_costate_step(sys, F, K, L, EPbar, EPunder))
         if not all(np.abs(v).max() < divergence for v in new):
@@ -415,30 +415,32 @@ def _dynamic_output_feedback(sys, tol, max_iter, init, rng, method, warn):
         solve=best.solve, worst_residual=run.worst_residual, period=stopping.period)
 
 
-_EXACT = "; exact_dynamic_output_feedback minimises the true cost and converges where Alg. 3.2 does not"
+_EXACT = ("; exact_dynamic_output_feedback minimises the true cost and converges where Alg. 3.2 "
+          "does not")
 
 
 def _message(status, it, stopping, tol, rho, failure, solve, worst_residual):
     """One sentence: why Alg. 3.2 stopped (naming the exact design where it did not converge)."""
     change = stopping.change
     message = {
-        "converged": f"converged after {it} iterations (relative change of the bounds {change:.2g} < tol = {tol:.2g})",
-        "cycle": f"stopped at iteration {it} on a cycle of period {stopping.period}: the bounds repeat "
-                 f"(relative change {change:.2g} < tol = {tol:.2g}) without converging; returned "
-                 "the "
-                 f"member of smallest bound (rho = {rho:.4f}){_EXACT}",
+        "converged": f"converged after {it} iterations "
+                     f"(relative change of the bounds {change:.2g} < tol = {tol:.2g})",
+        "cycle": f"stopped at iteration {it} on a cycle of period {stopping.period}: the bounds "
+                 f"repeat (relative change {change:.2g} < tol = {tol:.2g}) without converging; "
+                 f"returned the member of smallest bound (rho = {rho:.4f}){_EXACT}",
         "no_progress": f"stopped at iteration {it}: the relative change of the bounds "
                        f"({min(stopping.smallest):.2g} at best) "
                        + ("stopped decreasing" if not np.isfinite(stopping.predicted) else
-                          f"would need about {stopping.predicted:.0f} more iterations to reach tol "
-                          f"= {tol:.2g}")
+                          f"would need about {stopping.predicted:.0f} more iterations to reach "
+                          f"tol = {tol:.2g}")
                        + f" (the ill-posed (3.51), rho = {rho:.4f}){_EXACT}",
         "max_iterations": f"did not converge within {it} iterations (relative change {change:.2g} "
                           f">= tol = {tol:.2g}, rho = {rho:.4f}){_EXACT}",
         "diverged": f"stopped at iteration {it}: the bounds diverged (beyond "
                     f"{config.defaults['mjls.divergence_threshold']:.0e}, or grew 1e6-fold in "
                     f"{stopping.window} iterations; rho = {rho:.4f}){_EXACT}",
-        "linalg_error": f"stopped at iteration {it}: solving (3.51) failed (rho = {rho:.4f}; {failure}){_EXACT}",
+        "linalg_error": f"stopped at iteration {it}: solving (3.51) failed "
+                        f"(rho = {rho:.4f}; {failure}){_EXACT}",
     }[status]
     if solve is not None and solve.method == "cg":
         message += (f"; (3.51) solved by conjugate gradients, largest relative residual "

@@ -1,5 +1,4 @@
-"""Controllers (3.37) and (3.55) that minimise the exact cost instead of its bound (not in the
-thesis).
+"""Controllers (3.37) and (3.55) that minimise the exact cost, not its bound (not in the thesis).
 
 Algorithms 3.2 and 3.3 minimise the costs of the bounded second moments of Prop. 3.26 and
 Thm. 3.31, which are not upper bounds of the true costs (Secs. 3.6-3.7 page). Here the exact
@@ -28,13 +27,11 @@ from .design_result import CertifiedDesignResult, DesignResult
 from .dynamic import iterate_bounds
 from .finite_horizon import (
     augmented_initial_moment,
-    check_initial_state,
     finite_horizon_cost,
     finite_horizon_dynamic_output_feedback,
     initial_gains,
-    mode_distributions,
-    stages,
 )
+from .finite_horizon_model import check_initial_state, mode_distributions, stages
 from .gradients import (
     average_cost_and_gradient,
     closed_loop_radius,
@@ -116,8 +113,8 @@ class ExactFiniteHorizonResult(DesignResult):
     --------
     >>> from asoc.mjls.examples import sec373_system, SEC373_MEAN0, SEC373_COV0, SEC373_MU0
     >>> res = exact_finite_horizon_dynamic_output_feedback(sec373_system(1), 5, SEC373_MEAN0[1],
-    ...     SEC373_COV0,
-    ...                                                    SEC373_MU0, max_iter=3, warn=False)
+    ...                                                    SEC373_COV0, SEC373_MU0, max_iter=3,
+    ...                                                    warn=False)
     >>> res.status, res.F.shape, res.costs.size, res.controller.time_variant
     ('max_iterations', (5, 2, 2), 4, True)
     """
@@ -191,8 +188,7 @@ def _given_gains(sys, init, nc):
     gains = (init.F, init.K, init.L) if all(hasattr(init, g) for g in "FKL") else init
     if not (isinstance(gains, (tuple, list)) and len(gains) == 3):
         raise TypeError("init: expected a result with F, K, L (e.g. of dynamic_output_feedback) "
-                        "or a "
-                        f"tuple (F, K, L), found {type(init).__name__}"
+                        f"or a tuple (F, K, L), found {type(init).__name__}"
                         f"{f' of length {len(init)}' if isinstance(init, (tuple, list)) else ''}")
     F = np.atleast_2d(np.asarray(gains[0], dtype=float))
     if nc is not None and F.shape[0] != nc:
@@ -211,11 +207,12 @@ def _starts(sys, init, nc):
     else:
         nc = sys.nx if nc is None else nc
         candidates = [g for g in (_bounded_alg32(sys, nc), averaged_lqg(sys, nc)) if g is not None]
-        candidates = candidates or [(np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu,
-                                                                                           nc)))]
+        zero = (np.zeros((nc, nc)), np.zeros((nc, sys.ny)), np.zeros((sys.nu, nc)))
+        candidates = candidates or [zero]
     costs = [average_cost_and_gradient(sys, *g)[0] for g in candidates]
     order = np.argsort(costs, kind="stable")
-    return [pack(*candidates[i]) for i in order], [costs[i] for i in order], tuple(g.shape for g in candidates[0])
+    shapes = tuple(g.shape for g in candidates[0])
+    return [pack(*candidates[i]) for i in order], [costs[i] for i in order], shapes
 
 
 def _stabilising_start(sys, starts, costs, shapes):
@@ -252,8 +249,7 @@ def _min_radius(sys, z, shapes, max_iter, target=-np.inf, progress=False, patien
     """
     fun = lambda v: _flat(radius_and_gradient(sys, *unpack(v, shapes)))
     return bfgs(fun, z, config.defaults["mjls.min_radius_tol"], max_iter, progress, "min rho",
-                target=target, patience=patience,
-                stall=_RADIUS_STALL)
+                target=target, patience=patience, stall=_RADIUS_STALL)
 
 
 #: min_radius_dynamic_output_feedback stops (no_progress) when ``_RADIUS_PATIENCE`` BFGS steps
@@ -294,13 +290,12 @@ def _controller_result(sys, z, shapes, status, it, history, name, start, message
 @config.accepts_settings("mjls.rho_start", "mjls.min_radius_tol", "mjls.lqg_start_regularisation")
 def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, progress=False,
                                        warn=True):
-    """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2); not in the
-    thesis.
+    """The controller (3.37) of locally smallest mean-square spectral radius (Cor. 3.2).
 
-    BFGS on rho over (F, K, L) with the gradient of
-    :func:`asoc.mjls.gradients.radius_and_gradient`. A rho that stays >= 1 from several
-    starts is evidence, not proof, that no controller (3.37) of this order stabilises the
-    system without observing the mode.
+    Not in the thesis. BFGS on rho over (F, K, L) with the gradient of
+    :func:`asoc.mjls.gradients.radius_and_gradient`. A rho that stays >= 1 from several starts is
+    evidence, not proof, that no controller (3.37) of this order stabilises the system without
+    observing the mode.
 
     Parameters
     ----------
@@ -344,8 +339,7 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
     """
     check_system(sys)
     max_iter = integer(config.defaults["mjls.radius_max_iter"] if max_iter is None else max_iter,
-                       "max_iter",
-                       minimum=1)
+                       "max_iter", minimum=1)
     progress, warn = boolean(progress, "progress"), boolean(warn, "warn")
     start = time.perf_counter()
     z, _, shapes = _starts(sys, init, _checked_order(nc))
@@ -363,12 +357,11 @@ def min_radius_dynamic_output_feedback(sys, init=None, nc=None, max_iter=None, p
                          "mjls.min_radius_tol")
 def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2000, warn=True,
                                   progress=False):
-    """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24); not in the
-    thesis.
+    """The controller (3.37) minimising the exact average cost (3.42) (Prop. 3.24).
 
-    BFGS over (F, K, L) with the analytic gradient (adjoint of the augmented second-moment
-    equations, Prop. 3.23), inside the mean-square stabilising set (steps that leave it,
-    where the cost is inf, are rejected by the line search). This is the design to use when
+    Not in the thesis. BFGS over (F, K, L) with the analytic gradient (adjoint of the augmented
+    second-moment equations, Prop. 3.23), inside the mean-square stabilising set (steps that leave
+    it, where the cost is inf, are rejected by the line search). This is the design to use when
     Algorithm 3.2 (:func:`dynamic_output_feedback`) stops on a cycle or without converging.
 
     Parameters
@@ -429,8 +422,7 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
         message = f"found no mean-square stabilising start (smallest rho reached {rho:.4f})"
         if warn:
             warnings.warn(f"exact_dynamic_output_feedback: {message}; pass a stabilising init",
-                          RuntimeWarning,
-                          stacklevel=2)
+                          RuntimeWarning, stacklevel=2)
         return _controller_result(sys, z, shapes, "no_progress", 0, np.array([np.inf]), "cost",
                                   start, message)
     fun = lambda v: _flat(average_cost_and_gradient(sys, *unpack(v, shapes)))
@@ -445,8 +437,8 @@ def exact_dynamic_output_feedback(sys, init=None, nc=None, tol=1e-10, max_iter=2
 
 @config.accepts_settings("mjls.lbfgs_memory")
 def exact_finite_horizon_dynamic_output_feedback(sys, horizon, mean0, cov0, mu0, init=None,
-                                                 tol=1e-12,
-                                                 max_iter=5000, warn=True, progress=False):
+                                                 tol=1e-12, max_iter=5000, warn=True,
+                                                 progress=False):
     """The time-variant controller (3.55) minimising the exact J_0 (3.56)/(3.58); not in the thesis.
 
     L-BFGS over all gains F_k, K_k, L_k (k = 0..horizon-1) with the analytic gradient (the adjoint

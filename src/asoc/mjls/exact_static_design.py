@@ -114,7 +114,8 @@ def static_cost_and_gradient(sys, L):
     M, n, _ = Acl.shape
     solve = coupled_lyapunov_solver(Acl, sys.T)
     Y = solve(np.broadcast_to(np.eye(n), (M, n, n)), on_miss="report")
-    if not (np.all(np.isfinite(Y.X)) and Y.residual < config.defaults["mjls.solve_residual_max"] and positive_definite(Y.X)):
+    if not (np.all(np.isfinite(Y.X)) and Y.residual < config.defaults["mjls.solve_residual_max"]
+            and positive_definite(Y.X)):
         return np.inf, None
     rec = Recursion(sys)
     LC = L @ sys.C
@@ -145,7 +146,8 @@ def averaged_output_gain(sys):
     """
     mu = sys.mu_inf
     A, B, C, Q, R = (np.einsum("i,iab->ab", mu, S) for S in (sys.A, sys.B, sys.C, sys.Q, sys.R))
-    Q = Q + config.defaults["mjls.lqg_start_regularisation"] * max(1.0, np.abs(Q).max()) * np.eye(sys.nx)
+    regularisation = config.defaults["mjls.lqg_start_regularisation"] * max(1.0, np.abs(Q).max())
+    Q = Q + regularisation * np.eye(sys.nx)
     try:
         X = scipy.linalg.solve_discrete_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError):

@@ -1,6 +1,5 @@
 """The numerical examples of Chapter 3, with the thesis's parameters, and a networked loop that
-loses input packets (not
-in the thesis).
+loses input packets (not in the thesis).
 """
 
 import numpy as np
@@ -91,8 +90,8 @@ def sec373_system(T: int = 1) -> MJLS:
                 T=SEC373_T[T], J=0.1 * np.ones((1, 1)))
 
 
-# Not in the thesis: a networked loop whose input packets are lost (the engineer's example of
-# asoc.mjls).
+# Not in the thesis: a networked loop whose input packets are lost (the engineer's example
+# of asoc.mjls).
 NETWORKED_A = np.array([[0.24, 0.58, 0.23], [-0.92, 0.64, 0.32], [-0.38, 0.41, 0.26]])
 NETWORKED_B = np.array([[0.03], [0.55], [-0.74]])
 NETWORKED_C = np.array([[-0.16, -0.48, 0.6]])
@@ -115,8 +114,7 @@ def networked_loop() -> MJLS:
     (2, 3, [0.0, 0.0, 0.0], [0.857, 0.143])
     """
     return MJLS(A=NETWORKED_A, B=[NETWORKED_B, np.zeros_like(NETWORKED_B)], C=NETWORKED_C,
-                H=0.1 * np.eye(3), Q=np.eye(3),
-                R=np.eye(1), T=NETWORKED_T)
+                H=0.1 * np.eye(3), Q=np.eye(3), R=np.eye(1), T=NETWORKED_T)
 
 
 def _lossy_plant(dt=0.1):

@@ -15,12 +15,14 @@ xi_0^i^T, with mu0_i as the factor of the author's reference code, Mxttak/MJLS,
 MJLS_ClassMeasurementFeedbackVariantGains.m, PredictXuXl) whenever the mode-conditional
 means coincide or mu0 is a unit vector, as in Sec. 3.7.3; otherwise it is the exact
 second moment of (x_0 - x^_0, x^_0) without the cross term, the same bound as later steps.
+
+The model over the horizon (:class:`~asoc.mjls.finite_horizon_model.Stages`) and the
+validation of the initial state live in :mod:`asoc.mjls.finite_horizon_model`.
 """
 
 import time
 import warnings
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
@@ -28,26 +30,17 @@ from .. import config
 from ..linalg import transpose
 from ..progress import progress_bar
 from ..result import Status
-from ..validation import (
-    boolean,
-    choice,
-    integer,
-    probability_vector,
-    real_array,
-    real_scalar,
-    semidefinite,
-)
-from .closed_loops import noise_covariances
+from ..validation import boolean, choice, integer, real_array, real_scalar
 from .controllers import DynamicOutputFeedback
 from .design_result import DesignResult
 from .dynamic import dynamic_output_feedback
+from .finite_horizon_model import check_initial_state, mode_distributions, stages
 from .moment_bounds import bound_costate_step, bound_moment_step
 from .moments import second_moment_step
 from .optimality import METHODS, gains_from_bounds
-from .system import MJLS, successor_average
+from .system import successor_average
 
-__all__ = ["FiniteHorizonResult", "Stages", "StackedStages", "stages", "check_initial_state",
-           "initial_bounds", "mode_distributions", "augmented_initial_moment", "augmented_cost",
+__all__ = ["FiniteHorizonResult", "initial_bounds", "augmented_initial_moment", "augmented_cost",
            "finite_horizon_cost", "initial_gains", "finite_horizon_dynamic_output_feedback"]
 
 
@@ -83,7 +76,7 @@ class FiniteHorizonResult(DesignResult):
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
     >>> res = finite_horizon_dynamic_output_feedback(sys, 5, SEC373_MEAN0[1], SEC373_COV0,
-    ...     SEC373_MU0)
+    ...                                              SEC373_MU0)
     >>> res.status, res.Xbar.shape, res.controller.time_variant
     ('converged', (6, 2, 2, 2), True)
     """
@@ -106,124 +99,6 @@ class FiniteHorizonResult(DesignResult):
     seconds: float = 0.0
 
 
-@dataclass(frozen=True)
-class Stages:
-    """The time-variant MJLS (3.54) over a horizon: one MJLS per step k = 0..K-1 and the
-    terminal weight Q_K (M, nx, nx); noise covariances HHt, JJt per step.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> st = stages(sys, 4)
-    >>> st.horizon, len(st.HHt)
-    (4, 4)
-    """
-
-    systems: tuple
-    Q_final: np.ndarray
-    HHt: tuple
-    JJt: tuple
-
-    @property
-    def horizon(self):
-        return len(self.systems)
-
-    @cached_property
-    def stacked(self) -> "StackedStages":
-        """The matrices of all steps stacked over k, computed once (:class:`StackedStages`).
-
-        Examples
-        --------
-        >>> from asoc.mjls.examples import sec373_system
-        >>> st = stages(sec373_system(1), 4)
-        >>> st.stacked.A.shape, st.stacked.HHt.shape, st.stacked is st.stacked
-        ((4, 2, 2, 2), (4, 2, 2, 2), True)
-        """
-        stacked = {name: np.stack([getattr(s, name) for s in self.systems]) for name in "ABCQRT"}
-        return StackedStages(**stacked, HHt=np.stack(self.HHt), JJt=np.stack(self.JJt))
-
-
-@dataclass(frozen=True)
-class StackedStages:
-    """The matrices of the time-variant MJLS (3.54) stacked over the steps k = 0..K-1.
-
-    Attributes
-    ----------
-    A, B, C, Q, R : numpy.ndarray, shape (horizon, M, ., .)
-    T : numpy.ndarray, shape (horizon, M, M)
-    HHt, JJt : numpy.ndarray, shape (horizon, M, ., .)
-        The noise covariances H_i H_i^T and J_i J_i^T per step.
-    """
-
-    A: np.ndarray
-    B: np.ndarray
-    C: np.ndarray
-    Q: np.ndarray
-    R: np.ndarray
-    T: np.ndarray
-    HHt: np.ndarray
-    JJt: np.ndarray
-
-
-def stages(sys, horizon):
-    """Normalise ``sys`` (an MJLS, or a sequence of ``horizon`` or ``horizon + 1`` MJLS for
-    the time-variant model (3.54); a last extra entry only supplies Q_K) into :class:`Stages`.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> st = stages([sys, sys, sys.replace(Q=2 * np.eye(2))], 2)
-    >>> st.horizon, float(st.Q_final[0, 0, 0])
-    (2, 2.0)
-    """
-    horizon = integer(horizon, "horizon", minimum=1)
-    if isinstance(sys, MJLS):
-        systems = (sys,) * horizon
-        Q_final = sys.Q
-    else:
-        if not isinstance(sys, (list, tuple)):
-            raise TypeError("sys: expected an MJLS or a sequence of MJLS, found "
-                            f"{type(sys).__name__}")
-        systems = tuple(sys)
-        if len(systems) not in (horizon,
-                                horizon + 1) or not all(isinstance(s, MJLS) for s in systems):
-            raise ValueError(f"sys: expected an MJLS or a sequence of {horizon} or {horizon + 1} "
-                             "MJLS, "
-                             f"found {type(sys).__name__} of length {len(systems)}")
-        ref = systems[0]
-        for k, s in enumerate(systems):
-            if (s.M, s.nx, s.nu, s.ny) != (ref.M, ref.nx, ref.nu, ref.ny):
-                raise ValueError(f"sys: step {k} has (M, nx, nu, ny) = {(s.M, s.nx, s.nu, s.ny)}, "
-                                 f"step 0 has {(ref.M, ref.nx, ref.nu, ref.ny)}")
-        Q_final = systems[-1].Q
-        systems = systems[:horizon]
-    cache = {}
-    for s in systems:
-        if id(s) not in cache:
-            cache[id(s)] = noise_covariances(s)
-    HHt = tuple(cache[id(s)][0] for s in systems)
-    JJt = tuple(cache[id(s)][1] for s in systems)
-    return Stages(systems, Q_final, HHt, JJt)
-
-
-def check_initial_state(M, nx, mean0, cov0, mu0):
-    """Validate the Gaussian-mixture initial state; return (mean0, cov0, mu0) as arrays.
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> mean0, cov0, mu0 = check_initial_state(2, 2, SEC373_MEAN0[1], SEC373_COV0, [1, 0])
-    >>> mu0
-    array([1., 0.])
-    """
-    mu0 = probability_vector(mu0, "mu0", M)
-    mean0 = real_array(mean0, "mean0", shape=(M, nx))
-    cov0 = semidefinite(real_array(cov0, "cov0", shape=(M, nx, nx)), "cov0")
-    return mean0, cov0, mu0
-
-
 def initial_bounds(mean0, cov0, mu0):
     """x^_0 = E{x_0} and the bounds Xbar_{i,0}, Xunder_{i,0} (Thm. 3.31, Alg. 3.3 Step 2).
 
@@ -242,30 +117,13 @@ def initial_bounds(mean0, cov0, mu0):
     return xhat0, Xbar0, Xunder0
 
 
-def mode_distributions(st, mu0):
-    """mu_k = mu_0 T_0 ... T_{k-1} for k = 0..horizon, shape (horizon + 1, M).
-
-    Examples
-    --------
-    >>> from asoc.mjls.examples import sec373_system
-    >>> sys = sec373_system(1)
-    >>> mode_distributions(stages(sys, 2), np.array([1.0, 0.0])).round(3).tolist()
-    [[1.0, 0.0], [0.7, 0.3], [0.67, 0.33]]
-    """
-    mu = np.empty((st.horizon + 1, len(mu0)))
-    mu[0] = mu0
-    for k, s in enumerate(st.systems):
-        mu[k + 1] = mu[k] @ s.T
-    return mu
-
-
 def augmented_initial_moment(mean0, cov0, mu0, xhat0):
     """X~_0^i = E{[x_0; x^_0][x_0; x^_0]^T 1(theta_0 = i)} for a constant x^_0 = xhat0.
 
     Examples
     --------
     >>> X0 = augmented_initial_moment(np.array([[1.0]]), np.zeros((1, 1, 1)), np.array([1.0]),
-    ...     np.array([1.0]))
+    ...                               np.array([1.0]))
     >>> X0.tolist()
     [[[1.0, 1.0], [1.0, 1.0]]]
     """
@@ -284,15 +142,15 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
 
     Acl, HHt_cl, Qcl: sequences of K stacks (M, n, n) (mode-dependent, e.g. the augmented
     closed loop (3.59)-(3.60)); Q_final (M, n, n); Ts: K transition matrices; X0 (M, n, n):
-    E{x~_0 x~_0^T 1(theta_0 = i)}. Returns sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K}
-    X~_K^i].
+    E{x~_0 x~_0^T 1(theta_0 = i)}. Returns
+    sum_k sum_i tr[Q~_{i,k} X~_k^i] + sum_i tr[Q~_{i,K} X~_K^i].
 
     Examples
     --------
     >>> A = [np.array([[[0.5]]])] * 2
-    >>> cost = augmented_cost(A, [np.ones((1, 1, 1))] * 2, [np.ones((1, 1, 1))] * 2, np.ones((1, 1,
-    ...     1)),
-    ...                       [np.ones((1, 1))] * 2, np.ones((1, 1, 1)), np.array([1.0]))
+    >>> ones = np.ones((1, 1, 1))
+    >>> cost = augmented_cost(A, [ones] * 2, [ones] * 2, ones, [np.ones((1, 1))] * 2, ones,
+    ...                       np.array([1.0]))
     >>> round(cost, 4)
     3.5625
     """
@@ -306,8 +164,7 @@ def augmented_cost(Acl, HHt_cl, Qcl, Q_final, Ts, X0, mu0):
 
 
 def finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0=None):
-    """True expected cost (3.56) of the time-variant controller (3.55), from the augmented recursion
-    (3.58).
+    """True expected cost (3.56) of the time-variant controller (3.55), by the recursion (3.58).
 
     Parameters
     ----------
@@ -406,18 +263,17 @@ def initial_gains(init, st, nx, ny, nu):
     if all(hasattr(init, g) for g in "FKL"):
         init = (init.F, init.K, init.L)
     if not (isinstance(init, (tuple, list)) and len(init) == 3):
-        raise TypeError("init: expected None, a Generator, a result with F, K, L or a tuple (F, "
-                        "K, L), "
-                        f"found {type(init).__name__}")
+        raise TypeError("init: expected None, a Generator, a result with F, K, L or a tuple "
+                        f"(F, K, L), found {type(init).__name__}")
     out = []
-    for name, g, shape in (("F", init[0], (nx, nx)), ("K", init[1], (nx, ny)), ("L", init[2],
-                                                                                (nu, nx))):
+    for name, g, shape in (("F", init[0], (nx, nx)), ("K", init[1], (nx, ny)),
+                           ("L", init[2], (nu, nx))):
         g = real_array(g, f"init {name}")
         if g.shape == shape:
             g = np.broadcast_to(g, (horizon,) + shape)
         if g.shape != (horizon,) + shape:
-            raise ValueError(f"init {name}: expected shape {shape} or {(horizon,) + shape}, found "
-                             f"{g.shape}")
+            raise ValueError(f"init {name}: expected shape {shape} or {(horizon,) + shape}, "
+                             f"found {g.shape}")
         out.append(g.copy())
     return tuple(out)
 
@@ -499,8 +355,7 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
     max_iter = integer(max_iter, "max_iter", minimum=1)
     choice(method, "method", METHODS)
     safeguard, warn, progress = (boolean(v, n) for v, n in ((safeguard, "safeguard"),
-                                                            (warn, "warn"),
-                                                             (progress, "progress")))
+                                                            (warn, "warn"), (progress, "progress")))
     F, K, L = initial_gains(init, st, nx, ny, nu)
     xhat0, Xbar0, Xunder0 = initial_bounds(mean0, cov0, mu0)
     mu = mode_distributions(st, mu0)
@@ -523,8 +378,9 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
         rejected = 0
         for k in range(K_ - 1, -1, -1):                                      # Steps 4-6
             s = st.systems[k]
-            EPbar, EPunder, Eomega = successor_average(s.T, Pbar[k + 1],
-                                                       check=False), successor_average(s.T, Punder[k + 1], check=False), s.T @ omega
+            EPbar = successor_average(s.T, Pbar[k + 1], check=False)
+            EPunder = successor_average(s.T, Punder[k + 1], check=False)
+            Eomega = s.T @ omega
             args = (Xbar[k], Xunder[k], EPbar, EPunder, Eomega, mu[k], st.HHt[k], st.JJt[k])
             Fn, Kn, Ln = gains_from_bounds(s, Xbar[k], Xunder[k], EPbar, EPunder, mu[k],
                                            st.JJt[k], method)
@@ -548,18 +404,19 @@ def finite_horizon_dynamic_output_feedback(sys, horizon=100, mean0=None, cov0=No
             break
     bounds = np.array(bounds)
     seconds = time.perf_counter() - start
-    change = abs(bounds[-1] - bounds[-2]) / max(1.0, abs(bounds[-1])) if len(bounds) > 1 else np.inf
-    message = {"converged": f"converged after {it} iterations (change of Jbar_0 {change:.2g} <= tol = {tol:.2g})",
-               "max_iterations": f"did not converge within {it} iterations (change of Jbar_0 {change:.2g} "
-                                 f"> tol = {tol:.2g})",
+    change = (abs(bounds[-1] - bounds[-2]) / max(1.0, abs(bounds[-1])) if len(bounds) > 1
+              else np.inf)
+    message = {"converged": f"converged after {it} iterations "
+                            f"(change of Jbar_0 {change:.2g} <= tol = {tol:.2g})",
+               "max_iterations": f"did not converge within {it} iterations "
+                                 f"(change of Jbar_0 {change:.2g} > tol = {tol:.2g})",
                "diverged": f"stopped at iteration {it}: the bound Jbar_0 became non-finite"}[status]
     if warn and status is not Status.CONVERGED:
         warnings.warn(f"Algorithm 3.3 {message}", RuntimeWarning, stacklevel=2)
     increases = np.diff(bounds) > 1e-8 * np.maximum(1.0, np.abs(bounds[1:]))   # beyond rounding
     if warn and np.any(increases):
         warnings.warn(f"Algorithm 3.3: Jbar_0 increased in {int(increases.sum())} iterations "
-                      f"(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning,
-                      stacklevel=2)
+                      "(Thm. 3.33 asserts a non-increasing sequence)", RuntimeWarning, stacklevel=2)
     cost = finite_horizon_cost(sys, F, K, L, mean0, cov0, mu0, xhat0)
     return FiniteHorizonResult(F=F, K=K, L=L, xhat0=xhat0, cost_bounds=bounds,
                                converged=status is Status.CONVERGED, status=status, message=message,

@@ -1,5 +1,5 @@
-"""Gradients of the exact costs and of the mean-square spectral radius over the gains (3.37),
-(3.55).
+"""Gradients of the exact costs and of the mean-square spectral radius over the gains of (3.37)
+and (3.55).
 
 The exact designs of :mod:`asoc.mjls.exact_cost_design` minimise these functions. With the augmented
 closed loop A~_i, W_i = H~_i H~_i^T and Q~_i of (3.39)-(3.40) and Prop. 3.20,
@@ -46,6 +46,7 @@ def _closed_loop_gradient(sys, G):
     gL = (transpose(sys.B) @ G[:, :nx, nx:]).sum(axis=0)
     return gF, gK, gL
 
+
 def _gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     """dJ/dF, dJ/dK, dJ/dL from the moments X and costates E_i(P) (adjoint of Prop. 3.23).
 
@@ -87,6 +88,7 @@ def _gain_gradient(sys, K, L, At, X, EP, JJt, mu):
     gK += 2.0 * (mu[:, None, None] * EP[:, nx:, nx:] @ K @ JJt).sum(axis=0)
     gL += 2.0 * (sys.R @ L @ X[:, nx:, nx:]).sum(axis=0)
     return gF, gK, gL
+
 
 def average_cost_and_gradient(sys, F, K, L):
     """Exact average cost (3.42) (Prop. 3.24) of (3.37) and its gradient over (F, K, L).
@@ -141,6 +143,7 @@ def average_cost_and_gradient(sys, F, K, L):
     return cost, _gain_gradient(sys, K, L, At, X, successor_average(sys.T, P, check=False),
                                 noise_covariances(sys)[1], mu)
 
+
 def positive_definite(Y):
     """True when every matrix of the stack ``Y`` has a Cholesky factor (is positive definite).
 
@@ -155,6 +158,7 @@ def positive_definite(Y):
         return False
     return True
 
+
 def closed_loop_radius(sys, F, K, L):
     """Mean-square spectral radius (Cor. 3.2) of the augmented closed loop (3.39).
 
@@ -167,6 +171,7 @@ def closed_loop_radius(sys, F, K, L):
     1.3449
     """
     return mean_square_stability(augmented_closed_loop(sys, F, K, L)[0], sys.T, check=False).rho
+
 
 def radius_and_gradient(sys, F, K, L):
     """Mean-square spectral radius rho (Cor. 3.2) of (3.37) and its gradient over (F, K, L).
@@ -205,10 +210,12 @@ def radius_and_gradient(sys, F, K, L):
     At = augmented_closed_loop(sys, F, K, L)[0]
     rho, X, V = perron_pair(At, sys.T)
     inner = float(np.einsum("iab,iab->", V, X))
-    if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * np.linalg.norm(V) * np.linalg.norm(X):
+    scale = np.linalg.norm(V) * np.linalg.norm(X)
+    if not abs(inner) > config.defaults["mjls.perron_inner_rtol"] * scale:
         return rho, _closed_loop_gradient(sys, np.zeros_like(At))
-    return rho, _closed_loop_gradient(sys, 2.0 * successor_average(sys.T, V,
-                                                                   check=False) @ At @ X / inner)
+    EV = successor_average(sys.T, V, check=False)
+    return rho, _closed_loop_gradient(sys, 2.0 * EV @ At @ X / inner)
+
 
 def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     """Exact J_0 (3.56) by the augmented recursion (3.58) and its gradient over F_k, K_k, L_k.
@@ -216,7 +223,7 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     Parameters
     ----------
     st : Stages
-        The stages of the horizon (``asoc.mjls.finite_horizon.Stages``).
+        The stages of the horizon (``asoc.mjls.finite_horizon_model.Stages``).
     F, K, L : numpy.ndarray
         Gains of (3.55), shapes (horizon, nc, nc), (horizon, nc, ny), (horizon, nu, nc).
     X0 : numpy.ndarray, shape (M, n, n)
@@ -236,17 +243,16 @@ def finite_horizon_cost_and_gradient(st, F, K, L, X0, mu):
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
     >>> from asoc.mjls.examples import SEC373_MEAN0, SEC373_COV0, SEC373_MU0
-    >>> from asoc.mjls.finite_horizon import (augmented_initial_moment, finite_horizon_cost,
-    ...                                       mode_distributions, stages)
+    >>> from asoc.mjls.finite_horizon import augmented_initial_moment, finite_horizon_cost
+    >>> from asoc.mjls.finite_horizon_model import mode_distributions, stages
     >>> st = stages(sys, 3)
-    >>> gains = [np.broadcast_to(g, (3,) + g.shape) for g in (0.5 * np.eye(2), np.ones((2, 1)),
-    ...     -np.ones((1, 2)))]
-    >>> X0 = augmented_initial_moment(SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0,
-    ...     SEC373_MU0 @ SEC373_MEAN0[1])
-    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0, mode_distributions(st,
-    ...     SEC373_MU0))
-    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, SEC373_MEAN0[1], SEC373_COV0,
-    ...     SEC373_MU0))), gL.shape
+    >>> gains = [np.broadcast_to(g, (3,) + g.shape)
+    ...          for g in (0.5 * np.eye(2), np.ones((2, 1)), -np.ones((1, 2)))]
+    >>> mean0, cov0, mu0 = SEC373_MEAN0[1], SEC373_COV0, SEC373_MU0
+    >>> X0 = augmented_initial_moment(mean0, cov0, mu0, mu0 @ mean0)
+    >>> cost, (gF, gK, gL) = finite_horizon_cost_and_gradient(st, *gains, X0,
+    ...                                                       mode_distributions(st, mu0))
+    >>> bool(np.isclose(cost, finite_horizon_cost(sys, *gains, mean0, cov0, mu0))), gL.shape
     (True, (3, 1, 2))
     """
     m = st.stacked

@@ -85,8 +85,7 @@ def _psi(x_next, x, u, a, b, g, T, pi, Q, R):
 
 def expected_cost_two_steps_before_horizon(x, u, a, b, g, T, pi, Q=1.0, R=1.0, n_nodes=80,
                                            terms="full"):
-    """J_{K-2}(x, u) - Delta of (3.5) (K the horizon) on arrays x, u (broadcast), by Gauss-Hermite
-    quadrature.
+    """J_{K-2}(x, u) - Delta of (3.5) (K the horizon) on arrays x, u, by Gauss-Hermite quadrature.
 
     ``terms="last"`` gives only its last term, E{x_{K-1}^2 Psi(I_{K-1}) | I_{K-2}} of (3.6).
 
@@ -133,7 +132,8 @@ def expected_cost_two_steps_before_horizon(x, u, a, b, g, T, pi, Q=1.0, R=1.0, n
     try:
         x, u = np.broadcast_arrays(x, u)
     except ValueError as err:
-        raise ValueError(f"u: expected a shape that broadcasts with x {x.shape}, found {u.shape}") from err
+        raise ValueError(f"u: expected a shape that broadcasts with x {x.shape}, "
+                         f"found {u.shape}") from err
     nodes, weights = np.polynomial.hermite_e.hermegauss(n_nodes)
     weights = weights / weights.sum()
     total = Q * x ** 2 + R * u ** 2 if terms == "full" else np.zeros_like(x)
@@ -162,8 +162,8 @@ def _grid_arrays(**arrays):
     for name, value in rest:
         out.append(real_array(value, name))
         if out[-1].shape != ref.shape:
-            raise ValueError(f"{name}: expected the shape of {first}, {ref.shape}, found shape "
-                             f"{out[-1].shape}")
+            raise ValueError(f"{name}: expected the shape of {first}, {ref.shape}, "
+                             f"found shape {out[-1].shape}")
     return out
 
 

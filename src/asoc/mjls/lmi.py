@@ -122,8 +122,8 @@ def certificate(constraints):
 def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_residual=np.nan,
                eps=EPS, variables=None, stability=None):
     """The LMIResult of a solve: feasible iff the matrices satisfy the constraints
-    (``margin >= -eps/2``,
-    ``equality_residual <= config.defaults["mjls.lmi_equality_rtol"]``); rho reported on its own.
+    (``margin >= -eps/2``, ``equality_residual <= config.defaults["mjls.lmi_equality_rtol"]``); rho
+    reported on its own.
     Without a margin (nan), the solver's status "optimal" stands for the certificate. ``stability``
     is the gain's :func:`asoc.mjls.mean_square_stability` (rho, its certified bracket and
     ``stabilizing``); without it the gain is not certified to stabilise.
@@ -144,22 +144,23 @@ def lmi_result(solver_status, L=None, bound=np.inf, margin=np.nan, equality_resi
     rho = np.nan if stability is None else stability.rho
     common = dict(solver_status=solver_status, margin=margin, equality_residual=equality_residual,
                   variables=variables or {})
-    verified = (L is not None and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
+    verified = (L is not None
+                and (solver_status == cp.OPTIMAL if np.isnan(margin) else margin >= -eps / 2)
                 and not equality_residual > config.defaults["mjls.lmi_equality_rtol"])
     if not verified:
         status, message = _not_feasible(solver_status, L, margin, equality_residual, eps)
+        # no gain, no certificate
         return LMIResult(feasible=False, L=None, bound=np.inf, converged=False, status=status,
-                         message=message,
-                         **common)                     # no gain, no certificate
+                         message=message, **common)
     stabilizing = False if stability is None else stability.stabilizing
     text = f"the LMIs hold (margin {margin:.1e} >= {-eps / 2:.1e})" if not np.isnan(margin) else \
         f"the solver reports {solver_status!r}"
     if stabilizing:
         message = f"{text}; the gain gives rho = {rho:.4f} (mean-square stabilising)"
     else:
-        message = (f"{text}, but the recovered gain is not certified to stabilise (rho = "
-                   f"{rho:.4f}), which the theorem "
-                   f"excludes: a numerical failure of the gain's recovery, or a counterexample")
+        message = (f"{text}, but the recovered gain is not certified to stabilise "
+                   f"(rho = {rho:.4f}), which the theorem excludes: a numerical failure of the "
+                   "gain's recovery, or a counterexample")
     return LMIResult(feasible=True, L=L, bound=bound, converged=True, status="converged",
                      message=message, stability=stability, **common)
 
@@ -170,10 +171,11 @@ def _not_feasible(solver_status, L, margin, residual, eps):
         return "infeasible", ("the solver certifies that the LMIs of the sufficient condition are "
                               "infeasible" + _MAY_EXIST)
     if solver_status in (cp.INFEASIBLE_INACCURATE, cp.OPTIMAL_INACCURATE) or L is not None:
-        found = "" if L is None else f"; its matrices miss the LMIs (margin {margin:.1e}, equality residual {residual:.1e})"
-        return "inaccurate", ("the solver stopped short of its accuracy (status "
-                              f"{solver_status!r}){found}: "
-                              f"feasibility is undecided; rescale the system or try another solver")
+        found = ("" if L is None else f"; its matrices miss the LMIs (margin {margin:.1e}, "
+                 f"equality residual {residual:.1e})")
+        return "inaccurate", (f"the solver stopped short of its accuracy (status {solver_status!r})"
+                              f"{found}: feasibility is undecided; rescale the system or try "
+                              "another solver")
     return "infeasible", ("the solver found no solution of the sufficient condition "
                           f"(status {solver_status!r})" + _MAY_EXIST)
 
@@ -283,8 +285,8 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
     margin, residual = certificate(cons)
     gains = np.stack([F[g].value @ np.linalg.inv(Mv[g].value) for g in range(n_gains)])
     closed = sys.A + sys.B @ (gains if mode_observed else gains[0]) @ sys.C
-    variables = {name: [v.value for v in group] for name, group in (("F", F), ("G", G), ("M", Mv),
-                                                                    ("W", W), ("Y", Y))}
+    groups = (("F", F), ("G", G), ("M", Mv), ("W", W), ("Y", Y))
+    variables = {name: [v.value for v in group] for name, group in groups}
     return lmi_result(status, gains if mode_observed else gains[0], float(prob.value),
                       margin=margin, equality_residual=residual, eps=eps, variables=variables,
                       stability=mean_square_stability(closed, sys.T, check=False))
@@ -292,8 +294,7 @@ def static_output_lmi(sys, mode_observed=False, eps=EPS, solver="CLARABEL"):
 
 def solve_quietly(prob, solver):
     """Solve ``prob`` with ``solver``; cvxpy's warnings (e.g. "Solution may be inaccurate") are
-    caught,
-    since the result reports the status in its own words. Returns the status string, or
+    caught, since the result reports the status in its own words. Returns the status string, or
     "solver error: ..." when the solver raised.
 
     Examples
@@ -320,7 +321,8 @@ def check_solver(solver, name="solver"):
     'CLARABEL'
     """
     if not isinstance(solver, str):
-        raise TypeError(f"{name}: expected a cvxpy solver name (str), found {type(solver).__name__}")
+        raise TypeError(f"{name}: expected a cvxpy solver name (str), "
+                        f"found {type(solver).__name__}")
     if solver not in cp.installed_solvers():
         raise ValueError(f"{name}: expected one of the installed solvers {cp.installed_solvers()}, "
                          f"found {solver!r}")

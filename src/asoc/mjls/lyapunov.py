@@ -69,9 +69,7 @@ class LyapunovSolution:
 
 
 class _Dense:
-    """An LU factorisation of I - ms_operator, reused for moments and costates (LAPACK
-    getrf/getrs).
-    """
+    """An LU factorisation of I - ms_operator, reused for moments and costates (getrf/getrs)."""
 
     def __init__(self, A, T, kron=None):
         M, n, _ = A.shape
@@ -100,8 +98,8 @@ def residual(A, T, X, W, adjoint=False):
     if not np.all(np.isfinite(X)):
         return np.inf
     apply = costate_map if adjoint else second_moment_map
-    return float(np.linalg.norm(X - apply(A, T, X) - W) / max(np.linalg.norm(W),
-                                                              np.finfo(float).tiny))
+    scale = max(np.linalg.norm(W), np.finfo(float).tiny)
+    return float(np.linalg.norm(X - apply(A, T, X) - W) / scale)
 
 
 def solve_coupled_lyapunov(A, T, W, adjoint=False, method="auto", tol=None):
@@ -173,7 +171,8 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=None):
     if auto:
         method = "dense" if M * n * n <= config.defaults["mjls.dense_max_solve"] else "bicgstab"
     if method != "dense" and method not in ITERATIVE:
-        raise ValueError(f"method: expected 'auto', 'dense' or one of {ITERATIVE}, found {method!r}")
+        raise ValueError(f"method: expected 'auto', 'dense' or one of {ITERATIVE}, "
+                         f"found {method!r}")
     # the LU factorisation, made when first needed
     dense = []
 
@@ -195,11 +194,10 @@ def coupled_lyapunov_solver(A, T, method="auto", tol=None):
                 if not res <= res2:
                     X, res, used = X2, res2, used + "+dense"
             if not res <= config.defaults["mjls.solve_residual_max"]:
+                limit = config.defaults["mjls.solve_residual_max"]
                 warnings.warn(f"the coupled Lyapunov solve ({used}) reached a relative residual of "
-                              f"{res:.3g} only, "
-                              "above mjls.solve_residual_max = "
-                              f"{config.defaults['mjls.solve_residual_max']:.3g}: "
-                              f"the returned X is not a solution (rho(L) near 1?)", RuntimeWarning,
+                              f"{res:.3g} only, above mjls.solve_residual_max = {limit:.3g}: "
+                              "the returned X is not a solution (rho(L) near 1?)", RuntimeWarning,
                               stacklevel=2)
         return LyapunovSolution(X=X, residual=res, method=used, iterations=it)
     return solve
@@ -245,8 +243,8 @@ def _iterative_solve(A, T, W, adjoint, method, tol, max_iter=5000, x0=None):
     x0 = b if x0 is None else x0.ravel()
     if method == "gmres":
         x, _ = scipy.sparse.linalg.gmres(op, b, x0=x0, rtol=tol, atol=0.0, restart=60,
-                                         maxiter=max_iter // 60 + 1,
-                                         callback=callback, callback_type="pr_norm")
+                                         maxiter=max_iter // 60 + 1, callback=callback,
+                                         callback_type="pr_norm")
     else:
         x, _ = scipy.sparse.linalg.bicgstab(op, b, x0=x0, rtol=tol, atol=0.0, maxiter=max_iter,
                                             callback=callback)
@@ -304,8 +302,8 @@ def radii_and_moments(A, T, W, check=True):
 
     Examples
     --------
-    >>> A = np.array([[[[0.5]], [[0.8]]], [[[1.5]], [[0.8]]]]); T = np.array([[0.5, 0.5], [0.5,
-    ...     0.5]])
+    >>> A = np.array([[[[0.5]], [[0.8]]], [[[1.5]], [[0.8]]]])
+    >>> T = np.array([[0.5, 0.5], [0.5, 0.5]])
     >>> rho, X = radii_and_moments(A, T, np.ones((2, 1, 1)))
     >>> rho.round(6), X[1] is None
     (array([0.445, 1.445]), True)
@@ -314,11 +312,12 @@ def radii_and_moments(A, T, W, check=True):
         A, T, W = _checked(real_array(A, "A", ndim=4), T, W)
     G, M, n, _ = A.shape
     dim = M * n * n
-    if dim > config.defaults["mjls.dense_max_radius"] or dim > config.defaults["mjls.dense_max_solve"]:
+    if (dim > config.defaults["mjls.dense_max_radius"]
+            or dim > config.defaults["mjls.dense_max_solve"]):
         stability = [mean_square_stability(loop, T, check=False) for loop in A]
         return (np.array([s.rho for s in stability]),
-                [solve_coupled_lyapunov(loop, T, W).X if s.stable else None for loop,
-                 s in zip(A, stability)])
+                [solve_coupled_lyapunov(loop, T, W).X if s.stable else None
+                 for loop, s in zip(A, stability)])
     kron = kronecker_stack(A, T)
     rho = np.max(np.abs(np.linalg.eigvals(kron)), axis=1)
     eye = np.broadcast_to(np.eye(n), (M, n, n))

@@ -34,8 +34,8 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     >>> Z = np.zeros((2, 2, 2))
     >>> Xbar, Xunder = bound_moment_step(sys, np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)), Z, Z,
     ...                                  sys.mu_inf, HHt, JJt)
-    >>> np.allclose(Xbar, sys.predecessor_sum(sys.mu_inf[:, None,
-    ...     None] * HHt)), np.abs(Xunder).max()
+    >>> noise = sys.predecessor_sum(sys.mu_inf[:, None, None] * HHt)
+    >>> np.allclose(Xbar, noise), np.abs(Xunder).max()
     (True, np.float64(0.0))
     """
     KC = K @ sys.C
@@ -46,9 +46,8 @@ def bound_moment_step(sys, F, K, L, Xbar, Xunder, mu, HHt, JJt):
     m = mu[:, None, None]
     Xbar_in = m * (HHt + KJJK) + AKC @ Xbar @ transpose(AKC) + G @ Xunder @ transpose(G)
     Xunder_in = m * KJJK + KC @ Xbar @ transpose(KC) + FKC @ Xunder @ transpose(FKC)
-    Xbar_new, Xunder_new = predecessor_sum(sys.T, Xbar_in, check=False), predecessor_sum(sys.T,
-                                                                                         Xunder_in,
-                                                                                         check=False)
+    Xbar_new = predecessor_sum(sys.T, Xbar_in, check=False)
+    Xunder_new = predecessor_sum(sys.T, Xunder_in, check=False)
     return sym(Xbar_new), sym(Xunder_new)
 
 
@@ -111,6 +110,5 @@ def bound_cost(sys, L, Xbar, Xunder):
     >>> bound_cost(sys, np.zeros((1, 2)), I, I) == 2 * float(np.trace(sys.Q.sum(axis=0)))
     True
     """
-    return float(np.einsum("iab,iba->", sys.Q, Xbar + Xunder) + np.einsum("iab,iba->",
-                                                                          transpose(L) @ sys.R @ L,
-                                                                          Xunder))
+    LRL = transpose(L) @ sys.R @ L
+    return float(np.einsum("iab,iba->", sys.Q, Xbar + Xunder) + np.einsum("iab,iba->", LRL, Xunder))

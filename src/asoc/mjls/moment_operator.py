@@ -40,8 +40,8 @@ __all__ = ["mode_stack", "second_moment_map", "costate_map", "ms_operator", "kro
 
 def mode_stack(A_stack, T, name="A_stack"):
     """The validated (A, T) of an open loop: an :class:`~asoc.mjls.MJLS` (its A stack and T; ``T``
-    must then be
-    None) or an (M, n, n) stack of finite real matrices with a row-stochastic (M, M) ``T``.
+    must then be None) or an (M, n, n) stack of finite real matrices with a row-stochastic (M, M)
+    ``T``.
 
     Examples
     --------
@@ -56,8 +56,8 @@ def mode_stack(A_stack, T, name="A_stack"):
     """
     if isinstance(A_stack, MJLS):
         if T is not None:
-            raise TypeError(f"T: expected None when {name} is an MJLS (its own T is used), found "
-                            f"{type(T).__name__}")
+            raise TypeError(f"T: expected None when {name} is an MJLS (its own T is used), "
+                            f"found {type(T).__name__}")
         return A_stack.A, A_stack.T
     if T is None:
         raise TypeError(f"T: expected a transition matrix when {name} is a stack of matrices, "
@@ -68,8 +68,7 @@ def mode_stack(A_stack, T, name="A_stack"):
     T = stochastic_matrix(T, "T")
     if T.shape[0] != A.shape[0]:
         raise ValueError(f"T: expected shape ({A.shape[0]}, {A.shape[0]}) for {A.shape[0]} modes "
-                         f"(from {name}), "
-                         f"found {T.shape}")
+                         f"(from {name}), found {T.shape}")
     return A, T
 
 
@@ -121,13 +120,10 @@ def ms_operator(A_stack, T=None, check=True):
     A_M (x) A_M], the product of the same two factors as the thesis's
     M = diag[A_i (x) A_i] (T^T (x) I_{n^2}) in the other order: BC and CB have the same
     eigenvalues, and this order is the matrix of
-    :func:`~asoc.mjls.moment_operator.second_moment_map` (its transpose
-    that
-    of :func:`~asoc.mjls.moment_operator.costate_map`). vec(A X A^T) = (A (x) A) vec X holds for
-    row- and column-major
-    vec
-    alike, so the convention only fixes the order of the blocks. Size (M n^2)^2: for small
-    systems only.
+    :func:`~asoc.mjls.moment_operator.second_moment_map` (its transpose that of
+    :func:`~asoc.mjls.moment_operator.costate_map`). vec(A X A^T) = (A (x) A) vec X holds for
+    row- and column-major vec alike, so the convention only fixes the order of the blocks.
+    Size (M n^2)^2: for small systems only.
 
     Parameters
     ----------
@@ -184,8 +180,8 @@ def linear_operator(A, T, adjoint=False, shift=0.0, identity=0.0):
     Examples
     --------
     >>> A = np.array([[[0.5]]]); T = np.array([[1.0]])
-    >>> linear_operator(A, T, shift=1.0).matvec(np.ones(1)), linear_operator(A, T,
-    ...     identity=1.0).matvec(np.ones(1))
+    >>> x = np.ones(1)
+    >>> linear_operator(A, T, shift=1.0).matvec(x), linear_operator(A, T, identity=1.0).matvec(x)
     (array([1.25]), array([0.75]))
     """
     M, n, _ = A.shape

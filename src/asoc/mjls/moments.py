@@ -18,9 +18,7 @@ _NO_MOMENT = object()
 
 
 def _moment_arguments(Acl, HHt, T, mu, X=_NO_MOMENT, X_name="X", mu_name="mu"):
-    """Validated closed loop (M, n, n), noise (M, n, n), T (M, M), mu (M,) and optional X (M, n,
-    n).
-    """
+    """Validated closed loop and noise (M, n, n), T (M, M), mu (M,) and optional X (M, n, n)."""
     Acl = real_array(Acl, "Acl", ndim=3)
     M, n, _ = Acl.shape
     Acl = real_array(Acl, "Acl", shape=(M, n, n))
@@ -40,8 +38,8 @@ def _moment_arguments(Acl, HHt, T, mu, X=_NO_MOMENT, X_name="X", mu_name="mu"):
     if X is not _NO_MOMENT:
         X = real_array(X, X_name)
         if X.shape != (M, n, n):
-            raise ValueError(f"{X_name}: expected shape ({M}, {n}, {n}) {why}, found shape "
-                             f"{X.shape}")
+            raise ValueError(f"{X_name}: expected shape ({M}, {n}, {n}) {why}, "
+                             f"found shape {X.shape}")
         semidefinite(X, X_name)
     return Acl, HHt, T, mu, X
 
@@ -176,8 +174,8 @@ def steady_state_second_moment(Acl, HHt, T=None, mu_inf=None):
     --------
     x+ = 0.5 x + w has stationary variance 1 / (1 - 0.25):
 
-    >>> steady_state_second_moment(np.array([[[0.5]]]), np.array([[[1.0]]]), [[1.0]],
-    ...     [1.0]).round(4)
+    >>> A, HHt = np.array([[[0.5]]]), np.array([[[1.0]]])
+    >>> steady_state_second_moment(A, HHt, [[1.0]], [1.0]).round(4)
     array([[[1.3333]]])
 
     A random walk (rho = 1) has none:
@@ -203,29 +201,29 @@ def steady_state_second_moment(Acl, HHt, T=None, mu_inf=None):
                             "system's own are used), found arrays")
         Acl, HHt, T, mu_inf = (*controller_closed_loop(Acl, HHt, "HHt"), Acl.T, Acl.mu_inf)
     Acl, HHt, T, mu_inf, _ = _moment_arguments(Acl, HHt, T, mu_inf, mu_name="mu_inf")
-    return certified_second_moment(Acl, HHt, T, mu_inf, mean_square_stability(Acl, T, check=False),
-                                   check=False)
+    stability = mean_square_stability(Acl, T, check=False)
+    return certified_second_moment(Acl, HHt, T, mu_inf, stability, check=False)
 
 
 def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
     """:func:`steady_state_second_moment` with the certificate ``stability``
-    (:func:`asoc.mjls.mean_square_stability`
-    of (Acl, T)) that the caller already has: one spectral radius per closed loop, not one per use.
+    (:func:`asoc.mjls.mean_square_stability` of (Acl, T)) that the caller already has: one spectral
+    radius per closed loop, not one per use.
 
     Raises
     ------
     TypeError
         If ``stability`` is not a MeanSquareStability; the arrays as
-        :func:`steady_state_second_moment`
-        (``check=False``: float arrays of consistent shapes, not validated).
+        :func:`steady_state_second_moment` (``check=False``: float arrays of consistent shapes, not
+        validated).
     numpy.linalg.LinAlgError
         As :func:`steady_state_second_moment`.
 
     Examples
     --------
     >>> A, T = np.array([[[0.5]]]), np.array([[1.0]])
-    >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), mean_square_stability(A,
-    ...     T)).round(4)
+    >>> stability = mean_square_stability(A, T)
+    >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), stability).round(4)
     array([[[1.3333]]])
     >>> certified_second_moment(A, np.ones((1, 1, 1)), T, np.ones(1), 0.25)
     Traceback (most recent call last):
@@ -240,16 +238,15 @@ def certified_second_moment(Acl, HHt, T, mu_inf, stability, check=True):
     if not stability.stable:
         raise np.linalg.LinAlgError(
             "Acl: no stationary second moment: the closed loop is not certified mean-square "
-            f"stable (rho = {stability.rho:.6g} in [{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], "
-            f"{stability.verdict.value}; "
-            f"Cor. 3.2)")
-    solution = solve_coupled_lyapunov(Acl, T, predecessor_sum(T, mu_inf[:, None, None] * HHt,
-                                                              check=False))
+            f"stable (rho = {stability.rho:.6g} in "
+            f"[{stability.rho_lower:.6g}, {stability.rho_upper:.6g}], "
+            f"{stability.verdict.value}; Cor. 3.2)")
+    noise = predecessor_sum(T, mu_inf[:, None, None] * HHt, check=False)
+    solution = solve_coupled_lyapunov(Acl, T, noise)
     if not solution.accepted:
         raise np.linalg.LinAlgError("the stationary second moment was not found: relative "
-                                    "residual "
-                                    f"{solution.residual:.3g} of the coupled Lyapunov solve "
-                                    f"({solution.method})")
+                                    f"residual {solution.residual:.3g} of the coupled Lyapunov "
+                                    f"solve ({solution.method})")
     return solution.X
 
 

@@ -95,8 +95,8 @@ class _ModeStack:
         return np.arange(theta.size) * self.M + theta
 
     def _pick(self, flat, rows):
-        # np.take gathers whole rows; ``flat[rows]`` takes numpy's general fancy-index path (15x
-        # slower)
+        # np.take gathers whole rows; ``flat[rows]`` takes numpy's general fancy-index path
+        # (15x slower)
         return np.take(flat.reshape(rows.size * self.M, -1), rows, axis=0)
 
     def output(self, x, rows):
@@ -241,8 +241,8 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     controller.check(sys)
     x0 = real_array(x0, "x0")
     if x0.shape not in ((sys.nx,), (sys.M, sys.nx)):
-        raise ValueError(f"x0: expected shape ({sys.nx},) or ({sys.M}, {sys.nx}), found shape "
-                         f"{x0.shape}")
+        raise ValueError(f"x0: expected shape ({sys.nx},) or ({sys.M}, {sys.nx}), "
+                         f"found shape {x0.shape}")
     horizon = integer(horizon, "horizon", minimum=1)
     n_runs = integer(n_runs, "n_runs", minimum=1)
     generator(rng, "rng")
@@ -252,15 +252,13 @@ def simulate(sys, controller, x0, horizon, n_runs, rng, mode0=None, mu0=None, x0
     if x0_cov is not None:
         x0_cov = real_array(x0_cov, "x0_cov")
         if x0_cov.shape not in ((sys.nx, sys.nx), (sys.M, sys.nx, sys.nx)):
-            raise ValueError(f"x0_cov: expected shape ({sys.nx}, {sys.nx}) or ({sys.M}, {sys.nx}, "
-                             f"{sys.nx}), "
-                             f"found shape {x0_cov.shape}")
+            raise ValueError(f"x0_cov: expected shape ({sys.nx}, {sys.nx}) or "
+                             f"({sys.M}, {sys.nx}, {sys.nx}), found shape {x0_cov.shape}")
         x0_cov = semidefinite(x0_cov, "x0_cov")
     trajectories, progress = boolean(trajectories, "trajectories"), boolean(progress, "progress")
     with threadpool_limits(limits=1, user_api="blas"):
         return _simulate(sys, controller, x0, horizon, n_runs, rng, mode0, mu0, x0_cov,
-                         trajectories,
-                         progress)
+                         trajectories, progress)
 
 
 def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0, mu0, x0_cov, trajectories,
@@ -278,8 +276,8 @@ def _simulate(sys, controller, x0, horizon, n_runs, rng, mode0, mu0, x0_cov, tra
     state = controller.start(N)
     cost = np.zeros(N)
     if trajectories:
-        xs, us, ths = np.empty((N, K + 1, sys.nx)), np.empty((N, K, sys.nu)), np.empty((N, K + 1),
-                                                                                       int)
+        xs, us = np.empty((N, K + 1, sys.nx)), np.empty((N, K, sys.nu))
+        ths = np.empty((N, K + 1), int)
     for k in progress_bar(range(K), progress, desc="Monte Carlo", leave=False):
         rows = step.rows(theta)
         y = step.output(x, rows)

@@ -74,16 +74,16 @@ def table_3_2_designs(T, x0, horizon, H=None, rows=TABLE_3_2_ROWS):
     True
     """
     if isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
-        raise TypeError("rows: expected a sequence of rows of TABLE_3_2_ROWS, found "
-                        f"{type(rows).__name__}")
+        raise TypeError("rows: expected a sequence of rows of TABLE_3_2_ROWS, "
+                        f"found {type(rows).__name__}")
     unknown = [row for row in rows if row not in TABLE_3_2_ROWS]
     if unknown:
         raise ValueError(f"rows: expected rows of TABLE_3_2_ROWS, found {unknown}")
     kw = {} if H is None else {"H": H}
     systems = {"state feedback": sec354_system(T, "state", **kw),
                "output feedback": sec354_system(T, "C1=[1 2], C2=[2 1]", **kw)}
-    return {row: _DESIGNERS[row[1]](systems[row[0]], T, x0,
-                                    horizon) for row in TABLE_3_2_ROWS if row in rows}
+    return {row: _DESIGNERS[row[1]](systems[row[0]], T, x0, horizon)
+            for row in TABLE_3_2_ROWS if row in rows}
 
 
 def _observed_mode_38(sys, T, x0, horizon):
@@ -130,8 +130,8 @@ def median_costs(designs, x0, horizon, n_runs, seed, normalise=True, mode0=None,
     ['ci', 'n', 'value']
     """
     if not isinstance(designs, dict) or not all(isinstance(d, Design) for d in designs.values()):
-        raise TypeError("designs: expected a dict of Design (from table_3_2_designs), found "
-                        f"{type(designs).__name__}")
+        raise TypeError("designs: expected a dict of Design (from table_3_2_designs), "
+                        f"found {type(designs).__name__}")
     seed = integer(seed, "seed", minimum=0)
     normalise = boolean(normalise, "normalise")
     level = real_scalar(level, "level", low=0, high=1, low_open=True, high_open=True)

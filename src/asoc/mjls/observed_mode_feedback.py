@@ -50,9 +50,8 @@ class ObservedModeResult(CertifiedDesignResult):
         state is the output of the systems this design is for, C = I).
     converged, status, message
         Why the Riccati iteration stopped: ``"converged"``, ``"max_iterations"``,
-        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"`` (R_i + B_i^T
-        E_i(P) B_i
-        singular).
+        ``"diverged"`` (an entry of P beyond 1e100 in magnitude) or ``"linalg_error"``
+        (R_i + B_i^T E_i(P) B_i singular).
     iterations : int
     seconds : float
 
@@ -161,17 +160,18 @@ def observed_mode_state_feedback(sys, tol=1e-12, max_iter=100000, warn=True):
         L, stability = np.full((sys.M, sys.nu, sys.nx), np.nan), None
     rho, stabilizing = ((np.inf, False) if stability is None else
                         (stability.rho, stability.stabilizing))
-    message = {"converged": f"converged after {it} steps (relative change {delta:.2g} < tol = {tol:.2g})",
-               "max_iterations": f"did not converge in {it} steps (relative change {delta:.2g} >= tol = {tol:.2g})",
-               "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is not mean-square "
-                           f"stabilisable even with observed mode",
+    message = {"converged": f"converged after {it} steps "
+                            f"(relative change {delta:.2g} < tol = {tol:.2g})",
+               "max_iterations": f"did not converge in {it} steps "
+                                 f"(relative change {delta:.2g} >= tol = {tol:.2g})",
+               "diverged": f"diverges (max |P| > {DIVERGED:.0e} after {it} steps): the MJLS is "
+                           "not mean-square stabilisable even with observed mode",
                "linalg_error": f"stopped at step {it}: R_i + B_i^T E_i(P) B_i is singular"}[status]
     if warn and status is not Status.CONVERGED:
         warnings.warn(f"coupled Riccati iteration {message}", RuntimeWarning, stacklevel=2)
     elif warn and not stabilizing:
         warnings.warn(f"CARE gains are not certified to stabilise the MJLS (rho = {rho:.4f})",
-                      RuntimeWarning,
-                      stacklevel=2)
+                      RuntimeWarning, stacklevel=2)
     return ObservedModeResult(L=L, P=P, stability=stability, converged=status is Status.CONVERGED,
                               status=status, message=message, iterations=it,
                               seconds=time.perf_counter() - start)

@@ -37,13 +37,8 @@ import numpy as np
 from ..linalg import transpose
 from ..validation import real_array
 from .controllers import Controller
-from .finite_horizon import (
-    augmented_cost,
-    augmented_initial_moment,
-    check_initial_state,
-    mode_distributions,
-    stages,
-)
+from .finite_horizon import augmented_cost, augmented_initial_moment
+from .finite_horizon_model import check_initial_state, mode_distributions, stages
 from .system import check_system
 
 __all__ = ["ModeObservedResult", "ModeObservedLQG", "mode_observed_lqg"]
@@ -123,19 +118,22 @@ class ModeObservedLQG(Controller):
         self._dims = (sys.M, sys.nx, sys.nu, sys.ny)
 
     def check(self, sys):
+        """Raise a ValueError when ``sys`` has other (M, nx, nu, ny) than the design's system."""
         if (sys.M, sys.nx, sys.nu, sys.ny) != self._dims:
             raise ValueError(f"controller: built for (M, nx, nu, ny) = {self._dims}, found "
                              f"{(sys.M, sys.nx, sys.nu, sys.ny)}")
 
     def start(self, n_runs):
+        """The filter's initial estimate x^_0 for each of ``n_runs`` runs, shape (n_runs, nx)."""
         return np.broadcast_to(self.xhat0, (n_runs, self.xhat0.size)).copy()
 
     def input(self, k, y, theta, xhat):
+        """``(u, xhat)`` at step k: u_k = F_theta(k) x^_k and the Markov jump filter's x^_{k+1}."""
         k = min(k, len(self.F) - 1)
         u = np.einsum("nab,nb->na", self.F[k][theta], xhat)
         innovation = y - np.einsum("nab,nb->na", self.C[theta], xhat)
-        xhat = (np.einsum("nab,nb->na", self.A[theta], xhat) + np.einsum("nab,nb->na",
-                                                                         self.B[theta], u)
+        xhat = (np.einsum("nab,nb->na", self.A[theta], xhat)
+                + np.einsum("nab,nb->na", self.B[theta], u)
                 + np.einsum("nab,nb->na", self.Mf[k][theta], innovation))
         return u, xhat
 
@@ -151,7 +149,7 @@ def _control_riccati(st):
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
-    >>> from asoc.mjls.finite_horizon import stages
+    >>> from asoc.mjls.finite_horizon_model import stages
     >>> F, X = _control_riccati(stages(sys, 3))
     >>> F.shape, np.allclose(X[-1], sys.Q)
     ((3, 2, 1, 2), True)
@@ -178,11 +176,10 @@ def _markov_jump_filter(st, Y0, mu):
     --------
     >>> from asoc.mjls.examples import sec373_system
     >>> sys = sec373_system(1)
-    >>> from asoc.mjls.finite_horizon import mode_distributions, stages
+    >>> from asoc.mjls.finite_horizon_model import mode_distributions, stages
     >>> st = stages(sys, 3)
     >>> Mf, Y = _markov_jump_filter(st, 0.01 * np.broadcast_to(np.eye(2), (2, 2, 2)),
-    ...     mode_distributions(st,
-    ...     sys.mu_inf))
+    ...                             mode_distributions(st, sys.mu_inf))
     >>> Mf.shape, Y.shape
     ((3, 2, 2, 1), (4, 2, 2, 2))
     """
@@ -195,8 +192,8 @@ def _markov_jump_filter(st, Y0, mu):
         CY = s.C @ Y[k]
         Sigma = CY @ transpose(s.C) + mu[k][:, None, None] * st.JJt[k]
         Mf[k] = s.A @ transpose(CY) @ np.linalg.pinv(Sigma, hermitian=True)
-        inner = s.A @ Y[k] @ transpose(s.A) - Mf[k] @ CY @ transpose(s.A) + mu[k][:, None,
-                                                                                  None] * st.HHt[k]
+        inner = (s.A @ Y[k] @ transpose(s.A) - Mf[k] @ CY @ transpose(s.A)
+                 + mu[k][:, None, None] * st.HHt[k])
         Yn = s.predecessor_sum(inner)
         Y[k + 1] = 0.5 * (Yn + transpose(Yn))
     return Mf, Y

@@ -1,5 +1,4 @@
-"""The optimality conditions (3.49)-(3.51) / (3.70)-(3.71) of Algorithms 3.2 and 3.3, and their
-solvers.
+"""The optimality conditions (3.49)-(3.51) / (3.70)-(3.71) of Algs. 3.2 and 3.3, and their solvers.
 
 The gains z = [vec F; vec K; vec L] (column-stacking vec, :func:`asoc.linalg.pack`) of the
 bounded cost's stationary point solve H z + rho = 0 with H and rho built from (3.50).
@@ -36,8 +35,7 @@ def _kron_sum(X, Y):
 
 
 def _gain_shapes(sys):
-    """Shapes of F, K, L in the unknown z = [vec F; vec K; vec L] of (3.49)
-    (:func:`asoc.linalg.pack`).
+    """Shapes of F, K, L in the unknown z = [vec F; vec K; vec L] of (3.49) (as asoc.linalg.pack).
 
     Examples
     --------
@@ -93,14 +91,14 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     XuCt = Xunder @ transpose(C)
     nF, nK = sys.nx * sys.nx, sys.nx * sys.ny
     blocks = ((slice(0, nF), slice(0, nF), _kron_sum(Xunder, EPunder)),                  # Phi_F
-              (slice(nF, nF + nK), slice(nF, nF + nK), _kron_sum(m * JJt + C @ S @ transpose(C),
-                                                                 EPunder)),
-              (slice(nF + nK, None), slice(nF + nK, None), _kron_sum(Xunder,
-                                                                     R + transpose(B) @ EP @ B)),
+              (slice(nF, nF + nK), slice(nF, nF + nK),
+               _kron_sum(m * JJt + C @ S @ transpose(C), EPunder)),
+              (slice(nF + nK, None), slice(nF + nK, None),
+               _kron_sum(Xunder, R + transpose(B) @ EP @ B)),
               (slice(0, nF), slice(nF, nF + nK), _kron_sum(XuCt, EPunder)),           # Gamma_FK
               (slice(0, nF), slice(nF + nK, None), -_kron_sum(Xunder, EPuB)),         # Gamma_FL
-              # Gamma_KL
-              (slice(nF, nF + nK), slice(nF + nK, None), -_kron_sum(transpose(XuCt), EPuB)))
+              (slice(nF, nF + nK), slice(nF + nK, None),
+               -_kron_sum(transpose(XuCt), EPuB)))                                    # Gamma_KL
     n_z = nF + nK + sys.nu * sys.nx
     H = np.empty((n_z, n_z))
     for rows, cols, block in blocks:
@@ -145,9 +143,8 @@ class OptimalityOperator:
 
     def __init__(self, sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
         self.B, self.C, self.Xunder, self.EPunder = sys.B, sys.C, Xunder, EPunder
-        # (M, ny, ny)
+        # output weight (M, ny, ny) and input weight (M, nu, nu)
         self.output_weight = sys.C @ Xbar @ transpose(sys.C) + mu[:, None, None] * JJt
-        # (M, nu, nu)
         self.input_weight = sys.R + transpose(sys.B) @ EPbar @ sys.B
         self.shapes = _gain_shapes(sys)
         self.size = sum(a * b for a, b in self.shapes)
@@ -217,8 +214,8 @@ class KroneckerPreconditioner:
     def __init__(self, sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
         B, C = sys.B, sys.C
         pairs = (_nearest_kronecker(Xunder, EPunder),
-                 _nearest_kronecker(C @ (Xbar + Xunder) @ transpose(C) + mu[:, None, None] * JJt,
-                                    EPunder),
+                 _nearest_kronecker(C @ (Xbar + Xunder) @ transpose(C)
+                                    + mu[:, None, None] * JJt, EPunder),
                  _nearest_kronecker(Xunder, sys.R + transpose(B) @ (EPbar + EPunder) @ B))
         self.factors = [(*np.linalg.eigh(X0), *np.linalg.eigh(Y0)) for X0, Y0 in pairs]
         self.shapes = _gain_shapes(sys)
@@ -261,9 +258,7 @@ class GainSolve:
 
 
 def _relative_residual(Hz, rho):
-    """||H z + rho|| / ||rho||, scaled against overflow (0 for rho = 0, nan for non-finite
-    values).
-    """
+    """||H z + rho|| / ||rho||, scaled against overflow (0 for rho = 0, nan if not finite)."""
     scale = float(np.max(np.abs(rho), initial=0.0))
     if scale == 0.0:
         return 0.0
@@ -276,16 +271,15 @@ def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=
 
     The counterpart of the minimum-norm np.linalg.lstsq(H, -rho, rcond) for large systems.
     H is singular at the fixed point of Alg. 3.2 (see ``config.defaults["mjls.rank_rtol"]``): lstsq
-    drops the
-    singular values below rcond ||H||, here ``mjls.tikhonov_steps`` steps of
+    drops the singular values below rcond ||H||, here ``mjls.tikhonov_steps`` steps of
     z <- z + (H + delta I)^-1 (-rho - H z) from z = 0, delta = rcond ||H|| (||H|| estimated by
     ``preconditioner.scale``; rcond None: machine epsilon times the number of unknowns, as
-    LAPACK's), damp them. Each shifted system is positive definite and solved by conjugate
-    gradients preconditioned with :class:`KroneckerPreconditioner`. A direction of H with
-    eigenvalue lambda keeps the fraction 1 - (delta / (lambda + delta))^steps of its
-    least-squares component (lstsq: 1 above delta, 0 below), so the two agree to about
-    (rcond cond(H))^steps when H is well conditioned; when it is not, both are regularised
-    solutions of an ill-posed system and may differ.
+    LAPACK's), damp them. Each shifted system is positive definite and solved by conjugate gradients
+    preconditioned with :class:`KroneckerPreconditioner`. A direction of H with eigenvalue lambda
+    keeps the fraction 1 - (delta / (lambda + delta))^steps of its least-squares component (lstsq: 1
+    above delta, 0 below), so the two agree to about (rcond cond(H))^steps when H is well
+    conditioned; when it is not, both are regularised solutions of an ill-posed system and may
+    differ.
 
     Parameters
     ----------
@@ -322,7 +316,7 @@ def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=
     >>> args = (sys, I, 2 * I, I, 3 * I, sys.mu_inf, np.full((2, 1, 1), 0.01))
     >>> H, rho = optimality_system(*args)
     >>> z, info = solve_optimality_cg(OptimalityOperator(*args), rho,
-    ...     KroneckerPreconditioner(*args))
+    ...                               KroneckerPreconditioner(*args))
     >>> bool(np.allclose(z, np.linalg.lstsq(H, -rho)[0], rtol=1e-12)), info.residual < 1e-12
     (True, True)
     """
@@ -330,7 +324,8 @@ def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=
     if not np.any(rho):
         return np.zeros(size), GainSolve("cg", 0.0)
     delta = (np.finfo(float).eps * size if rcond is None else rcond) * preconditioner.scale
-    max_iter = max(1, int(config.defaults["mjls.cg_max_iter_factor"] * size)) if max_iter is None else max_iter
+    if max_iter is None:
+        max_iter = max(1, int(config.defaults["mjls.cg_max_iter_factor"] * size))
     tol = config.defaults["mjls.cg_tolerance"] if tol is None else tol
     norm_rho = float(np.linalg.norm(rho))
     shifted = scipy.sparse.linalg.LinearOperator((size, size),
@@ -348,9 +343,8 @@ def solve_optimality_cg(op, rho, preconditioner, rcond=None, tol=None, max_iter=
             reached = float(np.linalg.norm(shifted.matvec(step) - target)) / norm_rho
             if not reached <= 10 * tol:
                 raise np.linalg.LinAlgError("conjugate gradients on (3.51) reached the relative "
-                                            "residual "
-                                            f"{reached:.2g} > {tol:.2g} in {count} iterations "
-                                            f"({size} unknowns)")
+                                            f"residual {reached:.2g} > {tol:.2g} in {count} "
+                                            f"iterations ({size} unknowns)")
             z = z + step
         Hz = op.matvec(z)
     return z, GainSolve("cg", _relative_residual(Hz, rho), iterations, delta)
@@ -371,14 +365,12 @@ def _conjugate_gradients(A, b, inverse, atol, max_iter):
 def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcond=None):
     """F, K, L solving (3.51)/(3.71).
 
-    ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73)
-    (it also covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where
-    F and K do not enter the cost), by np.linalg.lstsq below
-    ``config.defaults["mjls.matrix_free_min_unknowns"]`` unknowns, else by
-    :func:`solve_optimality_cg`;
-    ``"sdp"``: the SDP after Alg. 3.2 (min lambda with [[lambda I, G], [G^T, I]] >= 0,
-    G = [F K L^T]) solved with cvxpy/Clarabel. ``rcond``: relative singular-value threshold of
-    ``"lstsq"`` (None: LAPACK's eps * size).
+    ``"lstsq"``: the minimum-norm least-squares solution, i.e. the quadratic program (3.73) (it also
+    covers singular systems, e.g. Punder = 0 at the end of a finite horizon, where F and K do not
+    enter the cost), by np.linalg.lstsq below ``config.defaults["mjls.matrix_free_min_unknowns"]``
+    unknowns, else by :func:`solve_optimality_cg`; ``"sdp"``: the SDP after Alg. 3.2 (min lambda
+    with [[lambda I, G], [G^T, I]] >= 0, G = [F K L^T]) solved with cvxpy/Clarabel. ``rcond``:
+    relative singular-value threshold of ``"lstsq"`` (None: LAPACK's eps * size).
 
     Examples
     --------
@@ -393,8 +385,7 @@ def gains_from_bounds(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq"
 
 
 def solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcond=None):
-    """F, K, L solving (3.51)/(3.71) and a :class:`GainSolve` saying how; see
-    :func:`gains_from_bounds`.
+    """F, K, L solving (3.51)/(3.71) and a :class:`GainSolve` saying how (see gains_from_bounds).
 
     Examples
     --------
@@ -408,8 +399,8 @@ def solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcon
     choice(method, "method", METHODS)
     args = (sys, Xbar, Xunder, EPbar, EPunder, mu, JJt)
     shapes = _gain_shapes(sys)
-    if method == "lstsq" and sum(a * b for a,
-                                 b in shapes) >= config.defaults["mjls.matrix_free_min_unknowns"]:
+    n_unknowns = sum(a * b for a, b in shapes)
+    if method == "lstsq" and n_unknowns >= config.defaults["mjls.matrix_free_min_unknowns"]:
         z, info = solve_optimality_cg(OptimalityOperator(*args), optimality_vector(*args[:5]),
                                       KroneckerPreconditioner(*args), rcond)
         return (*unpack(z, shapes), info)
@@ -425,9 +416,7 @@ def solve_gains(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt, method="lstsq", rcon
 
 
 def _gains_sdp(H, rho, n, ny, nu):
-    """The SDP recommended after Alg. 3.2: min lambda s.t. [[lambda I, G], [G^T, I]] >= 0,
-    (3.49).
-    """
+    """The SDP recommended after Alg. 3.2: min lambda, [[lambda I, G], [G^T, I]] >= 0, (3.49)."""
     import cvxpy as cp
 
     F, K, L = cp.Variable((n, n)), cp.Variable((n, ny)), cp.Variable((nu, n))

@@ -22,8 +22,7 @@ def _matrix_with_radius(rng, n, radius):
     """A standard normal n x n matrix rescaled to spectral radius ``radius``."""
     G = rng.standard_normal((n, n))
     rho = np.max(np.abs(np.linalg.eigvals(G)))
-    # a nilpotent draw (probability 0) has no radius to scale
-    while rho < 1e-8:
+    while rho < 1e-8:                      # a nilpotent draw (probability 0) has no radius to scale
         G = rng.standard_normal((n, n))
         rho = np.max(np.abs(np.linalg.eigvals(G)))
     return G * (radius / rho)
@@ -113,7 +112,8 @@ def random_mjls(rng, n_states, n_inputs, n_outputs, n_modes, *, family="stable",
     >>> random_mjls(np.random.default_rng(1), 3, 1, 1, 2, family="thesis_like")
     Traceback (most recent call last):
     ...
-    ValueError: family: expected n_states=2, n_inputs=1, n_outputs=1 for 'thesis_like', found 3, 1, 1
+    ValueError: family: expected n_states=2, n_inputs=1, n_outputs=1 for 'thesis_like',
+    found 3, 1, 1
     """
     rng = generator(rng, "rng")
     n_states = integer(n_states, "n_states", minimum=1)

@@ -7,10 +7,9 @@ one mode (``"single_mode"``); the dense eigenvalues of the Kronecker matrix for 
 eigenvalues up to M n^2 = ``mjls.dense_fallback_radius``, ``"arnoldi+dense"``, else to the
 shifted cone power method, ``"power"``); for many scalar modes (n = 1), where L is a sparse
 nonnegative M x M matrix, Noda's inverse iteration (``"noda"``).
-An estimate is never reported alone:
-:mod:`asoc.mjls.certificate` brackets rho around it and :mod:`asoc.mjls.stability` gives the
-verdict.
-Calls run one way: stability -> certificate -> spectral_estimate.
+An estimate is never reported alone: :mod:`asoc.mjls.certificate` brackets rho around it and
+:mod:`asoc.mjls.stability` gives the verdict. Calls run one way: stability -> certificate ->
+spectral_estimate.
 """
 
 from dataclasses import dataclass
@@ -72,8 +71,8 @@ def check_method(method):
     ValueError: method: expected one of 'auto', 'dense', 'arnoldi', 'power', found 'qr'
     """
     if method not in METHODS:
-        raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, found "
-                         f"{method!r}")
+        raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, "
+                         f"found {method!r}")
 
 
 def _resolve_method(method, M, n):
@@ -85,9 +84,8 @@ def _resolve_method(method, M, n):
 
     Examples
     --------
-    >>> _resolve_method("auto", 1, 3), _resolve_method("auto", 2, 3), _resolve_method("auto", 100,
-    ...     100)
-    ('single_mode', 'dense', 'arnoldi')
+    >>> [_resolve_method("auto", M, n) for M, n in ((1, 3), (2, 3), (100, 100))]
+    ['single_mode', 'dense', 'arnoldi']
     >>> _resolve_method("auto", 1000, 1)
     'noda'
     """
@@ -101,9 +99,9 @@ def _resolve_method(method, M, n):
 
 
 def _fallback_method(dim):
-    """Where no Krylov space converges: dense eigenvalues up to M n^2 =
-    ``mjls.dense_fallback_radius``
-    ("arnoldi+dense"), else the shifted cone power method ("power").
+    """Where no Krylov space converges: dense eigenvalues up to
+    M n^2 = ``mjls.dense_fallback_radius`` ("arnoldi+dense"), else the shifted cone power method
+    ("power").
 
     Examples
     --------
@@ -267,8 +265,7 @@ def _log2_sum(x):
 
 
 def _psd_stack(v, M, n):
-    """The positive semidefinite stack nearest the real symmetric part of an eigenvector (phase
-    removed).
+    """The positive semidefinite stack nearest the real symmetric part of an eigenvector, unphased.
 
     Examples
     --------
@@ -333,8 +330,8 @@ def estimate(A, T, method, adjoint=False):
     K = K.T if adjoint else K
     if method == "dense":
         lam, left, right = scipy.linalg.eig(K, left=True, right=True)
-    # the fallback, up to M n^2 = 1024: no left vectors
     else:
+        # the fallback, up to M n^2 = 1024: no left vectors
         lam, right = scipy.linalg.eig(K)
     rho = float(np.max(np.abs(lam)))
     top = np.flatnonzero(np.abs(lam) >= rho * (1 - config.defaults["mjls.perron_tie_rtol"]))
@@ -386,11 +383,10 @@ def _noda(a, T, adjoint):
 
 
 def _first_order_lower(K, lam, left, right):
-    """max_k |lambda_k| - s_k ||E||: a computed eigenvalue is exact for K + E with ||E|| <= 10 N eps
-    ||K||_F
-    (backward stable QR algorithm), and moves by at most s_k ||E|| to first order, s_k = 1 / |w_k^H
-    v_k|
-    its condition number (Wilkinson). Useless (0) for defective eigenvalues, where s_k is huge.
+    """max_k |lambda_k| - s_k ||E||: a computed eigenvalue is exact for K + E with
+    ||E|| <= 10 N eps ||K||_F (backward stable QR algorithm), and moves by at most s_k ||E|| to
+    first order, s_k = 1 / |w_k^H v_k| its condition number (Wilkinson). Useless (0) for defective
+    eigenvalues, where s_k is huge.
     """
     with np.errstate(divide="ignore"):
         s = 1.0 / np.abs(np.einsum("ik,ik->k", np.conj(left), right))
@@ -401,11 +397,9 @@ def _first_order_lower(K, lam, left, right):
 
 def _arnoldi(A, T, adjoint):
     """Estimates by ARPACK on L (or L*), one per Krylov-space size of ``mjls.arnoldi_subspaces``
-    (after 20
-    from M n^2 = ``mjls.arnoldi_lean_from`` on) that converges: the largest-modulus eigenvalue; when
-    it is not real
-    positive (periodic chains), again on
-    L + |lambda| I, where the Perron eigenvalue is strictly dominant.
+    (after 20 from M n^2 = ``mjls.arnoldi_lean_from`` on) that converges: the largest-modulus
+    eigenvalue; when it is not real positive (periodic chains), again on L + |lambda| I, where the
+    Perron eigenvalue is strictly dominant.
     """
     M, n, _ = A.shape
     dim = M * n * n
@@ -433,9 +427,7 @@ def _arnoldi(A, T, adjoint):
 
 
 def _adjoint_power(A, T, rho):
-    """The left Perron stack by the shifted power method P <- L*(P) + rho P (where ARPACK
-    failed).
-    """
+    """The left Perron stack by the shifted power method P <- L*(P) + rho P (if ARPACK failed)."""
     M, n, _ = A.shape
     P = np.broadcast_to(np.eye(n), (M, n, n)).copy()
     with single_threaded():

@@ -94,8 +94,8 @@ class MeanSquareStability:
     @property
     def stabilizing(self):
         """True (certified stable), False (certified unstable) or None (undecided)."""
-        return {Verdict.STABLE: True, Verdict.UNSTABLE: False,
-                Verdict.UNDECIDED: None}[self.verdict]
+        verdicts = {Verdict.STABLE: True, Verdict.UNSTABLE: False, Verdict.UNDECIDED: None}
+        return verdicts[self.verdict]
 
     @property
     def bracket(self) -> tuple[float, float]:
@@ -159,15 +159,13 @@ def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
     if not width <= config.defaults["mjls.bracket_warn_rtol"] * result.rho_upper:
         warnings.warn(f"the spectral radius {result.rho:.6g} is only known to lie in "
                       f"[{result.rho_lower:.6g}, {result.rho_upper:.6g}] (e.g. a defective or "
-                      "nearly "
-                      f"reducible spectrum)", RuntimeWarning, stacklevel=2)
+                      "nearly reducible spectrum)", RuntimeWarning, stacklevel=2)
     return result.rho
 
 
 @config.accepts_settings("mjls.bracket_rtol", "mjls.dense_max_radius")
 def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
-    """Cor. 3.2 as a certified verdict: rho with a bracket [rho_lower, rho_upper] and stable,
-    unstable or undecided.
+    """Cor. 3.2 as a certified verdict: rho, its bracket, and stable, unstable or undecided.
 
     Parameters
     ----------
@@ -227,31 +225,31 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
     Computations, 4th ed., Sec. 8.7.2; the spectral norm itself for the few stacks below); the
     bracket is widened by it. Where the estimate comes from dense eigenvalues, the lower end is also
     ``|lambda| - 10 s ||E||`` (the eigenvalue's condition number ``s = 1 / |w^H v|`` and the
-    backward
-    error ||E|| <= 10 N eps ||K||_F of the QR algorithm, first order), which is tight where the
-    Perron stack is singular. Where the bracket is still wider than ``mjls.bracket_warn_rtol``, the
-    left Perron stack P gives a residual lower bound and an upper bound at approximate resolvent
+    backward error ||E|| <= 10 N eps ||K||_F of the QR algorithm, first order), which is tight where
+    the Perron stack is singular. Where the bracket is still wider than ``mjls.bracket_warn_rtol``,
+    the left Perron stack P gives a residual lower bound and an upper bound at approximate resolvent
     solutions r Z - L(Z) = I with r just above rho, built around the Perron stack
     (:func:`asoc.mjls.certificate.deflated_resolvent_bounds`): Z > 0 even where the Perron stack is
     singular, as in the augmented closed loop of Alg. 3.2 at n = 32, M = 8, whose bracket from the
     Perron stack alone is wider than ``mjls.bracket_warn_rtol`` and with Z narrower
-    (tests/asoc/mjls/test_certified.py). This is a first-order bound with a safety factor of 10,
-    not interval arithmetic. The bracket is tight where the Perron stack is positive definite or its
+    (tests/asoc/mjls/test_certified.py). This is a first-order bound with a safety factor of 10, not
+    interval arithmetic. The bracket is tight where the Perron stack is positive definite or its
     resolvent candidates are; where neither holds (e.g. defective spectra) the bracket can stay
     wide. Where it then straddles 1 with an estimate below 1, the Lyapunov certificate decides a
-    margin: X_r = (r I - L)^-1 (I) for r between the estimate and 1 (r = 1: X = L(X) + I,
-    Thm. 3.1), with r X_r - L(X_r) >= delta I proven from a residual in extended precision
-    (:func:`asoc.mjls.certificate.lyapunov_upper_bound`); otherwise the verdict is undecided
-    rather than wrong. A subnormal partial result adds an absolute rounding of n 2^-1022 to the
-    rounding term, and the modes are balanced exactly before any of this (module docstring). T is
-    used as given (rows summing to 1 within the validation's tolerance, not renormalised): for one
-    mode, rho = p_11 rho(A)^2.
+    margin: X_r = (r I - L)^-1 (I) for r between the estimate and 1 (r = 1: X = L(X) + I, Thm. 3.1),
+    with r X_r - L(X_r) >= delta I proven from a residual in extended precision
+    (:func:`asoc.mjls.certificate.lyapunov_upper_bound`); otherwise the verdict is undecided rather
+    than wrong. A subnormal partial result adds an absolute rounding of n 2^-1022 to the rounding
+    term, and the modes are balanced exactly before any of this (module docstring). T is used as
+    given (rows summing to 1 within the validation's tolerance, not renormalised): for one mode,
+    rho = p_11 rho(A)^2.
 
     Examples
     --------
     >>> from asoc.mjls.examples import sec32_system
     >>> r = mean_square_stability(sec32_system())
-    >>> r.verdict, r.stabilizing, bool(r.rho_lower <= r.rho <= r.rho_upper), bool(r.rho_upper - r.rho_lower < 1e-9)
+    >>> inside, narrow = r.rho_lower <= r.rho <= r.rho_upper, r.rho_upper - r.rho_lower < 1e-9
+    >>> r.verdict, r.stabilizing, bool(inside), bool(narrow)
     (<Verdict.UNSTABLE: 'unstable'>, False, True, True)
 
     A mode with eigenvalue 1 has rho = 1: undecided, never stable.

@@ -182,14 +182,12 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
         ``config.defaults["mjls.auto_switch_iterations"]`` further iterations (checked after
         10 iterations, then at doubling intervals). An easy system converges before the
         switch, with the thesis's iterates; a hard one switches early. ``"step"``: the thesis's
-        iteration (one step of
-        each recursion (3.35) per gain
-        update; Fig. 3.4 shows its iterates). ``"exact"`` (not in the thesis): run the
-        thesis's iteration until its gain stabilises the MJLS, then alternate (3.34) with
-        the exact solution of the two moment equations (3.32)-(3.33) for the current gain
-        (linear systems of size M nx^2). Same fixed point, far fewer iterations when the
-        recursions contract slowly. Where no iterate stabilises (or an exact iterate does
-        not), the result of the thesis's iteration is returned.
+        iteration (one step of each recursion (3.35) per gain update; Fig. 3.4 shows its iterates).
+        ``"exact"`` (not in the thesis): run the thesis's iteration until its gain stabilises the
+        MJLS, then alternate (3.34) with the exact solution of the two moment equations
+        (3.32)-(3.33) for the current gain (linear systems of size M nx^2). Same fixed point, far
+        fewer iterations when the recursions contract slowly. Where no iterate stabilises (or an
+        exact iterate does not), the result of the thesis's iteration is returned.
 
     Returns
     -------

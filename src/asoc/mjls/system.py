@@ -34,11 +34,11 @@ def _stack(value, name, M=None, shape2=None, source=""):
     says where the expected sizes come from (e.g. "nx from A").
     """
     if isinstance(value, (list, tuple)) and value and all(np.ndim(v) >= 2 for v in value):
-        mats = [np.atleast_2d(real_array(v, f"{name}[{i}]", finite=False)) for i,
-                v in enumerate(value)]
+        mats = [np.atleast_2d(real_array(v, f"{name}[{i}]", finite=False))
+                for i, v in enumerate(value)]
         if len({m.shape for m in mats}) > 1:
-            raise ValueError(f"{name}: expected one shape for all modes, found "
-                             f"{[m.shape for m in mats]}")
+            raise ValueError(f"{name}: expected one shape for all modes, "
+                             f"found {[m.shape for m in mats]}")
         arr = np.stack(mats)
     else:
         arr = real_array(value, name, finite=False)
@@ -60,9 +60,8 @@ def _stack(value, name, M=None, shape2=None, source=""):
                 raise ValueError(f"{name}: expected shape ({M}, {exp[0]}, {exp[1]})"
                                  f"{f' ({source})' if source else ''}, found {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: expected finite entries, found "
-                         f"{int(np.size(arr) - np.isfinite(arr).sum())} "
-                         f"non-finite")
+        n_bad = int(np.size(arr) - np.isfinite(arr).sum())
+        raise ValueError(f"{name}: expected finite entries, found {n_bad} non-finite")
     return arr
 
 
@@ -139,9 +138,8 @@ def _warn_if_not_unique(T, stacklevel):
     n_closed = _closed_classes(T)
     if n_closed > 1:
         warnings.warn(f"T: the chain has {n_closed} closed classes, so its stationary distribution "
-                      "is "
-                      f"not unique; pass the intended one as MJLS(..., mu_inf=...)", RuntimeWarning,
-                      stacklevel=stacklevel)
+                      "is not unique; pass the intended one as MJLS(..., mu_inf=...)",
+                      RuntimeWarning, stacklevel=stacklevel)
 
 
 def _least_squares_stationary(T):
@@ -241,9 +239,7 @@ def _transition_and_stack(T, stack, name):
 
 
 def _sampling_time(dt, name="dt"):
-    """None (unspecified), True (discrete, unspecified period, as python-control) or a period >
-    0.
-    """
+    """None (unspecified), True (discrete, period unspecified, as python-control) or dt > 0."""
     if dt is None or dt is True:
         return dt
     return real_scalar(dt, name, low=0, low_open=True)
@@ -326,9 +322,8 @@ class MJLS:
         C = _stack(C, "C", M, (None, nx), from_A)
         H = _stack(H, "H", M, (nx, None), from_A)
         Q = semidefinite(_stack(Q, "Q", M, (nx, nx), from_A), "Q")
-        R = semidefinite(_stack(R, "R", M, (B.shape[2], B.shape[2]), f"nu = {B.shape[2]} from B"),
-                         "R",
-                         definite=True)
+        nu = B.shape[2]
+        R = semidefinite(_stack(R, "R", M, (nu, nu), f"nu = {nu} from B"), "R", definite=True)
         if J is not None:
             J = _stack(J, "J", M, (C.shape[1], None), f"ny = {C.shape[1]} from C")
         if mu_inf is None:
@@ -338,12 +333,12 @@ class MJLS:
             mu_inf = probability_vector(mu_inf, "mu_inf", M)
             gap = np.abs(mu_inf @ T - mu_inf).max()
             if gap > config.defaults["mjls.stationary_atol"]:
-                raise ValueError("mu_inf: expected a stationary distribution of T (mu_inf T = "
-                                 "mu_inf), "
+                raise ValueError("mu_inf: expected a stationary distribution of T "
+                                 "(mu_inf T = mu_inf), "
                                  f"found max |mu_inf T - mu_inf| = {gap:.3g}")
         dt = _sampling_time(dt)
-        for name, value in dict(A=A, B=B, C=C, H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf,
-                                dt=dt).items():
+        fields = dict(A=A, B=B, C=C, H=H, Q=Q, R=R, T=T, J=J, mu_inf=mu_inf, dt=dt)
+        for name, value in fields.items():
             object.__setattr__(self, name, value)
 
     @property
@@ -392,12 +387,11 @@ class MJLS:
         array([0.5, 0.5])
         """
         fields = dict(A=self.A, B=self.B, C=self.C, H=self.H, Q=self.Q, R=self.R, T=self.T,
-                      J=self.J,
-                      mu_inf=None if "T" in changes else self.mu_inf, dt=self.dt)
+                      J=self.J, mu_inf=None if "T" in changes else self.mu_inf, dt=self.dt)
         unknown = set(changes) - set(fields)
         if unknown:
-            raise TypeError(f"replace: expected keywords among {sorted(fields)}, found "
-                            f"{sorted(unknown)}")
+            raise TypeError(f"replace: expected keywords among {sorted(fields)}, "
+                            f"found {sorted(unknown)}")
         fields.update(changes)
         return MJLS(**fields)
 
@@ -464,35 +458,35 @@ class MJLS:
             raise TypeError(f"systems: expected a list of {T.shape[0]} control.StateSpace, "
                             f"found {type(systems).__name__}")
         if len(systems) != T.shape[0]:
-            raise ValueError(f"systems: expected {T.shape[0]} systems (one per mode of T), found "
-                             f"{len(systems)}")
+            raise ValueError(f"systems: expected {T.shape[0]} systems (one per mode of T), "
+                             f"found {len(systems)}")
         for i, s in enumerate(systems):
             if not isinstance(s, control.StateSpace):
-                raise TypeError(f"systems[{i}]: expected a control.StateSpace, found "
-                                f"{type(s).__name__}")
+                raise TypeError(f"systems[{i}]: expected a control.StateSpace, "
+                                f"found {type(s).__name__}")
             if s.dt is None or (s.dt is not True and s.dt == 0):
                 raise ValueError(f"systems[{i}]: expected a discrete-time system (dt > 0 or True), "
-                                 f"found continuous-time dt = {s.dt}; discretise it, e.g. "
-                                 "control.c2d")
+                                 f"found continuous-time dt = {s.dt}; "
+                                 "discretise it, e.g. control.c2d")
         periods = {s.dt for s in systems if s.dt is not True}
         if len(periods) > 1:
             raise ValueError(f"systems: expected one sampling time, found {sorted(periods)}")
         found = periods.pop() if periods else True
         if dt is not None:
             dt = _sampling_time(dt)
-            if found is not True and dt is not True and not np.isclose(found, dt,
-                                                                       rtol=config.defaults["mjls.sampling_time_rtol"],
-                                                                      atol=0):
+            rtol = config.defaults["mjls.sampling_time_rtol"]
+            if found is not True and dt is not True and not np.isclose(found, dt, rtol=rtol,
+                                                                       atol=0):
                 raise ValueError(f"dt: expected the systems' sampling time {found}, found {dt}")
             found = dt if found is True else found
         sizes = [(s.nstates, s.ninputs, s.noutputs) for s in systems]
         if len(set(sizes)) > 1:
-            raise ValueError("systems: expected equal sizes (nstates, ninputs, noutputs), found "
-                             f"{sizes}")
+            raise ValueError("systems: expected equal sizes (nstates, ninputs, noutputs), "
+                             f"found {sizes}")
         for i, s in enumerate(systems):
             if np.any(np.asarray(s.D) != 0):
-                raise ValueError(f"systems[{i}]: expected D = 0 (the MJLS (3.7) has no "
-                                 "feedthrough), "
+                raise ValueError(f"systems[{i}]: expected D = 0 "
+                                 "(the MJLS (3.7) has no feedthrough), "
                                  f"found max |D| = {np.abs(s.D).max():.3g}")
         nx, nu, _ = sizes[0]
         return cls(A=[np.asarray(s.A, float) for s in systems],
