@@ -54,6 +54,7 @@ COVERED_BY = {
     "mjls/exact_cost_design.py": "asoc/mjls/test_mjls_exact.py",
     "mjls/examples.py": "asoc/mjls/test_mjls.py",
     "mjls/finite_horizon.py": "asoc/mjls/test_mjls_dynamic.py",
+    "mjls/finite_horizon_model.py": "asoc/mjls/test_mjls_exact.py",
     "mjls/gradients.py": "asoc/mjls/test_mjls_exact.py",
     "mjls/lmi.py": "asoc/mjls/test_mjls.py",
     "mjls/lyapunov.py": "asoc/mjls/test_operators.py",

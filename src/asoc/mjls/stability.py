@@ -23,11 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import config
+from ..threads import single_threaded
 from .certificate import Bracket, certify, narrow
 from .closed_loops import controller_closed_loop, is_controller
 from .controllers import Controller
 from .moment_operator import mode_stack
-from ..threads import single_threaded
 from .spectral_estimate import balance, check_method, estimate, left_perron_stack
 from .system import MJLS
 
@@ -345,7 +345,8 @@ def _checked_estimate(A, T, method):
     Collatz-Wielandt bounds at its X hold it in a narrow bracket (``mjls.bracket_warn_rtol``),
     else the dense eigenvectors up to M n^2 = ``mjls.dense_fallback_radius`` (near a multiple
     Perron eigenvalue, e.g. at a minimum of rho over gains, X is ill-conditioned and its bounds
-    wide), else the certificate's (which tries more Krylov sizes and refines X)."""
+    wide), else the certificate's (which tries more Krylov sizes and refines X).
+    """
     found = estimate(A, T, method)
     bracket = Bracket(A, T)
     bracket.consider(found.X, config.defaults["mjls.bracket_rtol"])
