@@ -151,7 +151,8 @@ def _write_if_changed(path, text, remark=""):
     print(f"wrote {_rel(path)}{remark}")
 
 
-def _parser():
+def build_parser():
+    """The command line's argument parser, with one subcommand per action (``--help`` text)."""
     parser = argparse.ArgumentParser(prog="python -m asoc_companion",
                                      description=plain(__doc__.splitlines()[0]),
                                      epilog=plain(" ".join(__doc__.split("\n\n", 1)[1].split())))
@@ -204,7 +205,7 @@ def main(argv=None) -> int:
         return 1
     from . import build
 
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     if args.root:
         os.environ[paths.ENV_VAR] = os.path.abspath(args.root)     # notebook kernels inherit it
     try:

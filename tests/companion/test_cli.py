@@ -316,7 +316,7 @@ def _actions(parser):
 
 
 def test_every_argument_has_help_text():
-    bare = [name for name, text in _actions(cli._parser()) if not text]
+    bare = [name for name, text in _actions(cli.build_parser()) if not text]
     assert not bare, f"arguments without help text: {bare}"
 
 
@@ -368,7 +368,7 @@ def test_without_the_companion_extra_the_command_prints_one_line():
 
 
 def _all_help_texts():
-    parser = cli._parser()
+    parser = cli.build_parser()
     texts = [parser.format_help()]
     for action in parser._subparsers._group_actions:
         texts += [sub.format_help() for sub in action.choices.values()]

@@ -64,45 +64,45 @@ def test_lemma_2_1_check_catches_a_missing_schur_complement(monkeypatch):
         e = x - w @ x
         return (w[:, None] * e).T @ e  # C^xx only: the prediction
 
-    monkeypatch.setattr(c2, "_lib_lemma_2_1", without_measurement)
+    monkeypatch.setattr(c2, "library_lemma_2_1", without_measurement)
     assert c2.check_lemma_2_1(np.random.default_rng(3)).verdict == "fails"
 
 
 def test_theorem_2_4_check_catches_a_wrong_constant(monkeypatch):
-    right = c2._lib_terminal_value
+    right = c2.library_terminal_value
     monkeypatch.setattr(
-        c2, "_lib_terminal_value", lambda *a: (right(*a)[0] + 1e-6,) + right(*a)[1:]
+        c2, "library_terminal_value", lambda *a: (right(*a)[0] + 1e-6,) + right(*a)[1:]
     )
     assert c2.check_theorem_2_4(np.random.default_rng(3)).verdict == "fails"
 
 
 def test_theorem_2_5_check_catches_a_dropped_covariance_term(monkeypatch):
-    right = c2._lib_theorem_2_5_backward
+    right = c2.library_theorem_2_5_backward
 
     def without_S(*args):
         (s, v, V, S), gains, offsets = right(*args)
         return (s, v, V, 0 * S), gains, offsets
 
-    monkeypatch.setattr(c2, "_lib_theorem_2_5_backward", without_S)
+    monkeypatch.setattr(c2, "library_theorem_2_5_backward", without_S)
     verdicts = [c2.check_theorem_2_5(rng).verdict for rng in rngs(5)]
     assert "fails" in verdicts
 
 
 def test_proposition_2_7_check_catches_the_prior_variance(monkeypatch):
-    right = c2._lib_gp_posterior
+    right = c2.library_gp_posterior
 
     def prior_variance(covariance, shape, D, y, alpha, l, *rest):
         mean, var, cov = right(covariance, shape, D, y, alpha, l, *rest)
         return mean, np.full_like(var, alpha**2), cov
 
-    monkeypatch.setattr(c2, "_lib_gp_posterior", prior_variance)
+    monkeypatch.setattr(c2, "library_gp_posterior", prior_variance)
     assert c2.check_proposition_2_7(np.random.default_rng(3)).verdict == "fails"
 
 
 def test_theorem_2_5_exact_cost_agrees_with_monte_carlo():
     """The independent forward-moment cost against a simulation of the Kalman filter loop."""
     rng = np.random.default_rng(11)
-    A, B, H, C, J = c2._random_linear_gaussian(rng, 2, 1, 1)
+    A, B, H, C, J = c2.random_linear_gaussian(rng, 2, 1, 1)
     Q, R, Q_K = np.eye(2), np.eye(1), 2 * np.eye(2)
     x_target, mean, Sigma = np.array([1.0, -1.0]), np.array([0.5, 0.2]), 0.3 * np.eye(2)
     gains, offsets = c2.lq_tracking_policy(A, B, Q, R, Q_K, x_target, 3)
@@ -120,7 +120,7 @@ def test_theorem_2_5_exact_cost_agrees_with_monte_carlo():
             + np.einsum("ni,ij,nj->n", u, R, u)
         )
         x = x @ A.T + u @ B.T + rng.standard_normal((n, 2)) @ H.T
-        P, S_next = c2._kalman_posterior(A, H, C, J, S)
+        P, S_next = c2.kalman_posterior(A, H, C, J, S)
         y = x @ C.T + rng.standard_normal((n, 1)) @ J.T
         pred = x_hat @ A.T + u @ B.T
         gain = S_next @ C.T @ np.linalg.inv(J @ J.T)

@@ -276,21 +276,42 @@ class StageProblem:
             H[:, nx:, nx:] += self._covariance_hessian(u_bar)
         H = 0.5 * (H + np.swapaxes(H, 1, 2))
         if self.covariance_hessian == "shift":
-            H[:, nx:, nx:] += self._shift(alpha, H, nx) * np.eye(nu)
+            H[:, nx:, nx:] += self.levenberg_marquardt_shift(alpha, H, nx) * np.eye(nu)
         phi = self.particle_part(X, u_bar) + self.covariance_part(u_bar)
         return Expansion(phi, G[:, :nx], G[:, nx:], H[:, :nx, :nx], H[:, nx:, :nx], H[:, nx:, nx:],
                          X, alpha)
 
     @staticmethod
-    def _shift(alpha, H, nx):
-        """Levenberg-Marquardt shift mu >= 0 of R~_k for ``covariance_hessian="shift"``.
+    def levenberg_marquardt_shift(alpha, H, nx):
+        """Levenberg-Marquardt shift mu >= 0 of R~_k for ``covariance_hessian="shift"`` (2.9).
 
         The smallest mu (bisection, relative accuracy 1e-6) for which the weighted Hessian
         [[Q~, P~^T], [P~, R~ + mu I]] of phi_k satisfies the conditions (2.9) of Assumption
         2.3: R~_k + mu I > 0 and the Schur complement Q~ - P~^T (R~_k + mu I)^{-1} P~ >= 0.
         The Schur complement is V_k + S_k - S_k of eq. (2.11), so the value function stays
         convex in E{x_k}. mu = 0 when the exact Hessian already satisfies (2.9).
+
+        Parameters
+        ----------
+        alpha : array_like, shape (N,)
+            Weights of the N sample Hessians.
+        H : array_like, shape (N, nx + nu, nx + nu)
+            Hessians of phi_k in (x, u) at the samples.
+        nx : int
+            State dimension: the leading block of H is the state's.
+
+        Examples
+        --------
+        >>> H = np.array([[[2.0, 1.0], [1.0, 0.0]]])
+        >>> round(StageProblem.levenberg_marquardt_shift([1.0], H, 1), 4)
+        0.5
         """
+        H = check.real_array(H, "H", ndim=3)
+        alpha = check.real_array(alpha, "alpha", shape=(len(H),))
+        nx = check.integer(nx, "nx", minimum=1)
+        if H.shape[1] != H.shape[2] or H.shape[1] <= nx:
+            raise ValueError(f"H: expected shape (N, nx + nu, nx + nu) with nx = {nx} and nu >= 1, "
+                             f"found shape {H.shape}")
         Hm = np.einsum("i,ijk->jk", alpha, H)
         Q, P, R = Hm[:nx, :nx], Hm[nx:, :nx], Hm[nx:, nx:]
         nu = R.shape[0]
@@ -311,7 +332,7 @@ class StageProblem:
         while hi - lo > 1e-6 * hi:
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if ok(mid) else (mid, hi)
-        return hi
+        return float(hi)
 
     def _covariance_hessian(self, u_bar):
         """Hessian of 1/2 tr[S_{k+1} C_{k+1}(u)] in u (numdifftools); the safeguard against
@@ -323,7 +344,7 @@ class StageProblem:
         grad_uu C_k > 0; the gradient, the first-order dual effect, is unchanged);
         ``"exact"`` keeps the Hessian (Alg. 2.2 then keeps the old policy where R~_k is
         indefinite); ``"shift"`` keeps it and shifts R~_k by mu I only as far as needed
-        (:meth:`_shift`), as in Levenberg-Marquardt-regularised DDP.
+        (:meth:`levenberg_marquardt_shift`), as in Levenberg-Marquardt-regularised DDP.
         """
         import numdifftools as nd
         Hc = np.atleast_2d(nd.Hessian(self._covariance_part)(u_bar))

@@ -25,13 +25,16 @@ from .kernels import check_kernels_sec_2_6_3, random_covariance, summarise_kerne
 from .statement import Outcome, Statement
 
 __all__ = ["EPS", "check_lemma_2_1", "check_theorem_2_4", "expected_cost_of_affine_policy",
-           "lq_tracking_policy", "check_theorem_2_5", "check_proposition_2_7", "STATEMENTS"]
+           "lq_tracking_policy", "check_theorem_2_5", "check_proposition_2_7", "STATEMENTS",
+           "library_lemma_2_1", "library_terminal_value", "library_theorem_2_5_backward",
+           "library_gp_posterior", "random_linear_gaussian", "kalman_posterior"]
 
 
 EPS = float(np.finfo(float).eps)
 
 # --------------------------------------------------------------------------------------
-# Library calls. The beliefgp helper may rename these; each is used only here.
+# Library calls: the library's computation under each check (the seams where the tests plant a
+# wrong computation and require the check to fail).
 # --------------------------------------------------------------------------------------
 
 
@@ -40,13 +43,14 @@ def _lib_linear_gaussian_model(A, B, H, C, J):
     return linear_gaussian_model(A, B, H, C, J)
 
 
-def _lib_lemma_2_1(points, weights, u, model, w_points, v_points, beta, gamma):
+def library_lemma_2_1(points, weights, u, model, w_points, v_points, beta, gamma):
+    """Lemma 2.1 through the library: the estimate covariance after the measurement update."""
     from asoc.belief import DiracMixture, next_estimate_covariance
     return next_estimate_covariance(DiracMixture(points, weights), u, model, w_points, v_points,
                                     beta, gamma)
 
 
-def _lib_terminal_value(Q_K, x_target, points, weights):
+def library_terminal_value(Q_K, x_target, points, weights):
     """Theorem 2.4 for C_K(x) = (x - x_T)^T Q_K (x - x_T): (s_K, v_K, V_K, S_K)."""
     from asoc.belief import DiracMixture, QuadraticCost, terminal_value
     n = len(x_target)
@@ -55,7 +59,7 @@ def _lib_terminal_value(Q_K, x_target, points, weights):
     return value.s, value.v, value.V, value.S
 
 
-def _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_ref, mean0, cov0,
+def library_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_ref, mean0, cov0,
                               eps):
     """Alg. 2.1 (nominal reference under the affine policy L_ref, d_ref with the UKF), then
     Theorem 2.4 and Theorem 2.5 backwards with the steps ``eps``; returns the value at k = 0
@@ -92,7 +96,7 @@ def _policy_2_17(expansion, u_bar, eps):
     return -np.linalg.solve(R_t, P_t), np.linalg.solve(R_t, p_t - eps * r_t) + u_bar
 
 
-def _lib_gp_posterior(covariance, shape, D, y, alpha, l, sigma_n, D_star, D_star_star):
+def library_gp_posterior(covariance, shape, D, y, alpha, l, sigma_n, D_star, D_star_star):
     """Proposition 2.7 through DistributionGP: predictive mean, variance and joint covariance."""
     from asoc.gp import DistributionGP
     gp = DistributionGP(covariance, **shape).condition(D, y, alpha, l, sigma_n)
@@ -116,7 +120,7 @@ def _random_psd(rng, n):
     return G @ G.T / n
 
 
-def _random_linear_gaussian(rng, n_x, n_u, n_y):
+def random_linear_gaussian(rng, n_x, n_u, n_y):
     """x+ = A x + B u + H w, y = C x + J v (w, v ~ N(0, I)); spectral radius of A in [0.5, 1.2]."""
     A = rng.normal(size=(n_x, n_x))
     A *= rng.uniform(0.5, 1.2) / max(np.abs(np.linalg.eigvals(A)).max(), 1e-3)
@@ -154,7 +158,7 @@ def check_lemma_2_1(rng: np.random.Generator, mutant=False) -> Outcome:
     complement must equal (P^{-1} + C^T (J J^T)^{-1} C)^{-1} with P = A Sigma A^T + H H^T.
     """
     n_x, n_y = int(rng.integers(1, 4)), int(rng.integers(1, 3))
-    A, B, H, C, J = _random_linear_gaussian(rng, n_x, 1, n_y)
+    A, B, H, C, J = random_linear_gaussian(rng, n_x, 1, n_y)
     M = int(rng.integers(n_x + 1, 9))
     points = rng.normal(size=(M, n_x)) * rng.uniform(0.3, 2.0) + rng.normal(size=n_x)
     weights = rng.dirichlet(np.ones(M))
@@ -162,7 +166,7 @@ def check_lemma_2_1(rng: np.random.Generator, mutant=False) -> Outcome:
     w_points, beta = _symmetric_points(n_x)
     v_points, gamma = _symmetric_points(n_y)
     model = _lib_linear_gaussian_model(A, B, H, C, J)
-    lemma = _lib_lemma_2_1(points, weights, u, model, w_points, v_points, beta, gamma)
+    lemma = library_lemma_2_1(points, weights, u, model, w_points, v_points, beta, gamma)
 
     mean = weights @ points
     Sigma = (weights[:, None] * (points - mean)).T @ (points - mean)
@@ -196,7 +200,7 @@ def check_theorem_2_4(rng: np.random.Generator, mutant=False) -> Outcome:
     M, N = int(rng.integers(1, 8)), int(rng.integers(1, 8))
     ref_points, ref_weights = 2 * rng.normal(size=(M, n)), rng.dirichlet(np.ones(M))
     z, beta = 2 * rng.normal(size=(N, n)) + rng.normal(size=n), rng.dirichlet(np.ones(N))
-    s, v, V, S = _lib_terminal_value(Q_K, x_target, ref_points, ref_weights)
+    s, v, V, S = library_terminal_value(Q_K, x_target, ref_points, ref_weights)
 
     e = z - x_target
     cost_terms = np.einsum("ji,ik,jk->j", e, Q_K, e)
@@ -219,7 +223,11 @@ def check_theorem_2_4(rng: np.random.Generator, mutant=False) -> Outcome:
 # Theorem 2.5
 # --------------------------------------------------------------------------------------
 
-def _kalman_posterior(A, H, C, J, Sigma):
+def kalman_posterior(A, H, C, J, Sigma):
+    """Kalman filter step from the posterior covariance Sigma: (prior P, posterior covariance).
+
+    P = A Sigma A^T + H H^T, and the posterior (P^-1 + C^T (J J^T)^-1 C)^-1 of y = C x + J v.
+    """
     P = A @ Sigma @ A.T + H @ H.T
     return P, np.linalg.inv(np.linalg.inv(P) + C.T @ np.linalg.solve(J @ J.T, C))
 
@@ -239,7 +247,7 @@ def expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, of
                   + np.trace(Q @ Sigma) + np.trace(L.T @ R @ L @ second) + 2 * d @ R @ L @ mu
                   + d @ R @ d)
         F, c = A + B @ L, B @ d
-        P, Sigma_next = _kalman_posterior(A, H, C, J, Sigma)
+        P, Sigma_next = kalman_posterior(A, H, C, J, Sigma)
         second = F @ second @ F.T + np.outer(F @ mu, c) + np.outer(c, F @ mu) + np.outer(c, c)
         if innovation:
             second = second + P - Sigma_next
@@ -272,15 +280,15 @@ def check_theorem_2_5(rng: np.random.Generator, mutant=False) -> Outcome:
     """
     n_x, n_u, n_y = (int(rng.integers(1, 3)) for _ in range(3))
     K = int(rng.integers(2, 4))
-    A, B, H, C, J = _random_linear_gaussian(rng, n_x, n_u, n_y)
+    A, B, H, C, J = random_linear_gaussian(rng, n_x, n_u, n_y)
     Q, R, Q_K = _random_psd(rng, n_x), _random_pd(rng, n_u, 0.1), _random_psd(rng, n_x)
     x_target, mean0 = rng.normal(size=n_x), rng.normal(size=n_x)
     cov0 = 0.5 * _random_pd(rng, n_x, 0.05)
     L_ref, d_ref = rng.normal(scale=0.3, size=(K, n_u, n_x)), rng.normal(size=(K, n_u))
     optimal = bool(rng.random() < 0.5)
     eps = np.ones(K) if optimal else rng.uniform(0.05, 1.0, size=K)
-    (s, v, V, S), gains, offsets = _lib_theorem_2_5_backward(A, B, H, C, J, Q, R, Q_K, x_target, K,
-                                                             L_ref, d_ref, mean0, cov0, eps)
+    (s, v, V, S), gains, offsets = library_theorem_2_5_backward(
+        A, B, H, C, J, Q, R, Q_K, x_target, K, L_ref, d_ref, mean0, cov0, eps)
     m = rng.normal(size=n_x)
     theorem = float(s + v @ m + 0.5 * (m @ V @ m + np.trace(V @ cov0)) + 0.5 * np.trace(S @ cov0))
     exact = expected_cost_of_affine_policy(A, B, H, C, J, Q, R, Q_K, x_target, gains, offsets, m,
@@ -345,7 +353,7 @@ def check_proposition_2_7(rng: np.random.Generator, mutant=False) -> Outcome:
     alpha, sigma_n = rng.uniform(0.5, 2.0), rng.uniform(0.05, 0.5)
     l = rng.uniform(0.3, 3.0) * np.median(D_all[np.triu_indices(M + N, 1)])
     D, D_star, D_ss = D_all[:M, :M], D_all[M:, :M], D_all[M:, M:]
-    mean, var, cov = _lib_gp_posterior(name, shape, D, y, alpha, l, sigma_n, D_star, D_ss)
+    mean, var, cov = library_gp_posterior(name, shape, D, y, alpha, l, sigma_n, D_star, D_ss)
 
     joint = alpha ** 2 * _table_2_1(name, D_all, l, shape)
     joint[:M, :M] += sigma_n ** 2 * np.eye(M)

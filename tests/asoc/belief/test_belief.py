@@ -336,7 +336,7 @@ def test_levenberg_marquardt_shift_is_the_smallest_that_satisfies_2_9(seed):
     H = M @ M.T + 0.1 * np.eye(nx + nu)  # satisfies (2.9)
     H[nx:, nx:] -= rng.uniform(0, 5) * np.eye(nu)  # negative curvature in u
     H = np.stack([H, H])
-    mu = StageProblem._shift(np.array([0.5, 0.5]), H, nx)
+    mu = StageProblem.levenberg_marquardt_shift(np.array([0.5, 0.5]), H, nx)
     assert mu >= 0 and _schur_ok(H[0], nx, mu * (1 + 1e-5))
     if mu > 0:
         assert not _schur_ok(H[0], nx, mu * (1 - 1e-3))
@@ -344,7 +344,7 @@ def test_levenberg_marquardt_shift_is_the_smallest_that_satisfies_2_9(seed):
 
 def test_shift_is_zero_when_the_exact_hessian_satisfies_2_9():
     H = np.stack([np.array([[2.0, 0.5], [0.5, 1.0]])])
-    assert StageProblem._shift(np.ones(1), H, 1) == 0.0
+    assert StageProblem.levenberg_marquardt_shift(np.ones(1), H, 1) == 0.0
 
 
 def test_covariance_hessian_variants_on_the_example():
