@@ -27,6 +27,7 @@ import numpy as np
 from asoc.mjls import ms_spectral_radius
 from asoc.mjls.intractability import hessian_min_eigenvalue, quadratic_fit_residual
 from asoc.stats import settling_iteration
+from asoc.validation import real_array, real_scalar
 
 __all__ = ["BANDS", "ROUNDING", "settles_about", "relative_rms_difference", "not_quadratic",
            "not_convex", "converged_not_stabilizing", "non_increasing", "bounded", "lmi_separates",
@@ -260,7 +261,11 @@ def diverges(final_states, x0, factor=10.0):
     >>> diverges([[0.1, 0.0], [0.0, 0.2]], [1.0, 0.0])["holds"]
     False
     """
-    final_states, x0 = np.asarray(final_states, dtype=float), np.asarray(x0, dtype=float)
+    final_states = real_array(final_states, "final_states", ndim=2)
+    x0 = real_array(x0, "x0", shape=(final_states.shape[1],))
+    factor = real_scalar(factor, "factor", low=0, low_open=True)
+    if not np.any(x0):
+        raise ValueError("x0: expected a non-zero initial state (the growth is relative to it)")
     growth = float(np.mean(np.sum(final_states**2, axis=1)) / np.sum(x0**2))
     return {"holds": growth > factor, "value": growth}
 
@@ -278,8 +283,16 @@ def matches(value, reference, rtol=1e-4):
     --------
     >>> matches(1.00001, 1.0)["holds"], matches(1.001, 1.0)["holds"]
     (True, False)
+    >>> matches(1.0, 0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: reference: expected a non-zero reference (the difference is relative)
     """
-    relative = abs(float(value) / float(reference) - 1.0)
+    value, reference = real_scalar(value, "value"), real_scalar(reference, "reference")
+    rtol = real_scalar(rtol, "rtol", low=0, low_open=True)
+    if reference == 0:
+        raise ValueError("reference: expected a non-zero reference (the difference is relative)")
+    relative = abs(value / reference - 1.0)
     return {"holds": relative < rtol, "value": relative}
 
 
@@ -309,6 +322,8 @@ def resembles(samples, truth, threshold=0.5):
     >>> resembles([np.sin(x) + 1.0], np.sin(x))["holds"]
     False
     """
-    samples, truth = np.atleast_2d(np.asarray(samples, dtype=float)), np.asarray(truth, dtype=float)
+    truth = real_array(truth, "truth", ndim=1)
+    samples = real_array(np.atleast_2d(samples), "samples", shape=(None, len(truth)))
+    threshold = real_scalar(threshold, "threshold", low=0, low_open=True)
     deviation = float(np.median(np.sqrt(np.mean((samples - truth) ** 2, axis=1))))
     return {"holds": deviation <= threshold, "value": deviation}
