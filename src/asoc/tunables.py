@@ -178,6 +178,14 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         "this (defective spectra), and Arnoldi tries its next Krylov space: the pages print rho "
         "to 4 digits. Where the Perron stack is "
         "singular (e.g. triangular modes), the rounding margin alone makes brackets of 1e-5."),
+    "mjls.inexact_solve_max": (
+        1e-6,
+        REAL(0, 1),
+        "Loosest relative residual to which Alg. 3.1's exact iteration solves its moment "
+        "equations while its gain still moves (it asks for 1e-2 of the gain's last relative "
+        "change, down to mjls.solve_tolerance). At n = M = 100 (rho 0.99) its six iterations "
+        "take 2.6 s instead of 5.2 s, to the same gain; the Lyapunov certificate of each gain "
+        "accounts for the residual."),
     "mjls.solve_residual_max": (
         1e-8,
         REAL(0, 1),

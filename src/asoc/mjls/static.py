@@ -246,7 +246,7 @@ def _iterate(sys, tol, max_iter, init, method, until):
     if not run.stabilized:
         return run
     exact = exact_iteration(sys, rec, run.L, tol, max_iter - run.iterations, method,
-                            run.iterations + 1, guess=(run.X, run.P))
+                            run.iterations + 1, guess=(run.X, run.P), change=run.change)
     if not exact.stabilized:                            # an exact iterate left the stabilising set
         return step_iteration(sys, rec, tol, max_iter, init, method)
     exact.iterations += run.iterations
@@ -260,7 +260,7 @@ def _cheapest_member(sys, run):
     of the period of smallest exact cost (3.9).
     """
     members = run.members or [(run.L, run.X, run.P)]
-    costs = [_static_cost(sys, L)[::2] for L, _, _ in members]
+    costs = [_static_cost(sys, L, X)[::2] for L, X, _ in members]
     best = min(range(len(members)), key=lambda i: costs[i][0])
     return (*members[best], costs[best])
 
@@ -333,13 +333,17 @@ def static_cost(sys, L):
     return _static_cost(sys, gain_matrix(L, "L", sys.nu, sys.ny))
 
 
-def _static_cost(sys, L):
+def _static_cost(sys, L, X_guess=None):
+    """(cost, X, stability) of :func:`static_cost`, the moment equation solved from
+    ``X_guess`` (e.g. the last iterate's moments) where it is solved iteratively.
+    """
     Acl = closed_loop(sys, L, check=False)
     stability = mean_square_stability(Acl, sys.T)
     if not stability.stable:
         return np.inf, None, stability
-    noise = Recursion(sys).noise(L)
-    X = coupled_lyapunov_solver(Acl, sys.T)(predecessor_sum(sys.T, noise, check=False)).X
+    noise = predecessor_sum(sys.T, Recursion(sys).noise(L), check=False)
+    start = X_guess if X_guess is not None and np.all(np.isfinite(X_guess)) else None
+    X = coupled_lyapunov_solver(Acl, sys.T)(noise, x0=start).X
     LC = L @ sys.C
     cost = np.einsum("iab,iba->", sys.Q + transpose(LC) @ sys.R @ LC, X)
     if sys.J is not None:
