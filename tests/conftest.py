@@ -34,6 +34,15 @@ def pytest_ignore_collect(collection_path, config):
 
 
 SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")  # module-scoped clone / wheel
+GROUP = pytest.StashKey[str]()
+#: seconds each group took in `make test` on 2 cores (tests/notebooks: the ci runs, the PDF and
+#: the book), for the order in which the groups are handed out
+GROUP_SECONDS = {
+    "book": 110.0, "pdf": 95.0, "ci-sec3_4": 60.0, "ci-sec3_6": 52.0, "ci-sec2_6": 44.0,
+    "ci-theorems": 41.0, "ci-sec2_5": 40.0, "ci-findings": 37.0, "ci-large_system": 35.0,
+    "ci-sec3_5": 28.0, "ci-your_system": 24.0, "test_crash_safety": 22.0, "ci-scaling": 20.0,
+    "ci-peers": 15.0, "test_packaging": 12.0, "ci-sec3_2": 9.0,
+}
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -53,6 +62,11 @@ def pytest_collection_modifyitems(config, items):
         else:
             continue
         item.add_marker(pytest.mark.xdist_group(group))
+        item.stash[GROUP] = group
+    # longest first (the scheduler hands out groups in this order): the long groups start
+    # at once on both workers and the short tests fill the gaps, instead of one long group
+    # running alone at the end
+    items.sort(key=lambda item: -GROUP_SECONDS.get(item.stash.get(GROUP, None), 0.0))
 
 
 # Property tests draw the same examples on every run and machine (no example database), so a
