@@ -1,4 +1,5 @@
-"""Command line:
+"""The companion's command line: list, run, figure, table, reproduce and ledger.
+
 ``python -m asoc_companion list | run NAME | figure N | table N | reproduce | ledger``.
 
 Each command takes ``--fidelity full|ci``. ``full`` runs the thesis's settings and
