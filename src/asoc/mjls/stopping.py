@@ -40,9 +40,9 @@ class StoppingRule:
       changes of about e, so only e < 1e-4 is taken for a cycle, and such an iteration
       would need more than 2e5 iterations to reach tol = 1e-10; and with ``early_cycles``
       when the iterates approach a cycle (:meth:`approaches_cycle`): the lag-p change is
-      below 1e-2 of the lag-1 change and falls, over ``mjls.alg31_cycle_window`` iterations,
-      at least twice as fast as the lag-1 change, which is too slow to reach tol within
-      ``max_iter``;
+      below 1e-2 of the lag-1 change and their ratio falls steadily over
+      ``mjls.alg31_cycle_window`` iterations, while the lag-1 change is too slow to reach tol
+      within ``max_iter``;
     - ``"diverged"`` when the iterates grow by more than 1e6 within a window of
       w = ``mjls.alg32_patience`` iterations while not settling;
     - ``"no_progress"`` when the smallest change (over p) of the last w iterations is not
@@ -105,13 +105,15 @@ class StoppingRule:
     def approaches_cycle(self, it, period):
         """Whether the iterates approach a cycle of ``period`` faster than they settle.
 
-        Over the last W iterations (``mjls.alg31_cycle_window`` rounded up to a multiple of
-        ``period``, so that both ends are in the same phase) the change against ``period``
-        iterations back, c_p, falls by a factor g_p and the change against the last
-        iterate, c_1, by g_1. An iteration that converges with an oscillation (a contraction
-        factor near -1) has g_p = g_1; one that approaches a cycle has g_p < g_1 and c_p much
-        smaller than c_1. Taken for a cycle: c_p < 1e-2 c_1, g_p < g_1 / 2, and c_1 at the
-        rate g_1 would not reach tol within ``max_iter`` iterations.
+        The iterates are compared over the last W iterations (``mjls.alg31_cycle_window``,
+        rounded up to a multiple of four periods, so that every point is in the same phase) at
+        five points, a quarter apart, by the ratio r = c_p / c_1 of the change against
+        ``period`` iterations back to the change against the last iterate. An iteration that
+        converges with an oscillation (a contraction factor -(1 - e)) has r near e, constant;
+        one that approaches a cycle has r falling geometrically; a transient that passes near
+        a cycle dips and rises again. Taken for a cycle: r < 1e-2, r falls by 5 % or more in
+        every quarter and to half over the window, c_p is below its value one period back,
+        and c_1 at its rate over the window would not reach tol within ``max_iter`` iterations.
 
         Examples
         --------
@@ -129,16 +131,22 @@ class StoppingRule:
         >>> [(k, s) for k in range(1, 300) if (s := rule.status(k, [x[k]]))][0]
         (226, 'converged')
         """
-        window = period * -(-self.cycle_window // period)
+        quarter = period * -(-self.cycle_window // (4 * period))
+        window = 4 * quarter
         if len(self.lag_changes) <= window or len(self.lag_changes[-1 - window]) < period:
             return False
-        (c1, cp), (c1_then, cp_then) = ((changes[0], changes[period - 1]) for changes in
-                                        (self.lag_changes[-1], self.lag_changes[-1 - window]))
-        if not (0 < cp < 1e-2 * c1 and cp_then > 0 and c1_then > 0):
+        # (c_1, c_p) at five points of the window, oldest first, all in the same phase
+        points = [(self.lag_changes[-1 - k][0], self.lag_changes[-1 - k][period - 1])
+                  for k in range(window, -1, -quarter)]
+        if min(min(pair) for pair in points) <= 0:
             return False
-        g1, gp = c1 / c1_then, cp / cp_then
-        if not gp < 0.5 * g1:
+        ratios = [cp / c1 for c1, cp in points]
+        (c1, cp), (c1_then, _) = points[-1], points[0]
+        cp_last = self.lag_changes[-1 - period][period - 1]   # one period back
+        steady = all(later < 0.95 * earlier for earlier, later in zip(ratios, ratios[1:]))
+        if not (ratios[-1] < 1e-2 and cp < cp_last and steady and ratios[-1] < 0.5 * ratios[0]):
             return False
+        g1 = c1 / c1_then
         return bool(g1 >= 1 or window * np.log(self.tol / c1) / np.log(g1) > self.max_iter - it)
 
     def _progress(self, it):

@@ -82,12 +82,10 @@ def test_alg31_stops_on_the_lossy_loop_with_a_cycle_and_the_cheaper_member(lossy
     r = lossy_alg31
     assert (r.status, r.period) == ("cycle", 2) and r.iterations <= 200
     assert "exact_static_output_feedback" in r.message
-    # the returned member is one of the last two iterates; the other member of the 2-cycle is
-    # the iterate 2 back from the one not returned (the iterates repeat to 1 % at the stop)
-    last_two = [static_output_feedback(lossy, max_iter=r.iterations - k, warn=False)
-                for k in (1, 2)]
-    assert any(np.array_equal(run.L, r.L) for run in last_two)
-    other = next(run for run in last_two if not np.array_equal(run.L, r.L))
+    # the returned member is iterate n or n - 1; the other member of the 2-cycle is iterate
+    # n - 1, or iterate n - 2 (the phase of n; the iterates repeat to 1 % at the stop)
+    before = [static_output_feedback(lossy, max_iter=r.iterations - k, warn=False) for k in (1, 2)]
+    other = before[1] if np.array_equal(before[0].L, r.L) else before[0]
     assert other.status == "max_iterations" and not np.allclose(other.L, r.L, rtol=1e-3)
     members = {float(static_cost(lossy, L)[0]) for L in (r.L, other.L)}
     assert r.cost == min(members) and np.isfinite(r.cost)
@@ -165,3 +163,24 @@ def test_bfgs_stops_on_a_stall_and_on_a_scaled_gradient():
     assert (
         run.converged and np.linalg.norm(2 * run.z) * max(1, np.linalg.norm(run.z)) < 1e-6 * run.f
     )
+
+
+def test_a_slow_oscillating_convergence_is_not_taken_for_a_cycle():
+    """x_k = 3 + (-(1 - 1e-3))^k + (-0.8)^k: after the fast transient the lag-2 / lag-1 ratio
+    settles near 1e-3 and stays (Theorem study instance 967 converges so, in 14,353 iterations);
+    an approach to a cycle has that ratio falling. The rule must let it run."""
+    from asoc.mjls.stopping import StoppingRule
+
+    rule = StoppingRule(tol=1e-10, max_iter=20000, window=500, early_cycles=True)  # as Alg. 3.1
+    k = np.arange(2000)
+    x = 3 + (-(1 - 1e-3)) ** k + (-0.8) ** k
+    statuses = [rule.status(i, [np.full(1, x[i])]) for i in range(1, 2000)]
+    assert "cycle" not in statuses
+
+
+def test_alg31_converges_where_a_transient_passes_near_a_cycle():
+    """Sec. 3.5, C = [1 0], T[2]: the iterates pass near a 2-cycle (iterations 30-45) and
+    leave it; Alg. 3.1 converges after 2,811 iterations (to a gain that does not stabilise)."""
+    sys = sec354_system(2).replace(C=np.array([[[1.0, 0.0]], [[1.0, 0.0]]]))
+    res = static_output_feedback(sys, moments="step", warn=False)
+    assert res.status == "converged" and res.iterations > 2000 and not res.stabilizing
