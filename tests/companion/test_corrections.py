@@ -4,6 +4,7 @@ Each corrected statement must hold on seeded random instances and its mutant mus
 some; the closed-form counterexamples are checked exactly (fractions) or to rounding.
 """
 
+import re
 from fractions import Fraction
 
 import numpy as np
@@ -102,6 +103,20 @@ def test_a_planted_false_bound_is_caught(monkeypatch):
     assert any(corrected == "fails" for corrected, _ in verdicts)
 
 
+ASCII_MATH = re.compile(r"\^|_\{|_\w|<=|>=|~|\bsqrt|\btr\[|\[\[|bar\b|bar_|\b[XP]u\b")
+"""Marks of math written in ASCII (x_k, x^T, X~, <=, Xbar, Xu, [[a, b], [c, d]])."""
+CODE_NAME = re.compile(r"\b(?:[a-z]+[._])+[a-z]{4,}\b")
+"""A library name in prose (gp.mcvmd, mcvmd_integral), not math."""
+
+
+def _assert_latex_math(text):
+    """``text``'s math is in ``$...$`` (paired), none written in ASCII outside it."""
+    parts = text.split("$")
+    assert len(parts) % 2 == 1, f"unpaired $ in {text!r}"
+    prose = CODE_NAME.sub("", " ".join(parts[::2]))
+    assert not ASCII_MATH.search(prose), ASCII_MATH.findall(prose)
+
+
 def test_records_have_the_interface_the_study_merges():
     records = corrections.correction_records(
         np.random.SeedSequence(5), n_instances=3, mutant_instances=2
@@ -110,6 +125,8 @@ def test_records_have_the_interface_the_study_merges():
     for key, record in records.items():
         assert isinstance(record["diagnosis"], str) and record["diagnosis"]
         assert ("corrected" in record) != ("no_correction" in record), key
+        _assert_latex_math(record["diagnosis"])
+        _assert_latex_math(record.get("no_correction", ""))
         if "corrected" in record:
             c = record["corrected"]
             assert c["holds"] + c["fails"] == c["instances"]
@@ -205,3 +222,4 @@ def test_prop_3_15_diagnosis_points_at_3_11():
     from asoc_companion.theorems.static_feedback import summarise_3_15
 
     assert "starts in (3.11)" in summarise_3_15([])["diagnosis"]
+    _assert_latex_math(summarise_3_15([])["diagnosis"])

@@ -2,7 +2,7 @@
 to each statement's section, then per statement its claim, its check, its mutant, and where it
 fails the diagnosis and the corrected statement, as MyST Markdown that the HTML and the PDF both
 render; every check, mutant and corrected statement that has math is typeset (LaTeX), not ASCII
-(the diagnoses are still the study's plain text)."""
+(the diagnoses are written in LaTeX where they are made: tests/companion/test_corrections.py)."""
 
 import re
 

@@ -38,6 +38,7 @@ from .counterexamples import (
     thm_3_27_fixed_points,
     thm_3_31_example,
 )
+from .typeset import matrix_tex, number_tex
 
 __all__ = ["STATEMENT_IDS", "EXPENSIVE", "EIG_TOL", "COST_RTOL", "SPREAD", "check_kernels",
            "SINGULAR_NOISE_SHARE", "check_3_19", "check_3_26", "check_3_27", "check_3_31",
@@ -49,22 +50,36 @@ STATEMENT_IDS = ("2_6_3_kernels", "3_19", "3_26", "3_27", "3_31", "3_32", "3_33"
 EXPENSIVE = {"3_27": 100, "3_33": 100}
 
 
+def _start_tex(name):
+    r"""A start named like "1e-4 I" as LaTeX math ($10^{-4}\,\mathbf I$); another name as it is.
+
+    Examples
+    --------
+    >>> _start_tex("1e-4 I"), _start_tex("random SPD, seed 0")
+    ('$10^{-4}\\,\\mathbf I$', 'random SPD, seed 0')
+    """
+    scale, _, matrix = name.partition(" ")
+    return rf"${number_tex(scale)}\,\mathbf I$" if matrix == "I" else name
+
+
 def _record_kernels(outcomes, spread):
     ex = kernel_example()
     lowest = min((e for _, e in spread), default=0.0)
     return {"diagnosis": (
-        "Table 2.1's covariances of Delta = D(d_i, d_j) are covariance functions for every length "
-        "scale exactly when D embeds isometrically in a Hilbert space (Schoenberg 1938); the text "
-        "admits any 'admissible distance'. The printed Hellinger expression (1 - int sqrt(p1 "
-        "p2))^2 and the Jensen-Shannon divergence are not such distances: N(0,1), N(1,1), N(2,1) "
-        f"with the printed Hellinger and the SE kernel at l = {ex['length_scale']} give the Gram "
-        f"eigenvalue {ex['printed']:.3f} (with the usual Hellinger sqrt(1 - BC): "
-        f"{ex['usual']:.3f}). Nor is the thesis's closed form of the mCvMd with a finite b_max "
-        "(gp.mcvmd, b_max = 100), a large-b_max expansion of its integral, once the points spread "
-        f"beyond about 2 b_max: on Dirac sets spread over about {4 * SPREAD:.0f} its Gram matrices "
-        f"fail in {sum(v == 'fails' for v, _ in spread)} of {len(spread)} draws (lowest eigenvalue "
-        f"{lowest:.2f}), while the integral itself (exact, mcvmd_integral) gives PSD Gram "
-        "matrices. The study's failure count is the yield of an adversarial search over "
+        r"Table 2.1's covariances of $\Delta=D(d_i,d_j)$ are covariance functions for every length "
+        r"scale exactly when $D$ embeds isometrically in a Hilbert space (Schoenberg 1938); the "
+        r"text admits any 'admissible distance'. The printed Hellinger expression "
+        r"$(1-\int\sqrt{p_1p_2})^2$ and the Jensen-Shannon divergence are not such distances: "
+        r"$\mathcal N(0,1)$, $\mathcal N(1,1)$, $\mathcal N(2,1)$ with the printed Hellinger and "
+        rf"the SE kernel at $l={number_tex(ex['length_scale'])}$ give the Gram eigenvalue "
+        rf"${number_tex(ex['printed'], '.3f')}$ (with the usual Hellinger "
+        rf"$\sqrt{{1-\mathrm{{BC}}}}$: ${number_tex(ex['usual'], '.3f')}$). Nor is the thesis's "
+        r"closed form of the mCvMd with a finite $b_{\max}$ (gp.mcvmd, $b_{\max}=100$), a "
+        r"large-$b_{\max}$ expansion of its integral, once the points spread beyond about "
+        rf"$2b_{{\max}}$: on Dirac sets spread over about {4 * SPREAD:.0f} its Gram matrices fail "
+        rf"in {sum(v == 'fails' for v, _ in spread)} of {len(spread)} draws (lowest eigenvalue "
+        rf"${number_tex(lowest, '.2f')}$), while the integral itself (exact, mcvmd_integral) gives "
+        "PSD Gram matrices. The study's failure count is the yield of an adversarial search over "
         "distances, covariances and length scales, not a failure rate."),
         "corrected": {**_tally(outcomes, (
             "If D embeds isometrically in a Hilbert space (the mCvMd defined by its integral, for "
@@ -88,7 +103,7 @@ def _record_kernels(outcomes, spread):
 def _record_3_19(outcomes, singular_verdicts):
     ex = thm_3_19_example()
     cycle = ex["cycles"][0]
-    starts = ", ".join(f"{c['start']:g} I" for c in ex["cycles"])
+    starts = "$, $".join(rf"{number_tex(c['start'], 'g')}\,\mathbf I" for c in ex["cycles"])
     noiseless = thm_3_19_noiseless_example()
     return {"diagnosis": (
         "The proof (after (3.35)) shows that a solution of (3.31)-(3.33) stabilises, then argues "
@@ -96,14 +111,18 @@ def _record_3_19(outcomes, singular_verdicts):
         "unique and that the recursion (3.34)-(3.35) reaches it; neither follows: the degree "
         "counts solutions with sign, and the fixed-point map (3.34)-(3.35) is not a contraction. "
         "Smallest counterexample: one mode (plain output feedback), two states (one-decimal "
-        f"data): from X = P = {starts} Alg. 3.1 ends in a period-2 cycle of the gain, "
-        f"{cycle['gains'][0]:.4f} <-> {cycle['gains'][1]:.4f} (rho {cycle['rho'][0]:.2f} and "
-        f"{cycle['rho'][1]:.2f}), although L = {ex['best_gain']:.3f} gives rho "
-        f"{ex['best_rho']:.3f}. Even with state feedback (C = I) the noise must be non-degenerate: "
-        f"with H = 0, A = {noiseless['A']}, B = {noiseless['B']}, Q = I, R = 1, X_0 = I, P_0 = 0, "
-        f"X_1 = A A^T has smallest eigenvalue {noiseless['min_eig_X1']:.1e}, (3.34) no longer "
-        f"fixes L, and Alg. 3.1 (the library's) stops with status '{noiseless['status']}' instead "
-        f"of the LQ gain {noiseless['lq_gain']} (with H = 0.1 I: "
+        rf"data): from $\mathbf X=\mathbf P={starts}$ Alg. 3.1 ends in a period-2 cycle of "
+        rf"the gain, ${cycle['gains'][0]:.4f}\leftrightarrow{cycle['gains'][1]:.4f}$ ($\rho$ "
+        rf"{cycle['rho'][0]:.2f} and {cycle['rho'][1]:.2f}), although "
+        rf"$\mathbf L={ex['best_gain']:.3f}$ gives $\rho$ {ex['best_rho']:.3f}. Even with state "
+        r"feedback ($\mathbf C=\mathbf I$) the noise must be non-degenerate: with "
+        rf"$\mathbf H=\mathbf 0$, $\mathbf A={matrix_tex(noiseless['A'])}$, "
+        rf"$\mathbf B={matrix_tex(noiseless['B'])}$, $\mathbf Q=\mathbf I$, $\mathbf R=1$, "
+        r"$\mathbf X_0=\mathbf I$, $\mathbf P_0=\mathbf 0$, $\mathbf X_1=\mathbf A\mathbf "
+        rf"A^\top$ has smallest eigenvalue ${number_tex(noiseless['min_eig_X1'], '.1e')}$, (3.34) "
+        rf"no longer fixes $\mathbf L$, and Alg. 3.1 (the library's) stops with status "
+        rf"'{noiseless['status']}' instead of the LQ gain "
+        rf"${matrix_tex(noiseless['lq_gain'])}$ (with $\mathbf H=0.1\,\mathbf I$: "
         f"'{noiseless['status_with_noise']}', the LQ gain)."),
         "corrected": {**_tally(outcomes, (
             "If M = 1 and C = I (state feedback), H H^T > 0, (A, B) is stabilisable and Q > 0, "
@@ -122,15 +141,19 @@ def _record_3_19(outcomes, singular_verdicts):
 def _record_3_26(outcomes, sign_outcomes):
     ex = prop_3_26_example()
     return {"diagnosis": (
-        "The proof orders the Schur complements (X1 - X12 X2^{-1} X12^T <= Xbar, from X "
-        "Y^{-1} X^T >= X + X^T - Y) and then 'reverses the Schur complement'; but two matrices "
-        "with equal lower-right blocks and ordered Schur complements are ordered only if their "
-        "off-diagonal blocks agree: bound - X~ = [[2 X2 - X12 - X12^T, X2 - X12], [., 0]] is PSD "
-        "only if X12 = X2 (equality holds for the one-mode LQG optimum). Smallest counterexample, "
-        "exact: one state, x_{k+1} = w_k, x^_{k+1} = x_k (F = 0, K = 1, L = 0): X~_inf = I "
-        f"and bound - X~_inf = [[{ex['printed_gap'][0][0]}, {ex['printed_gap'][0][1]}], "
-        f"[{ex['printed_gap'][1][0]}, {ex['printed_gap'][1][1]}]], determinant "
-        f"{ex['printed_gap_determinant']} (eigenvalue 1 - sqrt 2)."),
+        r"The proof orders the Schur complements ($\mathbf X_1-\mathbf X_{12}\mathbf "
+        r"X_2^{-1}\mathbf X_{12}^\top\preceq\bar{\mathbf X}$, from $\mathbf X\mathbf "
+        r"Y^{-1}\mathbf X^\top\succeq\mathbf X+\mathbf X^\top-\mathbf Y$) and then 'reverses "
+        r"the Schur complement'; but two matrices with equal lower-right blocks and ordered Schur "
+        r"complements are ordered only if their off-diagonal blocks agree: "
+        r"$\mathrm{bound}-\tilde{\mathbf X}=\begin{bmatrix}2\mathbf X_2-\mathbf X_{12}-\mathbf "
+        r"X_{12}^\top&\mathbf X_2-\mathbf X_{12}\\\cdot&\mathbf 0\end{bmatrix}$ is PSD only "
+        r"if $\mathbf X_{12}=\mathbf X_2$ (equality holds for the one-mode LQG optimum). "
+        r"Smallest counterexample, exact: one state, $\mathbf x_{k+1}=\mathbf w_k$, "
+        r"$\hat{\mathbf x}_{k+1}=\mathbf x_k$ ($\mathbf F=0$, $\mathbf K=1$, $\mathbf L=0$): "
+        r"$\tilde{\mathbf X}_\infty=\mathbf I$ and $\mathrm{bound}-\tilde{\mathbf X}_\infty"
+        rf"={matrix_tex(ex['printed_gap'])}$, determinant "
+        rf"${number_tex(ex['printed_gap_determinant'])}$ (eigenvalue $1-\sqrt2$)."),
         "corrected": {**_tally(outcomes, (
             "X~_inf <= 2 [[Xbar + Xu, Xu], [Xu, Xu]] and P~_inf <= 2 [[Pbar + Pu, -Pu], [-Pu, "
             "Pu]] with Xbar = X1 - X12 - X12^T + X2, Xu = X2, Pbar = P1 + P12 + P12^T + P2, Pu = "
@@ -148,17 +171,20 @@ def _record_3_27(outcomes):
     low, high = ex["fixed_points"][0], ex["fixed_points"][-1]
     worst = lambda name: max(p[name] for p in ex["fixed_points"])
     return {"diagnosis": (
-        "App. A.1 rewrites the Hamiltonian of (3.42) 'if we use (3.43)', which replaces X12 by X2 "
-        "and P12 by -P2; (3.49) is the stationarity condition of that approximate Hamiltonian "
-        "(A.7), not of (3.42). The two agree where X12 = X2 and P12 = -P2, as at the one-mode LQG "
-        "optimum; with M >= 2 the fixed point of Alg. 3.2 is in general not a stationary point of "
-        f"the exact cost (3.42). Nor is it unique: the study's instance {ex['index']} (M = "
-        f"{ex['M']}, nx = {ex['nx']}, nu = {ex['nu']}, ny = {ex['ny']}) has "
-        f"{len(ex['fixed_points'])} stabilising fixed points of Alg. 3.2: from {low['starts'][0]} "
-        f"(exact cost {low['cost']:.3f}) and from {len(high['starts'])} of {ex['random_starts']} "
-        f"random starts (cost {high['cost']:.3f}). Both solve (3.45)-(3.48) to "
-        f"{worst('residual_3_45_3_48'):.0e} and (3.49) to {worst('residual_3_49'):.0e} (relative), "
-        "with Xu and Pu invertible (smallest eigenvalues "
+        r"App. A.1 rewrites the Hamiltonian of (3.42) 'if we use (3.43)', which replaces "
+        r"$\mathbf X_{12}$ by $\mathbf X_2$ and $\mathbf P_{12}$ by $-\mathbf P_2$; (3.49) is the "
+        r"stationarity condition of that approximate Hamiltonian (A.7), not of (3.42). The two "
+        r"agree where $\mathbf X_{12}=\mathbf X_2$ and $\mathbf P_{12}=-\mathbf P_2$, as at the "
+        r"one-mode LQG optimum; with $M\geq2$ the fixed point of Alg. 3.2 is in general not a "
+        r"stationary point of the exact cost (3.42). Nor is it unique: the study's instance "
+        rf"{ex['index']} ($M={ex['M']}$, $n_x={ex['nx']}$, $n_u={ex['nu']}$, $n_y={ex['ny']}$) "
+        rf"has {len(ex['fixed_points'])} stabilising fixed points of Alg. 3.2: from "
+        rf"{_start_tex(low['starts'][0])} (exact cost {low['cost']:.3f}) and from "
+        rf"{len(high['starts'])} of {ex['random_starts']} random starts (cost "
+        rf"{high['cost']:.3f}). Both solve (3.45)-(3.48) to "
+        rf"${number_tex(worst('residual_3_45_3_48'), '.0e')}$ and (3.49) to "
+        rf"${number_tex(worst('residual_3_49'), '.0e')}$ (relative), with "
+        r"$\underline{\mathbf X}$ and $\underline{\mathbf P}$ invertible (smallest eigenvalues "
         f"{min(p['min_eig_Xu'] for p in ex['fixed_points']):.3f} and "
         f"{min(p['min_eig_Pu'] for p in ex['fixed_points']):.1f}), so the equations do not "
         "determine the controller."),
@@ -178,12 +204,13 @@ def _record_3_27(outcomes):
 def _record_3_31(outcomes, ratios):
     ex = thm_3_31_example()
     return {"diagnosis": (
-        "B.1 bounds P~_k by Prop. 3.26 ((B.2)), which does not hold. Smallest counterexample, "
-        "exact: one mode, one state, no noise, a = b = c = q = r = 1, x_0 ~ N(0, 1), x^_0 = 0, F "
-        f"= K = 0, u = l x^, horizon 1. x^ stays 0, so J_0 = {ex['exact']} for every l, but Jbar_0 "
-        f"= 2 + 2l + 4l^2 = {ex['bound']} at l = {ex['gain']}: the bound depends on a gain that "
-        "has no effect. There P~_0 - bound has a zero lower-right block and off-diagonal -l(2l + "
-        f"1) = {ex['costate_gap_offdiagonal']}."),
+        r"B.1 bounds $\tilde{\mathbf P}_k$ by Prop. 3.26 ((B.2)), which does not hold. Smallest "
+        r"counterexample, exact: one mode, one state, no noise, $a=b=c=q=r=1$, "
+        r"$x_0\sim\mathcal N(0,1)$, $\hat x_0=0$, $F=K=0$, $u=l\hat x$, horizon 1. $\hat x$ "
+        rf"stays 0, so $\mathcal J_0={ex['exact']}$ for every $l$, but "
+        rf"$\bar{{\mathcal J}}_0=2+2l+4l^2={ex['bound']}$ at $l={ex['gain']}$: the bound depends "
+        r"on a gain that has no effect. There $\tilde{\mathbf P}_0-\mathrm{bound}$ has a zero "
+        rf"lower-right block and off-diagonal $-l(2l+1)={ex['costate_gap_offdiagonal']}$."),
         "corrected": {**_tally(outcomes, (
             "J_0 <= sum_k sum_i 2 tr[Q_i (Xbar_k + Xu_k) + L_k^T R_i L_k Xu_k] (+ the final "
             "term), with (3.66)-(3.67) whose two transported terms are doubled, started at the "
@@ -203,10 +230,14 @@ def _record_3_31(outcomes, ratios):
 def _record_3_32(outcomes, identity_errors):
     return {"diagnosis": (
         "(3.70) is the stationarity condition of the quadratic (B.4)/(B.5), which B.2 presents as "
-        "(3.65) with (3.68)-(3.69) rewritten. Expanding both: (3.65) - (B.4) = sum_i tr[(Z12 + "
-        "Z21 + 2 Z22) Xbar_i] with Z = Q~ + A~^T [[E(Pbar + Pu), -E(Pu)], [-E(Pu), E(Pu)]] A~ "
-        f"(largest relative error of this identity on the instances: {max(identity_errors):.1e}). "
-        "The difference depends on (F, K, L), so the solution of (3.70) does not minimise (3.65): "
+        r"(3.65) with (3.68)-(3.69) rewritten. Expanding both: (3.65) $-$ (B.4) "
+        r"$=\sum_i\mathrm{tr}[(\mathbf Z_{12}+\mathbf Z_{21}+2\mathbf Z_{22})\bar{\mathbf "
+        r"X}_i]$ with $\mathbf Z=\tilde{\mathbf Q}$ $+\,\tilde{\mathbf A}^\top\begin{bmatrix}"
+        r"\mathcal E(\bar{\mathbf P}+\underline{\mathbf P})&-\mathcal E(\underline{\mathbf P})"
+        r"\\-\mathcal E(\underline{\mathbf P})&\mathcal E(\underline{\mathbf P})\end{bmatrix}"
+        r"\tilde{\mathbf A}$ (largest relative error of this identity on the instances: "
+        rf"${number_tex(max(identity_errors), '.1e')}$). The difference depends on "
+        r"$(\mathbf F,\mathbf K,\mathbf L)$, so the solution of (3.70) does not minimise (3.65): "
         "the theorem holds for (B.4) and fails for (3.65), which Step 5 of Alg. 3.3 and (3.72) "
         "use."),
         "corrected": _tally(outcomes, (
@@ -221,24 +252,27 @@ def _record_3_32(outcomes, identity_errors):
 def _record_3_33(rises):
     rises = np.asarray(rises)
     guarded, literal = rises[:, 0] > 1e-8, rises[:, 1] > 1e-8
+    largest_rise = rises[guarded, 0].max() if guarded.any() else 0.0
     return {"diagnosis": (
-        "B.3 shows that the (B.4) functional at step k does not increase when (3.70) replaces the "
-        "step-k gains, with Xbar_k, Xu_k fixed. But Step 5 and the theorem use (3.65), which "
-        "differs from (B.4) (Thm. 3.32), and Jbar_0 depends on the step-k gains through "
-        "(3.68)-(3.69), which are not the adjoint of (3.66)-(3.67): a decrease at step k need not "
-        f"carry to Jbar_0. On random instances Jbar_0 rises in {int(guarded.sum())} of "
-        f"{len(rises)} runs with the project's Step 5 safeguard (largest relative rise "
-        f"{rises[guarded, 0].max() if guarded.any() else 0.0:.1e}) and in {int(literal.sum())} "
-        f"with the literal Step 5 ({int(np.isinf(rises[:, 1]).sum())} of these diverging until the "
+        r"B.3 shows that the (B.4) functional at step $k$ does not increase when (3.70) replaces "
+        r"the step-$k$ gains, with $\bar{\mathbf X}_k$, $\underline{\mathbf X}_k$ fixed. But Step "
+        r"5 and the theorem use (3.65), which differs from (B.4) (Thm. 3.32), and "
+        r"$\bar{\mathcal J}_0$ depends on the step-$k$ gains through (3.68)-(3.69), which are not "
+        r"the adjoint of (3.66)-(3.67): a decrease at step $k$ need not carry to "
+        r"$\bar{\mathcal J}_0$. On random instances $\bar{\mathcal J}_0$ rises in "
+        rf"{int(guarded.sum())} of {len(rises)} runs with the project's Step 5 safeguard (largest "
+        rf"relative rise ${number_tex(largest_rise, '.1e')}$) and in {int(literal.sum())} with the "
+        rf"literal Step 5 ({int(np.isinf(rises[:, 1]).sum())} of these diverging until the "
         "moments lose symmetry). The convergence of the gains has no argument in B.3: a monotone, "
         "bounded cost sequence converges, its arguments need not."),
         "no_correction": (
-            "Tried: (i) the literal Step 5 (compare with the previous iteration's Jbar_k): more "
-            "increases; (ii) the project's safeguard (compare the new and old step-k gains at the "
-            "same Xbar_k, Xu_k, P_{k+1}): fewer, not none; (iii) a sweep-level test on Jbar_0 "
-            "itself would make the costs monotone by construction, which is no theorem about Alg. "
-            "3.3, and still says nothing about the gains. A monotone scheme with a proof "
-            "minimises the exact cost instead "
+            r"Tried: (i) the literal Step 5 (compare with the previous iteration's "
+            r"$\bar{\mathcal J}_k$): more increases; (ii) the project's safeguard (compare the new "
+            r"and old step-$k$ gains at the same $\bar{\mathbf X}_k$, $\underline{\mathbf X}_k$, "
+            r"$\mathbf P_{k+1}$): fewer, not none; (iii) a sweep-level test on "
+            r"$\bar{\mathcal J}_0$ itself would make the costs monotone by construction, which is "
+            "no theorem about Alg. 3.3, and still says nothing about the gains. A monotone scheme "
+            "with a proof minimises the exact cost instead "
             "(asoc.mjls.exact_finite_horizon_dynamic_output_feedback, a descent method)."),
         "increases": {"with_safeguard": int(guarded.sum()), "literal_step_5": int(literal.sum()),
                       "literal_step_5_diverged": int(np.isinf(rises[:, 1]).sum()),

@@ -116,12 +116,16 @@ def check_3_15(rng, mutant=False):
 def summarise_3_15(outcomes):
     """The corrected reading of Prop. 3.15 (weight Q_i + C_i^T L^T R_i L C_i) on every instance."""
     holds = sum(bool(o.numbers["corrected_holds"]) for o in outcomes)
-    return {"diagnosis": ("A typo that starts in (3.11), not in (3.30): with u_k = L y_k = L C_i "
-                          "x_k (3.7) the stage cost x_k^T Q_i x_k + u_k^T R_i u_k is x_k^T (Q_i + "
-                          "C_i^T L^T R_i L C_i) x_k, but (3.11) already prints the weight Q_i + "
-                          "L^T R_i L, which drops C_i (it is even undefined unless n_y = n_x), and "
-                          "(3.30) copies it; the substitution of u_k holds only for C_i = I. Prop. "
-                          "3.16 and Thm. 3.17 use the weight with C_i."),
+    return {"diagnosis": (r"A typo that starts in (3.11), not in (3.30): with $\mathbf "
+                          r"u_k=\mathbf L\mathbf y_k=\mathbf L\mathbf C_i\mathbf x_k$ (3.7) the "
+                          r"stage cost $\mathbf x_k^\top\mathbf Q_i\mathbf x_k+\mathbf "
+                          r"u_k^\top\mathbf R_i\mathbf u_k$ is $\mathbf x_k^\top(\mathbf "
+                          r"Q_i+\mathbf C_i^\top\mathbf L^\top\mathbf R_i\mathbf L\mathbf "
+                          r"C_i)\mathbf x_k$, but (3.11) already prints the weight $\mathbf "
+                          r"Q_i+\mathbf L^\top\mathbf R_i\mathbf L$, which drops $\mathbf C_i$ "
+                          r"(it is even undefined unless $n_y=n_x$), and (3.30) copies it; the "
+                          r"substitution of $\mathbf u_k$ holds only for $\mathbf C_i=\mathbf I$. "
+                          r"Prop. 3.16 and Thm. 3.17 use the weight with $\mathbf C_i$."),
             "corrected": {"statement": "Problem (3.11) equals (3.30) with the weight "
                                        "$\\mathbf Q_i+\\mathbf C_i^\\top\\mathbf L^\\top\\mathbf "
                                        "R_i\\mathbf L\\mathbf C_i$",

@@ -2,10 +2,45 @@
 their math in LaTeX (MyST Markdown, ``$...$``), keyed by the text the study records.
 
 A text the study changes is no longer found here and is shown as recorded (plain text);
-tests/companion/test_theorems_page.py lists the records without a typeset form.
+tests/companion/test_theorems_page.py lists the records without a typeset form. The diagnoses
+(theorems.corrections) are written in LaTeX where they are made, their numbers by
+:func:`number_tex` and :func:`matrix_tex`.
 """
 
-__all__ = ["MUTANTS_TEX", "CORRECTIONS_TEX", "CHECKS_TEX"]
+__all__ = ["MUTANTS_TEX", "CORRECTIONS_TEX", "CHECKS_TEX", "number_tex", "matrix_tex"]
+
+
+def number_tex(value, spec="") -> str:
+    r"""``value`` formatted with the Python format ``spec`` (``str`` without one), as LaTeX math:
+    an exponent ``e-14`` becomes ``\cdot10^{-14}`` (the diagnoses of theorems.corrections).
+
+    Examples
+    --------
+    >>> number_tex(4.268807529683727e-14, ".1e"), number_tex(7e-15, ".0e"), number_tex(0.0001, "g")
+    ('4.3\\cdot10^{-14}', '7\\cdot10^{-15}', '0.0001')
+    >>> number_tex("1e-4"), number_tex(-0.272, ".3f"), number_tex(0.0, ".1e")
+    ('10^{-4}', '-0.272', '0')
+    """
+    text = format(value, spec) if spec else str(value)
+    if "e" not in text:
+        return text
+    mantissa, exponent = text.split("e")
+    if float(mantissa) == 0:
+        return "0"
+    power = f"10^{{{int(exponent)}}}"
+    return power if float(mantissa) == 1 else rf"{mantissa}\cdot{power}"
+
+
+def matrix_tex(rows, spec="") -> str:
+    r"""A matrix given as a list of rows, its entries by :func:`number_tex`, as a LaTeX ``bmatrix``.
+
+    Examples
+    --------
+    >>> matrix_tex([[0.3364, 0.1107], [-1.3845, -0.4556]])
+    '\\begin{bmatrix}0.3364&0.1107\\\\-1.3845&-0.4556\\end{bmatrix}'
+    """
+    body = r"\\".join("&".join(number_tex(v, spec) for v in row) for row in rows)
+    return rf"\begin{{bmatrix}}{body}\end{{bmatrix}}"
 
 
 MUTANTS_TEX = {
