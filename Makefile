@@ -17,8 +17,12 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 # `make -B` / `--always-make`: pass --force to reproduce and --all to jupyter-book
 ALWAYS := $(findstring B,$(firstword -$(MAKEFLAGS)))
-# pytest workers (pytest-xdist); tests of one notebook share a worker (--dist loadgroup)
+# pytest workers (pytest-xdist); tests of one notebook share a worker (--dist loadgroup). Each
+# worker and the kernels it starts compute on one BLAS thread: JOBS workers fill JOBS cores, and
+# OpenBLAS threads that wait for a busy core cost more than they gain (measured: 572 s with two
+# threads per worker, 505 s with one)
 JOBS   ?= 2
+ONE_THREAD := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 # Emulating other x86-64 CPUs (book/architecture.md, "Portability and tolerances"): OpenBLAS kernels of another core
 # type, and NumPy's own SIMD dispatch with the AVX-512 (X86_V4) or also the AVX2 (X86_V3)
 # groups switched off. test-portable runs every corner; make test runs the farthest one, and
@@ -79,7 +83,8 @@ tex:
 # kernels and NumPy without its AVX2 and AVX-512 code paths (as fast as the native kernels on
 # these small matrices). Results must not depend on the last bits of a CPU.
 test: venv chromium tex lint
-	OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" $(PY) -m pytest -n $(JOBS) --dist loadgroup
+	$(ONE_THREAD) OPENBLAS_CORETYPE=$(FAR_CORETYPE) NPY_DISABLE_CPU_FEATURES="$(FAR_DISABLED)" \
+	  $(PY) -m pytest -n $(JOBS) --dist loadgroup
 
 # The linter (configured in pyproject.toml): fails on a finding.
 lint: venv
@@ -87,13 +92,14 @@ lint: venv
 
 # The same suite with this machine's own kernels.
 test-native: venv chromium tex
-	$(PY) -m pytest -n $(JOBS) --dist loadgroup
+	$(ONE_THREAD) $(PY) -m pytest -n $(JOBS) --dist loadgroup
 
 # Every corner: each OpenBLAS core type with NumPy's X86_V4 off, and with X86_V3 and X86_V4 off.
 test-portable: venv
 	@set -e; for core in $(CORETYPES); do for disabled in "X86_V4" "X86_V3 X86_V4"; do \
 	  echo "== OPENBLAS_CORETYPE=$$core NPY_DISABLE_CPU_FEATURES=\"$$disabled\""; \
-	  OPENBLAS_CORETYPE=$$core NPY_DISABLE_CPU_FEATURES="$$disabled" $(PY) -m pytest $(PORTABLE_TESTS); \
+	  $(ONE_THREAD) OPENBLAS_CORETYPE=$$core NPY_DISABLE_CPU_FEATURES="$$disabled" \
+	    $(PY) -m pytest $(PORTABLE_TESTS); \
 	done; done
 
 # The benchmark suite (pytest-benchmark, one process): medians against targets, in-process ratios.

@@ -30,7 +30,9 @@ import os
 import re
 import sys
 import tempfile
+import uuid
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 
 from . import paths
@@ -40,14 +42,44 @@ from .staging import commit, one_blas_thread, remove_stage
 __all__ = ["HARNESS_PARAMETERS", "KERNEL_ARGUMENTS", "NotebookInfo", "notebooks", "find",
            "natural_key", "build_order", "by_name", "default_parameters", "parse_value",
            "parse_overrides", "run", "PAPERMILL_TIMES", "KERNEL_CELL_FILE", "normalise",
-           "parameters_reaching"]
+           "parameters_reaching", "socket_file_kernel_manager"]
 
 
 HARNESS_PARAMETERS = ("fidelity", "output_dir")   # set by the harness, not by -p
 KERNEL_ARGUMENTS = ["--IPKernelApp.log_level=ERROR"]
-"""The kernel's own log shows errors only: its start-up warning that the local kernel talks
-over TCP without encryption is noise on the command line (a notebook's warnings are cell
-outputs, not this log)."""
+"""The kernel's own log shows errors only: its start-up notices are noise on the command line
+(a notebook's warnings are cell outputs, not this log)."""
+
+
+@cache
+def socket_file_kernel_manager():
+    """jupyter_client's kernel manager, talking to the kernel over Unix socket files, not TCP.
+
+    Over TCP, the manager picks free ports and the kernel binds them a moment later; two runs
+    starting at once (the tests' two workers, say) can pick the same port, and the second
+    kernel dies with "Address already in use". Socket files carry a random name of their
+    own, so runs started together never collide.
+
+    Examples
+    --------
+    >>> manager = socket_file_kernel_manager()(kernel_name="python3")
+    >>> manager.transport, manager.ip.startswith(tempfile.gettempdir())
+    ('ipc', True)
+    """
+    from jupyter_client.manager import KernelManager
+    from traitlets import default
+
+    class SocketFileKernelManager(KernelManager):
+        @default("transport")
+        def _socket_files(self):
+            return "ipc"
+
+        @default("ip")
+        def _socket_file_prefix(self):
+            return os.path.join(tempfile.gettempdir(), f"asoc-kernel-{uuid.uuid4().hex[:16]}")
+
+    return SocketFileKernelManager
+
 
 @dataclass(frozen=True)
 class NotebookInfo:
@@ -323,7 +355,8 @@ def run(plan, log_output=False, progress_bar=None) -> Path:
             papermill.execute_notebook(str(info.path), str(staged), cwd=str(info.path.parent),
                                        parameters=staged_parameters, progress_bar=progress_bar,
                                        log_output=log_output, kernel_name="python3",
-                                       extra_arguments=KERNEL_ARGUMENTS)
+                                       extra_arguments=KERNEL_ARGUMENTS,
+                                       kernel_manager_class=socket_file_kernel_manager())
         normalise(staged, shown_parameters=shown, output_path=target,
                   replace={str(stage): shown["output_dir"],
                            staged_parameters["output_dir"]: shown["output_dir"]})
