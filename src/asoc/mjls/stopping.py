@@ -12,7 +12,6 @@ from collections import deque
 import numpy as np
 
 from .. import config
-from ..linalg import relative_change
 from ..result import Status
 
 __all__ = ["StopStatus", "StoppingRule"]
@@ -78,8 +77,13 @@ class StoppingRule:
         if not self.recent:
             self.recent.append(new)
             return None
+        squares = [float(np.vdot(part, part)) for part in new]
+        # relative_change of each part against each lag, its norm computed once
+        floor = config.defaults["linalg.norm_floor"]
+        sizes = [max(np.sqrt(square), floor) for square in squares]
         changes = [
-            max(relative_change(old_part, new_part) for old_part, new_part in zip(old, new))
+            max(_distance(old_part, new_part) / size
+                for old_part, new_part, size in zip(old, new, sizes))
             for old in reversed(self.recent)
         ]  # largest over the parts, per lag
         self.recent.append(new)
@@ -93,7 +97,7 @@ class StoppingRule:
                 self.change, self.period, self.lag1_change = change, period, changes[0]
                 return StopStatus.CYCLE
         self.smallest.append(min(changes))
-        self.norms.append(float(np.sqrt(sum(part.dot(part) for part in new))))
+        self.norms.append(float(np.sqrt(sum(squares))))
         return self._progress(it)
 
     def _cycles(self, change, change_1):
@@ -161,3 +165,9 @@ class StoppingRule:
             return StopStatus.NO_PROGRESS
         self.predicted = w * np.log(self.tol / last) / np.log(last / before)
         return StopStatus.NO_PROGRESS if self.predicted > self.max_iter - it else None
+
+
+def _distance(old, new):
+    """||new - old||_2 of two flat arrays (the numerator of :func:`asoc.linalg.relative_change`)."""
+    d = new - old
+    return np.sqrt(np.vdot(d, d))
