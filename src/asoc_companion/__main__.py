@@ -153,7 +153,13 @@ def _write_if_changed(path, text, remark=""):
 
 
 def build_parser():
-    """The command line's argument parser, with one subcommand per action (``--help`` text)."""
+    """The command line's argument parser, with one subcommand per action (``--help`` text).
+
+    Examples
+    --------
+    >>> build_parser().parse_args(["run", "sec3_5", "--fidelity", "ci"]).fidelity
+    'ci'
+    """
     parser = argparse.ArgumentParser(prog="python -m asoc_companion",
                                      description=plain(__doc__.splitlines()[0]),
                                      epilog=plain(" ".join(__doc__.split("\n\n", 1)[1].split())))

@@ -438,7 +438,13 @@ def _certify_estimates(A, T, method, unit):
 
 
 def narrow(lower, upper):
-    """Whether [lower, upper] is narrow: relative width ``mjls.bracket_warn_rtol`` at most."""
+    """Whether [lower, upper] is narrow: relative width ``mjls.bracket_warn_rtol`` at most.
+
+    Examples
+    --------
+    >>> narrow(0.98999, 0.99), narrow(0.9, 0.99)
+    (True, False)
+    """
     return upper - lower <= config.defaults["mjls.bracket_warn_rtol"] * upper
 
 
