@@ -8,7 +8,7 @@ import numpy as np
 
 from . import config
 
-__all__ = ["transpose", "sym", "pack", "unpack", "relative_change"]
+__all__ = ["transpose", "sym", "kronecker_sum", "pack", "unpack", "relative_change"]
 
 
 def transpose(X):
@@ -32,6 +32,30 @@ def sym(X):
            [1., 0.]])
     """
     return 0.5 * (X + transpose(X))
+
+
+
+def kronecker_sum(X, Y):
+    """sum_i X_i (x) Y_i of two stacks, (M, a, b) and (M, c, d), shape (a c, b d): e.g. the matrix
+    of L -> sum_i S_i L W_i on column-major vec L for symmetric W_i, in the gain equations
+    (3.31) and (3.34) (X = W, Y = S), and the blocks of (3.49).
+
+    One product of the (M, a b) and (M, c d) stacks of entries, rearranged.
+
+    Examples
+    --------
+    >>> X = np.array([[[1.0, 2.0], [2.0, 3.0]]]); Y = np.array([[[4.0]]])
+    >>> kronecker_sum(X, Y)
+    array([[ 4.,  8.],
+           [ 8., 12.]])
+    >>> A, B = np.ones((3, 2, 1)), np.ones((3, 1, 2))
+    >>> bool(np.array_equal(kronecker_sum(A, B), 3 * np.kron(A[0], B[0])))
+    True
+    """
+    M, a, b = X.shape
+    _, c, d = Y.shape
+    products = X.reshape(M, -1).T @ Y.reshape(M, -1)          # [(a, b), (c, d)]: X_ab Y_cd
+    return products.reshape(a, b, c, d).transpose(0, 2, 1, 3).reshape(a * c, b * d)
 
 
 def pack(*matrices):

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
+from ..linalg import kronecker_sum
 from ..validation import boolean, integer, probability_vector, real_array, real_scalar, semidefinite
 from .controllers import TimeVariantGain
 from .design_result import DesignResult
@@ -165,8 +166,7 @@ def _gain(sys, X, EL):
     S = sys.R + BT @ EL @ sys.B
     W = sys.C @ X @ np.swapaxes(sys.C, 1, 2)
     N = (BT @ EL @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
-    lhs = np.einsum("iab,icd->acbd", W, S).reshape(W.shape[1] * S.shape[1], -1)
-    vec, *_ = np.linalg.lstsq(lhs, -N.reshape(-1, order="F"), rcond=1e-12)
+    vec, *_ = np.linalg.lstsq(kronecker_sum(W, S), -N.reshape(-1, order="F"), rcond=1e-12)
     return vec.reshape(S.shape[1], W.shape[1], order="F")
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse.linalg
 
 from .. import config
-from ..linalg import pack, transpose, unpack
+from ..linalg import kronecker_sum, pack, transpose, unpack
 from ..threads import single_threaded
 from ..validation import choice
 
@@ -25,13 +25,6 @@ __all__ = ["METHODS", "optimality_vector", "optimality_system", "OptimalityOpera
 
 
 METHODS = ("lstsq", "sdp")
-
-
-def _kron_sum(X, Y):
-    """sum_i X_i (x) Y_i for stacks X (M, a, b), Y (M, c, d)."""
-    M, a, b = X.shape
-    _, c, d = Y.shape
-    return np.einsum("iab,icd->acbd", X, Y).reshape(a * c, b * d)
 
 
 def _gain_shapes(sys):
@@ -90,15 +83,15 @@ def optimality_system(sys, Xbar, Xunder, EPbar, EPunder, mu, JJt):
     EPuB = EPunder @ B
     XuCt = Xunder @ transpose(C)
     nF, nK = sys.nx * sys.nx, sys.nx * sys.ny
-    blocks = ((slice(0, nF), slice(0, nF), _kron_sum(Xunder, EPunder)),                  # Phi_F
+    blocks = ((slice(0, nF), slice(0, nF), kronecker_sum(Xunder, EPunder)),                  # Phi_F
               (slice(nF, nF + nK), slice(nF, nF + nK),
-               _kron_sum(m * JJt + C @ S @ transpose(C), EPunder)),
+               kronecker_sum(m * JJt + C @ S @ transpose(C), EPunder)),
               (slice(nF + nK, None), slice(nF + nK, None),
-               _kron_sum(Xunder, R + transpose(B) @ EP @ B)),
-              (slice(0, nF), slice(nF, nF + nK), _kron_sum(XuCt, EPunder)),           # Gamma_FK
-              (slice(0, nF), slice(nF + nK, None), -_kron_sum(Xunder, EPuB)),         # Gamma_FL
+               kronecker_sum(Xunder, R + transpose(B) @ EP @ B)),
+              (slice(0, nF), slice(nF, nF + nK), kronecker_sum(XuCt, EPunder)),           # Gamma_FK
+              (slice(0, nF), slice(nF + nK, None), -kronecker_sum(Xunder, EPuB)),         # Gamma_FL
               (slice(nF, nF + nK), slice(nF + nK, None),
-               -_kron_sum(transpose(XuCt), EPuB)))                                    # Gamma_KL
+               -kronecker_sum(transpose(XuCt), EPuB)))                                    # Gamma_KL
     n_z = nF + nK + sys.nu * sys.nx
     H = np.empty((n_z, n_z))
     for rows, cols, block in blocks:

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import config
-from ..linalg import transpose
+from ..linalg import kronecker_sum, transpose
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .closed_loops import closed_loop, gain_matrix, noise_covariances
 from .design_result import CertifiedDesignResult
@@ -130,8 +130,7 @@ def gain_from_moments(sys, X, P, method="vec"):
     N = (np.swapaxes(sys.B, 1, 2) @ EP @ sys.A @ X @ np.swapaxes(sys.C, 1, 2)).sum(axis=0)
     if method == "sdp":
         return gain_sdp(S, W, N)
-    lhs = np.einsum("iab,icd->acbd", W, S).reshape(W.shape[1] * S.shape[1], -1)  # sum W_i (x) S_i
-    vec_L = -np.linalg.solve(lhs, N.reshape(-1, order="F"))
+    vec_L = -np.linalg.solve(kronecker_sum(W, S), N.reshape(-1, order="F"))
     return vec_L.reshape(S.shape[1], W.shape[1], order="F")
 
 

@@ -16,7 +16,7 @@ from enum import Enum
 import numpy as np
 
 from .. import config
-from ..linalg import transpose
+from ..linalg import kronecker_sum, transpose
 from .closed_loops import closed_loop
 from .lyapunov import coupled_lyapunov_solver
 from .stability import mean_square_stability
@@ -143,24 +143,8 @@ class Recursion:
             return gain_sdp(S, W, N)
         if self.scalar_gain:
             return -N / (W * S).sum()
-        return -np.linalg.solve(self.kronecker_sum(W, S),
+        return -np.linalg.solve(kronecker_sum(W, S),
                                 N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
-
-    def kronecker_sum(self, W, S):
-        """sum_i W_i (x) S_i, the matrix of L -> sum_i S_i L W_i on column-major vec L (Prop.
-        3.18; W_i symmetric), as one product of the (M, ny^2) and (M, nu^2) stacks of entries.
-
-        Examples
-        --------
-        >>> from asoc.mjls.examples import sec354_system
-        >>> rec = Recursion(sec354_system(1))
-        >>> W, S = np.ones((2, 1, 1)), np.full((2, 1, 1), 3.0)
-        >>> rec.kronecker_sum(W, S)
-        array([[6.]])
-        """
-        M, ny, nu = len(W), W.shape[1], S.shape[1]
-        products = W.reshape(M, -1).T @ S.reshape(M, -1)          # [(a, b), (c, d)]: W_ab S_cd
-        return products.reshape(ny, ny, nu, nu).transpose(0, 2, 1, 3).reshape(ny * nu, -1)
 
     def noise(self, L):
         """mu_i (H_i H_i^T + B_i L J_i J_i^T L^T B_i^T): the constant term of (3.35) for the gain
