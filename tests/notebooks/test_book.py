@@ -154,11 +154,13 @@ def _all_pages(html):
 
 def _load_and_log(browser, path):
     """Open ``path``; return (requests [(url, type)], console errors) of this page load alone."""
-    import time
+    from selenium.webdriver.support.ui import WebDriverWait
 
     browser.get_log("performance"), browser.get_log("browser")  # drop what earlier pages left
-    browser.get(path.as_uri())
-    time.sleep(0.5)  # async and deferred scripts
+    browser.get(path.as_uri())  # returns after the load event: deferred and async scripts ran
+    WebDriverWait(browser, 10).until(
+        lambda d: d.execute_script("return document.readyState") == "complete"
+    )
     if browser.execute_script(
         "return !!(window.MathJax && MathJax.startup && MathJax.startup.promise)"
     ):
