@@ -203,3 +203,28 @@ def browser():
     driver.set_window_size(1280, 900)
     yield driver
     driver.quit()
+
+
+def write_toy_notebook(
+    book, name, cells, params='fidelity = "full"\noutput_dir = "../figures"', depends=None
+):
+    """Write a minimal harness notebook ``book/<name>.ipynb`` (the ``asoc`` metadata, a tagged
+    ``parameters`` cell with ``params``, then one code cell per entry of ``cells``); its path."""
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["asoc"] = {
+        "title": name,
+        "figures": [],
+        "tables": [],
+        **({"depends": depends} if depends else {}),
+    }
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
+    parameters = nbformat.v4.new_code_cell(params)
+    parameters.metadata["tags"] = ["parameters"]
+    nb.cells = [parameters] + [nbformat.v4.new_code_cell(c) for c in cells]
+    path = book / f"{name}.ipynb"
+    nbformat.write(nb, path)
+    return path

@@ -17,6 +17,7 @@ from asoc_companion import plan as plan_module
 from asoc_companion.atomic_files import atomic_write_json
 from asoc_companion.paths import ROOT
 from asoc_companion.plan import make_plan, output_folder
+from conftest import write_toy_notebook
 
 
 def _notebook(
@@ -26,23 +27,7 @@ def _notebook(
     depends=None,
     params='fidelity = "full"\noutput_dir = "."\nseed = 3',
 ):
-    nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {
-        "title": name,
-        "figures": [],
-        "tables": [],
-        **({"depends": depends} if depends else {}),
-    }
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    cell = nbformat.v4.new_code_cell(params)
-    cell.metadata["tags"] = ["parameters"]
-    nb.cells = [cell, nbformat.v4.new_code_cell(source)]
-    path = folder / f"{name}.ipynb"
-    nbformat.write(nb, path)
+    write_toy_notebook(folder, name, [source], params=params, depends=depends)
     return nbs.notebooks(folder)[name]
 
 

@@ -26,6 +26,7 @@ from asoc_companion import manifest, paths
 from asoc_companion import notebooks as nbs
 from asoc_companion.atomic_files import atomic_write_json
 from asoc_companion.plan import make_plan
+from conftest import write_toy_notebook
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 
@@ -139,17 +140,7 @@ def _project(tmp_path, monkeypatch):
 
 
 def _notebook(book, name, cells):
-    nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {"title": name, "figures": [], "tables": []}
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    params = nbformat.v4.new_code_cell('fidelity = "full"\noutput_dir = "../figures"')
-    params.metadata["tags"] = ["parameters"]
-    nb.cells = [params] + [nbformat.v4.new_code_cell(c) for c in cells]
-    nbformat.write(nb, book / f"{name}.ipynb")
+    write_toy_notebook(book, name, cells)
     return nbs.notebooks(book)[name]
 
 

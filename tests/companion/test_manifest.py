@@ -18,6 +18,7 @@ from asoc_companion import notebooks as nbs
 from asoc_companion.atomic_files import atomic_write_json
 from asoc_companion.imports import closure, imported_names
 from asoc_companion.plan import make_plan
+from conftest import write_toy_notebook
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 
@@ -48,22 +49,7 @@ def _project(tmp_path, monkeypatch):
 
 
 def _notebook(book, name, source, depends=None):
-    nb = nbformat.v4.new_notebook()
-    nb.metadata["asoc"] = {
-        "title": name,
-        "figures": [],
-        "tables": [],
-        **({"depends": depends} if depends else {}),
-    }
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    params = nbformat.v4.new_code_cell('fidelity = "full"\noutput_dir = "../figures"')
-    params.metadata["tags"] = ["parameters"]
-    nb.cells = [params, nbformat.v4.new_code_cell(source)]
-    nbformat.write(nb, book / f"{name}.ipynb")
+    write_toy_notebook(book, name, [source], depends=depends)
 
 
 def test_imports_are_read_statically_with_relative_and_lazy_ones():
