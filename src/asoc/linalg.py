@@ -1,5 +1,6 @@
 """Small linear-algebra helpers shared by the subpackages: transposes and symmetric parts of
-stacks, packing of gains into one vector, and the relative change with one floor rule.
+stacks, Kronecker sums of two stacks, packing of gains into one vector, and the relative change
+with one floor rule.
 
 Stacks of matrices have shape ``(..., n, m)``; every helper works on the last two axes.
 """
@@ -51,7 +52,16 @@ def kronecker_sum(X, Y):
     >>> A, B = np.ones((3, 2, 1)), np.ones((3, 1, 2))
     >>> bool(np.array_equal(kronecker_sum(A, B), 3 * np.kron(A[0], B[0])))
     True
+    >>> kronecker_sum(np.ones((2, 1, 1)), np.ones((3, 1, 1)))
+    Traceback (most recent call last):
+    ...
+    ValueError: X, Y: expected stacks (M, a, b) and (M, c, d) of the same M, found shapes
+    (2, 1, 1) and (3, 1, 1)
     """
+    X, Y = np.asarray(X), np.asarray(Y)
+    if X.ndim != 3 or Y.ndim != 3 or len(X) != len(Y):
+        raise ValueError(f"X, Y: expected stacks (M, a, b) and (M, c, d) of the same M, found "
+                         f"shapes {X.shape} and {Y.shape}")
     M, a, b = X.shape
     _, c, d = Y.shape
     products = X.reshape(M, -1).T @ Y.reshape(M, -1)          # [(a, b), (c, d)]: X_ab Y_cd
