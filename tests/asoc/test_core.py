@@ -1,6 +1,9 @@
 """The core modules shared by the subpackages: asoc.optimize, asoc.result, asoc.threads,
 asoc.progress, asoc.stats, asoc.linalg and asoc.setting_checks (beside their doctests)."""
 
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info
@@ -12,7 +15,7 @@ from asoc.progress import progress_bar
 from asoc.result import STATUS_CODES, IterativeResult
 from asoc.setting_checks import INT, REAL, SIZES
 from asoc.stats import bootstrap_ci, bootstrap_median_ci
-from asoc.threads import single_threaded
+from asoc.threads import concurrently, in_parts, parts, single_threaded
 
 
 def rosenbrock(z):
@@ -89,3 +92,57 @@ def test_setting_checks_state_what_they_accept():
         REAL(0, 1).check("k", 1.0)
     with pytest.raises(TypeError, match="k: expected an integer"):
         INT(0).check("k", 1.5)
+
+
+def _blas_threads():
+    return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+
+
+def test_single_threaded_contexts_overlapping_on_threads_restore_blas_once_all_closed():
+    before = _blas_threads()
+    inner_open, outer_closed = threading.Event(), threading.Event()
+
+    def inner():
+        with single_threaded():
+            inner_open.set()
+            outer_closed.wait(5)
+            return _blas_threads()
+
+    worker = ThreadPoolExecutor(1).submit(inner)
+    inner_open.wait(5)
+    with single_threaded():
+        pass  # closes first: the other thread's context is still open
+    still_limited = _blas_threads()
+    outer_closed.set()
+    assert still_limited == {1} and worker.result() == {1}
+    assert _blas_threads() == before
+
+
+def test_concurrently_keeps_order_per_call_settings_and_raises_a_calls_error():
+    @config.accepts_settings("mjls.rank_rtol")
+    def both():
+        return concurrently(lambda: config.defaults["mjls.rank_rtol"],
+                            lambda: config.defaults["mjls.rank_rtol"],
+                            lambda: threading.current_thread().name)
+
+    first, second, _ = both(rank_rtol=1e-3)
+    assert (first, second) == (1e-3, 1e-3)   # the caller's per-call value, on every thread
+    before = _blas_threads()
+
+    def fails():
+        raise ValueError("from a worker")
+
+    with pytest.raises(ValueError, match="from a worker"):
+        concurrently(lambda: 1, fails)
+    assert _blas_threads() == before
+
+
+def test_nested_concurrently_runs_in_line_without_waiting_for_its_own_pool():
+    def nested(k):
+        return concurrently(lambda: k, lambda: -k)
+
+    assert concurrently(lambda: nested(1), lambda: nested(2), lambda: nested(3)) == [
+        [1, -1], [2, -2], [3, -3]]
+    x = np.zeros(7)
+    in_parts(lambda part: x.__setitem__(part, np.arange(7)[part]), 7)
+    assert x.tolist() == list(range(7)) and sum(len(range(7)[p]) for p in parts(7)) == 7
