@@ -73,9 +73,16 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
     "mjls.arnoldi_lean_from": (
         100_000,
         INT(0),
-        "From this size M n^2 on, 20 Krylov vectors are tried before mjls.arnoldi_subspaces: at "
-        "n = M = 100 (M n^2 = 10^6) they take 21 products (1.4 s), 60 vectors 61 products and "
-        "their orthogonalisation (10 s, loaded 2 cores)."),
+        "From this size M n^2 on, mjls.arnoldi_lean_subspace Krylov vectors are tried before "
+        "mjls.arnoldi_subspaces: at n = M = 100 (M n^2 = 10^6) 20 vectors took 21 products "
+        "(1.4 s), 60 vectors 61 products and their orthogonalisation (10 s, loaded 2 cores)."),
+    "mjls.arnoldi_lean_subspace": (
+        8,
+        INT(3),
+        "The Krylov-space size tried first from M n^2 = mjls.arnoldi_lean_from on. ARPACK's own "
+        "work (orthogonalising against the space, restarts) grows with it and there outweighs "
+        "the products: at n = M = 100 (rho 0.99, the Alg. 3.1 design) the certified rho took "
+        "1.0 s with 8 vectors, 1.1 s with 10 and 1.8 s with 20, to the same bracket."),
     "mjls.bracket_rtol": (
         1e-12,
         REAL(0, 1),
@@ -269,6 +276,15 @@ TUNABLES: dict[str, tuple[object, Allowed, str]] = {
         "iterations), exact 2.6 s, auto 1.0 s. n = 64, M = 8, easy: auto as step (CPU 0.62-0.69 s "
         "against 0.65-0.74 s); rho 0.995: step 221 s (1,629 iterations), exact 13.3 s, "
         "auto 15.6 s."),
+    "mjls.parallel_from": (
+        8_000_000,
+        INT(0),
+        "From this M n^3 on, the products of the moment maps L and L* and of Alg. 3.1's step "
+        "(3.35) run in parts of the modes on threads with single-threaded BLAS, and Alg. 3.1's "
+        "exact iteration solves its two moment equations at once (asoc.threads.concurrently). "
+        "Measured per step of (3.35) on 2 cores, one piece against parts: n = 64, M = 16 "
+        "(4.2e6) 1.77 and 1.77 ms; n = 100, M = 16 (1.6e7) 10.2 and 4.8 ms; n = M = 100 58 and "
+        "28 ms. Below, waking a thread (about 0.4 ms) costs more than it saves."),
     "mjls.stationary_atol": (
         1e-8,
         REAL(0, 1),

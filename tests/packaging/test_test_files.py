@@ -71,6 +71,7 @@ COVERED_BY = {
     "mjls/stability.py": "asoc/mjls/test_certified.py",
     "mjls/static.py": "asoc/mjls/test_mjls.py",
     "mjls/static_iterates.py": "asoc/mjls/test_mjls_exact.py",
+    "mjls/scaled_pair.py": "asoc/mjls/test_mjls_exact.py",
     "mjls/stopping.py": "asoc/mjls/test_mjls_dynamic.py",
     "mjls/system.py": "asoc/mjls/test_statespace.py",
 }

@@ -397,14 +397,15 @@ def _first_order_lower(K, lam, left, right):
 
 def _arnoldi(A, T, adjoint):
     """Estimates by ARPACK on L (or L*), one per Krylov-space size of ``mjls.arnoldi_subspaces``
-    (after 20 from M n^2 = ``mjls.arnoldi_lean_from`` on) that converges: the largest-modulus
-    eigenvalue; when it is not real positive (periodic chains), again on L + |lambda| I, where the
-    Perron eigenvalue is strictly dominant.
+    (after ``mjls.arnoldi_lean_subspace`` from M n^2 = ``mjls.arnoldi_lean_from`` on) that
+    converges: the largest-modulus eigenvalue; when it is not real positive (periodic chains),
+    again on L + |lambda| I, where the Perron eigenvalue is strictly dominant.
     """
     M, n, _ = A.shape
     dim = M * n * n
     v0 = np.broadcast_to(np.eye(n), (M, n, n)).ravel()
-    lean = (20,) if dim >= config.defaults["mjls.arnoldi_lean_from"] else ()
+    lean = config.defaults["mjls.arnoldi_lean_subspace"]
+    lean = (lean,) if dim >= config.defaults["mjls.arnoldi_lean_from"] else ()
     for ncv in lean + tuple(config.defaults["mjls.arnoldi_subspaces"]):
         shift = 0.0
         try:

@@ -14,6 +14,7 @@ B_i^T E_i(P) B_i L mu_i J_i J_i^T, so in (3.31) and (3.34) C_i X_i C_i^T becomes
 C_i X_i C_i^T + mu_i J_i J_i^T. With J = 0 (J = None) nothing changes.
 """
 
+import contextlib
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -22,6 +23,7 @@ import numpy as np
 
 from .. import config
 from ..linalg import kronecker_sum, transpose
+from ..threads import single_threaded
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .closed_loops import closed_loop, gain_matrix, noise_covariances
 from .design_result import CertifiedDesignResult
@@ -239,13 +241,23 @@ def static_output_feedback(sys, tol=1e-10, max_iter=20000, init=1e-4, method="ve
 
 
 def _iterate(sys, tol, max_iter, init, method, until):
-    """The thesis's iteration, handing over to the exact one at a stabilising gain (``until``)."""
+    """The thesis's iteration, handing over to the exact one at a stabilising gain (``until``);
+    where its steps run on threads (:attr:`asoc.mjls.static_iterates.Recursion.parallel`), with
+    single-threaded BLAS throughout, which its threads would otherwise switch on and off.
+    """
     rec = Recursion(sys)
+    with single_threaded() if rec.parallel else contextlib.nullcontext():
+        return _phases(sys, rec, tol, max_iter, init, method, until)
+
+
+def _phases(sys, rec, tol, max_iter, init, method, until):
+    """The step iteration, then the exact one from its first stabilising gain (``until``)."""
     run = step_iteration(sys, rec, tol, max_iter, init, method, until)
     if not run.stabilized:
         return run
     exact = exact_iteration(sys, rec, run.L, tol, max_iter - run.iterations, method,
-                            run.iterations + 1, guess=(run.X, run.P), change=run.change)
+                            run.iterations + 1, guess=(run.X, run.P), change=run.change,
+                            handover=run.handover)
     if not exact.stabilized:                            # an exact iterate left the stabilising set
         return step_iteration(sys, rec, tol, max_iter, init, method)
     exact.iterations += run.iterations

@@ -17,13 +17,16 @@ import numpy as np
 
 from .. import config
 from ..linalg import kronecker_sum, transpose
+from ..threads import concurrently, in_parts
 from .closed_loops import closed_loop
 from .lyapunov import coupled_lyapunov_solver
+from .moment_operator import in_parallel, mix_modes
+from .scaled_pair import ScaledPair
 from .stability import mean_square_stability
 from .stopping import StoppingRule, StopStatus
 from .system import predecessor_sum, successor_average
 
-__all__ = ["ALG31_PATIENCE", "UntilStabilizing", "IterationRun", "Recursion", "ScaledPair",
+__all__ = ["ALG31_PATIENCE", "UntilStabilizing", "IterationRun", "Recursion",
            "gain_sdp", "step_iteration", "exact_iteration", "lyapunov_certified"]
 
 
@@ -62,7 +65,9 @@ class IterationRun:
     L : numpy.ndarray, shape (nu, ny)
         The returned gain: the last, or on a cycle the member of the period of smallest exact cost.
     X, P : numpy.ndarray, shape (M, nx, nx)
-        The (unscaled) moments of that iterate.
+        The (unscaled) moments of that iterate; where the step iteration stopped at a
+        stabilising gain, the solutions of (3.33) (and of (3.32), where it was solved beside it)
+        for that gain.
     status : StopStatus
     change : float
         The relative change that decided the status.
@@ -79,6 +84,10 @@ class IterationRun:
         (step iteration), resp. every exact iterate stabilised (exact iteration).
     trace_X, trace_P : numpy.ndarray, shape (iterations + 1, M)
         tr X^i and tr P^i of every iterate.
+    handover : tuple or None
+        Where the step iteration stopped at a stabilising gain: the moment equations of that gain
+        and their solutions P and X (X None unless solved beside P), for :func:`exact_iteration`
+        to start from.
 
     Examples
     --------
@@ -101,6 +110,7 @@ class IterationRun:
     period: int = 1
     members: list = None
     lag1_change: float = np.nan
+    handover: tuple = None
 
 
 class Recursion:
@@ -123,16 +133,30 @@ class Recursion:
         self.muJJt = None if sys.J is None else sys.mu_inf[:, None, None] * (sys.J @ swap(sys.J))
         self.nu, self.ny = sys.nu, sys.ny
         self.scalar_gain = sys.nu == sys.ny == 1
+        # the two recursions (and the two moment equations) of a gain on two threads
+        self.parallel = in_parallel(sys.A)
+        self._arrays = {}
 
     def terms(self, Xs, EP, cX, cP):
         """S_i = R_i cP + B_i^T E_i(P) B_i, W_i = C_i Xs_i C_i^T + cX mu_i J_i J_i^T and
-        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables.
+        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables (in parts of the
+        modes on threads where :attr:`parallel`, N summed part by part).
         """
-        BtEP = self.Bt @ EP
-        S = cP * self.R + BtEP @ self.B
-        XCt = Xs @ self.Ct
-        W = self.C @ XCt if self.muJJt is None else self.C @ XCt + cX * self.muJJt
-        return S, W, (BtEP @ self.A @ XCt).sum(axis=0)
+        M = len(self.A)
+        S, W = np.empty((M, self.nu, self.nu)), np.empty((M, self.ny, self.ny))
+        N_parts = {}
+
+        def products(modes):
+            BtEP = self.Bt[modes] @ EP[modes]
+            S[modes] = cP * self.R[modes] + BtEP @ self.B[modes]
+            XCt = Xs[modes] @ self.Ct[modes]
+            W[modes] = self.C[modes] @ XCt
+            if self.muJJt is not None:
+                W[modes] += cX * self.muJJt[modes]
+            N_parts[modes.start] = (BtEP @ self.A[modes] @ XCt).sum(axis=0)
+
+        self._run(products)
+        return S, W, sum(N_parts[start] for start in sorted(N_parts, key=lambda k: k or 0))
 
     def gain(self, Xs, EP, cX, cP, method="vec"):
         """(3.34) with R scaled by cP = 1 / s_P and the measurement noise by cX = 1 / s_X
@@ -146,91 +170,74 @@ class Recursion:
         return -np.linalg.solve(kronecker_sum(W, S),
                                 N.reshape(-1, order="F")).reshape(self.nu, self.ny, order="F")
 
-    def noise(self, L):
+    def noise(self, L, modes=slice(None)):
         """mu_i (H_i H_i^T + B_i L J_i J_i^T L^T B_i^T): the constant term of (3.35) for the gain
-        L.
+        L (of the ``modes``).
         """
         if self.muJJt is None:
-            return self.muHHt
-        BL = self.B @ L
-        return self.muHHt + BL @ self.muJJt @ transpose(BL)
+            return self.muHHt[modes]
+        BL = self.B[modes] @ L
+        return self.muHHt[modes] + BL @ self.muJJt[modes] @ transpose(BL)
 
     def moments(self, L, Xs, EP, cX, cP, out):
         """(3.35) into out[0] (next X, constant term scaled by cX = 1 / s_X) and out[1] (next P, by
         cP).
 
-        With one input and one output, the products B L C and C^T L^T R L C contract over
-        dimensions of size 1: each entry is one product, formed by broadcasting (the same
-        numbers as the matrix products, in fewer operations).
+        From M n^3 = ``mjls.parallel_from`` on, the products run in parts of the modes on threads
+        (:func:`asoc.threads.concurrently`), then the sums over the predecessors in parts of the
+        rows (one product with two BLAS threads is as fast, but switching the BLAS threads back
+        and forth between the two costs more than the threads gain).
         """
+        Y, half = self._scratch(out[0].shape, "Y"), self._scratch(out[0].shape, "half")
+
+        def products(modes):
+            Acl, LtRL = self._closed_loop(L, modes)
+            Aclt = Acl.swapaxes(1, 2)
+            np.matmul(np.matmul(Acl, Xs[modes], out=half[modes]), Aclt, out=Y[modes])
+            Y[modes] += cX * self.noise(L, modes)
+            np.matmul(np.matmul(Aclt, EP[modes], out=half[modes]), Acl, out=out[1][modes])
+            out[1][modes] += cP * (self.Q[modes] + LtRL)
+
+        self._run(products)
+        self._run(lambda rows: mix_modes(self.Tt[rows], Y, out[0][rows]))
+
+    def successor_average(self, P):
+        """E_i(P) = sum_j p_ij P_j of the stack P (in parts of the rows on threads, as
+        :meth:`moments`), in an array that the next call overwrites.
+        """
+        EP = self._scratch(P.shape, "EP")
+        self._run(lambda rows: mix_modes(self.T[rows], P, EP[rows]))
+        return EP
+
+    def _scratch(self, shape, name):
+        """An array kept between steps (its pages mapped once: threads writing a new array wait
+        for each other there); the result of the last call is overwritten by the next.
+        """
+        if name not in self._arrays or self._arrays[name].shape != shape:
+            self._arrays[name] = np.empty(shape)
+        return self._arrays[name]
+
+    def _closed_loop(self, L, modes):
+        """A_i + B_i L C_i and C_i^T L^T R_i L C_i of the ``modes``.
+
+        With one input and one output, the products contract over dimensions of size 1: each
+        entry is one product, formed by broadcasting (the same numbers as the matrix products,
+        in fewer operations).
+        """
+        A, B, C, R = self.A[modes], self.B[modes], self.C[modes], self.R[modes]
         if self.scalar_gain:
             gain = L[0, 0]
-            Acl = self.A + (self.B * gain) * self.C
-            LC = gain * self.C
-            LtRL = (LC.swapaxes(1, 2) * self.R) * LC
+            LC = gain * C
+            return A + (B * gain) * C, (LC.swapaxes(1, 2) * R) * LC
+        LC = L @ C
+        return A + (B @ L) @ C, LC.swapaxes(1, 2) @ R @ LC
+
+    def _run(self, task):
+        """task(modes) for all modes: in parts on threads where :attr:`parallel`, else at once."""
+        if self.parallel:
+            in_parts(task, len(self.A))
         else:
-            Acl = self.A + (self.B @ L) @ self.C
-            LC = L @ self.C
-            LtRL = LC.swapaxes(1, 2) @ self.R @ LC
-        Aclt = Acl.swapaxes(1, 2)
-        Y = Acl @ Xs @ Aclt + cX * self.noise(L)
-        np.matmul(self.Tt, Y.reshape(len(Y), -1), out=out[0].reshape(len(Y), -1))
-        np.add(Aclt @ EP @ Acl, cP * (self.Q + LtRL), out=out[1])
-
-
-class ScaledPair:
-    """The iterates of Alg. 3.1 in scaled variables, X^i = s_X Xs and P^i = s_P Ps, as one stack
-    [Xs, Ps] of shape (2, M, nx, nx).
-
-    Keeps the log scales, the directions Xs / ||Xs||_F and Ps / ||Ps||_F (``units``, what Step
-    4's test compares) and the diagonals of every iterate (the trace histories), so that each
-    new pair is scaled, checked and normalised once; ``next`` receives the unscaled pair of (3.35).
-
-    Examples
-    --------
-    >>> pair = ScaledPair(1e-4, 2, 3)
-    >>> pair.next[:] = 5.0
-    >>> pair.accept(pair.largest_entries())
-    >>> float(pair.stack.max()), round(float(pair.unscaled().max()), 12), pair.traces()[0].shape
-    (1.0, 5.0, (2, 2))
-    """
-
-    def __init__(self, init, M, n):
-        self.stack = np.broadcast_to(init * np.eye(n), (2, M, n, n)).copy()
-        self.log_scales = np.zeros((2, 1, 1, 1))
-        self.next = np.empty_like(self.stack)
-        self._magnitudes = np.empty_like(self.stack)
-        self.units = _unit(self.stack[0]), _unit(self.stack[1])
-        self._diagonals = [self.stack.diagonal(0, 2, 3).copy()]
-        self._logs = [self.log_scales]
-
-    def largest_entries(self):
-        """Max |X| and max |P| over the pair in ``next``, shape (2, 1, 1, 1); NaN where it holds a
-        NaN, and 1 where it is zero (a zero iterate, e.g. of a system without noise, stays zero).
-        """
-        largest = np.abs(self.next, out=self._magnitudes).max(axis=(1, 2, 3), keepdims=True)
-        return np.where(largest == 0.0, 1.0, largest)
-
-    def accept(self, scales):
-        """Make ``next / scales`` the current pair (a new array: earlier stacks stay valid)."""
-        self.stack = self.next / scales
-        self.log_scales = self.log_scales + np.log(scales)
-        self._diagonals.append(self.stack.diagonal(0, 2, 3).copy())
-        self._logs.append(self.log_scales)
-        self.units = _unit(self.stack[0]), _unit(self.stack[1])
-
-    def unscaled(self, stack=None, log_scales=None):
-        """X^i and P^i (of the current pair, or of an earlier ``stack`` and ``log_scales``)."""
-        if stack is None:
-            stack, log_scales = self.stack, self.log_scales
-        return np.exp(log_scales) * stack
-
-    def traces(self):
-        """Tr X^i and tr P^i of every iterate, each (iterations + 1, M)."""
-        traces = np.exp(np.array(self._logs).reshape(-1, 2, 1)) * np.array(self._diagonals).sum(
-            axis=3
-        )
-        return traces[:, 0], traces[:, 1]
+            task(slice(None))
 
 
 def gain_sdp(S, W, N):
@@ -257,12 +264,6 @@ def gain_sdp(S, W, N):
     return np.asarray(L.value)
 
 
-def _unit(S):
-    """S / ||S||_F as a flat vector."""
-    flat = S.ravel()
-    return flat / math.sqrt(flat.dot(flat))
-
-
 def _finite(L):
     """Whether every entry of the gain is finite."""
     return math.isfinite(L[0, 0]) if L.size == 1 else bool(np.isfinite(L).all())
@@ -286,7 +287,7 @@ def step_iteration(sys, rec, tol, max_iter, init, method="vec", until=UntilStabi
     for it in range(1, max_iter + 1):
         cX, cP = np.exp(-pair.log_scales).ravel().tolist()
         Xs, Ps = pair.stack
-        EP = (sys.T @ Ps.reshape(sys.M, -1)).reshape(Ps.shape)
+        EP = rec.successor_average(Ps)
         try:
             L_new = rec.gain(Xs, EP, cX, cP, method)
         except np.linalg.LinAlgError:
@@ -305,9 +306,9 @@ def step_iteration(sys, rec, tol, max_iter, init, method="vec", until=UntilStabi
             status = verdict
             break
         if until is UntilStabilizing.EACH or (
-            until is UntilStabilizing.SLOW and rate.slow(it, rule.change)
+            until is UntilStabilizing.SLOW and rate.slow(it, rule.change, pair.traces)
         ):
-            stable, P_exact = _stabilizes(sys, L, pair.unscaled()[1], rule.change)
+            stable, handover = _stabilizes(sys, rec, L, pair.unscaled(), rule.change)
             if stable:
                 stabilized = True
                 break
@@ -316,7 +317,8 @@ def step_iteration(sys, rec, tol, max_iter, init, method="vec", until=UntilStabi
     members = [(G, *pair.unscaled(stack, logs)) for G, stack, logs in list(recent)[:period]]
     L, X, P = members[0]
     if stabilized:
-        P = P_exact  # the solution of (3.33) for L, from the check
+        _, P_solution, X_solution = handover   # the solutions of (3.33) (and (3.32)) for L
+        P, X = P_solution.X, X if X_solution is None else X_solution.X
     return IterationRun(
         L=L,
         X=X,
@@ -330,6 +332,7 @@ def step_iteration(sys, rec, tol, max_iter, init, method="vec", until=UntilStabi
         period=period,
         members=members if period > 1 else [],
         lag1_change=rule.lag1_change,
+        handover=handover if stabilized else None,
     )
 
 
@@ -338,6 +341,15 @@ class _Rate:
     estimated over the last ``window`` iterations; it is slow when log(tol / change) / log r,
     the iterations still to go, exceeds ``mjls.auto_switch_iterations``. Checked after
     ``window`` iterations, then at doubling intervals (each check may cost a spectral radius).
+
+    r is the larger of the rate of the changes and the rate of the moments: the iterates
+    X^k = L(X^{k-1}) + N approach their limit as rho^k (rho of the closed loop, Cor. 3.2), and
+    so do their directions, which Step 4's test compares; the increments of tr X^k and of tr P^k
+    over the window estimate that rate, where they shrink, and the smaller of the two counts
+    (both tend to rho; a transient slows one of them for a while: on Sec. 3.5.4's first system,
+    rho 0.82, tr P^k's increments shrank by 0.91 a step over the first 11). The changes alone
+    can fall fast for a while and predict too few iterations (at n = M = 100 with rho 0.99 they
+    predicted 105 further iterations after 20, where about 1,500 were needed).
     """
 
     window = 10
@@ -346,7 +358,10 @@ class _Rate:
         self.tol, self.changes, self.next_check = tol, [], self.window
         self.threshold = config.defaults["mjls.auto_switch_iterations"]
 
-    def slow(self, it, change):
+    def slow(self, it, change, traces):
+        """Whether to try the exact iteration after iteration ``it`` with its ``change``;
+        ``traces()`` returns tr X^k and tr P^k of every iterate so far (:meth:`ScaledPair.traces`).
+        """
         self.changes.append(change)
         if it < self.next_check or len(self.changes) <= self.window:
             return False
@@ -354,18 +369,29 @@ class _Rate:
         first, last = self.changes[-self.window - 1], self.changes[-1]
         if not (0 < last < first):
             return True  # not contracting: try the exact moments
-        remaining = np.log(self.tol / last) / np.log(last / first) * self.window
-        return remaining > self.threshold
+        rate = max(last / first, min(self._moment_rate(trace) for trace in traces()))
+        remaining = np.log(self.tol / last) / np.log(rate) * self.window
+        return bool(remaining > self.threshold)
+
+    def _moment_rate(self, trace):
+        """The factor by which the increment of sum_i tr X_i^k shrank over the window (0 where it
+        did not shrink: no evidence of a slow contraction).
+        """
+        increments = np.abs(np.diff(trace[-self.window - 2:].sum(axis=1)))
+        first, last = increments[0], increments[-1]
+        return float(last / first) if 0 < last < first else 0.0
 
 
-def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=None, change=np.inf):
+def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=None, change=np.inf,
+                    handover=None):
     """(3.34) alternated with the exact solve of the moment equations (3.32)-(3.33) for L.
 
     Each step solves the two coupled linear equations X = predecessor_sum(Acl X Acl^T + mu H H^T)
     and P = Q + C^T L^T R L C + Acl^T successor_average(P) Acl
     (:func:`asoc.mjls.lyapunov.coupled_lyapunov_solver`: one LU factorisation of size M nx^2
     for both when small, else BiCGSTAB on the operator, started from the previous solutions
-    and first from ``guess`` = (X, P), e.g. the thesis's last iterates), and stops on the rule of
+    and first from ``guess`` = (X, P), e.g. the thesis's last iterates, or for the first gain
+    the solutions of the step iteration's check, ``handover``), and stops on the rule of
     :class:`asoc.mjls.stopping.StoppingRule` on L (iterations counted from ``first``).
     ``stabilized`` is False when an iterate does not stabilise (the moments have no solution
     then). Each gain is first checked by the coupled Lyapunov certificate
@@ -380,19 +406,16 @@ def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=Non
     stabilized, status = True, StopStatus.MAX_ITERATIONS
     X, P = guess if guess is not None else (None, None)
     for it in range(first, first + max_iter):
-        # warm starts from the last solutions, solved as far as the gain's change needs
-        solve_tol = _inexact_tolerance(change)
-        # an inexact solve is asked for: its residual is checked here, not reported as a miss
-        on_miss = "fallback" if solve_tol <= config.defaults["mjls.solve_tolerance"] else "report"
-        Acl, solve, P_solution, weight = _costate(sys, L, x0=P, tol=solve_tol, on_miss=on_miss)
-        if not (
-            lyapunov_certified(P_solution, weight)
-            or mean_square_stability(Acl, sys.T, check=False).rho < 1
-        ):
+        if handover is not None:                # the step iteration's check solved them for L
+            (equations, P_solution, X_solution), handover = handover, None
+        else:  # warm starts from the last solutions, solved as far as the gain's change needs
+            equations = _MomentEquations(sys, rec, L, change)
+            P_solution, X_solution = equations.solutions(X, P)
+        if not equations.stabilizing(P_solution):
             stabilized, status = False, StopStatus.DIVERGED
             break
         P = P_solution.X
-        X = solve(predecessor_sum(sys.T, rec.noise(L), check=False), x0=X, on_miss=on_miss).X
+        X = (X_solution or equations.second_moments(X)).X
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
         try:
@@ -432,33 +455,61 @@ def _inexact_tolerance(change):
     return float(np.clip(1e-2 * change, floor, loosest))
 
 
-def _costate(sys, L, x0=None, tol=None, on_miss="fallback"):
-    """The closed loop of L, its solver, and the solution P of P = L*(P) + Q + C^T L^T R L C with
-    its weight.
+class _MomentEquations:
+    """The moment equations (3.32)-(3.33) of one gain L, solved as far as its last relative
+    ``change`` needs (:func:`_inexact_tolerance`; an inexact solve's residual is checked by the
+    certificate, not reported as a miss): X = L(X) + predecessor_sum(mu (H H^T + B L J J^T L^T
+    B^T)) and P = L*(P) + Q + C^T L^T R L C (the ``weight``).
     """
-    Acl = closed_loop(sys, L, check=False)
-    solve = coupled_lyapunov_solver(Acl, sys.T, tol=tol)
-    LC = L @ sys.C
-    weight = sys.Q + transpose(LC) @ sys.R @ LC
-    return Acl, solve, solve(weight, adjoint=True, x0=x0, on_miss=on_miss), weight
+
+    def __init__(self, sys, rec, L, change):
+        self.sys, self.rec = sys, rec
+        self.Acl = closed_loop(sys, L, check=False)
+        tol = _inexact_tolerance(change)
+        self.solve = coupled_lyapunov_solver(self.Acl, sys.T, tol=tol)
+        self.on_miss = "fallback" if tol <= config.defaults["mjls.solve_tolerance"] else "report"
+        LC = L @ sys.C
+        self.weight = sys.Q + transpose(LC) @ sys.R @ LC
+        self.noise = predecessor_sum(sys.T, rec.noise(L), check=False)
+
+    def costates(self, P_guess):
+        """The solution P of (3.33) from ``P_guess``."""
+        return self.solve(self.weight, adjoint=True, x0=P_guess, on_miss=self.on_miss)
+
+    def second_moments(self, X_guess):
+        """The solution X of (3.32) from ``X_guess``."""
+        return self.solve(self.noise, x0=X_guess, on_miss=self.on_miss)
+
+    def solutions(self, X_guess, P_guess):
+        """(P, X) solutions: both at once on two threads where the recursion runs in parallel
+        (:attr:`Recursion.parallel`), else P alone and None (X waits until L is known to
+        stabilise).
+        """
+        if self.rec.parallel:
+            return concurrently(lambda: self.costates(P_guess),
+                                lambda: self.second_moments(X_guess))
+        return self.costates(P_guess), None
+
+    def stabilizing(self, P_solution):
+        """The coupled Lyapunov certificate of P (:func:`lyapunov_certified`), else rho < 1
+        (Cor. 3.2).
+        """
+        return (lyapunov_certified(P_solution, self.weight)
+                or mean_square_stability(self.Acl, self.sys.T, check=False).rho < 1)
 
 
-def _stabilizes(sys, L, P_guess, change):
-    """Whether L stabilises, and the solution P of (3.33) for it: the coupled Lyapunov
-    certificate (:func:`lyapunov_certified`, one solve from the iterate ``P_guess``), else
-    rho < 1 (Cor. 3.2). The same verdict as rho alone, since a certified P implies rho < 1, at
-    the cost of a solve (which the exact iteration continues from) instead of a certified
-    spectral radius. The solve goes as far as the gain's last relative ``change`` needs
+def _stabilizes(sys, rec, L, guess, change):
+    """Whether L stabilises, and (its moment equations, the solution P of (3.33), the solution X
+    of (3.32) or None unless solved beside P, :meth:`_MomentEquations.solutions`): the coupled
+    Lyapunov certificate (:func:`lyapunov_certified`, one solve from the iterate ``guess`` =
+    (X, P)), else rho < 1 (Cor. 3.2). The same verdict as rho alone, since a certified P implies
+    rho < 1, at the cost of a solve (which the exact iteration continues from) instead of a
+    certified spectral radius. The solve goes as far as the gain's last relative ``change`` needs
     (:func:`_inexact_tolerance`); the certificate accounts for its residual.
     """
-    solve_tol = _inexact_tolerance(change)
-    on_miss = "fallback" if solve_tol <= config.defaults["mjls.solve_tolerance"] else "report"
-    Acl, _, P_solution, weight = _costate(sys, L, x0=P_guess, tol=solve_tol, on_miss=on_miss)
-    stable = (
-        lyapunov_certified(P_solution, weight)
-        or mean_square_stability(Acl, sys.T, check=False).rho < 1
-    )
-    return stable, P_solution.X
+    equations = _MomentEquations(sys, rec, L, change)
+    P_solution, X_solution = equations.solutions(*guess)
+    return equations.stabilizing(P_solution), (equations, P_solution, X_solution)
 
 
 def lyapunov_certified(solution, weight):

@@ -13,8 +13,13 @@ import numpy as np
 
 from .. import config
 from ..result import Status
+from ..threads import concurrently
 
 __all__ = ["StopStatus", "StoppingRule"]
+
+# iterates of at least this many numbers are compared with their earlier ones on threads
+# (asoc.threads.concurrently): at n = M = 100 (2 x 10^6 numbers, 6 lags) 14 ms a step on one
+_LARGE = 100_000
 
 
 #: Why a fixed-point iteration of Alg. 3.1 or 3.2 stopped: the status codes of
@@ -81,11 +86,13 @@ class StoppingRule:
         # relative_change of each part against each lag, its norm computed once
         floor = config.defaults["linalg.norm_floor"]
         sizes = [max(np.sqrt(square), floor) for square in squares]
-        changes = [
-            max(_distance(old_part, new_part) / size
-                for old_part, new_part, size in zip(old, new, sizes))
+        lags = [
+            lambda old=old: max(_distance(old_part, new_part) / size
+                                for old_part, new_part, size in zip(old, new, sizes))
             for old in reversed(self.recent)
         ]  # largest over the parts, per lag
+        large = sum(part.size for part in new) >= _LARGE
+        changes = concurrently(*lags) if large else [lag() for lag in lags]
         self.recent.append(new)
         self.lag_changes.append(changes)
         self.change = changes[0]

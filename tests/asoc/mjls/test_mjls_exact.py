@@ -31,6 +31,7 @@ from asoc.mjls.gradients import (
     closed_loop_radius,
     finite_horizon_cost_and_gradient,
 )
+from asoc.mjls.scaled_pair import ScaledPair
 
 EPS = np.finfo(float).eps
 COST_RTOL = 1e-12  # two solvers of the same Lyapunov system (LU here, np.linalg.solve in
@@ -408,3 +409,16 @@ def test_alg31_solves_its_moments_inexactly_while_the_gain_moves_and_ends_at_the
     assert all(r.converged for r in runs) and runs[0].iterations < step_only.iterations
     np.testing.assert_allclose(runs[0].L, runs[1].L, rtol=1e-8)
     assert runs[0].cost == pytest.approx(runs[1].cost, rel=1e-10)
+
+
+def test_scaled_pair_follows_iterates_beyond_the_doubles():
+    """Alg. 3.1's iterates in scaled variables: an iterate that grows by 1e200 a step keeps
+    finite stacks of largest entry 1, and its traces are the unscaled ones."""
+    pair = ScaledPair(1.0, 2, 2)
+    for _ in range(3):
+        pair.next[:] = pair.stack * 1e200
+        pair.accept(pair.largest_entries())
+    assert np.abs(pair.stack).max() == 1.0 and np.all(np.isfinite(pair.stack))
+    np.testing.assert_allclose(pair.log_scales.ravel(), 3 * 200 * np.log(10.0), rtol=1e-12)
+    with np.errstate(over="ignore"):
+        assert np.isinf(pair.traces()[0][-1]).all()   # 2e600: beyond the doubles, as it is

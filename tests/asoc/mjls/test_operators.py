@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from asoc import config
-from asoc.mjls import ms_operator, ms_spectral_radius
+from asoc.mjls import ms_operator, ms_spectral_radius, static_output_feedback
 from asoc.mjls.lyapunov import (
     coupled_lyapunov_solver,
     radii_and_moments,
@@ -15,6 +15,7 @@ from asoc.mjls.lyapunov import (
 )
 from asoc.mjls.moment_operator import costate_map, second_moment_map
 from asoc.mjls.stability import Verdict, mean_square_stability
+from asoc.mjls.static_iterates import Recursion
 from asoc_companion.scaling import scaling_system
 from asoc_companion.timing import fitted_exponent
 
@@ -192,3 +193,35 @@ def test_arnoldi_radius_on_the_larger_plants_hard_closed_loops(case):
         result.rho_lower <= rho_dense * (1 + 1e-12) and rho_dense * (1 - 1e-12) <= result.rho_upper
     )
     assert result.verdict is Verdict.STABLE and result.rho_upper - rho_dense <= 1e-5 * rho_dense
+
+
+def test_the_maps_and_alg31_steps_on_threads_are_the_maps_and_steps_in_one_piece():
+    """mjls.parallel_from = 0 runs the products in parts of the modes on threads: the same
+    numbers, to rounding (each part's products are the same products)."""
+    s = scaling_system(np.random.default_rng(11), 6, 5)
+    X, P = stack(np.random.default_rng(12), 5, 6), stack(np.random.default_rng(13), 5, 6)
+    L = 0.1 * np.random.default_rng(14).standard_normal((s.nu, s.ny))
+    results = {}
+    for parallel_from in (10**9, 0):
+        with config.option_context(**{"mjls.parallel_from": parallel_from}):
+            rec = Recursion(s)
+            out = np.empty((2, 5, 6, 6))
+            rec.moments(L, X, rec.successor_average(P), 0.5, 2.0, out)
+            results[parallel_from] = (second_moment_map(s.A, s.T, X), costate_map(s.A, s.T, P),
+                                      out, static_output_feedback(s, warn=False).L)
+        assert rec.parallel is (parallel_from == 0)
+    for one_piece, on_threads in zip(results[10**9], results[0]):
+        np.testing.assert_allclose(on_threads, one_piece, rtol=1e-13, atol=1e-13)
+
+
+def test_alg31_auto_hands_over_when_the_moments_contract_slowly():
+    """A closed loop at rho = 0.99 (the open loop scaled; M n^2 = 576, solved matrix-free): the
+    moments contract by 0.99 a step, and "auto" hands over to the exact iteration at its first
+    check, after 11 steps, to the fixed point of the thesis's iteration."""
+    s = scaling_system(np.random.default_rng(3), 12, 4)
+    s = s.replace(A=s.A * np.sqrt(0.99 / mean_square_stability(s).rho))
+    auto = static_output_feedback(s, warn=False)
+    exact = static_output_feedback(s, warn=False, moments="exact")
+    assert auto.converged and exact.converged
+    assert auto.iterations - 11 <= exact.iterations < 20
+    np.testing.assert_allclose(auto.L, exact.L, rtol=1e-8, atol=1e-10)
