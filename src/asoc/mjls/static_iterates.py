@@ -139,12 +139,13 @@ class Recursion:
 
     def terms(self, Xs, EP, cX, cP):
         """S_i = R_i cP + B_i^T E_i(P) B_i, W_i = C_i Xs_i C_i^T + cX mu_i J_i J_i^T and
-        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables (in parts of the
-        modes on threads where :attr:`parallel`, N summed part by part).
+        N = sum_i B_i^T E_i(P) A_i Xs_i C_i^T of (3.34), in the scaled variables (the products in
+        parts of the modes on threads where :attr:`parallel`, the sum in one piece, so that the
+        number of cores does not change it).
         """
         M = len(self.A)
         S, W = np.empty((M, self.nu, self.nu)), np.empty((M, self.ny, self.ny))
-        N_parts = {}
+        N_terms = np.empty((M, self.nu, self.ny))
 
         def products(modes):
             BtEP = self.Bt[modes] @ EP[modes]
@@ -153,10 +154,10 @@ class Recursion:
             W[modes] = self.C[modes] @ XCt
             if self.muJJt is not None:
                 W[modes] += cX * self.muJJt[modes]
-            N_parts[modes.start] = (BtEP @ self.A[modes] @ XCt).sum(axis=0)
+            N_terms[modes] = BtEP @ self.A[modes] @ XCt
 
         self._run(products)
-        return S, W, sum(N_parts[start] for start in sorted(N_parts, key=lambda k: k or 0))
+        return S, W, N_terms.sum(axis=0)
 
     def gain(self, Xs, EP, cX, cP, method="vec"):
         """(3.34) with R scaled by cP = 1 / s_P and the measurement noise by cX = 1 / s_X
