@@ -12,17 +12,20 @@ one application of L and one of L* take 26 ms together instead of 50 ms one afte
 import contextlib
 import contextvars
 import os
+import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
 from threadpoolctl import ThreadpoolController
+
+from .validation import integer
 
 __all__ = ["single_threaded", "concurrently", "worker_count", "parts", "in_parts"]
 
 
 _LOCK = threading.Lock()
 # the open single_threaded() contexts of all threads, the limiter that restores BLAS after them,
-# and the controller
+# and the controller with the number of modules loaded when it was made
 _OPEN = {"count": 0, "limiter": None}
 _POOL = {}
 _WORKER = threading.local()
@@ -58,11 +61,12 @@ def single_threaded():
 
 
 def _controller():
-    """The thread-pool controller, made at the first use: by then numpy has loaded its BLAS,
-    which a controller made at import could miss.
+    """The thread-pool controller of the BLAS libraries loaded now. A controller misses the
+    libraries loaded after it was made (scipy brings its own OpenBLAS, which ARPACK uses), so it
+    is made again whenever modules were imported since (making one takes about 1 ms).
     """
-    if "controller" not in _OPEN:
-        _OPEN["controller"] = ThreadpoolController()
+    if _OPEN.get("modules") != len(sys.modules):
+        _OPEN["controller"], _OPEN["modules"] = ThreadpoolController(), len(sys.modules)
     return _OPEN["controller"]
 
 
@@ -90,6 +94,7 @@ def parts(count):
     ...     worker_count()) for k in range(min(5, worker_count()))]
     True
     """
+    count = integer(count, "count", minimum=0)
     pieces = max(1, min(count, worker_count()))
     return [slice(count * k // pieces, count * (k + 1) // pieces) for k in range(pieces)]
 
@@ -104,6 +109,11 @@ def concurrently(*calls):
     they run one after the other, and so do calls made from inside a call. Results are those of
     the calls run alone: each call's arithmetic is the same whichever thread runs it.
 
+    Raises
+    ------
+    TypeError
+        If a call is not callable (named by its position, ``calls[k]``).
+
     Examples
     --------
     >>> import numpy as np
@@ -111,7 +121,15 @@ def concurrently(*calls):
     >>> left, right = concurrently(lambda: A @ A, lambda: A.T @ A)
     >>> left.tolist(), right.tolist()
     ([[2.0, 3.0], [6.0, 11.0]], [[4.0, 6.0], [6.0, 10.0]])
+    >>> concurrently(lambda: 1, 2)
+    Traceback (most recent call last):
+    ...
+    TypeError: calls[1]: expected an argument-free callable, found int
     """
+    for k, call in enumerate(calls):
+        if not callable(call):
+            raise TypeError(f"calls[{k}]: expected an argument-free callable, found "
+                            f"{type(call).__name__}")
     with single_threaded():
         if len(calls) < 2 or worker_count() < 2 or getattr(_WORKER, "busy", False):
             return [call() for call in calls]
@@ -140,7 +158,13 @@ def in_parts(task, count):
     >>> in_parts(fill, 6)
     >>> x.tolist()
     [0.0, 1.0, 4.0, 9.0, 16.0, 25.0]
+    >>> in_parts(fill, -1)
+    Traceback (most recent call last):
+    ...
+    ValueError: count: expected an integer >= 0, found -1
     """
+    if not callable(task):
+        raise TypeError(f"task: expected a callable of one slice, found {type(task).__name__}")
     concurrently(*(lambda part=part: task(part) for part in parts(count)))
 
 

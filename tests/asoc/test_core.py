@@ -6,7 +6,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
-from threadpoolctl import threadpool_info
+from threadpoolctl import threadpool_info, threadpool_limits
 
 from asoc import config
 from asoc.linalg import pack, relative_change, unpack
@@ -15,7 +15,7 @@ from asoc.progress import progress_bar
 from asoc.result import STATUS_CODES, IterativeResult
 from asoc.setting_checks import INT, REAL, SIZES
 from asoc.stats import bootstrap_ci, bootstrap_median_ci
-from asoc.threads import concurrently, in_parts, parts, single_threaded
+from asoc.threads import concurrently, in_parts, parts, single_threaded, worker_count
 
 
 def rosenbrock(z):
@@ -98,8 +98,15 @@ def _blas_threads():
     return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
 
 
+@pytest.mark.skipif(worker_count() < 2, reason="needs two cores for two BLAS threads")
 def test_single_threaded_contexts_overlapping_on_threads_restore_blas_once_all_closed():
-    before = _blas_threads()
+    with threadpool_limits(limits=2, user_api="blas"):  # else a restore to one thread is unseen
+        _overlapping_contexts()
+
+
+def _overlapping_contexts():
+    before = _threads_by_library()
+    assert 2 in before.values()  # a library whose restore to two threads would show
     inner_open, outer_closed = threading.Event(), threading.Event()
 
     def inner():
@@ -115,7 +122,12 @@ def test_single_threaded_contexts_overlapping_on_threads_restore_blas_once_all_c
     still_limited = _blas_threads()
     outer_closed.set()
     assert still_limited == {1} and worker.result() == {1}
-    assert _blas_threads() == before
+    assert _threads_by_library() == before
+
+
+def _threads_by_library():
+    return {lib["filepath"]: lib["num_threads"] for lib in threadpool_info()
+            if lib["user_api"] == "blas"}
 
 
 def test_concurrently_keeps_order_per_call_settings_and_raises_a_calls_error():

@@ -153,7 +153,8 @@ def _scratch(shape):
 
 def in_parallel(A):
     """Whether products with the stack A, shape (M, n, n), run in parts of the modes on threads
-    (:func:`asoc.threads.in_parts`): from M n^3 = ``mjls.parallel_from`` on.
+    (:func:`asoc.threads.in_parts`): from M n^3 = ``mjls.parallel_from`` on. Not validated (a
+    float array of shape (M, n, n), as the maps take it).
 
     Examples
     --------
@@ -166,7 +167,8 @@ def in_parallel(A):
 
 def mix_modes(T_rows, X, out):
     """Out = T_rows X: rows of a transition matrix (or of its transpose) times the stack X,
-    out_j = sum_i T_rows[j, i] X_i, without a temporary.
+    out_j = sum_i T_rows[j, i] X_i, without a temporary. Not validated, for the inner loops: float
+    arrays, T_rows (k, M), X (M, ...) and out (k, ...) C-contiguous.
 
     Examples
     --------

@@ -18,8 +18,9 @@ from ..threads import concurrently
 __all__ = ["StopStatus", "StoppingRule"]
 
 # iterates of at least this many numbers are compared with their earlier ones on threads
-# (asoc.threads.concurrently): at n = M = 100 (2 x 10^6 numbers, 6 lags) 14 ms a step on one
-_LARGE = 100_000
+# (asoc.threads.concurrently): at n = M = 100 (2 x 10^6 numbers, 6 lags) 14 ms a step on one;
+# a distance of 10^6 numbers takes about 1 ms, ahead of the 0.4 ms of waking a thread
+_LARGE = 1_000_000
 
 
 #: Why a fixed-point iteration of Alg. 3.1 or 3.2 stopped: the status codes of
