@@ -18,11 +18,17 @@ import scipy.linalg
 import scipy.sparse.linalg
 
 from .. import config
-from ..linalg import sym
+from ..linalg import bicgstab, sym
 from ..threads import single_threaded
 from ..validation import real_array, stochastic_matrix
 from .certificate import certified_upper_bound
-from .moment_operator import costate_map, kronecker_stack, linear_operator, second_moment_map
+from .moment_operator import (
+    costate_map,
+    kronecker_stack,
+    linear_operator,
+    second_moment_map,
+    shifted_map,
+)
 from .stability import mean_square_stability
 
 __all__ = ["ITERATIVE", "LyapunovSolution", "residual", "solve_coupled_lyapunov",
@@ -87,7 +93,8 @@ class _Dense:
 
 
 def residual(A, T, X, W, adjoint=False):
-    """||X - L(X) - W||_F / ||W||_F (L* for ``adjoint``); inf for a non-finite X.
+    """||X - L(X) - W||_F / ||W||_F (L* for ``adjoint``) of a symmetric X (as every solution
+    here is; of another X, that of its symmetric part); inf for a non-finite X.
 
     Examples
     --------
@@ -97,9 +104,10 @@ def residual(A, T, X, W, adjoint=False):
     """
     if not np.all(np.isfinite(X)):
         return np.inf
-    apply = costate_map if adjoint else second_moment_map
     scale = max(np.linalg.norm(W), np.finfo(float).tiny)
-    return float(np.linalg.norm(X - apply(A, T, X) - W) / scale)
+    difference = shifted_map(A, T, X.ravel(), adjoint, identity=1.0)
+    difference -= W.ravel()
+    return float(np.linalg.norm(difference) / scale)
 
 
 def solve_coupled_lyapunov(A, T, W, adjoint=False, method="auto", tol=None):
@@ -233,22 +241,22 @@ def _iterative_solve(A, T, W, adjoint, method, tol, max_iter=5000, x0=None):
                 return X_new, it
             X = X_new
         return X, max_iter
-    count = [0]
-
-    def callback(_):
-        count[0] += 1
-
-    op = linear_operator(A, T, adjoint, identity=1.0)
     b = sym(W).ravel()
     x0 = b if x0 is None else x0.ravel()
     if method == "gmres":
-        x, _ = scipy.sparse.linalg.gmres(op, b, x0=x0, rtol=tol, atol=0.0, restart=60,
+        count = [0]
+
+        def callback(_):
+            count[0] += 1
+
+        x, _ = scipy.sparse.linalg.gmres(linear_operator(A, T, adjoint, identity=1.0), b, x0=x0,
+                                         rtol=tol, atol=0.0, restart=60,
                                          maxiter=max_iter // 60 + 1, callback=callback,
                                          callback_type="pr_norm")
-    else:
-        x, _ = scipy.sparse.linalg.bicgstab(op, b, x0=x0, rtol=tol, atol=0.0, maxiter=max_iter,
-                                            callback=callback)
-    return x.reshape(M, n, n), count[0]
+        return x.reshape(M, n, n), count[0]
+    x, iterations = bicgstab(lambda v, out: shifted_map(A, T, v, adjoint, identity=1.0, out=out),
+                             b, x0, tol, max_iter)
+    return x.reshape(M, n, n), iterations
 
 
 def radius_and_moments(A, T, W, check=True):

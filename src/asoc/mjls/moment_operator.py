@@ -39,7 +39,7 @@ from ..validation import real_array, stochastic_matrix
 from .system import MJLS
 
 __all__ = ["mode_stack", "second_moment_map", "costate_map", "in_parallel", "mix_modes",
-           "ms_operator", "kronecker_stack", "linear_operator"]
+           "ms_operator", "kronecker_stack", "linear_operator", "shifted_map"]
 
 
 def mode_stack(A_stack, T, name="A_stack"):
@@ -101,15 +101,7 @@ def second_moment_map(A, T, X):
     if not in_parallel(A):
         Y = A @ X @ transpose(A)
         return (T.T @ Y.reshape(len(Y), -1)).reshape(Y.shape)
-    half, Y, out = _scratch(X.shape)
-
-    def products(modes):
-        np.matmul(np.matmul(A[modes], X[modes], out=half[modes]), transpose(A[modes]),
-                  out=Y[modes])
-
-    in_parts(products, len(A))
-    in_parts(lambda rows: mix_modes(T.T[rows], Y, out[rows]), len(A))
-    return out.copy()
+    return _map_in_parts(A, T, X, adjoint=False)[0].copy()
 
 
 def costate_map(A, T, P):
@@ -126,29 +118,61 @@ def costate_map(A, T, P):
     if not in_parallel(A):
         EP = (T @ P.reshape(len(P), -1)).reshape(P.shape)
         return transpose(A) @ EP @ A
-    half, EP, out = _scratch(P.shape)
-
-    def products(modes):
-        np.matmul(np.matmul(transpose(A[modes]), EP[modes], out=half[modes]), A[modes],
-                  out=out[modes])
-
-    in_parts(lambda rows: mix_modes(T[rows], P, EP[rows]), len(A))
-    in_parts(products, len(A))
-    return out.copy()
+    return _map_in_parts(A, T, P, adjoint=True)[0].copy()
 
 
 _SCRATCH = threading.local()
 
 
 def _scratch(shape):
-    """Three arrays of ``shape`` for this thread's products on threads, kept between calls: a new
+    """Four arrays of ``shape`` for this thread's products on threads, kept between calls: a new
     array's pages are mapped when first written, and two threads writing one new array wait for
     each other there (at n = M = 100, an application of L took 32 ms with new arrays, 18 ms with
     these and one copy of the result).
     """
     if getattr(_SCRATCH, "shape", None) != shape:
-        _SCRATCH.shape, _SCRATCH.arrays = shape, tuple(np.empty(shape) for _ in range(3))
+        _SCRATCH.shape, _SCRATCH.arrays = shape, tuple(np.empty(shape) for _ in range(4))
     return _SCRATCH.arrays
+
+
+def _symmetric_part(X, out, modes):
+    """out[modes] = (X_i + X_i^T) / 2 for the ``modes`` (one mode's matrix stays in cache)."""
+    np.add(X[modes], transpose(X[modes]), out=out[modes])
+    out[modes] *= 0.5
+
+
+def _map_in_parts(A, T, X, adjoint, symmetrize=False):
+    """L(X) (L*(X) for ``adjoint``) in parts of the modes on threads, and the stack it was applied
+    to: sym(X) with ``symmetrize`` (formed mode by mode in the same parts), else X. Both are this
+    thread's kept arrays (:func:`_scratch`), overwritten by its next call.
+    """
+    M = len(A)
+    Xs, half, Y, out = _scratch(X.shape)
+    Xs = Xs if symmetrize else X
+    if adjoint:                        # E(sym X) = sym E(X): mix first, symmetrise per mode
+        in_parts(lambda rows: mix_modes(T[rows], X, Y[rows]), M)
+
+        def products(modes):
+            E, temporary = Y, half
+            if symmetrize:
+                _symmetric_part(X, Xs, modes)
+                _symmetric_part(Y, half, modes)
+                E, temporary = half, Y
+            np.matmul(np.matmul(transpose(A[modes]), E[modes], out=temporary[modes]), A[modes],
+                      out=out[modes])
+
+        in_parts(products, M)
+        return out, Xs
+
+    def products(modes):
+        if symmetrize:
+            _symmetric_part(X, Xs, modes)
+        np.matmul(np.matmul(A[modes], Xs[modes], out=half[modes]), transpose(A[modes]),
+                  out=Y[modes])
+
+    in_parts(products, M)
+    in_parts(lambda rows: mix_modes(T.T[rows], Y, out[rows]), M)
+    return out, Xs
 
 
 def in_parallel(A):
@@ -252,11 +276,43 @@ def linear_operator(A, T, adjoint=False, shift=0.0, identity=0.0):
     (array([1.25]), array([0.75]))
     """
     M, n, _ = A.shape
-    apply = costate_map if adjoint else second_moment_map
 
     def matvec(x):
-        X = sym(np.asarray(x).reshape(M, n, n).real)
-        Y = apply(A, T, X)
-        return (identity * X - Y if identity else Y + shift * X).ravel()
+        return shifted_map(A, T, np.asarray(x).real, adjoint, shift, identity)
 
     return scipy.sparse.linalg.LinearOperator((M * n * n, M * n * n), matvec=matvec, dtype=float)
+
+
+def shifted_map(A, T, x, adjoint=False, shift=0.0, identity=0.0, out=None):
+    """L(X) + shift X, or identity X - L(X) where ``identity`` is non-zero, for X = sym(x), x a
+    flat stack (L* for ``adjoint``): the product of :func:`linear_operator`, into the flat array
+    ``out`` where given (else a new one). Not validated, for the inner loops.
+
+    From M n^3 = ``mjls.parallel_from`` on, X is formed mode by mode in the parts of the products
+    (:func:`in_parallel`), and the result in one pass.
+
+    Examples
+    --------
+    >>> A = np.array([[[0.5]]]); T = np.array([[1.0]])
+    >>> shifted_map(A, T, np.ones(1), identity=1.0)
+    array([0.75])
+    """
+    M, n, _ = A.shape
+    x = x.reshape(M, n, n)
+    if in_parallel(A):
+        Y, X = _map_in_parts(A, T, x, adjoint, symmetrize=True)
+    else:
+        X = sym(x)
+        Y = (costate_map if adjoint else second_moment_map)(A, T, X)
+    out = np.empty(M * n * n) if out is None else out
+    result = out.reshape(M, n, n)
+    if identity == 1.0:
+        np.subtract(X, Y, out=result)
+    elif identity:
+        np.multiply(X, identity, out=result)
+        result -= Y
+    elif shift:
+        np.add(Y, shift * X, out=result)
+    else:
+        np.copyto(result, Y)
+    return out

@@ -31,7 +31,7 @@ from .lyapunov import coupled_lyapunov_solver
 from .stability import mean_square_stability
 from .static_iterates import Recursion, UntilStabilizing, exact_iteration, gain_sdp, step_iteration
 from .stopping import StopStatus
-from .system import check_system, predecessor_sum, successor_average
+from .system import check_system, successor_average
 
 __all__ = ["StaticOutputFeedbackResult", "gain_from_moments", "MOMENTS", "static_output_feedback",
            "static_cost"]
@@ -352,7 +352,8 @@ def _static_cost(sys, L, X_guess=None):
     stability = mean_square_stability(Acl, sys.T)
     if not stability.stable:
         return np.inf, None, stability
-    noise = predecessor_sum(sys.T, Recursion(sys).noise(L), check=False)
+    rec = Recursion(sys)
+    noise = rec.predecessor_sum(rec.noise(L))
     start = X_guess if X_guess is not None and np.all(np.isfinite(X_guess)) else None
     X = coupled_lyapunov_solver(Acl, sys.T)(noise, x0=start).X
     LC = L @ sys.C

@@ -24,7 +24,6 @@ from .moment_operator import in_parallel, mix_modes
 from .scaled_pair import ScaledPair
 from .stability import mean_square_stability
 from .stopping import StoppingRule, StopStatus
-from .system import predecessor_sum, successor_average
 
 __all__ = ["ALG31_PATIENCE", "UntilStabilizing", "IterationRun", "Recursion",
            "gain_sdp", "step_iteration", "exact_iteration", "lyapunov_certified"]
@@ -121,7 +120,7 @@ class Recursion:
     >>> from asoc.mjls.examples import sec354_system
     >>> rec = Recursion(sec354_system(1))
     >>> X = P = np.broadcast_to(np.eye(2), (2, 2, 2))
-    >>> rec.gain(X, successor_average(rec.T, P), 1.0, 1.0).round(4)
+    >>> rec.gain(X, rec.successor_average(P), 1.0, 1.0).round(4)
     array([[-0.1447]])
     """
 
@@ -209,6 +208,14 @@ class Recursion:
         EP = self._scratch(P.shape, "EP")
         self._run(lambda rows: mix_modes(self.T[rows], P, EP[rows]))
         return EP
+
+    def predecessor_sum(self, Y):
+        """D_i(Y) = sum_j p_ji Y_j of the stack Y (in parts of the rows on threads, as
+        :meth:`moments`), in a new array.
+        """
+        D = np.empty_like(Y)
+        self._run(lambda rows: mix_modes(self.Tt[rows], Y, D[rows]))
+        return D
 
     def _scratch(self, shape, name):
         """An array kept between steps (its pages mapped once: threads writing a new array wait
@@ -420,7 +427,7 @@ def exact_iteration(sys, rec, L, tol, max_iter, method="vec", first=1, guess=Non
         trace_X.append(np.trace(X, axis1=1, axis2=2))
         trace_P.append(np.trace(P, axis1=1, axis2=2))
         try:
-            L_new = rec.gain(X, successor_average(sys.T, P, check=False), 1.0, 1.0, method)
+            L_new = rec.gain(X, rec.successor_average(P), 1.0, 1.0, method)
         except np.linalg.LinAlgError:
             status = StopStatus.LINALG_ERROR
             break
@@ -471,7 +478,7 @@ class _MomentEquations:
         self.on_miss = "fallback" if tol <= config.defaults["mjls.solve_tolerance"] else "report"
         LC = L @ sys.C
         self.weight = sys.Q + transpose(LC) @ sys.R @ LC
-        self.noise = predecessor_sum(sys.T, rec.noise(L), check=False)
+        self.noise = rec.predecessor_sum(rec.noise(L))
 
     def costates(self, P_guess):
         """The solution P of (3.33) from ``P_guess``."""

@@ -13,7 +13,7 @@ from asoc.mjls.lyapunov import (
     radius_and_moments,
     solve_coupled_lyapunov,
 )
-from asoc.mjls.moment_operator import costate_map, second_moment_map
+from asoc.mjls.moment_operator import costate_map, second_moment_map, shifted_map
 from asoc.mjls.stability import Verdict, mean_square_stability
 from asoc.mjls.static_iterates import Recursion
 from asoc_companion.scaling import scaling_system
@@ -197,9 +197,11 @@ def test_arnoldi_radius_on_the_larger_plants_hard_closed_loops(case):
 
 def test_the_maps_and_alg31_steps_on_threads_are_the_maps_and_steps_in_one_piece():
     """mjls.parallel_from = 0 runs the products in parts of the modes on threads: the same
-    numbers, to rounding (each part's products are the same products)."""
+    numbers, to rounding (each part's products are the same products; the operator's input is
+    symmetrised mode by mode in the parts, its result formed in one pass)."""
     s = scaling_system(np.random.default_rng(11), 6, 5)
     X, P = stack(np.random.default_rng(12), 5, 6), stack(np.random.default_rng(13), 5, 6)
+    raw = np.random.default_rng(15).standard_normal(5 * 6 * 6)      # not symmetric
     L = 0.1 * np.random.default_rng(14).standard_normal((s.nu, s.ny))
     results = {}
     for parallel_from in (10**9, 0):
@@ -208,7 +210,11 @@ def test_the_maps_and_alg31_steps_on_threads_are_the_maps_and_steps_in_one_piece
             out = np.empty((2, 5, 6, 6))
             rec.moments(L, X, rec.successor_average(P), 0.5, 2.0, out)
             results[parallel_from] = (second_moment_map(s.A, s.T, X), costate_map(s.A, s.T, P),
-                                      out, static_output_feedback(s, warn=False).L)
+                                      out, static_output_feedback(s, warn=False).L,
+                                      *(shifted_map(s.A, s.T, raw, adjoint, shift, identity)
+                                        for adjoint in (False, True)
+                                        for shift, identity in ((0.0, 1.0), (0.0, 0.7), (0.3, 0.0),
+                                                                (0.0, 0.0))))
         assert rec.parallel is (parallel_from == 0)
     for one_piece, on_threads in zip(results[10**9], results[0]):
         np.testing.assert_allclose(on_threads, one_piece, rtol=1e-13, atol=1e-13)
