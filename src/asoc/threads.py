@@ -16,11 +16,13 @@ import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
+import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from .validation import integer
 
-__all__ = ["single_threaded", "concurrently", "worker_count", "parts", "in_parts"]
+__all__ = ["single_threaded", "concurrently", "worker_count", "parts", "in_parts",
+           "stacked_in_parts"]
 
 
 _LOCK = threading.Lock()
@@ -28,7 +30,6 @@ _LOCK = threading.Lock()
 # and the controller with the number of modules loaded when it was made
 _OPEN = {"count": 0, "limiter": None}
 _POOL = {}
-_WORKER = threading.local()
 
 
 @contextlib.contextmanager
@@ -104,10 +105,12 @@ def concurrently(*calls):
     :func:`worker_count` threads with single-threaded BLAS.
 
     Each call runs in a copy of the caller's context, so per-call settings
-    (:func:`asoc.config.accepts_settings`) hold in it. The first call runs on the calling thread.
-    An exception of a call is raised once every call has finished. With one core, or one call,
-    they run one after the other, and so do calls made from inside a call. Results are those of
-    the calls run alone: each call's arithmetic is the same whichever thread runs it.
+    (:func:`asoc.config.accepts_settings`) hold in it. The first call runs on the calling thread,
+    and so does every call for which no worker of the pool is free: a call is handed only to a
+    worker reserved for it, so no thread ever waits for a queued call (calls made from inside a
+    call take a worker when one has become free, e.g. when the other of two solves has finished).
+    An exception of a call is raised once every call has finished. Results are those of the calls
+    run alone: each call's arithmetic is the same whichever thread runs it.
 
     Raises
     ------
@@ -131,19 +134,20 @@ def concurrently(*calls):
             raise TypeError(f"calls[{k}]: expected an argument-free callable, found "
                             f"{type(call).__name__}")
     with single_threaded():
-        if len(calls) < 2 or worker_count() < 2 or getattr(_WORKER, "busy", False):
+        pool = _pool(worker_count() - 1) if len(calls) > 1 and worker_count() > 1 else None
+        handed = pool.reserve(len(calls) - 1) if pool is not None else 0
+        if handed == 0:
             return [call() for call in calls]
-        pool = _pool(min(len(calls), worker_count()) - 1)
-        futures = [pool.submit(contextvars.copy_context().run, _as_worker, call)
-                   for call in calls[1:]]
+        futures = [pool.submit(contextvars.copy_context().run, call)
+                   for call in calls[1:1 + handed]]
         try:
-            first = _as_worker(calls[0])
+            here = [calls[0]()] + [call() for call in calls[1 + handed:]]
         finally:
             rest = [future.exception() for future in futures]   # waits for every call
         for error in rest:
             if error is not None:
                 raise error
-        return [first] + [future.result() for future in futures]
+        return here[:1] + [future.result() for future in futures] + here[1:]
 
 
 def in_parts(task, count):
@@ -168,22 +172,67 @@ def in_parts(task, count):
     concurrently(*(lambda part=part: task(part) for part in parts(count)))
 
 
-def _as_worker(call):
-    """call(), marked so that a nested :func:`concurrently` on this thread runs in line (a pool
-    thread never waits for its own pool, and the calling thread never for a busy one).
+def stacked_in_parts(function, *stacks):
+    """function(*stacks) for a function that works matrix by matrix along the leading axis (e.g. M
+    eigendecompositions), computed in the :func:`parts` of that axis concurrently
+    (:func:`concurrently`) and joined: an array, or a tuple of arrays where the function returns
+    a tuple.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> X = np.arange(8.0).reshape(2, 2, 2)
+    >>> stacked_in_parts(lambda S: S.sum(axis=(1, 2)), X).tolist()
+    [6.0, 22.0]
+    >>> stacked_in_parts(len, X)
+    Traceback (most recent call last):
+    ...
+    TypeError: function: expected a function of the stacks' parts returning arrays, found int
     """
-    before = getattr(_WORKER, "busy", False)
-    _WORKER.busy = True
-    try:
-        return call()
-    finally:
-        _WORKER.busy = before
+    if not callable(function):
+        raise TypeError(f"function: expected a callable, found {type(function).__name__}")
+    pieces = concurrently(*(lambda part=part: function(*(stack[part] for stack in stacks))
+                            for part in parts(len(stacks[0]))))
+    if isinstance(pieces[0], tuple):
+        return tuple(np.concatenate(joined) for joined in zip(*pieces))
+    if not isinstance(pieces[0], np.ndarray):
+        raise TypeError("function: expected a function of the stacks' parts returning arrays, "
+                        f"found {type(pieces[0]).__name__}")
+    return np.concatenate(pieces)
+
+
+class _Pool:
+    """A thread pool whose workers are reserved before a call is handed to them (:meth:`reserve`),
+    so that a call never waits in its queue behind another: nested calls cannot deadlock.
+    """
+
+    def __init__(self, workers):
+        self.executor = ThreadPoolExecutor(workers, thread_name_prefix="asoc")
+        self.free = workers
+
+    def reserve(self, wanted):
+        """The number of workers (at most ``wanted``) now reserved for the caller's calls."""
+        with _LOCK:
+            taken = min(wanted, self.free)
+            self.free -= taken
+        return taken
+
+    def submit(self, run, call):
+        """run(call) on a reserved worker, which is free again once the call has returned."""
+        return self.executor.submit(self._release_after, run, call)
+
+    def _release_after(self, run, call):
+        try:
+            return run(call)
+        finally:
+            with _LOCK:
+                self.free += 1
 
 
 def _pool(workers):
-    """A thread pool of ``workers`` threads, made once per size (and again after a fork)."""
+    """The pool of ``workers`` threads, made once per size (and again after a fork)."""
     key = (os.getpid(), workers)
     with _LOCK:
         if key not in _POOL:
-            _POOL[key] = ThreadPoolExecutor(workers, thread_name_prefix="asoc")
+            _POOL[key] = _Pool(workers)
         return _POOL[key]

@@ -2,6 +2,7 @@
 asoc.progress, asoc.stats, asoc.linalg and asoc.setting_checks (beside their doctests)."""
 
 import threading
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -149,12 +150,32 @@ def test_concurrently_keeps_order_per_call_settings_and_raises_a_calls_error():
     assert _blas_threads() == before
 
 
-def test_nested_concurrently_runs_in_line_without_waiting_for_its_own_pool():
-    def nested(k):
-        return concurrently(lambda: k, lambda: -k)
+def test_nested_concurrently_takes_a_free_worker_or_runs_in_line_and_never_deadlocks():
+    """Nested calls at every depth, many times over: the results in order, and no wait on a
+    queued call (a deadlock would hang the test). A nested call made once the other call has
+    finished runs on its worker."""
+    def nested(k, depth):
+        if depth == 0:
+            return k
+        return concurrently(lambda: nested(k, depth - 1), lambda: nested(-k, depth - 1))
 
-    assert concurrently(lambda: nested(1), lambda: nested(2), lambda: nested(3)) == [
-        [1, -1], [2, -2], [3, -3]]
+    for _ in range(50):
+        assert concurrently(lambda: nested(1, 2), lambda: nested(2, 2), lambda: nested(3, 1)) == [
+            [[1, -1], [-1, 1]], [[2, -2], [-2, 2]], [3, -3]]
+    if worker_count() > 1:
+        finished = threading.Event()
+
+        def after_the_other():
+            finished.wait(5)
+            for _ in range(200):                 # until the worker is released after its call
+                names = concurrently(*[lambda: threading.current_thread().name] * 2)
+                if len(set(names)) == 2:
+                    return names
+                time.sleep(0.01)
+            return names
+
+        names, _ = concurrently(after_the_other, finished.set)
+        assert len(set(names)) == 2
     x = np.zeros(7)
     in_parts(lambda part: x.__setitem__(part, np.arange(7)[part]), 7)
     assert x.tolist() == list(range(7)) and sum(len(range(7)[p]) for p in parts(7)) == 7

@@ -28,8 +28,8 @@ import scipy.sparse.linalg
 
 from .. import config
 from ..linalg import sym, transpose
-from ..threads import single_threaded
-from .moment_operator import kronecker_stack, linear_operator, second_moment_map
+from ..threads import single_threaded, stacked_in_parts
+from .moment_operator import in_parallel, kronecker_stack, linear_operator, second_moment_map
 from .spectral_estimate import estimates, left_perron_stack
 
 __all__ = ["EPS", "TINY", "certified_upper_bound", "Bracket", "deflated_resolvent_bounds",
@@ -136,17 +136,13 @@ class Bracket:
         ones).
         """
         try:
-            C = np.linalg.cholesky(X)
+            extremes = lambda X, Y: _generalized_extremes(X, Y, sharp)
+            alpha, beta, inv_norm2 = (stacked_in_parts(extremes, X, Y) if in_parallel(X)
+                                      else extremes(X, Y))
         except np.linalg.LinAlgError:
             return
-        with np.errstate(all="ignore"):
-            Ci = np.linalg.inv(C)
-            lam = np.linalg.eigvalsh(sym(Ci @ Y @ transpose(Ci)))
-        if not np.all(np.isfinite(lam)):
+        if not (np.all(np.isfinite(alpha)) and np.all(np.isfinite(beta))):
             return
-        alpha, beta = lam[:, 0], lam[:, -1]
-        inv_norm2 = (np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp
-                     else np.einsum("iab,iab->i", Ci, Ci))
         norm_X = np.sqrt(np.einsum("iab,iab->i", X, X))
         rounding = (self.T.T @ (self.norm_A2 * norm_X) + np.sqrt(np.einsum("iab,iab->i", Y, Y))
                     + self.underflow)
@@ -156,6 +152,20 @@ class Bracket:
             self.upper, self.margin = upper, float(margin.max())
         if lower > self.lower:
             self.lower = lower
+
+
+def _generalized_extremes(X, Y, sharp):
+    """The smallest and largest eigenvalues alpha_i, beta_i of C_i^-1 Y_i C_i^-T (X_i = C_i C_i^T,
+    Cholesky; LinAlgError where an X_i is not definite) and ||C_i^-1||^2 (Frobenius, or with
+    ``sharp`` spectral), for :meth:`Bracket.bounds`.
+    """
+    C = np.linalg.cholesky(X)
+    with np.errstate(all="ignore"):
+        Ci = np.linalg.inv(C)
+        lam = np.linalg.eigvalsh(sym(Ci @ Y @ transpose(Ci)))
+    inv_norm2 = (np.linalg.norm(Ci, 2, axis=(1, 2)) ** 2 if sharp
+                 else np.einsum("iab,iab->i", Ci, Ci))
+    return lam[:, 0], lam[:, -1], inv_norm2
 
 
 def _refine(A, T, X0, rho):

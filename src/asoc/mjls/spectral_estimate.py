@@ -21,8 +21,8 @@ import scipy.sparse.linalg
 
 from .. import config
 from ..linalg import sym, transpose
-from ..threads import single_threaded
-from .moment_operator import costate_map, kronecker_stack, linear_operator
+from ..threads import single_threaded, stacked_in_parts
+from .moment_operator import costate_map, in_parallel, kronecker_stack, linear_operator
 
 __all__ = ["METHODS", "Estimate", "check_method", "left_perron_stack", "Balanced", "balance",
            "estimates", "estimate"]
@@ -278,10 +278,17 @@ def _psd_stack(v, M, n):
     Z = sym((Z * (np.conj(big) / abs(big))).real) if abs(big) > 0 else np.zeros((M, n, n))
     if np.trace(Z, axis1=1, axis2=2).sum() < 0:
         Z = -Z
-    w, U = np.linalg.eigh(Z)
-    Z = (U * np.clip(w, 0.0, None)[:, None, :]) @ transpose(U)
+    Z = stacked_in_parts(_nearest_psd, Z) if in_parallel(Z) else _nearest_psd(Z)
     top = np.abs(Z).max()
     return sym(Z) / top if top > 0 else np.broadcast_to(np.eye(n), (M, n, n)).copy()
+
+
+def _nearest_psd(Z):
+    """The nearest positive semidefinite matrix of each symmetric Z_i: its negative eigenvalues
+    set to 0.
+    """
+    w, U = np.linalg.eigh(Z)
+    return (U * np.clip(w, 0.0, None)[:, None, :]) @ transpose(U)
 
 
 def estimates(A, T, method):

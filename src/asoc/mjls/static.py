@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import config
 from ..linalg import kronecker_sum, transpose
-from ..threads import single_threaded
+from ..threads import concurrently, single_threaded
 from ..validation import boolean, choice, integer, real_array, real_scalar, semidefinite
 from .closed_loops import closed_loop, gain_matrix, noise_covariances
 from .design_result import CertifiedDesignResult
@@ -271,7 +271,9 @@ def _cheapest_member(sys, run):
     of the period of smallest exact cost (3.9).
     """
     members = run.members or [(run.L, run.X, run.P)]
-    costs = [_static_cost(sys, L, X)[::2] for L, X, _ in members]
+    # the exact iteration's last gain is within its change of a certified stabilising one
+    near_stable = run.stabilized and len(members) == 1
+    costs = [_static_cost(sys, L, X, near_stable)[::2] for L, X, _ in members]
     best = min(range(len(members)), key=lambda i: costs[i][0])
     return (*members[best], costs[best])
 
@@ -344,18 +346,26 @@ def static_cost(sys, L):
     return _static_cost(sys, gain_matrix(L, "L", sys.nu, sys.ny))
 
 
-def _static_cost(sys, L, X_guess=None):
+def _static_cost(sys, L, X_guess=None, near_stable=False):
     """(cost, X, stability) of :func:`static_cost`, the moment equation solved from
-    ``X_guess`` (e.g. the last iterate's moments) where it is solved iteratively.
+    ``X_guess`` (e.g. the last iterate's moments) where it is solved iteratively. ``near_stable``
+    (L next to a certified stabilising gain): on threads, X is solved beside the certificate
+    instead of after it (unused where L does not stabilise).
     """
     Acl = closed_loop(sys, L, check=False)
-    stability = mean_square_stability(Acl, sys.T)
+    rec = Recursion(sys)
+    start = X_guess if X_guess is not None and np.all(np.isfinite(X_guess)) else None
+
+    def moments():
+        return coupled_lyapunov_solver(Acl, sys.T)(rec.predecessor_sum(rec.noise(L)), x0=start).X
+
+    if near_stable and rec.parallel and start is not None:
+        stability, X = concurrently(lambda: mean_square_stability(Acl, sys.T), moments)
+    else:
+        stability = mean_square_stability(Acl, sys.T)
+        X = moments() if stability.stable else None
     if not stability.stable:
         return np.inf, None, stability
-    rec = Recursion(sys)
-    noise = rec.predecessor_sum(rec.noise(L))
-    start = X_guess if X_guess is not None and np.all(np.isfinite(X_guess)) else None
-    X = coupled_lyapunov_solver(Acl, sys.T)(noise, x0=start).X
     LC = L @ sys.C
     cost = np.einsum("iab,iba->", sys.Q + transpose(LC) @ sys.R @ LC, X)
     if sys.J is not None:
