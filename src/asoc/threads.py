@@ -96,8 +96,7 @@ def parts(count):
     True
     """
     count = integer(count, "count", minimum=0)
-    pieces = max(1, min(count, worker_count()))
-    return [slice(count * k // pieces, count * (k + 1) // pieces) for k in range(pieces)]
+    return _split(count, max(1, min(count, worker_count())))
 
 
 def concurrently(*calls):
@@ -106,9 +105,10 @@ def concurrently(*calls):
 
     Each call runs in a copy of the caller's context, so per-call settings
     (:func:`asoc.config.accepts_settings`) hold in it. The first call runs on the calling thread,
-    and so does every call for which no worker of the pool is free: a call is handed only to a
-    worker reserved for it, so no thread ever waits for a queued call (calls made from inside a
-    call take a worker when one has become free, e.g. when the other of two solves has finished).
+    with its share of the calls (contiguous groups, one per thread); a group is handed only to a
+    worker reserved for it, and where none is free the calls run on the calling thread, so no
+    thread ever waits for a queued call (calls made from inside a call take a worker when one
+    has become free, e.g. when the other of two solves has finished).
     An exception of a call is raised once every call has finished. Results are those of the calls
     run alone: each call's arithmetic is the same whichever thread runs it.
 
@@ -138,16 +138,28 @@ def concurrently(*calls):
         handed = pool.reserve(len(calls) - 1) if pool is not None else 0
         if handed == 0:
             return [call() for call in calls]
-        futures = [pool.submit(contextvars.copy_context().run, call)
-                   for call in calls[1:1 + handed]]
+        # contiguous groups of calls, the first on this thread, one on each reserved worker
+        groups = [[(contextvars.copy_context(), call) for call in calls[part]]
+                  for part in _split(len(calls), handed + 1)]
+        futures = [pool.submit(_run_group, group) for group in groups[1:]]
         try:
-            here = [calls[0]()] + [call() for call in calls[1 + handed:]]
+            here = _run_group(groups[0])
         finally:
             rest = [future.exception() for future in futures]   # waits for every call
         for error in rest:
             if error is not None:
                 raise error
-        return here[:1] + [future.result() for future in futures] + here[1:]
+        return here + [result for future in futures for result in future.result()]
+
+
+def _run_group(group):
+    """The results of the (context, call) pairs of a group, each call run in its context."""
+    return [context.run(call) for context, call in group]
+
+
+def _split(count, pieces):
+    """Slices cutting range(count) into ``pieces`` contiguous parts of nearly equal length."""
+    return [slice(count * k // pieces, count * (k + 1) // pieces) for k in range(pieces)]
 
 
 def in_parts(task, count):
@@ -217,13 +229,13 @@ class _Pool:
             self.free -= taken
         return taken
 
-    def submit(self, run, call):
-        """run(call) on a reserved worker, which is free again once the call has returned."""
-        return self.executor.submit(self._release_after, run, call)
+    def submit(self, run, calls):
+        """run(calls) on a reserved worker, which is free again once it has returned."""
+        return self.executor.submit(self._release_after, run, calls)
 
-    def _release_after(self, run, call):
+    def _release_after(self, run, calls):
         try:
-            return run(call)
+            return run(calls)
         finally:
             with _LOCK:
                 self.free += 1

@@ -404,9 +404,10 @@ def _first_order_lower(K, lam, left, right):
 
 def _arnoldi(A, T, adjoint):
     """Estimates by ARPACK on L (or L*), one per Krylov-space size of ``mjls.arnoldi_subspaces``
-    (after ``mjls.arnoldi_lean_subspace`` from M n^2 = ``mjls.arnoldi_lean_from`` on) that
-    converges: the largest-modulus eigenvalue; when it is not real positive (periodic chains),
-    again on L + |lambda| I, where the Perron eigenvalue is strictly dominant.
+    (after ``mjls.arnoldi_lean_subspace``, to ``mjls.arnoldi_lean_tol``, from M n^2 =
+    ``mjls.arnoldi_lean_from`` on) that converges: the largest-modulus eigenvalue; when it is not
+    real positive (periodic chains), again on L + |lambda| I, where the Perron eigenvalue is
+    strictly dominant.
     """
     M, n, _ = A.shape
     dim = M * n * n
@@ -414,13 +415,15 @@ def _arnoldi(A, T, adjoint):
     lean = config.defaults["mjls.arnoldi_lean_subspace"]
     lean = (lean,) if dim >= config.defaults["mjls.arnoldi_lean_from"] else ()
     for ncv in lean + tuple(config.defaults["mjls.arnoldi_subspaces"]):
+        tol = config.defaults["mjls.arnoldi_lean_tol" if lean and ncv == lean[0] else
+                              "mjls.arnoldi_tol"]
         shift = 0.0
         try:
             with single_threaded():
                 for _ in range(2):
                     lam, V = scipy.sparse.linalg.eigs(
                         linear_operator(A, T, adjoint, shift=shift), k=1, which="LM", v0=v0,
-                        tol=config.defaults["mjls.arnoldi_tol"], ncv=min(dim - 1, ncv),
+                        tol=tol, ncv=min(dim - 1, ncv),
                         maxiter=max(1000, dim))
                     lam = complex(lam[0]) - shift
                     real = abs(lam.imag) <= config.defaults["mjls.arnoldi_real_rtol"] * abs(lam)

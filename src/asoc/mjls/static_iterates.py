@@ -189,14 +189,16 @@ class Recursion:
         and forth between the two costs more than the threads gain).
         """
         Y, half = self._scratch(out[0].shape, "Y"), self._scratch(out[0].shape, "half")
+        Acl, weight = self._scratch(out[0].shape, "Acl"), self._scratch(out[0].shape, "weight")
 
         def products(modes):
-            Acl, LtRL = self._closed_loop(L, modes)
-            Aclt = Acl.swapaxes(1, 2)
-            np.matmul(np.matmul(Acl, Xs[modes], out=half[modes]), Aclt, out=Y[modes])
-            Y[modes] += cX * self.noise(L, modes)
-            np.matmul(np.matmul(Aclt, EP[modes], out=half[modes]), Acl, out=out[1][modes])
-            out[1][modes] += cP * (self.Q[modes] + LtRL)
+            self._closed_loop(L, modes, Acl[modes], weight[modes])
+            Aclt = Acl[modes].swapaxes(1, 2)
+            np.matmul(np.matmul(Acl[modes], Xs[modes], out=half[modes]), Aclt, out=Y[modes])
+            Y[modes] += np.multiply(self.noise(L, modes), cX, out=half[modes])
+            np.matmul(np.matmul(Aclt, EP[modes], out=half[modes]), Acl[modes], out=out[1][modes])
+            weight[modes] += self.Q[modes]
+            out[1][modes] += np.multiply(weight[modes], cP, out=weight[modes])
 
         self._run(products)
         self._run(lambda rows: mix_modes(self.Tt[rows], Y, out[0][rows]))
@@ -225,8 +227,8 @@ class Recursion:
             self._arrays[name] = np.empty(shape)
         return self._arrays[name]
 
-    def _closed_loop(self, L, modes):
-        """A_i + B_i L C_i and C_i^T L^T R_i L C_i of the ``modes``.
+    def _closed_loop(self, L, modes, Acl, LtRL):
+        """A_i + B_i L C_i into Acl and C_i^T L^T R_i L C_i into LtRL, for the ``modes``.
 
         With one input and one output, the products contract over dimensions of size 1: each
         entry is one product, formed by broadcasting (the same numbers as the matrix products,
@@ -236,9 +238,13 @@ class Recursion:
         if self.scalar_gain:
             gain = L[0, 0]
             LC = gain * C
-            return A + (B * gain) * C, (LC.swapaxes(1, 2) * R) * LC
-        LC = L @ C
-        return A + (B @ L) @ C, LC.swapaxes(1, 2) @ R @ LC
+            np.multiply(B * gain, C, out=Acl)
+            np.multiply(LC.swapaxes(1, 2) * R, LC, out=LtRL)
+        else:
+            LC = L @ C
+            np.matmul(B @ L, C, out=Acl)
+            np.matmul(LC.swapaxes(1, 2) @ R, LC, out=LtRL)
+        Acl += A
 
     def _run(self, task):
         """task(modes) for all modes: in parts on threads where :attr:`parallel`, else at once."""
