@@ -409,8 +409,9 @@ def _residual_upper_bound(A, T, X, r):
     return float(np.max(r - delta / lam_X[:, -1]) * (1 + 4 * EPS))
 
 
-def certify(A, T, method, unit=1.0):
-    """(lower, upper, rho, X, estimate) of the balanced (A, T): ``_certify_estimates`` with BLAS on
+def certify(A, T, method, unit=1.0, start=None):
+    """(lower, upper, rho, X, estimate) of the balanced (A, T) (``start``: a stack near the Perron
+    stack, :func:`asoc.mjls.spectral_estimate.power_estimate`): ``_certify_estimates`` with BLAS on
     one thread: its work is small products and M small eigenproblems, where threads only cost (a
     stack of 8 eigh of 32 x 32: 0.49 s with threads on a loaded 2-core machine, 1 ms without).
 
@@ -422,16 +423,17 @@ def certify(A, T, method, unit=1.0):
     (True, 'dense')
     """
     with single_threaded():
-        return _certify_estimates(A, T, method, unit)
+        return _certify_estimates(A, T, method, unit, start)
 
 
-def _certify_estimates(A, T, method, unit):
+def _certify_estimates(A, T, method, unit, start=None):
     """(lower, upper, rho, X, estimate) for the balanced (A, T): the first estimate inside a narrow
     bracket (relative width ``mjls.bracket_warn_rtol``), else the narrowest (a subdominant
-    eigenvalue from a small Krylov space fails the test: the bracket holds rho, not it).
+    eigenvalue from a small Krylov space fails the test: the bracket holds rho, not it); the
+    estimates start from ``start`` where given (:func:`asoc.mjls.spectral_estimate.estimates`).
     """
     best = None
-    for estimate in estimates(A, T, method):
+    for estimate in estimates(A, T, method, start):
         lower, upper, rho, X = _refine(A, T, estimate.X, estimate.rho)
         lower, upper = _singular_perron_bounds(A, T, estimate, lower, upper, rho, X)
         rho = float(np.clip(rho, lower, upper))

@@ -22,9 +22,16 @@ import scipy.sparse.linalg
 from .. import config
 from ..linalg import sym, transpose
 from ..threads import single_threaded, stacked_in_parts
-from .moment_operator import costate_map, in_parallel, kronecker_stack, linear_operator
+from .moment_operator import (
+    costate_map,
+    in_parallel,
+    kronecker_stack,
+    linear_operator,
+    second_moment_map,
+)
 
 __all__ = ["METHODS", "Estimate", "check_method", "left_perron_stack", "Balanced", "balance",
+           "power_estimate",
            "estimates", "estimate"]
 
 
@@ -176,6 +183,14 @@ class Balanced:
         t = -self.t if adjoint else self.t
         return np.ldexp(X * d[:, None] * d[None, :], t[:, None, None])
 
+    def from_stack(self, X):
+        """The stack of (A', W) of a stack X of (A, T): the inverse of :meth:`to_stack`, scaled to
+        largest entry 1 (where it is not zero).
+        """
+        Y = np.ldexp(X / (self.d[:, None] * self.d[None, :]), -self.t[:, None, None])
+        top = np.abs(Y).max()
+        return Y / top if top > 0 and np.isfinite(top) else Y
+
 
 def balance(A, T):
     """(A, T) balanced exactly (:class:`Balanced`): one common diagonal D and one power of 2 for all
@@ -291,8 +306,10 @@ def _nearest_psd(Z):
     return (U * np.clip(w, 0.0, None)[:, None, :]) @ transpose(U)
 
 
-def estimates(A, T, method):
-    """The eigen-solver's estimates in turn: Arnoldi with each Krylov-space size, then its fallback.
+def estimates(A, T, method, start=None):
+    """The eigen-solver's estimates in turn: Arnoldi with each Krylov-space size, then its fallback;
+    for Arnoldi with a ``start`` near the Perron stack, first the power method from it
+    (:func:`power_estimate`) where it converges.
 
     Examples
     --------
@@ -303,6 +320,9 @@ def estimates(A, T, method):
     M, n, _ = A.shape
     method = _resolve_method(method, M, n)
     if method == "arnoldi" and M * n * n > 3:
+        found = None if start is None else power_estimate(A, T, start)
+        if found is not None:
+            yield found
         yield from _arnoldi(A, T, False)
         method = _fallback_method(M * n * n)
     yield estimate(A, T, method)
@@ -345,6 +365,42 @@ def estimate(A, T, method, adjoint=False):
     k = top[np.argmax(lam[top].real)]                             # the real Perron eigenvalue
     return Estimate(rho, _psd_stack(right[:, k], M, n), method,
                      _first_order_lower(K, lam, left, right) if method == "dense" else 0.0)
+
+
+def power_estimate(A, T, start, tol=1e-10):
+    """Rho and its eigenvector stack by the power method X <- L(X) / max |L(X)| from ``start``, a
+    stack near the Perron stack (e.g. the stationary second moments of the same or a nearby
+    closed loop, X = sum_k L^k(N), whose Perron component dominates when rho is near 1 and the
+    other eigenvalues are not): None where the largest change of an entry does not fall to
+    ``tol`` within ``mjls.start_power_steps`` steps, or its rate says it would not.
+
+    Examples
+    --------
+    >>> A = np.array([[[0.5]], [[1.2]]]); T = np.array([[0.5, 0.5], [0.5, 0.5]])
+    >>> found = power_estimate(A, T, np.ones((2, 1, 1)))
+    >>> round(found.rho, 9), found.method
+    (0.845, 'power')
+    """
+    steps = config.defaults["mjls.start_power_steps"]
+    top = np.abs(start).max()
+    if not (top > 0 and np.isfinite(top)):
+        return None
+    X, previous = start / top, np.inf
+    for step in range(steps):
+        Y = sym(second_moment_map(A, T, X))
+        rho = float(np.abs(Y).max())
+        if not (rho > 0 and np.isfinite(rho)):
+            return None
+        Y /= rho
+        change = float(np.abs(Y - X).max())
+        X = Y
+        if change <= tol:
+            return Estimate(rho, X, "power")
+        rate = change / previous
+        if step >= 2 and (rate >= 1 or np.log(tol / change) / np.log(rate) > steps - step - 1):
+            return None
+        previous = change
+    return None
 
 
 def _single_mode(A, p, adjoint):

@@ -24,6 +24,7 @@ import numpy as np
 
 from .. import config
 from ..threads import single_threaded
+from ..validation import real_array
 from .certificate import Bracket, certify, narrow
 from .closed_loops import controller_closed_loop, is_controller
 from .controllers import Controller
@@ -164,7 +165,7 @@ def ms_spectral_radius(A_stack, T=None, *, method="auto", check=True) -> float:
 
 
 @config.accepts_settings("mjls.bracket_rtol", "mjls.dense_max_radius")
-def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
+def mean_square_stability(A_stack, T=None, *, method="auto", check=True, start=None):
     """Cor. 3.2 as a certified verdict: rho, its bracket, and stable, unstable or undecided.
 
     Parameters
@@ -192,6 +193,12 @@ def mean_square_stability(A_stack, T=None, *, method="auto", check=True):
         ``mjls.scalar_sparse_from``, dense up to M n^2 = ``mjls.dense_max_radius``, else Arnoldi.
     check : bool
         Validate the arguments.
+    start : array_like of shape (M, n, n), optional
+        A positive semidefinite stack near the Perron stack, e.g. the stationary second moments
+        of this or a nearby closed loop (their Perron component dominates when rho is near 1 and
+        the other eigenvalues are not): where the estimate is Arnoldi's, the power method from it
+        is tried first (:func:`asoc.mjls.spectral_estimate.power_estimate`). Only the speed
+        depends on it; the bracket is certified either way.
 
     Returns
     -------
@@ -280,7 +287,9 @@ mean_square_stability(sys, controller)
     A_stack, T = loop
     if check:
         A_stack, T = mode_stack(A_stack, T)
-    return _certified(A_stack, T, method)
+        if start is not None:
+            start = real_array(start, "start", shape=A_stack.shape)
+    return _certified(A_stack, T, method, start)
 
 
 def _loop(A_stack, T):
@@ -360,8 +369,9 @@ def _checked_estimate(A, T, method):
     return rho, X, found.method
 
 
-def _certified(A, T, method):
-    """MeanSquareStability of (A, T): balance, estimate, bracket, scale back.
+def _certified(A, T, method, start=None):
+    """MeanSquareStability of (A, T): balance, estimate (from ``start``, where given), bracket,
+    scale back.
 
     Where balancing cannot hold (A, T) exactly (an entry under- or overflows), the estimate is
     returned with the bracket [0, inf]: not certified, never a bound of another operator.
@@ -370,7 +380,9 @@ def _certified(A, T, method):
     balanced = balance(A, T)
     with np.errstate(over="ignore"):                # 2^g beyond the doubles: inf is right
         unit = float(np.ldexp(1.0, -balanced.g))
-        lower, upper, rho, _, estimate = certify(balanced.A, balanced.W, method, unit=unit)
+        lower, upper, rho, _, estimate = certify(
+            balanced.A, balanced.W, method, unit=unit,
+            start=None if start is None else balanced.from_stack(start))
         if not balanced.exact:
             lower, upper = 0.0, np.inf
         lower, upper = _scaled(lower, balanced.g, -np.inf), _scaled(upper, balanced.g, np.inf)

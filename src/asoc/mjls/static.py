@@ -349,8 +349,10 @@ def static_cost(sys, L):
 def _static_cost(sys, L, X_guess=None, near_stable=False):
     """(cost, X, stability) of :func:`static_cost`, the moment equation solved from
     ``X_guess`` (e.g. the last iterate's moments) where it is solved iteratively. ``near_stable``
-    (L next to a certified stabilising gain): on threads, X is solved beside the certificate
-    instead of after it (unused where L does not stabilise).
+    (L next to a certified stabilising gain, X_guess its stationary moments): on threads, X is
+    solved beside the certificate instead of after it (unused where L does not stabilise), and
+    the certificate's estimate starts from X_guess (``start`` of
+    :func:`asoc.mjls.mean_square_stability`).
     """
     Acl = closed_loop(sys, L, check=False)
     rec = Recursion(sys)
@@ -359,8 +361,9 @@ def _static_cost(sys, L, X_guess=None, near_stable=False):
     def moments():
         return coupled_lyapunov_solver(Acl, sys.T)(rec.predecessor_sum(rec.noise(L)), x0=start).X
 
-    if near_stable and rec.parallel and start is not None:
-        stability, X = concurrently(lambda: mean_square_stability(Acl, sys.T), moments)
+    if near_stable and rec.parallel and start is not None:  # X_guess is near the Perron stack
+        stability, X = concurrently(lambda: mean_square_stability(Acl, sys.T, start=start),
+                                    moments)
     else:
         stability = mean_square_stability(Acl, sys.T)
         X = moments() if stability.stable else None

@@ -231,3 +231,33 @@ def test_singular_perron_stack_gets_a_narrow_bracket_from_the_deflated_resolvent
     monkeypatch.setattr(certificate, "deflated_resolvent_bounds", lambda *args: None)
     without = mean_square_stability(A, T)
     assert without.rho_upper - without.rho_lower > width * without.rho_upper
+
+
+def test_a_start_near_the_perron_stack_is_used_and_a_poor_one_only_costs_time():
+    """A closed loop with a large spectral gap, on the Arnoldi path: from its stationary second
+    moments (mostly the Perron stack) the power method gives the estimate, in a narrow bracket
+    around the dense radius; from a start that does not converge within the steps (a periodic
+    chain, where |lambda_2| = rho) ARPACK gives it, and a start of the wrong shape is named."""
+    rng = np.random.default_rng(8)
+    M, n = 4, 5
+    A = 0.1 * rng.standard_normal((M, n, n)) / np.sqrt(n)
+    A[:, 0, 0] += 1.0                                   # one dominant direction in every mode
+    T = np.tile(rng.dirichlet(np.ones(M)), (M, 1))      # i.i.d. modes: |lambda_2| / rho about 0.1
+    A *= np.sqrt(0.95 / dense_rho(A, T))
+    X = np.broadcast_to(np.eye(n), (M, n, n))
+    for _ in range(400):                     # the stationary moments X = L(X) + I, by iteration
+        X = np.einsum("ij,iab,icb->jac", T, A @ X, A) + np.eye(n)
+    with forced("arnoldi"):
+        warm = mean_square_stability(A, T, start=X)
+        cold = mean_square_stability(A, T)
+        with pytest.raises(ValueError, match="start"):
+            mean_square_stability(A, T, start=X[:2])
+        cycle = np.roll(np.eye(M), 1, axis=1)
+        periodic = mean_square_stability(A, cycle, start=np.broadcast_to(np.eye(n), (M, n, n)))
+    assert warm.method == "power" and cold.method == "arnoldi"
+    for result in (warm, cold):
+        assert_contains(result, 0.95)
+    width = [result.rho_upper - result.rho_lower for result in (warm, cold)]
+    assert width[0] <= 1e-6 and width[0] <= 10 * width[1], width
+    assert periodic.method != "power"
+    assert_contains(periodic, dense_rho(A, cycle))
