@@ -185,8 +185,8 @@ def in_parts(task, count):
 
 
 def stacked_in_parts(function, *stacks):
-    """function(*stacks) for a function that works matrix by matrix along the leading axis (e.g. M
-    eigendecompositions), computed in the :func:`parts` of that axis concurrently
+    """``function(*stacks)`` for a function that works matrix by matrix along the leading axis (e.g.
+    M eigendecompositions), computed in the :func:`parts` of that axis concurrently
     (:func:`concurrently`) and joined: an array, or a tuple of arrays where the function returns
     a tuple.
 

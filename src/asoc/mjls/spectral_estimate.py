@@ -368,7 +368,7 @@ def estimate(A, T, method, adjoint=False):
 
 
 def power_estimate(A, T, start, tol=1e-10):
-    """Rho and its eigenvector stack by the power method X <- L(X) / max |L(X)| from ``start``, a
+    """Rho and its eigenvector stack by the power method ``X <- L(X) / max|L(X)|`` from ``start``, a
     stack near the Perron stack (e.g. the stationary second moments of the same or a nearby
     closed loop, X = sum_k L^k(N), whose Perron component dominates when rho is near 1 and the
     other eigenvalues are not): None where the largest change of an entry does not fall to

@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import config
 from ..linalg import kronecker_sum, transpose
-from ..threads import concurrently, in_parts
+from ..threads import concurrently, in_parts, stacked_in_parts
 from .closed_loops import closed_loop
 from .lyapunov import coupled_lyapunov_solver
 from .moment_operator import in_parallel, mix_modes
@@ -547,9 +547,15 @@ def lyapunov_certified(solution, weight):
     margin = 2.0 * solution.residual * np.linalg.norm(weight)
     if not (np.isfinite(margin) and np.all(np.isfinite(solution.X))):
         return False
+    def factors(weights, P):                      # raise LinAlgError where one is not definite
+        shifted = weights - margin * np.eye(weights.shape[-1])
+        return np.linalg.cholesky(shifted), np.linalg.cholesky(P)
+
     try:
-        np.linalg.cholesky(weight - margin * np.eye(weight.shape[-1]))
-        np.linalg.cholesky(solution.X)
+        if in_parallel(weight):
+            stacked_in_parts(factors, weight, solution.X)
+        else:
+            factors(weight, solution.X)
     except np.linalg.LinAlgError:
         return False
     return True
