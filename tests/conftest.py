@@ -33,7 +33,8 @@ def pytest_ignore_collect(collection_path, config):
     return None
 
 
-SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging")  # module-scoped clone / wheel
+# module-scoped clone / wheel / full run of a notebook
+SHARED_FIXTURE_MODULES = ("test_crash_safety", "test_packaging", "test_your_system")
 GROUP = pytest.StashKey[str]()
 #: seconds each group took in `make test` on 2 cores (tests/notebooks: the ci runs, the PDF and
 #: the book), for the order in which the groups are handed out
@@ -49,6 +50,7 @@ GROUP_SECONDS = {
     "ci-large_system": 35.0,
     "ci-sec3_5": 28.0,
     "ci-your_system": 24.0,
+    "test_your_system": 36.0,
     "test_crash_safety": 22.0,
     "ci-scaling": 20.0,
     "ci-peers": 15.0,
