@@ -135,7 +135,7 @@ def relative_change(old, new, floor=None, axis=None):
     return np.sqrt((d * d).sum(axis=axis)) / np.maximum(np.sqrt((new * new).sum(axis=axis)), floor)
 
 
-def bicgstab(apply, b, x0, rtol, max_iter, callback=None):
+def bicgstab(apply, b, x0, rtol, max_iter):
     """BiCGSTAB (van der Vorst, SIAM J. Sci. Stat. Comput. 13(2), 1992, Alg. "Bi-CGSTAB") for
     K x = b, without preconditioner, on six vectors kept for the whole solve.
 
@@ -153,8 +153,6 @@ def bicgstab(apply, b, x0, rtol, max_iter, callback=None):
         Stop when the recursively updated residual is at most rtol ||b||.
     max_iter : int
         Iteration limit.
-    callback : callable, optional
-        Called with x after every iteration.
 
     Returns
     -------
@@ -204,6 +202,4 @@ def bicgstab(apply, b, x0, rtol, max_iter, callback=None):
         daxpy(r, x, a=omega)
         daxpy(t, r, a=-omega)
         rho_prev = rho
-        if callback is not None:
-            callback(x)
     return x, max_iter
