@@ -11,6 +11,7 @@ import numpy as np
 from scipy.linalg.blas import daxpy, dscal
 
 from . import config
+from .validation import function, integer, real_array, real_scalar
 
 __all__ = ["transpose", "sym", "kronecker_sum", "pack", "unpack", "relative_change", "bicgstab"]
 
@@ -169,8 +170,16 @@ def bicgstab(apply, b, x0, rtol, max_iter):
     ...                          1e-12, 10)
     >>> np.allclose(K @ x, b), iterations
     (True, 2)
+    >>> bicgstab(lambda v, out: None, b, np.zeros(3), 1e-12, 10)
+    Traceback (most recent call last):
+    ...
+    ValueError: x0: expected shape (2,), found shape (3,)
     """
-    x = np.array(x0, dtype=float)
+    apply = function(apply, "apply")
+    b = real_array(b, "b", ndim=1, finite=False)        # non-finite: the caller's residual says so
+    x = real_array(x0, "x0", shape=b.shape, finite=False).copy()
+    rtol = real_scalar(rtol, "rtol", low=0, high=1, low_open=True)
+    max_iter = integer(max_iter, "max_iter", minimum=0)
     if not np.any(b):
         return np.zeros_like(x), 0
     r, v, t = np.empty_like(x), np.zeros_like(x), np.empty_like(x)

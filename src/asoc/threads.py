@@ -203,6 +203,10 @@ def stacked_in_parts(function, *stacks):
     """
     if not callable(function):
         raise TypeError(f"function: expected a callable, found {type(function).__name__}")
+    lengths = {len(stack) if hasattr(stack, "__len__") else None for stack in stacks}
+    if len(lengths) != 1 or None in lengths:
+        raise ValueError(f"stacks: expected one or more arrays of one length along the leading "
+                         f"axis, found lengths {sorted(lengths, key=str)}")
     pieces = concurrently(*(lambda part=part: function(*(stack[part] for stack in stacks))
                             for part in parts(len(stacks[0]))))
     if isinstance(pieces[0], tuple):

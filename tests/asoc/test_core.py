@@ -16,7 +16,14 @@ from asoc.progress import progress_bar
 from asoc.result import STATUS_CODES, IterativeResult
 from asoc.setting_checks import INT, REAL, SIZES
 from asoc.stats import bootstrap_ci, bootstrap_median_ci
-from asoc.threads import concurrently, in_parts, parts, single_threaded, worker_count
+from asoc.threads import (
+    concurrently,
+    in_parts,
+    parts,
+    single_threaded,
+    stacked_in_parts,
+    worker_count,
+)
 
 
 def rosenbrock(z):
@@ -201,3 +208,15 @@ def test_bicgstab_solves_a_nonsymmetric_system_to_its_tolerance_in_kept_vectors(
     assert none == 0 and not zero.any()
     _, one = bicgstab(apply, b, np.zeros(400), 1e-14, 1)
     assert one == 1
+    for bad, name in (((1.0, b, b, 1e-10, 5), "apply"), ((apply, b, b, 0.0, 5), "rtol"),
+                      ((apply, b, b[:3], 1e-10, 5), "x0"), ((apply, b, b, 1e-10, -1), "max_iter")):
+        with pytest.raises((TypeError, ValueError), match=f"^{name}: expected"):
+            bicgstab(*bad)
+
+
+def test_stacked_in_parts_joins_the_parts_and_names_stacks_of_different_lengths():
+    X = np.arange(24.0).reshape(6, 2, 2)
+    np.testing.assert_array_equal(stacked_in_parts(lambda S: S.sum(axis=(1, 2)), X),
+                                  X.sum(axis=(1, 2)))
+    with pytest.raises(ValueError, match="^stacks: expected"):
+        stacked_in_parts(lambda S, P: S, X, X[:2])
